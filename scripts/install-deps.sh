@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package Regolith needs to build, test and run.
+# Idempotent: packages already present are skipped by apt. Needs root (or sudo).
+set -euo pipefail
+
+PACKAGES=(
+  # toolchain
+  build-essential cmake ninja-build pkg-config git clang-format clang-tidy
+  # I/O: HDF5 stores, GDAL import, PROJ (also the projection oracle in tests)
+  libhdf5-dev hdf5-tools libgdal-dev gdal-bin libproj-dev proj-bin
+  # maths and rendering: GLM, OpenGL/EGL through Mesa (llvmpipe), GLFW windows, PNG
+  libglm-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev libpng-dev
+  # tests, benchmarks, CLI, JSON
+  libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
+  # Python bindings and Python-side oracles (Debian's interpreter, not PyPI)
+  python3 python3-dev pybind11-dev python3-numpy python3-pytest python3-h5py python3-gdal python3-matplotlib
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if ((${#missing[@]} == 0)); then
+  echo "install-deps: all ${#PACKAGES[@]} packages already installed"
+  exit 0
+fi
+
+SUDO=""
+if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
+echo "install-deps: installing ${#missing[@]} missing packages: ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: done"

@@ -1,0 +1,67 @@
+#pragma once
+/// \file
+/// Where a planar DEM sits on its body.
+
+#include <regolith/topo/Body.hpp>
+#include <regolith/topo/Projection.hpp>
+
+#include <glm/mat3x3.hpp>
+#include <glm/vec3.hpp>
+
+#include <variant>
+
+namespace regolith::topo {
+
+/// Places a TopoDem's planar grid (x, y in metres, height h in metres) on a body, so that
+/// every sample has a body-fixed position.
+///
+/// - LocalTangentPlane: (x, y, h) are coordinates in the plane's frame; h is measured along
+///   the plane's normal (a flat-earth DEM, as SimScape's local DEMs).
+/// - PolarStereographic / Equirectangular: (x, y) are projected map metres; h is the height
+///   above the body's reference surface along its normal at the inverse-projected point.
+///   For Equirectangular the placement also says how the projection's latitude is read.
+///
+/// Immutable and thread-safe.
+class Placement {
+ public:
+  enum class Kind { LocalTangentPlane, PolarStereographic, Equirectangular };
+
+  explicit Placement(LocalTangentPlane plane);
+  Placement(const Body& body, PolarStereographic projection);
+  Placement(const Body& body, Equirectangular projection,
+            LatitudeType latitudeType = LatitudeType::Planetocentric);
+
+  [[nodiscard]] Kind kind() const noexcept;
+  [[nodiscard]] const Body& body() const noexcept { return body_; }
+  /// The latitude type the projection's latitudes are read as (planetodetic for polar
+  /// stereographic and the tangent plane).
+  [[nodiscard]] LatitudeType latitudeType() const noexcept { return latType_; }
+
+  [[nodiscard]] const LocalTangentPlane* localTangentPlane() const noexcept;
+  [[nodiscard]] const PolarStereographic* polarStereographic() const noexcept;
+  [[nodiscard]] const Equirectangular* equirectangular() const noexcept;
+
+  /// Body-fixed position of grid point (x, y) at height h.
+  [[nodiscard]] glm::dvec3 toBodyFixed(double x, double y, double h) const;
+  /// Planetodetic position of grid point (x, y) at height h.
+  [[nodiscard]] Geodetic toGeodetic(double x, double y, double h) const;
+  /// Grid coordinates (x, y, h) of a planetodetic position: the inverse of toGeodetic.
+  [[nodiscard]] glm::dvec3 fromGeodetic(const Geodetic& g) const;
+  /// Grid coordinates (x, y, h) of a body-fixed point.
+  [[nodiscard]] glm::dvec3 fromBodyFixed(const glm::dvec3& p) const;
+
+  /// Columns: ∂P/∂x, ∂P/∂y, ∂P/∂h of the body-fixed position P at (x, y, h). Exact for the
+  /// tangent plane; central differences over ±0.5 m for map projections (relative error
+  /// ~1e-13, far below anything a DEM resolves).
+  [[nodiscard]] glm::dmat3 jacobian(double x, double y, double h) const;
+  /// Converts a normal in the grid frame (x, y, h) at (x, y, h) to a unit body-fixed normal.
+  [[nodiscard]] glm::dvec3 normalToBodyFixed(const glm::dvec3& gridNormal, double x, double y,
+                                             double h) const;
+
+ private:
+  Body body_;
+  LatitudeType latType_;
+  std::variant<LocalTangentPlane, PolarStereographic, Equirectangular> proj_;
+};
+
+}  // namespace regolith::topo

@@ -1,0 +1,119 @@
+#pragma once
+/// \file
+/// Map projections, forward and inverse, in double precision.
+///
+/// Conventions: latitudes/longitudes in degrees (latitudes planetodetic unless stated),
+/// projected coordinates in metres. Every projection is an immutable value and thread-safe.
+/// Formulas follow Snyder, "Map Projections: A Working Manual" (USGS PP 1395, 1987), and
+/// are checked against PROJ in tests/topo/ProjectionTest.cpp.
+
+#include <regolith/topo/Body.hpp>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+namespace regolith::topo {
+
+/// Equirectangular (simple cylindrical, PROJ `eqc`) on a sphere of radius `radius`:
+///   x = R (λ − λ0) cos φts,  y = R (φ − φ0).
+/// φ is the projection's own latitude; a placement says whether it is planetocentric or
+/// planetodetic on the body. λ − λ0 is wrapped into [−180°, 180°).
+class Equirectangular {
+ public:
+  /// Throws InvalidArgument for a non-positive radius or |latTrueScaleDeg| ≥ 90.
+  Equirectangular(double radius, double latTrueScaleDeg, double lonCentreDeg,
+                  double latOriginDeg = 0.0);
+
+  [[nodiscard]] glm::dvec2 forward(const LatLon& ll) const;
+  /// Inverse; latitude beyond ±90° (y outside the map) throws DomainError.
+  [[nodiscard]] LatLon inverse(const glm::dvec2& xy) const;
+
+  [[nodiscard]] double radius() const noexcept { return r_; }
+  [[nodiscard]] double latTrueScaleDeg() const noexcept { return latTsDeg_; }
+  [[nodiscard]] double lonCentreDeg() const noexcept { return lon0Deg_; }
+  [[nodiscard]] double latOriginDeg() const noexcept { return lat0Deg_; }
+
+ private:
+  double r_, latTsDeg_, lon0Deg_, lat0Deg_;
+  double cosTs_;
+};
+
+/// Polar stereographic, north or south, on a sphere or biaxial ellipsoid (Snyder §21;
+/// PROJ `stere` with lat_0 = ±90). Scale is given either by a latitude of true scale or by
+/// the scale factor at the pole. Grid north points from the pole along λ0 (north aspect)
+/// or towards it (south aspect), as in PROJ.
+class PolarStereographic {
+ public:
+  enum class Pole { North, South };
+
+  /// Scale set by a latitude of true scale (degrees, same hemisphere as the pole; ±90
+  /// means k0 = 1 at the pole).
+  static PolarStereographic withTrueScaleLatitude(const Body& body, Pole pole,
+                                                  double latTrueScaleDeg, double lonCentreDeg,
+                                                  double falseEasting = 0.0,
+                                                  double falseNorthing = 0.0);
+  /// Scale set by the scale factor k0 at the pole.
+  static PolarStereographic withScaleFactor(const Body& body, Pole pole, double k0,
+                                            double lonCentreDeg, double falseEasting = 0.0,
+                                            double falseNorthing = 0.0);
+
+  /// Forward. Exactly at the centre pole gives (falseEasting, falseNorthing). The opposite
+  /// pole maps to infinity and throws DomainError.
+  [[nodiscard]] glm::dvec2 forward(const LatLon& ll) const;
+  /// Inverse. At the centre pole the longitude is λ0.
+  [[nodiscard]] LatLon inverse(const glm::dvec2& xy) const;
+  /// Point scale factor k at a planetodetic latitude.
+  [[nodiscard]] double scaleFactor(double latDeg) const;
+
+  [[nodiscard]] Pole pole() const noexcept { return pole_; }
+  [[nodiscard]] double lonCentreDeg() const noexcept { return lon0Deg_; }
+  [[nodiscard]] double scaleFactorAtPole() const noexcept { return k0_; }
+  [[nodiscard]] double falseEasting() const noexcept { return fe_; }
+  [[nodiscard]] double falseNorthing() const noexcept { return fn_; }
+  [[nodiscard]] double equatorialRadius() const noexcept { return a_; }
+  [[nodiscard]] double eccentricitySquared() const noexcept { return e_ * e_; }
+
+ private:
+  PolarStereographic(double a, double e, Pole pole, double k0, double lon0Deg, double fe,
+                     double fn);
+  double a_, e_;
+  Pole pole_;
+  double k0_, lon0Deg_, fe_, fn_;
+  double rhoFactor_;  // ρ = rhoFactor_ · t
+};
+
+/// A local tangent plane: a right-handed Cartesian frame whose origin is a planetodetic
+/// position, whose z axis is the surface normal there (up), and whose y axis points at
+/// azimuth `headingDeg` (clockwise from north; 0 = y points north, x points east).
+/// Forward and inverse are exact (no map distortion: this is a rigid frame, the "ENU"
+/// frame rotated by the heading; PROJ `topocentric` for heading 0).
+class LocalTangentPlane {
+ public:
+  LocalTangentPlane(const Body& body, const Geodetic& origin, double headingDeg = 0.0);
+
+  /// Planetodetic position → plane coordinates (x, y, z) in metres.
+  [[nodiscard]] glm::dvec3 forward(const Geodetic& g) const;
+  /// Plane coordinates → planetodetic position.
+  [[nodiscard]] Geodetic inverse(const glm::dvec3& xyz) const;
+  /// Plane coordinates → body-fixed position.
+  [[nodiscard]] glm::dvec3 toBodyFixed(const glm::dvec3& xyz) const noexcept;
+  /// Body-fixed position → plane coordinates.
+  [[nodiscard]] glm::dvec3 fromBodyFixed(const glm::dvec3& p) const noexcept;
+
+  [[nodiscard]] const Body& body() const noexcept { return body_; }
+  [[nodiscard]] const Geodetic& origin() const noexcept { return origin_; }
+  [[nodiscard]] double headingDeg() const noexcept { return headingDeg_; }
+  /// Plane axes in body-fixed coordinates (unit vectors).
+  [[nodiscard]] const glm::dvec3& xAxis() const noexcept { return ex_; }
+  [[nodiscard]] const glm::dvec3& yAxis() const noexcept { return ey_; }
+  [[nodiscard]] const glm::dvec3& zAxis() const noexcept { return ez_; }
+  [[nodiscard]] const glm::dvec3& originBodyFixed() const noexcept { return o_; }
+
+ private:
+  Body body_;
+  Geodetic origin_;
+  double headingDeg_;
+  glm::dvec3 o_, ex_, ey_, ez_;
+};
+
+}  // namespace regolith::topo

@@ -1,0 +1,89 @@
+#pragma once
+/// \file
+/// A latitude/longitude grid over a whole planet or a region of one.
+
+#include <regolith/topo/Body.hpp>
+#include <regolith/topo/Query.hpp>
+#include <regolith/topo/TopoGrid.hpp>
+
+#include <memory>
+#include <span>
+
+namespace regolith::topo {
+
+/// A lat/lon grid of heights (metres above the body's reference surface, along its
+/// normal). The grid's x is longitude and y latitude, both in degrees, with the pixel-centre
+/// convention of TopoGrid; latitudes are planetocentric or planetodetic as declared.
+///
+/// Longitude wraps: a query's longitude may be given in any range (−180…180, 0…360, …).
+/// A grid spanning 360° is periodic, so stencils cross the ±180° seam. A grid whose
+/// pixel extent reaches a pole has a polar cap: between the outermost row of centres and
+/// the pole, heights blend linearly in latitude towards the mean of that row, so the pole
+/// has one height whatever the longitude, and bicubic stencils reach across the pole to
+/// the row on the opposite meridian. Points outside a regional grid give OutsideGrid;
+/// |lat| > 90 and NaN/inf throw InvalidArgument.
+///
+/// Thread-safety: as TopoDem.
+class TopoPlanet {
+ public:
+  /// Throws InvalidArgument if samples is null or mis-sized, or the grid leaves
+  /// −90…90° latitude or spans more than 360° of longitude.
+  TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
+             std::shared_ptr<const SampleSource> samples);
+
+  [[nodiscard]] const TopoGrid& grid() const noexcept { return grid_; }
+  [[nodiscard]] const Body& body() const noexcept { return body_; }
+  [[nodiscard]] LatitudeType latitudeType() const noexcept { return latType_; }
+  [[nodiscard]] const SampleSource& samples() const noexcept { return *samples_; }
+  [[nodiscard]] bool isGlobalInLongitude() const noexcept { return global_; }
+  [[nodiscard]] bool hasNorthCap() const noexcept { return northCap_; }
+  [[nodiscard]] bool hasSouthCap() const noexcept { return southCap_; }
+
+  /// Height at a point whose latitude is in the grid's latitude type.
+  [[nodiscard]] HeightSample height(const LatLon& ll,
+                                    Interpolation interp = Interpolation::Bilinear) const;
+  /// Height and unit normal. The Grid frame is east-north-up at the point.
+  [[nodiscard]] SurfaceSample surface(const LatLon& ll,
+                                      Interpolation interp = Interpolation::Bilinear,
+                                      NormalFrame frame = NormalFrame::Grid) const;
+
+  /// Batch heights; spans of equal length (status may be empty).
+  void heights(std::span<const double> latsDeg, std::span<const double> lonsDeg,
+               std::span<double> out, std::span<QueryStatus> status,
+               Interpolation interp = Interpolation::Bilinear) const;
+  /// Batch heights and normals.
+  void surfaces(std::span<const double> latsDeg, std::span<const double> lonsDeg,
+                std::span<double> outHeights, std::span<glm::dvec3> outNormals,
+                std::span<QueryStatus> status, Interpolation interp = Interpolation::Bilinear,
+                NormalFrame frame = NormalFrame::Grid) const;
+
+  /// Planetodetic position of a grid latitude/longitude at height h.
+  [[nodiscard]] Geodetic toGeodetic(const LatLon& ll, double h) const;
+  /// Body-fixed position of a grid latitude/longitude at height h.
+  [[nodiscard]] glm::dvec3 toBodyFixed(const LatLon& ll, double h) const;
+
+  /// Mean of the valid samples of the row nearest the north/south pole (NaN if none).
+  [[nodiscard]] double northPoleHeight() const noexcept { return northPole_; }
+  [[nodiscard]] double southPoleHeight() const noexcept { return southPole_; }
+
+ private:
+  struct Located;
+  [[nodiscard]] Located locate(const LatLon& ll) const;
+  [[nodiscard]] SurfaceSample surfaceImpl(const LatLon& ll, Interpolation interp,
+                                          NormalFrame frame, bool wantNormal) const;
+  [[nodiscard]] glm::dvec3 capNormalEnu(const LatLon& ll, Interpolation interp,
+                                        double h) const;
+
+  TopoGrid grid_;
+  Body body_;
+  LatitudeType latType_;
+  std::shared_ptr<const SampleSource> samples_;
+  bool global_ = false;
+  bool northCap_ = false;
+  bool southCap_ = false;
+  double northPoleV_ = 0.0;  // fractional row of the north pole
+  double southPoleV_ = 0.0;
+  double northPole_, southPole_;
+};
+
+}  // namespace regolith::topo

@@ -1,0 +1,204 @@
+#pragma once
+// Interpolation kernels shared by TopoDem and TopoPlanet (private header).
+//
+// Kernels are templates over an accessor so that the in-memory fast path compiles to plain
+// array loads while paged sources go through SampleSource. An accessor provides
+//   float operator()(long r, long c)  any integer index, mapped to a sample (clamp/wrap/pole)
+//   bool hasRow(long r), hasCol(long c)  whether the index names a distinct sample
+//   long rMax(), cMax()  the largest base index of a cell (rows−2 on clamped axes)
+// Coordinates u (column) and v (row) are fractional sample indices, already brought into
+// the accessor's range by the caller.
+
+#include <regolith/topo/Query.hpp>
+#include <regolith/topo/TopoGrid.hpp>
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+
+namespace regolith::topo::detail {
+
+struct KernelResult {
+  double h = 0.0;
+  double dhdu = 0.0;  // ∂h/∂(column index)
+  double dhdv = 0.0;  // ∂h/∂(row index)
+  QueryStatus status = QueryStatus::Ok;
+};
+
+inline bool missing(float s, float nd) noexcept { return s != s || s == nd; }
+
+// Raw fetchers: indices already valid.
+struct MemFetch {
+  const float* data;
+  long cols;
+  float operator()(long r, long c) const noexcept { return data[r * cols + c]; }
+};
+struct SourceFetch {
+  const SampleSource* src;
+  float operator()(long r, long c) const {
+    return src->sample(static_cast<std::size_t>(r), static_cast<std::size_t>(c));
+  }
+};
+
+// Clamp-to-edge accessor (TopoDem, and regional TopoPlanet grids).
+template <class Fetch>
+struct ClampAcc {
+  Fetch fetch;
+  long rows, cols;
+  float operator()(long r, long c) const {
+    return fetch(std::clamp(r, 0L, rows - 1), std::clamp(c, 0L, cols - 1));
+  }
+  bool hasRow(long r) const noexcept { return r >= 0 && r < rows; }
+  bool hasCol(long c) const noexcept { return c >= 0 && c < cols; }
+  long rMax() const noexcept { return std::max(rows - 2, 0L); }
+  long cMax() const noexcept { return std::max(cols - 2, 0L); }
+};
+
+// TopoPlanet accessor: longitude wraps on a global grid; rows beyond a pole reflect to the
+// row on the opposite meridian when the grid is global with an even column count.
+template <class Fetch>
+struct PlanetAcc {
+  Fetch fetch;
+  long rows, cols;
+  bool global, reflectNorth, reflectSouth;
+  float operator()(long r, long c) const {
+    if (r < 0) {
+      if (reflectNorth) {
+        r = -1 - r;
+        c += cols / 2;
+      }
+    } else if (r >= rows) {
+      if (reflectSouth) {
+        r = 2 * rows - 1 - r;
+        c += cols / 2;
+      }
+    }
+    r = std::clamp(r, 0L, rows - 1);
+    if (global) {
+      c %= cols;
+      if (c < 0) c += cols;
+    } else {
+      c = std::clamp(c, 0L, cols - 1);
+    }
+    return fetch(r, c);
+  }
+  bool hasRow(long r) const noexcept {
+    return (r >= 0 && r < rows) || (r < 0 && reflectNorth) || (r >= rows && reflectSouth);
+  }
+  bool hasCol(long c) const noexcept { return global || (c >= 0 && c < cols); }
+  long rMax() const noexcept { return std::max(rows - 2, 0L); }
+  long cMax() const noexcept { return global ? LONG_MAX : std::max(cols - 2, 0L); }
+};
+
+// Keys (1981) cubic convolution, a = −0.5: weights of samples −1, 0, 1, 2 at fraction t,
+// and their derivatives.
+inline void keysWeights(double t, double w[4], double dw[4]) noexcept {
+  const double t2 = t * t, t3 = t2 * t;
+  w[0] = 0.5 * (-t3 + 2.0 * t2 - t);
+  w[1] = 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0);
+  w[2] = 0.5 * (-3.0 * t3 + 4.0 * t2 + t);
+  w[3] = 0.5 * (t3 - t2);
+  dw[0] = 0.5 * (-3.0 * t2 + 4.0 * t - 1.0);
+  dw[1] = 0.5 * (9.0 * t2 - 10.0 * t);
+  dw[2] = 0.5 * (-9.0 * t2 + 8.0 * t + 1.0);
+  dw[3] = 0.5 * (3.0 * t2 - 2.0 * t);
+}
+
+template <bool Grad, class Acc>
+KernelResult nearest(const Acc& acc, double u, double v, float nd) {
+  const long c = static_cast<long>(std::floor(u + 0.5));
+  const long r = static_cast<long>(std::floor(v + 0.5));
+  KernelResult k;
+  const float s = acc(r, c);
+  if (missing(s, nd)) return {0.0, 0.0, 0.0, QueryStatus::Nodata};
+  k.h = static_cast<double>(s);
+  if constexpr (Grad) {
+    // Central differences of the neighbouring samples, one-sided at the edges.
+    auto diff = [&](bool hasLo, bool hasHi, float lo, float hi, double& out) {
+      const double a = hasLo ? static_cast<double>(lo) : k.h;
+      const double b = hasHi ? static_cast<double>(hi) : k.h;
+      const int n = int(hasLo) + int(hasHi);
+      if ((hasLo && missing(lo, nd)) || (hasHi && missing(hi, nd))) return false;
+      out = n == 0 ? 0.0 : (b - a) / n;
+      return true;
+    };
+    if (!diff(acc.hasCol(c - 1), acc.hasCol(c + 1), acc(r, c - 1), acc(r, c + 1), k.dhdu) ||
+        !diff(acc.hasRow(r - 1), acc.hasRow(r + 1), acc(r - 1, c), acc(r + 1, c), k.dhdv)) {
+      return {0.0, 0.0, 0.0, QueryStatus::Nodata};
+    }
+  }
+  return k;
+}
+
+template <bool Grad, class Acc>
+KernelResult bilinear(const Acc& acc, double u, double v, float nd) {
+  const long c = std::min(static_cast<long>(std::floor(u)), acc.cMax());
+  const long r = std::min(static_cast<long>(std::floor(v)), acc.rMax());
+  const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
+  float s00 = acc(r, c), s01 = acc(r, c + 1), s10 = acc(r + 1, c), s11 = acc(r + 1, c + 1);
+  if (missing(s00, nd) || missing(s01, nd) || missing(s10, nd) || missing(s11, nd)) {
+    if constexpr (Grad) return {0.0, 0.0, 0.0, QueryStatus::Nodata};
+    // Height only: a missing sample is harmless exactly when its weight is zero.
+    const double w[4] = {(1 - tu) * (1 - tv), tu * (1 - tv), (1 - tu) * tv, tu * tv};
+    float* s[4] = {&s00, &s01, &s10, &s11};
+    for (int i = 0; i < 4; ++i) {
+      if (missing(*s[i], nd)) {
+        if (w[i] != 0.0) return {0.0, 0.0, 0.0, QueryStatus::Nodata};
+        *s[i] = 0.0f;
+      }
+    }
+  }
+  const double a = s00, b = s01, cc = s10, d = s11;
+  KernelResult k;
+  const double top = a + tu * (b - a), bottom = cc + tu * (d - cc);
+  k.h = top + tv * (bottom - top);
+  if constexpr (Grad) {
+    k.dhdu = (1 - tv) * (b - a) + tv * (d - cc);
+    k.dhdv = bottom - top;
+  }
+  return k;
+}
+
+template <bool Grad, class Acc>
+KernelResult bicubic(const Acc& acc, double u, double v, float nd) {
+  const long c = std::min(static_cast<long>(std::floor(u)), acc.cMax());
+  const long r = std::min(static_cast<long>(std::floor(v)), acc.rMax());
+  double wu[4], dwu[4], wv[4], dwv[4];
+  keysWeights(u - static_cast<double>(c), wu, dwu);
+  keysWeights(v - static_cast<double>(r), wv, dwv);
+  KernelResult k;
+  for (int i = 0; i < 4; ++i) {
+    double row = 0.0, drow = 0.0;
+    for (int j = 0; j < 4; ++j) {
+      const float s = acc(r - 1 + i, c - 1 + j);
+      if (missing(s, nd)) {
+        if (Grad || (wv[i] * wu[j]) != 0.0) return {0.0, 0.0, 0.0, QueryStatus::Nodata};
+        continue;
+      }
+      row += wu[j] * static_cast<double>(s);
+      if constexpr (Grad) drow += dwu[j] * static_cast<double>(s);
+    }
+    k.h += wv[i] * row;
+    if constexpr (Grad) {
+      k.dhdu += wv[i] * drow;
+      k.dhdv += dwv[i] * row;
+    }
+  }
+  return k;
+}
+
+template <bool Grad, class Acc>
+KernelResult evaluate(Interpolation interp, const Acc& acc, double u, double v, float nd) {
+  switch (interp) {
+    case Interpolation::Nearest: return nearest<Grad>(acc, u, v, nd);
+    case Interpolation::Bicubic: return bicubic<Grad>(acc, u, v, nd);
+    case Interpolation::Bilinear: break;
+  }
+  return bilinear<Grad>(acc, u, v, nd);
+}
+
+inline float nodataOrNan(const TopoGrid& g) noexcept {
+  return g.nodata() ? *g.nodata() : __builtin_nanf("");
+}
+
+}  // namespace regolith::topo::detail

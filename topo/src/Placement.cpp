@@ -1,0 +1,99 @@
+#include <regolith/topo/Error.hpp>
+#include <regolith/topo/Placement.hpp>
+
+#include <glm/geometric.hpp>
+
+namespace regolith::topo {
+
+Placement::Placement(LocalTangentPlane plane)
+    : body_(plane.body()), latType_(LatitudeType::Planetodetic), proj_(std::move(plane)) {}
+
+Placement::Placement(const Body& body, PolarStereographic projection)
+    : body_(body), latType_(LatitudeType::Planetodetic), proj_(projection) {}
+
+Placement::Placement(const Body& body, Equirectangular projection, LatitudeType latitudeType)
+    : body_(body), latType_(latitudeType), proj_(projection) {}
+
+Placement::Kind Placement::kind() const noexcept {
+  switch (proj_.index()) {
+    case 0: return Kind::LocalTangentPlane;
+    case 1: return Kind::PolarStereographic;
+    default: return Kind::Equirectangular;
+  }
+}
+
+const LocalTangentPlane* Placement::localTangentPlane() const noexcept {
+  return std::get_if<LocalTangentPlane>(&proj_);
+}
+const PolarStereographic* Placement::polarStereographic() const noexcept {
+  return std::get_if<PolarStereographic>(&proj_);
+}
+const Equirectangular* Placement::equirectangular() const noexcept {
+  return std::get_if<Equirectangular>(&proj_);
+}
+
+Geodetic Placement::toGeodetic(double x, double y, double h) const {
+  if (const auto* ltp = localTangentPlane()) return ltp->inverse({x, y, h});
+  LatLon ll;
+  if (const auto* ps = polarStereographic()) {
+    ll = ps->inverse({x, y});
+  } else {
+    ll = equirectangular()->inverse({x, y});
+    ll.latDeg = body_.toPlanetodetic(ll.latDeg, latType_);
+  }
+  return {ll.latDeg, ll.lonDeg, h};
+}
+
+glm::dvec3 Placement::toBodyFixed(double x, double y, double h) const {
+  if (const auto* ltp = localTangentPlane()) {
+    requireFinite(x, "Placement::toBodyFixed()", "x");
+    requireFinite(y, "Placement::toBodyFixed()", "y");
+    requireFinite(h, "Placement::toBodyFixed()", "height");
+    return ltp->toBodyFixed({x, y, h});
+  }
+  return body_.toBodyFixed(toGeodetic(x, y, h));
+}
+
+glm::dvec3 Placement::fromGeodetic(const Geodetic& g) const {
+  if (const auto* ltp = localTangentPlane()) return ltp->forward(g);
+  glm::dvec2 xy;
+  if (const auto* ps = polarStereographic()) {
+    xy = ps->forward({g.latDeg, g.lonDeg});
+  } else {
+    xy = equirectangular()->forward({body_.fromPlanetodetic(g.latDeg, latType_), g.lonDeg});
+  }
+  return {xy.x, xy.y, g.height};
+}
+
+glm::dvec3 Placement::fromBodyFixed(const glm::dvec3& p) const {
+  if (const auto* ltp = localTangentPlane()) return ltp->fromBodyFixed(p);
+  return fromGeodetic(body_.toGeodetic(p));
+}
+
+glm::dmat3 Placement::jacobian(double x, double y, double h) const {
+  if (const auto* ltp = localTangentPlane()) {
+    return glm::dmat3(ltp->xAxis(), ltp->yAxis(), ltp->zAxis());
+  }
+  // Central differences: the projections are smooth at the metre scale, so the truncation
+  // error (~(δ/R)²) and the rounding error (~1e-16·R/δ) are both ~1e-10 relative or less.
+  constexpr double d = 0.5;
+  const glm::dvec3 px = (toBodyFixed(x + d, y, h) - toBodyFixed(x - d, y, h)) / (2.0 * d);
+  const glm::dvec3 py = (toBodyFixed(x, y + d, h) - toBodyFixed(x, y - d, h)) / (2.0 * d);
+  const Geodetic g = toGeodetic(x, y, h);
+  const glm::dvec3 up = body_.enuFrame(g.latDeg, g.lonDeg)[2];
+  return glm::dmat3(px, py, up);
+}
+
+glm::dvec3 Placement::normalToBodyFixed(const glm::dvec3& n, double x, double y,
+                                        double h) const {
+  const glm::dmat3 j = jacobian(x, y, h);
+  if (localTangentPlane() != nullptr) return glm::normalize(j * n);
+  // The surface is S(x, y) = P(x, y, h(x, y)); the grid normal (−hx, −hy, 1)·s encodes the
+  // slopes. Tangents S_x = P_x + P_h·hx and S_y = P_y + P_h·hy; the normal is their cross.
+  const double hx = -n.x / n.z, hy = -n.y / n.z;
+  const glm::dvec3 sx = j[0] + j[2] * hx;
+  const glm::dvec3 sy = j[1] + j[2] * hy;
+  return glm::normalize(glm::cross(sx, sy));
+}
+
+}  // namespace regolith::topo

@@ -1,0 +1,182 @@
+#include <regolith/topo/Error.hpp>
+#include <regolith/topo/TopoDem.hpp>
+
+#include "Kernels.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <string>
+
+namespace regolith::topo {
+namespace {
+
+using detail::ClampAcc;
+using detail::KernelResult;
+
+// Locates (x, y) in the grid; false if outside the pixel extent.
+struct Where {
+  double u, v;
+  bool inside;
+};
+
+inline Where locate(const TopoGrid& g, double x, double y) noexcept {
+  const double u = (x - g.x0()) / g.spacingX();
+  const double v = (g.y0() - y) / g.spacingY();
+  const double cmax = static_cast<double>(g.cols()) - 1.0;
+  const double rmax = static_cast<double>(g.rows()) - 1.0;
+  const bool inside = u >= -0.5 && u <= cmax + 0.5 && v >= -0.5 && v <= rmax + 0.5;
+  // Within the half-pixel border the stencil sits on the outermost samples.
+  return {std::clamp(u, 0.0, cmax), std::clamp(v, 0.0, rmax), inside};
+}
+
+template <bool Grad, class Fn>
+KernelResult withAccessor(const TopoGrid& g, const SampleSource& src, Fn&& fn) {
+  const long rows = static_cast<long>(g.rows()), cols = static_cast<long>(g.cols());
+  if (const float* d = src.contiguous()) {
+    return fn(ClampAcc<detail::MemFetch>{{d, cols}, rows, cols});
+  }
+  return fn(ClampAcc<detail::SourceFetch>{{&src}, rows, cols});
+}
+
+void requirePoint(double x, double y, const char* op) {
+  requireFinite(x, op, "x");
+  requireFinite(y, op, "y");
+}
+
+void requireSameLength(std::size_t n, std::size_t m, const char* op, const char* field) {
+  if (n != m) {
+    throw InvalidArgument(std::string(op) + ": " + field + " has " + std::to_string(m) +
+                          " elements, expected " + std::to_string(n));
+  }
+}
+
+void requireFiniteArray(std::span<const double> a, const char* op, const char* field) {
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!std::isfinite(a[i])) {
+      throw InvalidArgument(std::string(op) + ": " + field + "[" + std::to_string(i) + "] is " +
+                            std::to_string(a[i]) + ", expected a finite number");
+    }
+  }
+}
+
+}  // namespace
+
+TopoDem::TopoDem(TopoGrid grid, Placement placement, std::shared_ptr<const SampleSource> samples)
+    : grid_(std::move(grid)), placement_(std::move(placement)), samples_(std::move(samples)) {
+  if (!samples_) throw InvalidArgument("TopoDem(): samples is null, expected a SampleSource");
+  if (samples_->rows() != grid_.rows() || samples_->cols() != grid_.cols()) {
+    throw InvalidArgument("TopoDem(): samples are " + std::to_string(samples_->rows()) + "x" +
+                          std::to_string(samples_->cols()) + ", expected the grid's " +
+                          std::to_string(grid_.rows()) + "x" + std::to_string(grid_.cols()));
+  }
+}
+
+HeightSample TopoDem::height(double x, double y, Interpolation interp) const {
+  requirePoint(x, y, "TopoDem::height()");
+  const Where w = locate(grid_, x, y);
+  if (!w.inside) return {};
+  const float nd = detail::nodataOrNan(grid_);
+  const KernelResult k = withAccessor<false>(grid_, *samples_, [&](const auto& acc) {
+    return detail::evaluate<false>(interp, acc, w.u, w.v, nd);
+  });
+  if (k.status != QueryStatus::Ok) return {std::numeric_limits<double>::quiet_NaN(), k.status};
+  return {k.h, QueryStatus::Ok};
+}
+
+SurfaceSample TopoDem::surface(double x, double y, Interpolation interp, NormalFrame frame) const {
+  requirePoint(x, y, "TopoDem::surface()");
+  const Where w = locate(grid_, x, y);
+  if (!w.inside) return {};
+  const float nd = detail::nodataOrNan(grid_);
+  const KernelResult k = withAccessor<true>(grid_, *samples_, [&](const auto& acc) {
+    return detail::evaluate<true>(interp, acc, w.u, w.v, nd);
+  });
+  SurfaceSample s;
+  s.status = k.status;
+  if (k.status != QueryStatus::Ok) return s;
+  s.height = k.h;
+  // Grid frame: z = h(x, y) with ∂h/∂x = ∂h/∂u / dx and ∂h/∂y = −∂h/∂v / dy (row 0 north).
+  const double hx = k.dhdu / grid_.spacingX();
+  const double hy = -k.dhdv / grid_.spacingY();
+  s.normal = glm::normalize(glm::dvec3(-hx, -hy, 1.0));
+  if (frame == NormalFrame::BodyFixed) {
+    s.normal = placement_.normalToBodyFixed(s.normal, x, y, k.h);
+  }
+  return s;
+}
+
+void TopoDem::heights(std::span<const double> xs, std::span<const double> ys,
+                      std::span<double> out, std::span<QueryStatus> status,
+                      Interpolation interp) const {
+  constexpr const char* op = "TopoDem::heights()";
+  const std::size_t n = xs.size();
+  requireSameLength(n, ys.size(), op, "ys");
+  requireSameLength(n, out.size(), op, "out");
+  if (!status.empty()) requireSameLength(n, status.size(), op, "status");
+  requireFiniteArray(xs, op, "xs");
+  requireFiniteArray(ys, op, "ys");
+  const float nd = detail::nodataOrNan(grid_);
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  // The accessor and kernel are chosen once for the whole batch.
+  withAccessor<false>(grid_, *samples_, [&](const auto& acc) {
+    auto run = [&](auto kernel) {
+      for (std::size_t i = 0; i < n; ++i) {
+        const Where w = locate(grid_, xs[i], ys[i]);
+        QueryStatus st = QueryStatus::OutsideGrid;
+        double h = nan;
+        if (w.inside) {
+          const KernelResult k = kernel(acc, w.u, w.v, nd);
+          st = k.status;
+          h = st == QueryStatus::Ok ? k.h : nan;
+        }
+        out[i] = h;
+        if (!status.empty()) status[i] = st;
+      }
+    };
+    using Acc = std::decay_t<decltype(acc)>;
+    switch (interp) {
+      case Interpolation::Nearest: run(detail::nearest<false, Acc>); break;
+      case Interpolation::Bicubic: run(detail::bicubic<false, Acc>); break;
+      case Interpolation::Bilinear: run(detail::bilinear<false, Acc>); break;
+    }
+    return KernelResult{};
+  });
+}
+
+void TopoDem::surfaces(std::span<const double> xs, std::span<const double> ys,
+                       std::span<double> outHeights, std::span<glm::dvec3> outNormals,
+                       std::span<QueryStatus> status, Interpolation interp,
+                       NormalFrame frame) const {
+  constexpr const char* op = "TopoDem::surfaces()";
+  const std::size_t n = xs.size();
+  requireSameLength(n, ys.size(), op, "ys");
+  requireSameLength(n, outHeights.size(), op, "outHeights");
+  requireSameLength(n, outNormals.size(), op, "outNormals");
+  if (!status.empty()) requireSameLength(n, status.size(), op, "status");
+  requireFiniteArray(xs, op, "xs");
+  requireFiniteArray(ys, op, "ys");
+  for (std::size_t i = 0; i < n; ++i) {
+    const SurfaceSample s = surface(xs[i], ys[i], interp, frame);
+    outHeights[i] = s.height;
+    outNormals[i] = s.normal;
+    if (!status.empty()) status[i] = s.status;
+  }
+}
+
+glm::dvec3 TopoDem::samplePosition(std::size_t row, std::size_t col) const {
+  if (row >= grid_.rows() || col >= grid_.cols()) {
+    throw InvalidArgument("TopoDem::samplePosition(): sample (" + std::to_string(row) + ", " +
+                          std::to_string(col) + ") is outside the " +
+                          std::to_string(grid_.rows()) + "x" + std::to_string(grid_.cols()) +
+                          " grid");
+  }
+  const float s = samples_->sample(row, col);
+  const glm::dvec2 xy = grid_.sampleCentre(static_cast<double>(row), static_cast<double>(col));
+  const double h = grid_.isNodata(s) ? std::numeric_limits<double>::quiet_NaN()
+                                     : static_cast<double>(s);
+  if (std::isnan(h)) return glm::dvec3(std::numeric_limits<double>::quiet_NaN());
+  return placement_.toBodyFixed(xy.x, xy.y, h);
+}
+
+}  // namespace regolith::topo

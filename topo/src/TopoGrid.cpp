@@ -1,0 +1,95 @@
+#include <regolith/topo/Error.hpp>
+#include <regolith/topo/TopoGrid.hpp>
+#include <regolith/topo/Body.hpp>
+
+#include <cassert>
+#include <cmath>
+#include <string>
+
+namespace regolith::topo {
+
+TopoGrid::TopoGrid(std::size_t rows, std::size_t cols, double x0, double y0, double dx,
+                   double dy, std::optional<float> nodata)
+    : rows_(rows), cols_(cols), x0_(x0), y0_(y0), dx_(dx), dy_(dy), nodata_(nodata) {
+  constexpr const char* op = "TopoGrid()";
+  if (rows == 0 || cols == 0) {
+    throw InvalidArgument(std::string(op) + ": grid is " + std::to_string(rows) + "x" +
+                          std::to_string(cols) + " samples, expected at least 1x1");
+  }
+  requireFinite(x0, op, "x0");
+  requireFinite(y0, op, "y0");
+  requireFinite(dx, op, "spacing x");
+  requireFinite(dy, op, "spacing y");
+  if (dx <= 0.0 || dy <= 0.0) {
+    throw InvalidArgument(std::string(op) + ": spacing is (" + std::to_string(dx) + ", " +
+                          std::to_string(dy) + "), expected both > 0");
+  }
+}
+
+TopoGrid TopoGrid::fromGeoTransform(const std::array<double, 6>& gt, std::size_t rows,
+                                    std::size_t cols, std::optional<float> nodata) {
+  if (gt[2] != 0.0 || gt[4] != 0.0) {
+    throw InvalidArgument("TopoGrid::fromGeoTransform(): rotation terms are (" +
+                          std::to_string(gt[2]) + ", " + std::to_string(gt[4]) +
+                          "), expected 0 (north-up rasters only)");
+  }
+  if (!(gt[1] > 0.0) || !(gt[5] < 0.0)) {
+    throw InvalidArgument("TopoGrid::fromGeoTransform(): pixel size is (" +
+                          std::to_string(gt[1]) + ", " + std::to_string(gt[5]) +
+                          "), expected dx > 0 and dy < 0 (north-up)");
+  }
+  const double dx = gt[1], dy = -gt[5];
+  return TopoGrid(rows, cols, gt[0] + 0.5 * dx, gt[3] - 0.5 * dy, dx, dy, nodata);
+}
+
+std::array<double, 6> TopoGrid::geoTransform() const noexcept {
+  return {x0_ - 0.5 * dx_, dx_, 0.0, y0_ + 0.5 * dy_, 0.0, -dy_};
+}
+
+bool TopoGrid::contains(double x, double y) const noexcept {
+  const glm::dvec2 f = fractionalIndex(x, y);
+  return f.x >= -0.5 && f.x <= static_cast<double>(cols_) - 0.5 && f.y >= -0.5 &&
+         f.y <= static_cast<double>(rows_) - 0.5;
+}
+
+void SampleSource::readWindow(std::size_t row0, std::size_t col0, std::size_t nrows,
+                              std::size_t ncols, std::span<float> out) const {
+  assert(out.size() >= nrows * ncols);
+  for (std::size_t r = 0; r < nrows; ++r) {
+    for (std::size_t c = 0; c < ncols; ++c) out[r * ncols + c] = sample(row0 + r, col0 + c);
+  }
+}
+
+InMemorySamples::InMemorySamples(std::size_t rows, std::size_t cols, std::vector<float> data)
+    : rows_(rows), cols_(cols), data_(std::move(data)) {
+  if (rows == 0 || cols == 0 || data_.size() != rows * cols) {
+    throw InvalidArgument("InMemorySamples(): " + std::to_string(data_.size()) +
+                          " samples for a " + std::to_string(rows) + "x" +
+                          std::to_string(cols) + " grid, expected rows*cols > 0");
+  }
+}
+
+std::shared_ptr<InMemorySamples> InMemorySamples::fromFunction(
+    std::size_t rows, std::size_t cols, const std::function<float(std::size_t, std::size_t)>& f) {
+  std::vector<float> data(rows * cols);
+  for (std::size_t r = 0; r < rows; ++r) {
+    for (std::size_t c = 0; c < cols; ++c) data[r * cols + c] = f(r, c);
+  }
+  return std::make_shared<InMemorySamples>(rows, cols, std::move(data));
+}
+
+float InMemorySamples::sample(std::size_t row, std::size_t col) const {
+  assert(row < rows_ && col < cols_);
+  return data_[row * cols_ + col];
+}
+
+void InMemorySamples::readWindow(std::size_t row0, std::size_t col0, std::size_t nrows,
+                                 std::size_t ncols, std::span<float> out) const {
+  assert(row0 + nrows <= rows_ && col0 + ncols <= cols_ && out.size() >= nrows * ncols);
+  for (std::size_t r = 0; r < nrows; ++r) {
+    const float* src = data_.data() + (row0 + r) * cols_ + col0;
+    std::copy(src, src + ncols, out.begin() + static_cast<std::ptrdiff_t>(r * ncols));
+  }
+}
+
+}  // namespace regolith::topo

@@ -1,0 +1,280 @@
+#include <regolith/topo/Error.hpp>
+#include <regolith/topo/TopoPlanet.hpp>
+
+#include "Kernels.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+namespace regolith::topo {
+namespace {
+constexpr double kDeg = std::numbers::pi / 180.0;
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+constexpr double kEdgeTol = 1e-9;  // degrees: how close an edge must be to ±90°/360° spans
+
+double rowMean(const SampleSource& src, const TopoGrid& g, std::size_t row) {
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (std::size_t c = 0; c < g.cols(); ++c) {
+    const float s = src.sample(row, c);
+    if (!g.isNodata(s)) {
+      sum += static_cast<double>(s);
+      ++n;
+    }
+  }
+  return n == 0 ? kNan : sum / static_cast<double>(n);
+}
+}  // namespace
+
+struct TopoPlanet::Located {
+  double u = 0.0, v = 0.0;
+  int cap = 0;     // +1 north polar cap, −1 south polar cap, 0 none
+  double t = 0.0;  // blend towards the pole inside a cap, 0…1
+  bool inside = false;
+};
+
+TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
+                       std::shared_ptr<const SampleSource> samples)
+    : grid_(std::move(grid)),
+      body_(std::move(body)),
+      latType_(latitudeType),
+      samples_(std::move(samples)),
+      northPole_(kNan),
+      southPole_(kNan) {
+  constexpr const char* op = "TopoPlanet()";
+  if (!samples_) throw InvalidArgument(std::string(op) + ": samples is null, expected a SampleSource");
+  if (samples_->rows() != grid_.rows() || samples_->cols() != grid_.cols()) {
+    throw InvalidArgument(std::string(op) + ": samples are " + std::to_string(samples_->rows()) +
+                          "x" + std::to_string(samples_->cols()) + ", expected the grid's " +
+                          std::to_string(grid_.rows()) + "x" + std::to_string(grid_.cols()));
+  }
+  if (grid_.north() > 90.0 + kEdgeTol || grid_.south() < -90.0 - kEdgeTol) {
+    throw InvalidArgument(std::string(op) + ": grid spans latitudes " +
+                          std::to_string(grid_.south()) + " to " + std::to_string(grid_.north()) +
+                          " deg, expected within [-90, 90]");
+  }
+  const double span = static_cast<double>(grid_.cols()) * grid_.spacingX();
+  if (span > 360.0 + kEdgeTol) {
+    throw InvalidArgument(std::string(op) + ": grid spans " + std::to_string(span) +
+                          " deg of longitude, expected at most 360");
+  }
+  global_ = std::abs(span - 360.0) <= kEdgeTol;
+  const double lastLat = grid_.y0() - static_cast<double>(grid_.rows() - 1) * grid_.spacingY();
+  northCap_ = grid_.north() >= 90.0 - kEdgeTol && grid_.y0() < 90.0;
+  southCap_ = grid_.south() <= -90.0 + kEdgeTol && lastLat > -90.0;
+  northPoleV_ = (grid_.y0() - 90.0) / grid_.spacingY();
+  southPoleV_ = (grid_.y0() + 90.0) / grid_.spacingY();
+  if (northCap_ || grid_.y0() >= 90.0) northPole_ = rowMean(*samples_, grid_, 0);
+  if (southCap_ || lastLat <= -90.0) southPole_ = rowMean(*samples_, grid_, grid_.rows() - 1);
+}
+
+TopoPlanet::Located TopoPlanet::locate(const LatLon& ll) const {
+  Located L;
+  const double west = grid_.west();
+  const double lon = west + wrapLongitude360(ll.lonDeg - west);
+  L.u = (lon - grid_.x0()) / grid_.spacingX();
+  const double cmax = static_cast<double>(grid_.cols()) - 1.0;
+  if (!global_) {
+    if (L.u > cmax + 0.5) return L;
+    L.u = std::clamp(L.u, 0.0, cmax);
+  }
+  const double rmax = static_cast<double>(grid_.rows()) - 1.0;
+  L.v = (grid_.y0() - ll.latDeg) / grid_.spacingY();
+  if (L.v < 0.0) {
+    if (northCap_) {
+      L.cap = 1;
+      L.t = std::min(L.v / northPoleV_, 1.0);
+    } else if (L.v < -0.5) {
+      return L;
+    }
+    L.v = 0.0;
+  } else if (L.v > rmax) {
+    if (southCap_) {
+      L.cap = -1;
+      L.t = std::min((L.v - rmax) / (southPoleV_ - rmax), 1.0);
+    } else if (L.v > rmax + 0.5) {
+      return L;
+    }
+    L.v = rmax;
+  }
+  L.inside = true;
+  return L;
+}
+
+namespace {
+template <bool Grad, class Fn>
+detail::KernelResult planetAccessor(const TopoGrid& g, const SampleSource& src, bool global,
+                                    bool northCap, bool southCap, Fn&& fn) {
+  const long rows = static_cast<long>(g.rows()), cols = static_cast<long>(g.cols());
+  const bool even = cols % 2 == 0;
+  const bool rn = global && even && northCap, rs = global && even && southCap;
+  if (const float* d = src.contiguous()) {
+    return fn(detail::PlanetAcc<detail::MemFetch>{{d, cols}, rows, cols, global, rn, rs});
+  }
+  return fn(detail::PlanetAcc<detail::SourceFetch>{{&src}, rows, cols, global, rn, rs});
+}
+
+void requireLatLon(const LatLon& ll, const char* op) {
+  requireFinite(ll.latDeg, op, "latitude");
+  requireFinite(ll.lonDeg, op, "longitude");
+  if (std::abs(ll.latDeg) > 90.0) {
+    throw InvalidArgument(std::string(op) + ": latitude is " + std::to_string(ll.latDeg) +
+                          " deg, expected within [-90, 90]");
+  }
+}
+}  // namespace
+
+HeightSample TopoPlanet::height(const LatLon& ll, Interpolation interp) const {
+  requireLatLon(ll, "TopoPlanet::height()");
+  const SurfaceSample s = surfaceImpl(ll, interp, NormalFrame::Grid, false);
+  return {s.height, s.status};
+}
+
+SurfaceSample TopoPlanet::surface(const LatLon& ll, Interpolation interp, NormalFrame frame) const {
+  requireLatLon(ll, "TopoPlanet::surface()");
+  return surfaceImpl(ll, interp, frame, true);
+}
+
+SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, NormalFrame frame,
+                                      bool wantNormal) const {
+  SurfaceSample s;
+  const Located L = locate(ll);
+  if (!L.inside) return s;
+  const float nd = detail::nodataOrNan(grid_);
+  auto eval = [&](auto grad) {
+    constexpr bool G = decltype(grad)::value;
+    return planetAccessor<G>(grid_, *samples_, global_, northCap_, southCap_,
+                             [&](const auto& acc) {
+                               return detail::evaluate<G>(interp, acc, L.u, L.v, nd);
+                             });
+  };
+  const bool analytic = wantNormal && L.cap == 0;
+  const detail::KernelResult k =
+      analytic ? eval(std::true_type{}) : eval(std::false_type{});
+  s.status = k.status;
+  if (k.status != QueryStatus::Ok) return s;
+  double h = k.h;
+  if (L.cap != 0) {
+    const double pole = L.cap > 0 ? northPole_ : southPole_;
+    if (std::isnan(pole)) {
+      s.status = QueryStatus::Nodata;
+      return s;
+    }
+    h = (1.0 - L.t) * h + L.t * pole;
+  }
+  s.height = h;
+  if (!wantNormal) return s;
+
+  const double latD = body_.toPlanetodetic(ll.latDeg, latType_);
+  const double cosD = std::cos(latD * kDeg);
+  glm::dvec3 enu;
+  if (analytic && cosD > 1e-9) {
+    // Surface S(φ, λ) = X(φ, λ) + h·U: its normal in ENU is (−h_e, −h_n, 1) with
+    // h_e = h_λ / ((N + h) cos φ) and h_n = h_φ / (M + h), φ planetodetic.
+    const double hLam = k.dhdu / (grid_.spacingX() * kDeg);
+    double hPhi = -k.dhdv / (grid_.spacingY() * kDeg);
+    if (latType_ == LatitudeType::Planetocentric && !body_.isSphere()) {
+      const double q = (body_.polarRadius() / body_.equatorialRadius()) *
+                       (body_.polarRadius() / body_.equatorialRadius());
+      const double sinD = std::sin(latD * kDeg);
+      hPhi *= q / (cosD * cosD + q * q * sinD * sinD);  // ∂φc/∂φd
+    }
+    const double he = hLam / ((body_.primeVerticalRadius(latD) + h) * cosD);
+    const double hn = hPhi / (body_.meridianRadius(latD) + h);
+    enu = glm::normalize(glm::dvec3(-he, -hn, 1.0));
+  } else {
+    enu = capNormalEnu(ll, interp, h);
+    if (std::isnan(enu.x)) {
+      s.status = QueryStatus::Nodata;
+      s.height = kNan;
+      return s;
+    }
+  }
+  s.normal = frame == NormalFrame::Grid ? enu : body_.enuFrame(latD, ll.lonDeg) * enu;
+  return s;
+}
+
+glm::dvec3 TopoPlanet::capNormalEnu(const LatLon& ll, Interpolation interp, double) const {
+  // Near and at a pole latitude/longitude derivatives degenerate, so the normal comes from
+  // four heights a quarter row apart along east and north in the tangent plane, which
+  // stay well defined at the pole itself (east/north are taken at the given longitude).
+  const double latD = body_.toPlanetodetic(ll.latDeg, latType_);
+  const glm::dmat3 enu = body_.enuFrame(latD, ll.lonDeg);
+  const glm::dvec3 p0 = body_.toBodyFixed({latD, ll.lonDeg, 0.0});
+  const double delta = 0.25 * grid_.spacingY() * kDeg * body_.meridianRadius(latD);
+  glm::dvec3 pts[4];
+  const glm::dvec3 offs[4] = {delta * enu[0], -delta * enu[0], delta * enu[1], -delta * enu[1]};
+  for (int i = 0; i < 4; ++i) {
+    const Geodetic g = body_.toGeodetic(p0 + offs[i]);
+    const LatLon q{body_.fromPlanetodetic(g.latDeg, latType_), g.lonDeg};
+    const SurfaceSample hs = surfaceImpl(q, interp, NormalFrame::Grid, false);
+    if (!hs.valid()) return glm::dvec3(kNan);
+    pts[i] = body_.toBodyFixed({g.latDeg, g.lonDeg, hs.height});
+  }
+  const glm::dvec3 n = glm::normalize(glm::cross(pts[0] - pts[1], pts[2] - pts[3]));
+  return {glm::dot(n, enu[0]), glm::dot(n, enu[1]), glm::dot(n, enu[2])};
+}
+
+void TopoPlanet::heights(std::span<const double> latsDeg, std::span<const double> lonsDeg,
+                         std::span<double> out, std::span<QueryStatus> status,
+                         Interpolation interp) const {
+  constexpr const char* op = "TopoPlanet::heights()";
+  const std::size_t n = latsDeg.size();
+  if (lonsDeg.size() != n || out.size() != n || (!status.empty() && status.size() != n)) {
+    throw InvalidArgument(std::string(op) + ": arrays have lengths " + std::to_string(n) + ", " +
+                          std::to_string(lonsDeg.size()) + ", " + std::to_string(out.size()) +
+                          ", " + std::to_string(status.size()) + ", expected equal lengths");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    try {
+      requireLatLon({latsDeg[i], lonsDeg[i]}, op);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(std::string(e.what()) + " (point " + std::to_string(i) + ")");
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const SurfaceSample s = surfaceImpl({latsDeg[i], lonsDeg[i]}, interp, NormalFrame::Grid, false);
+    out[i] = s.height;
+    if (!status.empty()) status[i] = s.status;
+  }
+}
+
+void TopoPlanet::surfaces(std::span<const double> latsDeg, std::span<const double> lonsDeg,
+                          std::span<double> outHeights, std::span<glm::dvec3> outNormals,
+                          std::span<QueryStatus> status, Interpolation interp,
+                          NormalFrame frame) const {
+  constexpr const char* op = "TopoPlanet::surfaces()";
+  const std::size_t n = latsDeg.size();
+  if (lonsDeg.size() != n || outHeights.size() != n || outNormals.size() != n ||
+      (!status.empty() && status.size() != n)) {
+    throw InvalidArgument(std::string(op) + ": arrays differ in length, expected " +
+                          std::to_string(n) + " elements each");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    try {
+      requireLatLon({latsDeg[i], lonsDeg[i]}, op);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(std::string(e.what()) + " (point " + std::to_string(i) + ")");
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const SurfaceSample s = surfaceImpl({latsDeg[i], lonsDeg[i]}, interp, frame, true);
+    outHeights[i] = s.height;
+    outNormals[i] = s.normal;
+    if (!status.empty()) status[i] = s.status;
+  }
+}
+
+Geodetic TopoPlanet::toGeodetic(const LatLon& ll, double h) const {
+  requireLatLon(ll, "TopoPlanet::toGeodetic()");
+  return {body_.toPlanetodetic(ll.latDeg, latType_), ll.lonDeg, h};
+}
+
+glm::dvec3 TopoPlanet::toBodyFixed(const LatLon& ll, double h) const {
+  return body_.toBodyFixed(toGeodetic(ll, h));
+}
+
+}  // namespace regolith::topo
