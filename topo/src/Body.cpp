@@ -104,7 +104,10 @@ glm::dvec3 Body::toBodyFixed(const Geodetic& g) const noexcept {
 
 Geodetic Body::toGeodetic(const glm::dvec3& p) const noexcept {
   const double rxy = std::hypot(p.x, p.y);
-  const double lon = (rxy == 0.0) ? 0.0 : std::atan2(p.y, p.x) / kDeg;
+  double lon = (rxy == 0.0) ? 0.0 : std::atan2(p.y, p.x) / kDeg;
+  // atan2 gives −π for y = −0 or a y that is negative by rounding only (toBodyFixed at
+  // −180°); the documented range is (−180, 180].
+  if (lon <= -180.0) lon += 360.0;
   if (isSphere()) {
     const double r = std::hypot(rxy, p.z);
     return {std::atan2(p.z, rxy) / kDeg, lon, r - a_};

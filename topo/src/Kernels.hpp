@@ -3,7 +3,8 @@
 //
 // Kernels are templates over an accessor so that the in-memory fast path compiles to plain
 // array loads while paged sources go through SampleSource. An accessor provides
-//   float operator()(long r, long c)  any integer index, mapped to a sample (clamp/wrap/pole)
+//   double operator()(long r, long c)  any integer index, mapped to a sample (wrap, pole,
+//                                      or extrapolation one sample beyond an edge)
 //   bool hasRow(long r), hasCol(long c)  whether the index names a distinct sample
 //   long rMax(), cMax()  the largest base index of a cell (rows−2 on clamped axes)
 // Coordinates u (column) and v (row) are fractional sample indices, already brought into
@@ -15,6 +16,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <limits>
 
 namespace regolith::topo::detail {
 
@@ -25,7 +27,8 @@ struct KernelResult {
   QueryStatus status = QueryStatus::Ok;
 };
 
-inline bool missing(float s, float nd) noexcept { return s != s || s == nd; }
+// A sample is missing if NaN or equal to the nodata value (NaN itself when none is declared).
+inline bool missing(double s, double nd) noexcept { return s != s || s == nd; }
 
 // Raw fetchers: indices already valid.
 struct MemFetch {
@@ -40,13 +43,32 @@ struct SourceFetch {
   }
 };
 
-// Clamp-to-edge accessor (TopoDem, and regional TopoPlanet grids).
+// Samples beyond a non-periodic edge are extrapolated with Keys' own boundary condition,
+// f(−1) = 3f(0) − 3f(1) + f(2), which keeps cubic convolution exact for quadratics right up
+// to the border (edge replication would bend a plane there). With two samples the rule is
+// linear, with one constant. Only one sample beyond an edge is ever requested.
+template <class At>
+double extrapolate(long n, long i, At&& at) {
+  if (n == 1) return at(0);
+  const bool low = i < 0;
+  const long e0 = low ? 0 : n - 1, e1 = low ? 1 : n - 2, e2 = low ? 2 : n - 3;
+  if (n == 2) return 2.0 * at(e0) - at(e1);
+  return 3.0 * at(e0) - 3.0 * at(e1) + at(e2);
+}
+
+// TopoDem accessor (and regional TopoPlanet grids): both axes end at the grid's edges.
 template <class Fetch>
 struct ClampAcc {
   Fetch fetch;
   long rows, cols;
-  float operator()(long r, long c) const {
-    return fetch(std::clamp(r, 0L, rows - 1), std::clamp(c, 0L, cols - 1));
+  double operator()(long r, long c) const {
+    if (c < 0 || c >= cols) {
+      return extrapolate(cols, c, [&](long cc) { return (*this)(r, cc); });
+    }
+    if (r < 0 || r >= rows) {
+      return extrapolate(rows, r, [&](long rr) { return (*this)(rr, c); });
+    }
+    return static_cast<double>(fetch(r, c));
   }
   bool hasRow(long r) const noexcept { return r >= 0 && r < rows; }
   bool hasCol(long c) const noexcept { return c >= 0 && c < cols; }
@@ -61,26 +83,24 @@ struct PlanetAcc {
   Fetch fetch;
   long rows, cols;
   bool global, reflectNorth, reflectSouth;
-  float operator()(long r, long c) const {
-    if (r < 0) {
-      if (reflectNorth) {
-        r = -1 - r;
-        c += cols / 2;
-      }
-    } else if (r >= rows) {
-      if (reflectSouth) {
-        r = 2 * rows - 1 - r;
-        c += cols / 2;
-      }
+  double operator()(long r, long c) const {
+    if (r < 0 && reflectNorth) {
+      r = -1 - r;
+      c += cols / 2;
+    } else if (r >= rows && reflectSouth) {
+      r = 2 * rows - 1 - r;
+      c += cols / 2;
     }
-    r = std::clamp(r, 0L, rows - 1);
     if (global) {
       c %= cols;
       if (c < 0) c += cols;
-    } else {
-      c = std::clamp(c, 0L, cols - 1);
+    } else if (c < 0 || c >= cols) {
+      return extrapolate(cols, c, [&](long cc) { return (*this)(r, cc); });
     }
-    return fetch(r, c);
+    if (r < 0 || r >= rows) {
+      return extrapolate(rows, r, [&](long rr) { return (*this)(rr, c); });
+    }
+    return static_cast<double>(fetch(r, c));
   }
   bool hasRow(long r) const noexcept {
     return (r >= 0 && r < rows) || (r < 0 && reflectNorth) || (r >= rows && reflectSouth);
@@ -105,18 +125,18 @@ inline void keysWeights(double t, double w[4], double dw[4]) noexcept {
 }
 
 template <bool Grad, class Acc>
-KernelResult nearest(const Acc& acc, double u, double v, float nd) {
+KernelResult nearest(const Acc& acc, double u, double v, double nd) {
   const long c = static_cast<long>(std::floor(u + 0.5));
   const long r = static_cast<long>(std::floor(v + 0.5));
   KernelResult k;
-  const float s = acc(r, c);
+  const double s = acc(r, c);
   if (missing(s, nd)) return {0.0, 0.0, 0.0, QueryStatus::Nodata};
-  k.h = static_cast<double>(s);
+  k.h = s;
   if constexpr (Grad) {
     // Central differences of the neighbouring samples, one-sided at the edges.
-    auto diff = [&](bool hasLo, bool hasHi, float lo, float hi, double& out) {
-      const double a = hasLo ? static_cast<double>(lo) : k.h;
-      const double b = hasHi ? static_cast<double>(hi) : k.h;
+    auto diff = [&](bool hasLo, bool hasHi, double lo, double hi, double& out) {
+      const double a = hasLo ? lo : k.h;
+      const double b = hasHi ? hi : k.h;
       const int n = int(hasLo) + int(hasHi);
       if ((hasLo && missing(lo, nd)) || (hasHi && missing(hi, nd))) return false;
       out = n == 0 ? 0.0 : (b - a) / n;
@@ -131,24 +151,24 @@ KernelResult nearest(const Acc& acc, double u, double v, float nd) {
 }
 
 template <bool Grad, class Acc>
-KernelResult bilinear(const Acc& acc, double u, double v, float nd) {
+KernelResult bilinear(const Acc& acc, double u, double v, double nd) {
   const long c = std::min(static_cast<long>(std::floor(u)), acc.cMax());
   const long r = std::min(static_cast<long>(std::floor(v)), acc.rMax());
   const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
-  float s00 = acc(r, c), s01 = acc(r, c + 1), s10 = acc(r + 1, c), s11 = acc(r + 1, c + 1);
+  double s00 = acc(r, c), s01 = acc(r, c + 1), s10 = acc(r + 1, c), s11 = acc(r + 1, c + 1);
   if (missing(s00, nd) || missing(s01, nd) || missing(s10, nd) || missing(s11, nd)) {
     if constexpr (Grad) return {0.0, 0.0, 0.0, QueryStatus::Nodata};
     // Height only: a missing sample is harmless exactly when its weight is zero.
     const double w[4] = {(1 - tu) * (1 - tv), tu * (1 - tv), (1 - tu) * tv, tu * tv};
-    float* s[4] = {&s00, &s01, &s10, &s11};
+    double* s[4] = {&s00, &s01, &s10, &s11};
     for (int i = 0; i < 4; ++i) {
       if (missing(*s[i], nd)) {
         if (w[i] != 0.0) return {0.0, 0.0, 0.0, QueryStatus::Nodata};
-        *s[i] = 0.0f;
+        *s[i] = 0.0;
       }
     }
   }
-  const double a = s00, b = s01, cc = s10, d = s11;
+  const double a = s00, b = s01, cc = s10, d = s11;  // NOLINT(readability-identifier-length)
   KernelResult k;
   const double top = a + tu * (b - a), bottom = cc + tu * (d - cc);
   k.h = top + tv * (bottom - top);
@@ -160,7 +180,7 @@ KernelResult bilinear(const Acc& acc, double u, double v, float nd) {
 }
 
 template <bool Grad, class Acc>
-KernelResult bicubic(const Acc& acc, double u, double v, float nd) {
+KernelResult bicubic(const Acc& acc, double u, double v, double nd) {
   const long c = std::min(static_cast<long>(std::floor(u)), acc.cMax());
   const long r = std::min(static_cast<long>(std::floor(v)), acc.rMax());
   double wu[4], dwu[4], wv[4], dwv[4];
@@ -170,13 +190,13 @@ KernelResult bicubic(const Acc& acc, double u, double v, float nd) {
   for (int i = 0; i < 4; ++i) {
     double row = 0.0, drow = 0.0;
     for (int j = 0; j < 4; ++j) {
-      const float s = acc(r - 1 + i, c - 1 + j);
+      const double s = acc(r - 1 + i, c - 1 + j);
       if (missing(s, nd)) {
         if (Grad || (wv[i] * wu[j]) != 0.0) return {0.0, 0.0, 0.0, QueryStatus::Nodata};
         continue;
       }
-      row += wu[j] * static_cast<double>(s);
-      if constexpr (Grad) drow += dwu[j] * static_cast<double>(s);
+      row += wu[j] * s;
+      if constexpr (Grad) drow += dwu[j] * s;
     }
     k.h += wv[i] * row;
     if constexpr (Grad) {
@@ -188,7 +208,7 @@ KernelResult bicubic(const Acc& acc, double u, double v, float nd) {
 }
 
 template <bool Grad, class Acc>
-KernelResult evaluate(Interpolation interp, const Acc& acc, double u, double v, float nd) {
+KernelResult evaluate(Interpolation interp, const Acc& acc, double u, double v, double nd) {
   switch (interp) {
     case Interpolation::Nearest: return nearest<Grad>(acc, u, v, nd);
     case Interpolation::Bicubic: return bicubic<Grad>(acc, u, v, nd);
@@ -197,8 +217,8 @@ KernelResult evaluate(Interpolation interp, const Acc& acc, double u, double v, 
   return bilinear<Grad>(acc, u, v, nd);
 }
 
-inline float nodataOrNan(const TopoGrid& g) noexcept {
-  return g.nodata() ? *g.nodata() : __builtin_nanf("");
+inline double nodataOrNan(const TopoGrid& g) noexcept {
+  return g.nodata() ? static_cast<double>(*g.nodata()) : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace regolith::topo::detail

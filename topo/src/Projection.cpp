@@ -21,11 +21,12 @@ void requireLatitude(double latDeg, const char* op) {
   }
 }
 
-// Snyder (15-9): t = tan(π/4 − φ/2) / ((1 − e sinφ)/(1 + e sinφ))^(e/2), written with
-// cos φ / (1 + sin φ) for tan(π/4 − φ/2) so that it stays accurate near the pole.
+// Snyder (15-9): t = tan(π/4 − φ/2) / ((1 − e sinφ)/(1 + e sinφ))^(e/2). tan(π/4 − φ/2)
+// is written cos φ / (1 + sin φ) in the projection's hemisphere and (1 − sin φ) / cos φ in
+// the other, so it stays accurate (and finite) next to both poles.
 double stereoT(double phi, double e) {
   const double s = std::sin(phi);
-  const double base = std::cos(phi) / (1.0 + s);
+  const double base = phi >= 0.0 ? std::cos(phi) / (1.0 + s) : (1.0 - s) / std::cos(phi);
   if (e == 0.0) return base;
   return base / std::pow((1.0 - e * s) / (1.0 + e * s), 0.5 * e);
 }

@@ -76,7 +76,7 @@ HeightSample TopoDem::height(double x, double y, Interpolation interp) const {
   requirePoint(x, y, "TopoDem::height()");
   const Where w = locate(grid_, x, y);
   if (!w.inside) return {};
-  const float nd = detail::nodataOrNan(grid_);
+  const double nd = detail::nodataOrNan(grid_);
   const KernelResult k = withAccessor<false>(grid_, *samples_, [&](const auto& acc) {
     return detail::evaluate<false>(interp, acc, w.u, w.v, nd);
   });
@@ -88,7 +88,7 @@ SurfaceSample TopoDem::surface(double x, double y, Interpolation interp, NormalF
   requirePoint(x, y, "TopoDem::surface()");
   const Where w = locate(grid_, x, y);
   if (!w.inside) return {};
-  const float nd = detail::nodataOrNan(grid_);
+  const double nd = detail::nodataOrNan(grid_);
   const KernelResult k = withAccessor<true>(grid_, *samples_, [&](const auto& acc) {
     return detail::evaluate<true>(interp, acc, w.u, w.v, nd);
   });
@@ -116,7 +116,7 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys,
   if (!status.empty()) requireSameLength(n, status.size(), op, "status");
   requireFiniteArray(xs, op, "xs");
   requireFiniteArray(ys, op, "ys");
-  const float nd = detail::nodataOrNan(grid_);
+  const double nd = detail::nodataOrNan(grid_);
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
   // The accessor and kernel are chosen once for the whole batch.
   withAccessor<false>(grid_, *samples_, [&](const auto& acc) {

@@ -143,7 +143,7 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, No
   SurfaceSample s;
   const Located L = locate(ll);
   if (!L.inside) return s;
-  const float nd = detail::nodataOrNan(grid_);
+  const double nd = detail::nodataOrNan(grid_);
   auto eval = [&](auto grad) {
     constexpr bool G = decltype(grad)::value;
     return planetAccessor<G>(grid_, *samples_, global_, northCap_, southCap_,

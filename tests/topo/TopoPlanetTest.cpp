@@ -1,0 +1,194 @@
+// TopoPlanet: lat/lon grids, longitude wrapping, polar caps, regional grids, normals.
+#include <regolith/topo/Error.hpp>
+#include <regolith/topo/TopoPlanet.hpp>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+using namespace regolith;
+using namespace regolith::topo;
+
+namespace {
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// A smooth function on the sphere (of the unit position vector), so it is single-valued at
+// the poles and periodic in longitude.
+double field(double latDeg, double lonDeg) {
+  const double x = std::cos(latDeg * kDeg) * std::cos(lonDeg * kDeg);
+  const double y = std::cos(latDeg * kDeg) * std::sin(lonDeg * kDeg);
+  const double z = std::sin(latDeg * kDeg);
+  return 3000.0 * z + 2000.0 * x - 1500.0 * y * y + 800.0 * x * z;
+}
+
+// Global grid with `perDeg` samples per degree, pixel-is-area, west edge at `west`.
+TopoPlanet globalPlanet(double perDeg, double west, const Body& body = Body::marsSphere(),
+                        LatitudeType lt = LatitudeType::Planetocentric) {
+  const double d = 1.0 / perDeg;
+  const auto rows = static_cast<std::size_t>(std::lround(180.0 * perDeg));
+  const auto cols = static_cast<std::size_t>(std::lround(360.0 * perDeg));
+  TopoGrid g(rows, cols, west + d / 2, 90.0 - d / 2, d, d);
+  return {g, body, lt, InMemorySamples::fromFunction(rows, cols, [&](std::size_t r, std::size_t c) {
+            const glm::dvec2 p = g.sampleCentre(double(r), double(c));
+            return float(field(p.y, p.x));
+          })};
+}
+}  // namespace
+
+TEST(TopoPlanet, DetectsGlobalGridsAndPolarCaps) {
+  const TopoPlanet p = globalPlanet(1.0, 0.0);
+  EXPECT_TRUE(p.isGlobalInLongitude());
+  EXPECT_TRUE(p.hasNorthCap());
+  EXPECT_TRUE(p.hasSouthCap());
+  const TopoGrid regional(10, 10, 0.5, 9.5, 1.0, 1.0);
+  const TopoPlanet r(regional, Body::moon(), LatitudeType::Planetocentric,
+                     std::make_shared<InMemorySamples>(10, 10, std::vector<float>(100, 1.0f)));
+  EXPECT_FALSE(r.isGlobalInLongitude());
+  EXPECT_FALSE(r.hasNorthCap());
+}
+
+TEST(TopoPlanet, InterpolatesASmoothFieldToTheExpectedAccuracy) {
+  const TopoPlanet p = globalPlanet(2.0, -180.0);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> lat(-89.0, 89.0), lon(-180.0, 180.0);
+  double maxLin = 0.0, maxCub = 0.0;
+  for (int i = 0; i < 2000; ++i) {
+    const double a = lat(rng), b = lon(rng);
+    maxLin = std::max(maxLin, std::abs(p.height({a, b}, Interpolation::Bilinear).height - field(a, b)));
+    maxCub = std::max(maxCub, std::abs(p.height({a, b}, Interpolation::Bicubic).height - field(a, b)));
+  }
+  // Second derivatives are ≲ 5000 m/rad², spacing 0.5° = 0.0087 rad: h''·d²/8 ≈ 0.05 m.
+  EXPECT_LT(maxLin, 0.2);
+  EXPECT_LT(maxCub, 0.02);
+  EXPECT_LT(maxCub, maxLin);
+}
+
+TEST(TopoPlanet, LongitudeWrapsWhateverRangeItIsGivenIn) {
+  const TopoPlanet a = globalPlanet(1.0, 0.0);     // grid 0…360
+  const TopoPlanet b = globalPlanet(1.0, -180.0);  // grid −180…180
+  for (double lon : {-170.3, -0.25, 10.6, 179.9}) {
+    const double h = a.height({12.3, lon}, Interpolation::Bicubic).height;
+    for (double alt : {lon + 360.0, lon - 360.0, lon + 720.0}) {
+      EXPECT_NEAR(a.height({12.3, alt}, Interpolation::Bicubic).height, h, 1e-9);
+      EXPECT_NEAR(b.height({12.3, alt}, Interpolation::Bicubic).height, h, 1e-9);
+    }
+  }
+}
+
+TEST(TopoPlanet, RegionalGridIsOutsideBeyondItsExtentAndAcceptsEitherLongitudeRange) {
+  // A region straddling 0°: 350°…10°E, 20°S…20°N, 1° pixels.
+  const TopoGrid g(40, 20, 350.5, 19.5, 1.0, 1.0);
+  const TopoPlanet p(g, Body::marsSphere(), LatitudeType::Planetocentric,
+                     InMemorySamples::fromFunction(40, 20, [&](std::size_t r, std::size_t c) {
+                       return float(100 * r + c);
+                     }));
+  EXPECT_TRUE(p.height({0.0, 355.0}).valid());
+  EXPECT_DOUBLE_EQ(p.height({0.0, -5.0}).height, p.height({0.0, 355.0}).height);
+  EXPECT_DOUBLE_EQ(p.height({19.5, 5.5}, Interpolation::Nearest).height, 15.0);
+  EXPECT_EQ(p.height({0.0, 10.6}).status, QueryStatus::OutsideGrid);
+  EXPECT_EQ(p.height({0.0, 349.4}).status, QueryStatus::OutsideGrid);
+  EXPECT_EQ(p.height({20.6, 0.0}).status, QueryStatus::OutsideGrid);
+  EXPECT_EQ(p.height({-20.6, 0.0}).status, QueryStatus::OutsideGrid);
+  EXPECT_TRUE(p.height({20.0, 10.0}).valid());  // the pixel-extent corner is inside
+}
+
+TEST(TopoPlanet, PoleHeightIsOneValueAndTheCapJoinsTheGridContinuously) {
+  const TopoPlanet p = globalPlanet(1.0, 0.0);
+  const double pole = p.height({90.0, 0.0}).height;
+  EXPECT_NEAR(pole, p.northPoleHeight(), 1e-12);
+  for (double lon : {-180.0, -45.0, 33.3, 90.0, 180.0, 359.0}) {
+    for (Interpolation k : {Interpolation::Nearest, Interpolation::Bilinear, Interpolation::Bicubic}) {
+      EXPECT_DOUBLE_EQ(p.height({90.0, lon}, k).height, pole);
+    }
+  }
+  // The pole mean of the first row matches the field's pole value to the grid's accuracy.
+  EXPECT_NEAR(pole, field(90.0, 0.0), 2.0);
+  // Continuity at the edge of the cap (last row centre at 89.5°).
+  for (Interpolation k : {Interpolation::Bilinear, Interpolation::Bicubic}) {
+    const double in = p.height({89.5 - 1e-9, 40.0}, k).height;
+    const double out = p.height({89.5 + 1e-9, 40.0}, k).height;
+    EXPECT_NEAR(in, out, 1e-4);
+  }
+}
+
+TEST(TopoPlanet, EnuNormalMatchesFiniteDifferencesOfBodyFixedPositions) {
+  for (const bool ellipsoid : {false, true}) {
+    const Body body = ellipsoid ? Body::marsEllipsoid() : Body::marsSphere();
+    const TopoPlanet p = globalPlanet(4.0, 0.0, body, LatitudeType::Planetocentric);
+    for (auto [lat, lon] : {std::pair{10.1, 20.2}, {-45.3, 300.7}, {70.05, 181.3}, {89.0, 10.0},
+                            {89.95, 123.0}, {-89.95, 2.0}}) {
+      const SurfaceSample s = p.surface({lat, lon}, Interpolation::Bicubic, NormalFrame::BodyFixed);
+      ASSERT_TRUE(s.valid());
+      EXPECT_NEAR(glm::length(s.normal), 1.0, 1e-12);
+      // Oracle: tangents from positions of nearby points (1e-4° ≈ 6 m apart).
+      const double e = 1e-4;
+      auto P = [&](double a, double b) {
+        return p.toBodyFixed({a, b}, p.height({a, b}, Interpolation::Bicubic).height);
+      };
+      glm::dvec3 fd = glm::normalize(glm::cross(P(lat, lon + e) - P(lat, lon - e),
+                                                P(lat + e, lon) - P(lat - e, lon)));
+      // In the polar cap the blend is only C0 across longitudes at the same latitude, so
+      // compare more loosely there.
+      const double tol = std::abs(lat) > 89.875 ? 2e-2 : 1e-5;
+      EXPECT_LT(glm::length(s.normal - fd), tol) << lat << "," << lon << " ellipsoid=" << ellipsoid;
+      // Grid-frame (ENU) normal rotated into the body frame gives the same vector.
+      const SurfaceSample g = p.surface({lat, lon}, Interpolation::Bicubic, NormalFrame::Grid);
+      const glm::dmat3 enu = body.enuFrame(body.toPlanetodetic(lat, LatitudeType::Planetocentric), lon);
+      EXPECT_LT(glm::length(enu * g.normal - s.normal), 1e-12);
+    }
+  }
+}
+
+TEST(TopoPlanet, FlatPlanetHasUpNormalsEverywhereIncludingThePoles) {
+  const TopoGrid g(18, 36, 5.0, 85.0, 10.0, 10.0);
+  const TopoPlanet p(g, Body::marsEllipsoid(), LatitudeType::Planetodetic,
+                     std::make_shared<InMemorySamples>(18, 36, std::vector<float>(18 * 36, 250.0f)));
+  for (double lat : {-90.0, -89.99, -30.0, 0.0, 45.0, 89.999, 90.0}) {
+    for (double lon : {-180.0, 0.0, 77.0}) {
+      const SurfaceSample s = p.surface({lat, lon}, Interpolation::Bilinear, NormalFrame::Grid);
+      ASSERT_TRUE(s.valid());
+      EXPECT_DOUBLE_EQ(s.height, 250.0);
+      EXPECT_NEAR(s.normal.z, 1.0, 1e-9) << lat << "," << lon;
+    }
+  }
+}
+
+TEST(TopoPlanet, LatitudeBeyondNinetyAndNonFiniteInputThrow) {
+  const TopoPlanet p = globalPlanet(1.0, 0.0);
+  try {
+    (void)p.height({90.5, 0.0});
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "TopoPlanet::height(): latitude is 90.500000 deg, expected within [-90, 90]");
+  }
+  EXPECT_THROW((void)p.surface({0.0, std::nan("")}), InvalidArgument);
+  std::vector<double> lats{0.0, std::numeric_limits<double>::infinity()}, lons{0.0, 0.0}, out(2);
+  EXPECT_THROW(p.heights(lats, lons, out, {}), InvalidArgument);
+}
+
+TEST(TopoPlanet, BatchEqualsSingleQueries) {
+  const TopoPlanet p = globalPlanet(1.0, -180.0);
+  std::vector<double> lats{-90.0, -10.5, 0.0, 45.25, 89.9}, lons{0.0, 179.99, -180.0, 360.0, 10.0};
+  std::vector<double> h(5), h2(5);
+  std::vector<glm::dvec3> n(5);
+  std::vector<QueryStatus> st(5);
+  p.heights(lats, lons, h, st, Interpolation::Bicubic);
+  p.surfaces(lats, lons, h2, n, {}, Interpolation::Bicubic, NormalFrame::BodyFixed);
+  for (std::size_t i = 0; i < 5; ++i) {
+    EXPECT_EQ(h[i], p.height({lats[i], lons[i]}, Interpolation::Bicubic).height);
+    const SurfaceSample s = p.surface({lats[i], lons[i]}, Interpolation::Bicubic, NormalFrame::BodyFixed);
+    EXPECT_EQ(h2[i], s.height);
+    EXPECT_EQ(n[i], s.normal);
+  }
+}
+
+TEST(TopoPlanet, RejectsGridsBeyondThePolesOrWiderThan360Degrees) {
+  auto s = std::make_shared<InMemorySamples>(2, 2, std::vector<float>(4));
+  EXPECT_THROW(TopoPlanet(TopoGrid(2, 2, 0.5, 90.0, 1.0, 1.0), Body::moon(), LatitudeType::Planetocentric, s),
+               InvalidArgument);
+  EXPECT_THROW(TopoPlanet(TopoGrid(2, 2, 0.0, 0.0, 200.0, 1.0), Body::moon(), LatitudeType::Planetocentric, s),
+               InvalidArgument);
+}
