@@ -6,6 +6,7 @@
 #include <glm/geometric.hpp>
 
 #include <cmath>
+#include <cstdlib>
 #include <string>
 
 namespace regolith::topo {
@@ -20,28 +21,34 @@ struct Where {
   bool inside;
 };
 
-inline Where locate(const TopoGrid& g, double x, double y) noexcept {
+// cmax, rmax: cols − 1 and rows − 1 (precomputed: size_t → double is not free).
+inline Where locate(const TopoGrid& g, double x, double y, double cmax, double rmax) noexcept {
   const double u = (x - g.x0()) / g.spacingX();
   const double v = (g.y0() - y) / g.spacingY();
-  const double cmax = static_cast<double>(g.cols()) - 1.0;
-  const double rmax = static_cast<double>(g.rows()) - 1.0;
   const bool inside = u >= -0.5 && u <= cmax + 0.5 && v >= -0.5 && v <= rmax + 0.5;
   // Within the half-pixel border the stencil sits on the outermost samples.
   return {std::clamp(u, 0.0, cmax), std::clamp(v, 0.0, rmax), inside};
 }
 
-template <bool Grad, class Fn>
-KernelResult withAccessor(const TopoGrid& g, const SampleSource& src, Fn&& fn) {
+// Calls fn with the accessor that fits the source: plain array loads when the samples are
+// resident, SampleSource::sample() otherwise.
+template <class Fn>
+KernelResult withAccessor(const TopoGrid& g, const SampleSource& src, const float* resident,
+                          Fn&& fn) {
   const long rows = static_cast<long>(g.rows()), cols = static_cast<long>(g.cols());
-  if (const float* d = src.contiguous()) {
-    return fn(ClampAcc<detail::MemFetch>{{d, cols}, rows, cols});
-  }
+  if (resident != nullptr) return fn(ClampAcc<detail::MemFetch>{{resident, cols}, rows, cols});
   return fn(ClampAcc<detail::SourceFetch>{{&src}, rows, cols});
 }
 
-void requirePoint(double x, double y, const char* op) {
+// The check is inline and the throwing part out of line, so that the hot path stays small.
+[[noreturn]] void throwNonFinite(double x, double y, const char* op) {
   requireFinite(x, op, "x");
   requireFinite(y, op, "y");
+  std::abort();  // unreachable: one of the two threw
+}
+
+inline void requirePoint(double x, double y, const char* op) {
+  if (!std::isfinite(x) || !std::isfinite(y)) [[unlikely]] throwNonFinite(x, y, op);
 }
 
 void requireSameLength(std::size_t n, std::size_t m, const char* op, const char* field) {
@@ -70,15 +77,40 @@ TopoDem::TopoDem(TopoGrid grid, Placement placement, std::shared_ptr<const Sampl
                           std::to_string(samples_->cols()) + ", expected the grid's " +
                           std::to_string(grid_.rows()) + "x" + std::to_string(grid_.cols()));
   }
+  resident_ = samples_->contiguous();
+  nodata_ = detail::nodataOrNan(grid_);
+  hasNodataValue_ = grid_.nodata().has_value() && !std::isnan(*grid_.nodata());
+  uMax_ = static_cast<double>(grid_.cols()) - 1.0;
+  vMax_ = static_cast<double>(grid_.rows()) - 1.0;
 }
 
 HeightSample TopoDem::height(double x, double y, Interpolation interp) const {
   requirePoint(x, y, "TopoDem::height()");
-  const Where w = locate(grid_, x, y);
+  const Where w = locate(grid_, x, y, uMax_, vMax_);
   if (!w.inside) return {};
-  const double nd = detail::nodataOrNan(grid_);
-  const KernelResult k = withAccessor<false>(grid_, *samples_, [&](const auto& acc) {
-    return detail::evaluate<false>(interp, acc, w.u, w.v, nd);
+  if (resident_ != nullptr && interp == Interpolation::Bilinear) {
+    // The rover's query, written out: ~30 instructions instead of the generic kernel's
+    // ~150 (the accessor's edge handling is not needed when the cell is inside the grid).
+    const auto cols = static_cast<long>(grid_.cols()), rows = static_cast<long>(grid_.rows());
+    if (cols >= 2 && rows >= 2) {
+      const long c = std::min(static_cast<long>(w.u), cols - 2);  // u, v ≥ 0 here
+      const long r = std::min(static_cast<long>(w.v), rows - 2);
+      const double tu = w.u - static_cast<double>(c), tv = w.v - static_cast<double>(r);
+      const float* p = resident_ + r * cols + c;
+      const double a = p[0], b = p[1], cc = p[cols], d = p[cols + 1];
+      const double top = a + tu * (b - a), bottom = cc + tu * (d - cc);
+      const double h = top + tv * (bottom - top);
+      // A NaN sample makes h NaN (0·NaN is NaN), so one test covers them all; a declared
+      // nodata value needs comparing. Either way the generic kernel below then decides,
+      // by the weights, whether the query is Nodata.
+      if (h == h && (!hasNodataValue_ ||
+                     (a != nodata_ && b != nodata_ && cc != nodata_ && d != nodata_))) [[likely]] {
+        return {h, QueryStatus::Ok};
+      }
+    }
+  }
+  const KernelResult k = withAccessor(grid_, *samples_, resident_, [&](const auto& acc) {
+    return detail::evaluate<false>(interp, acc, w.u, w.v, nodata_);
   });
   if (k.status != QueryStatus::Ok) return {std::numeric_limits<double>::quiet_NaN(), k.status};
   return {k.h, QueryStatus::Ok};
@@ -86,11 +118,10 @@ HeightSample TopoDem::height(double x, double y, Interpolation interp) const {
 
 SurfaceSample TopoDem::surface(double x, double y, Interpolation interp, NormalFrame frame) const {
   requirePoint(x, y, "TopoDem::surface()");
-  const Where w = locate(grid_, x, y);
+  const Where w = locate(grid_, x, y, uMax_, vMax_);
   if (!w.inside) return {};
-  const double nd = detail::nodataOrNan(grid_);
-  const KernelResult k = withAccessor<true>(grid_, *samples_, [&](const auto& acc) {
-    return detail::evaluate<true>(interp, acc, w.u, w.v, nd);
+  const KernelResult k = withAccessor(grid_, *samples_, resident_, [&](const auto& acc) {
+    return detail::evaluate<true>(interp, acc, w.u, w.v, nodata_);
   });
   SurfaceSample s;
   s.status = k.status;
@@ -116,13 +147,13 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys,
   if (!status.empty()) requireSameLength(n, status.size(), op, "status");
   requireFiniteArray(xs, op, "xs");
   requireFiniteArray(ys, op, "ys");
-  const double nd = detail::nodataOrNan(grid_);
+  const double nd = nodata_;
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
   // The accessor and kernel are chosen once for the whole batch.
-  withAccessor<false>(grid_, *samples_, [&](const auto& acc) {
+  withAccessor(grid_, *samples_, resident_, [&](const auto& acc) {
     auto run = [&](auto kernel) {
       for (std::size_t i = 0; i < n; ++i) {
-        const Where w = locate(grid_, xs[i], ys[i]);
+        const Where w = locate(grid_, xs[i], ys[i], uMax_, vMax_);
         QueryStatus st = QueryStatus::OutsideGrid;
         double h = nan;
         if (w.inside) {

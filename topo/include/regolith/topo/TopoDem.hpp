@@ -67,6 +67,10 @@ class TopoDem {
   TopoGrid grid_;
   Placement placement_;
   std::shared_ptr<const SampleSource> samples_;
+  const float* resident_ = nullptr;  // samples_->contiguous(), cached for the fast path
+  double nodata_;                    // the nodata value, or NaN
+  bool hasNodataValue_;              // a nodata value other than NaN is declared
+  double uMax_, vMax_;               // cols − 1, rows − 1
 };
 
 }  // namespace regolith::topo
