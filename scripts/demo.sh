@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# The README's first command: installs what is missing, builds, and runs the main job.
+#
+#   bash scripts/demo.sh [extra arguments for `regolith demo`, e.g. --size 2001]
+#
+# The configure options match scripts/test-all.sh, so both share one build folder.
+set -euo pipefail
+
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$root"
+build_dir=${BUILD_DIR:-build}
+
+echo "==== Dependencies (scripts/install-deps.sh)"
+bash scripts/install-deps.sh
+
+echo "==== Build ($build_dir, Release)"
+cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DREGOLITH_WERROR=ON \
+  -DREGOLITH_SANITIZE= -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=ON \
+  -DREGOLITH_BUILD_BENCH=ON >/dev/null
+cmake --build "$build_dir" -j2 --target regolith
+
+echo "==== Main job: $build_dir/tools/regolith demo $*"
+exec "$build_dir/tools/regolith" demo "$@"
