@@ -46,6 +46,14 @@ std::string fmt(const char* f, double a) {
   return b;
 }
 
+// "2.050000°S 5.500000°W" style.
+std::string latLon(double lat, double lon, int decimals) {
+  char b[96];
+  std::snprintf(b, sizeof b, "%.*f°%c %.*f°%c", decimals, std::abs(lat), lat < 0 ? 'S' : 'N',
+                decimals, std::abs(lon), lon < 0 ? 'W' : 'E');
+  return b;
+}
+
 double seconds(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
@@ -71,17 +79,17 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
   out << "[1/6] DEM: " << o.size << " x " << o.size << " samples at " << o.spacing
       << " m spacing (" << fmt("%.1f", static_cast<double>(o.size * o.size * 4) / 1e6)
       << " MB), built in " << fmt("%.2f", seconds(t0)) << " s\n";
-  out << "      body: " << mars.name() << " IAU ellipsoid, a = " << mars.equatorialRadius()
-      << " m, b = " << mars.polarRadius() << " m\n";
-  out << "      placement: local tangent plane at " << fmt("%.2f", origin.latDeg) << " N, "
-      << fmt("%.2f", origin.lonDeg) << " E, height " << origin.height << " m, heading 0\n";
+  out << "      body: " << mars.name() << " IAU ellipsoid, a = " << fmt("%.0f", mars.equatorialRadius())
+      << " m, b = " << fmt("%.0f", mars.polarRadius()) << " m\n";
+  out << "      placement: local tangent plane at " << latLon(origin.latDeg, origin.lonDeg, 2)
+      << ", " << fmt("%.0f", origin.height) << " m above the ellipsoid, heading 0 (y north)\n";
   const glm::dvec3 c0 = dem.toBodyFixed(0.0, 0.0, 0.0);
   out << "      DEM centre body-fixed: (" << fmt("%.3f", c0.x / 1e3) << ", "
       << fmt("%.3f", c0.y / 1e3) << ", " << fmt("%.3f", c0.z / 1e3) << ") km\n";
   for (auto [name, x, y] : {std::tuple{"NW corner", -half, half}, {"SE corner", half, -half}}) {
     const Geodetic g = dem.placement().toGeodetic(x, y, dem.height(x, y).height);
-    out << "      " << name << ": " << fmt("%.6f", g.latDeg) << " N, " << fmt("%.6f", g.lonDeg)
-        << " E, " << fmt("%.2f", g.height) << " m above the ellipsoid\n";
+    out << "      " << name << ": " << latLon(g.latDeg, g.lonDeg, 6) << ", ground "
+        << fmt("%.2f", g.height) << " m above the ellipsoid\n";
   }
 
   // ---- 2. Crater metrics, from queries -----------------------------------------------
@@ -103,16 +111,23 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
   // ---- 3. A rover drives from the plains to the rim ----------------------------------
   out << "\n[3/6] Rover traverse from the western plains to the rim (bilinear, grid frame)\n";
   out << "      x [m]    y [m]    lat [deg N]   lon [deg E]   height [m]  slope [deg]  body-fixed normal\n";
+  const double xStart = -std::min(0.95 * half, 560.0);
+  const double xEnd = half > 600.0 ? -384.0 : 0.95 * half;  // the rim, or across a small DEM
+  const double step = (xEnd - xStart) / 8.0;
   for (int i = 0; i <= 8; ++i) {
-    const double x = -std::min(half - 1.0, 560.0) + 22.0 * i, y = -40.0 + 2.0 * i;
+    const double x = xStart + step * i, y = std::clamp(-40.0 + 2.0 * i, -half, half);
     const SurfaceSample s = dem.surface(x, y, Interpolation::Bilinear, NormalFrame::Grid);
     const SurfaceSample b = dem.surface(x, y, Interpolation::Bilinear, NormalFrame::BodyFixed);
-    const Geodetic g = dem.placement().toGeodetic(x, y, s.height);
     char line[200];
-    std::snprintf(line, sizeof line,
-                  "      %7.1f %7.1f  %12.7f  %12.7f  %10.3f  %10.2f   (%.4f, %.4f, %.4f)\n", x, y,
-                  g.latDeg, g.lonDeg, s.height, std::acos(s.normal.z) * 180.0 / kPi, b.normal.x,
-                  b.normal.y, b.normal.z);
+    if (!s.valid()) {
+      std::snprintf(line, sizeof line, "      %7.1f %7.1f  (no valid terrain here)\n", x, y);
+    } else {
+      const Geodetic g = dem.placement().toGeodetic(x, y, s.height);
+      std::snprintf(line, sizeof line,
+                    "      %7.1f %7.1f  %12.7f  %12.7f  %10.3f  %10.2f   (%.4f, %.4f, %.4f)\n", x,
+                    y, g.latDeg, g.lonDeg, s.height, std::acos(s.normal.z) * 180.0 / kPi,
+                    b.normal.x, b.normal.y, b.normal.z);
+    }
     out << line;
   }
 
