@@ -112,7 +112,7 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
   out << "\n[3/6] Rover traverse from the western plains to the rim (bilinear, grid frame)\n";
   out << "      x [m]    y [m]    lat [deg N]   lon [deg E]   height [m]  slope [deg]  body-fixed normal\n";
   const double xStart = -std::min(0.95 * half, 560.0);
-  const double xEnd = half > 600.0 ? -384.0 : 0.95 * half;  // the rim, or across a small DEM
+  const double xEnd = half > 420.0 ? -384.0 : 0.95 * half;  // the rim, or across a small DEM
   const double step = (xEnd - xStart) / 8.0;
   for (int i = 0; i <= 8; ++i) {
     const double x = xStart + step * i, y = std::clamp(-40.0 + 2.0 * i, -half, half);
