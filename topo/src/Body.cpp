@@ -113,7 +113,7 @@ Geodetic Body::toGeodetic(const glm::dvec3& p) const noexcept {
     return {std::atan2(p.z, rxy) / kDeg, lon, r - a_};
   }
   // Bowring's method: reduced latitude β from the current φ, φ from β; each step gains
-  // about three orders of magnitude, so three steps are far below a nanometre for
+  // about three orders of magnitude, so four steps are far below a nanometre for
   // altitudes from −10 km to 1000 km (tests/topo/BodyTest.cpp checks against PROJ).
   const double ep2 = (a_ * a_ - b_ * b_) / (b_ * b_);
   double beta = std::atan2(a_ * p.z, b_ * rxy);
