@@ -2,9 +2,10 @@
 
 #include <regolith/topo/Error.hpp>
 
+#include <unistd.h>
+
 #include <fstream>
 #include <string>
-#include <unistd.h>
 
 namespace regolith::tools {
 
@@ -19,7 +20,8 @@ void writeFileAtomically(const std::filesystem::path& path,
       if (!out) throw Error("writeFileAtomically(): " + tmp.string() + ": cannot create file");
       write(out);
       out.flush();
-      if (!out) throw Error("writeFileAtomically(): " + tmp.string() + ": write failed (disk full?)");
+      if (!out)
+        throw Error("writeFileAtomically(): " + tmp.string() + ": write failed (disk full?)");
     }
     fs::rename(tmp, path);
   } catch (const fs::filesystem_error& e) {

@@ -1,9 +1,9 @@
 #include "TopoDemo.hpp"
 
-#include "AtomicFile.hpp"
-
 #include <regolith/topo/Mesh.hpp>
 #include <regolith/topo/TopoDem.hpp>
+
+#include "AtomicFile.hpp"
 
 #include <glm/geometric.hpp>
 
@@ -71,15 +71,17 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
   const double half = 0.5 * static_cast<double>(o.size - 1) * o.spacing;
   const TopoGrid grid(o.size, o.size, -half, half, o.spacing, o.spacing);
   auto t0 = Clock::now();
-  const auto samples = InMemorySamples::fromFunction(o.size, o.size, [&](std::size_t r, std::size_t c) {
-    const glm::dvec2 p = grid.sampleCentre(static_cast<double>(r), static_cast<double>(c));
-    return static_cast<float>(craterHeight(p.x, p.y));
-  });
+  const auto samples =
+      InMemorySamples::fromFunction(o.size, o.size, [&](std::size_t r, std::size_t c) {
+        const glm::dvec2 p = grid.sampleCentre(static_cast<double>(r), static_cast<double>(c));
+        return static_cast<float>(craterHeight(p.x, p.y));
+      });
   const TopoDem dem(grid, Placement(plane), samples);
-  out << "[1/6] DEM: " << o.size << " x " << o.size << " samples at " << o.spacing
-      << " m spacing (" << fmt("%.1f", static_cast<double>(o.size * o.size * 4) / 1e6)
-      << " MB), built in " << fmt("%.2f", seconds(t0)) << " s\n";
-  out << "      body: " << mars.name() << " IAU ellipsoid, a = " << fmt("%.0f", mars.equatorialRadius())
+  out << "[1/6] DEM: " << o.size << " x " << o.size << " samples at " << o.spacing << " m spacing ("
+      << fmt("%.1f", static_cast<double>(o.size * o.size * 4) / 1e6) << " MB), built in "
+      << fmt("%.2f", seconds(t0)) << " s\n";
+  out << "      body: " << mars.name()
+      << " IAU ellipsoid, a = " << fmt("%.0f", mars.equatorialRadius())
       << " m, b = " << fmt("%.0f", mars.polarRadius()) << " m\n";
   out << "      placement: local tangent plane at " << latLon(origin.latDeg, origin.lonDeg, 2)
       << ", " << fmt("%.0f", origin.height) << " m above the ellipsoid, heading 0 (y north)\n";
@@ -97,7 +99,8 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
   for (int i = 0; i < 720; ++i) {
     const double th = 2.0 * kPi * i / 720.0;
     for (double r = 0.0; r < std::min(half, 500.0); r += 2.0) {
-      const SurfaceSample s = dem.surface(r * std::cos(th), r * std::sin(th), Interpolation::Bicubic);
+      const SurfaceSample s =
+          dem.surface(r * std::cos(th), r * std::sin(th), Interpolation::Bicubic);
       if (!s.valid()) continue;
       rimMax = std::max(rimMax, s.height);
       floorMin = std::min(floorMin, s.height);
@@ -110,7 +113,8 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
 
   // ---- 3. A rover drives from the plains to the rim ----------------------------------
   out << "\n[3/6] Rover traverse from the western plains to the rim (bilinear, grid frame)\n";
-  out << "      x [m]    y [m]    lat [deg N]   lon [deg E]   height [m]  slope [deg]  body-fixed normal\n";
+  out << "      x [m]    y [m]    lat [deg N]   lon [deg E]   height [m]  slope [deg]  body-fixed "
+         "normal\n";
   const double xStart = -std::min(0.95 * half, 560.0);
   const double xEnd = half > 420.0 ? -384.0 : 0.95 * half;  // the rim, or across a small DEM
   const double step = (xEnd - xStart) / 8.0;
@@ -144,7 +148,8 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
     ys[i] = r * std::sin(th);
   }
   for (auto [name, k] : {std::pair{"nearest ", Interpolation::Nearest},
-                         {"bilinear", Interpolation::Bilinear}, {"bicubic ", Interpolation::Bicubic}}) {
+                         {"bilinear", Interpolation::Bilinear},
+                         {"bicubic ", Interpolation::Bicubic}}) {
     double maxErr = 0.0, sum2 = 0.0;
     t0 = Clock::now();
     double sink = 0.0;
@@ -183,8 +188,8 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
   const double normals = seconds(t0) * 1e9 / static_cast<double>(n);
   out << "\n[5/6] Throughput on one core, " << n << " queries along a rover path (1 cm steps):\n"
       << "      bilinear height " << fmt("%.1f", single) << " ns/query, batch "
-      << fmt("%.1f", batch) << " ns/query, height+normal " << fmt("%.1f", normals)
-      << " ns/query" << (acc == 0.123 ? " " : "") << "\n"
+      << fmt("%.1f", batch) << " ns/query, height+normal " << fmt("%.1f", normals) << " ns/query"
+      << (acc == 0.123 ? " " : "") << "\n"
       << "      (a 6-wheel rover at 1 kHz needs 6,000 queries/s: "
       << fmt("%.4f", 6000.0 * normals * 1e-9 * 100.0) << " % of one core)\n";
 
@@ -193,7 +198,8 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
   const std::size_t row0 = (o.size - win) / 2;
   const TriangleMesh mesh = buildMesh(dem, {row0, 0, win, win}, MeshFrame::Grid);
   const auto path = o.outDir / "crater_west_rim.ply";
-  writeFileAtomically(path, [&](std::ostream& s) { writePly(s, mesh); }, true);
+  writeFileAtomically(
+      path, [&](std::ostream& s) { writePly(s, mesh); }, true);
   out << "\n[6/6] Wrote " << path.string() << ": " << mesh.vertices.size() << " vertices, "
       << mesh.triangles.size() << " triangles (binary PLY, grid frame, metres)\n";
 

@@ -8,9 +8,9 @@
 namespace regolith::tools {
 
 struct TopoDemoOptions {
-  std::size_t size = 1201;       // samples per side
-  double spacing = 1.0;          // metres
-  std::size_t queries = 2000000; // for the throughput measurement
+  std::size_t size = 1201;        // samples per side
+  double spacing = 1.0;           // metres
+  std::size_t queries = 2000000;  // for the throughput measurement
   std::filesystem::path outDir = "out/topo-demo";
 };
 

@@ -7,8 +7,8 @@
 #include "support/Fixtures.hpp"
 
 #include <gdal.h>
-#include <ogr_srs_api.h>
 #include <gtest/gtest.h>
+#include <ogr_srs_api.h>
 
 #include <array>
 #include <memory>
@@ -40,9 +40,9 @@ Raster readWithGdal(const std::string& path) {
   const double nd = GDALGetRasterNoDataValue(band, &has);
   if (has) r.nodata = static_cast<float>(nd);
   r.data.resize(r.rows * r.cols);
-  const CPLErr err = GDALRasterIO(band, GF_Read, 0, 0, static_cast<int>(r.cols), static_cast<int>(r.rows),
-                                  r.data.data(), static_cast<int>(r.cols), static_cast<int>(r.rows),
-                                  GDT_Float32, 0, 0);
+  const CPLErr err = GDALRasterIO(band, GF_Read, 0, 0, static_cast<int>(r.cols),
+                                  static_cast<int>(r.rows), r.data.data(), static_cast<int>(r.cols),
+                                  static_cast<int>(r.rows), GDT_Float32, 0, 0);
   if (err != CE_None) throw std::runtime_error("GDAL cannot read " + path);
   return r;
 }
@@ -66,8 +66,10 @@ TEST(GdalConvention, ShoemakerSampleCentresAndHeightsMatchGdal) {
   const double k0 = OSRGetProjParm(srs, SRS_PP_SCALE_FACTOR, 1.0, nullptr);
   ASSERT_EQ(lat0, -90.0);
   const Body moon = Body::sphere("Moon", a);
-  const auto ps = PolarStereographic::withScaleFactor(moon, PolarStereographic::Pole::South, k0, lon0);
-  const TopoDem dem(grid, Placement(moon, ps), std::make_shared<InMemorySamples>(ras.rows, ras.cols, ras.data));
+  const auto ps =
+      PolarStereographic::withScaleFactor(moon, PolarStereographic::Pole::South, k0, lon0);
+  const TopoDem dem(grid, Placement(moon, ps),
+                    std::make_shared<InMemorySamples>(ras.rows, ras.cols, ras.data));
 
   // PROJ (through OGR) is the oracle for geographic positions of GDAL's pixel centres.
   OGRSpatialReferenceH geo = OSRCloneGeogCS(srs);

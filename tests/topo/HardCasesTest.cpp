@@ -22,12 +22,15 @@ constexpr Interpolation kAll[] = {Interpolation::Nearest, Interpolation::Bilinea
 // Global 1° grid, west edge at `west`, sample value = 10·row + col/1000 (distinct values).
 TopoPlanet indexPlanet(double west) {
   TopoGrid g(180, 360, west + 0.5, 89.5, 1.0, 1.0);
-  return {g, Body::marsSphere(), LatitudeType::Planetocentric,
-          InMemorySamples::fromFunction(180, 360, [](std::size_t r, std::size_t c) {
-            return static_cast<float>(10.0 * static_cast<double>(r) + static_cast<double>(c) / 1000.0);
-          })};
+  return {
+      g, Body::marsSphere(), LatitudeType::Planetocentric,
+      InMemorySamples::fromFunction(180, 360, [](std::size_t r, std::size_t c) {
+        return static_cast<float>(10.0 * static_cast<double>(r) + static_cast<double>(c) / 1000.0);
+      })};
 }
-double at(const TopoPlanet& p, std::size_t r, std::size_t c) { return static_cast<double>(p.samples().sample(r, c)); }
+double at(const TopoPlanet& p, std::size_t r, std::size_t c) {
+  return static_cast<double>(p.samples().sample(r, c));
+}
 }  // namespace
 
 TEST(HardCases, LatitudeExactlyPlusAndMinus90) {
@@ -36,7 +39,8 @@ TEST(HardCases, LatitudeExactlyPlusAndMinus90) {
     for (Interpolation k : kAll) {
       const SurfaceSample s0 = p.surface({lat, 0.0}, k, NormalFrame::BodyFixed);
       ASSERT_TRUE(s0.valid());
-      EXPECT_TRUE(std::isfinite(s0.normal.x) && std::isfinite(s0.normal.y) && std::isfinite(s0.normal.z));
+      EXPECT_TRUE(std::isfinite(s0.normal.x) && std::isfinite(s0.normal.y) &&
+                  std::isfinite(s0.normal.z));
       EXPECT_NEAR(glm::length(s0.normal), 1.0, 1e-12);
       for (double lon : {-180.0, -90.0, 45.0, 180.0, 270.0}) {
         const SurfaceSample s = p.surface({lat, lon}, k, NormalFrame::BodyFixed);
@@ -82,8 +86,8 @@ TEST(HardCases, AntimeridianInsideABicubicStencil) {
   const double t = 0.3;
   const double w[4] = {0.5 * (-t * t * t + 2 * t * t - t), 0.5 * (3 * t * t * t - 5 * t * t + 2),
                        0.5 * (-3 * t * t * t + 4 * t * t + t), 0.5 * (t * t * t - t * t)};
-  const double expect = w[0] * at(p, 60, 358) + w[1] * at(p, 60, 359) + w[2] * at(p, 60, 0) +
-                        w[3] * at(p, 60, 1);
+  const double expect =
+      w[0] * at(p, 60, 358) + w[1] * at(p, 60, 359) + w[2] * at(p, 60, 0) + w[3] * at(p, 60, 1);
   EXPECT_NEAR(p.height({29.5, 179.8}, Interpolation::Bicubic).height, expect, 1e-9);
 }
 
@@ -113,7 +117,8 @@ TEST(HardCases, TwoQueriesOneMillimetreApartAtPlanetaryRadius) {
                             return static_cast<float>(perDeg * static_cast<double>(c));
                           }));
   const double dLon = 1e-3 / (3396190.0 * kDeg);
-  const double a = planet.height({0.25, 100.3}).height, b = planet.height({0.25, 100.3 + dLon}).height;
+  const double a = planet.height({0.25, 100.3}).height,
+               b = planet.height({0.25, 100.3 + dLon}).height;
   EXPECT_NEAR((b - a) / (perDeg * dLon), 1.0, 1e-5);  // lon's ulp is 1e-6 of dLon
 }
 
@@ -134,7 +139,8 @@ TEST(HardCases, BicubicOnA1xNAndA2x2Grid) {
   }
   // 2×2: the centre is the mean, the corners are the samples, nothing is NaN.
   const TopoGrid sq(2, 2, 0.0, 0.0, 1.0, 1.0);
-  const TopoDem d2(sq, pl, std::make_shared<InMemorySamples>(2, 2, std::vector<float>{1, 3, 5, 11}));
+  const TopoDem d2(sq, pl,
+                   std::make_shared<InMemorySamples>(2, 2, std::vector<float>{1, 3, 5, 11}));
   EXPECT_DOUBLE_EQ(d2.height(0.5, -0.5, Interpolation::Bicubic).height, 5.0);
   EXPECT_DOUBLE_EQ(d2.height(0.0, 0.0, Interpolation::Bicubic).height, 1.0);
   EXPECT_DOUBLE_EQ(d2.height(1.0, -1.0, Interpolation::Bicubic).height, 11.0);
@@ -160,7 +166,8 @@ TEST(HardCases, NanOrInfInputCoordinatesGiveAClearError) {
   EXPECT_THROW((void)dem.height(0, -inf), InvalidArgument);
   EXPECT_THROW((void)planet.height({nan, 0}), InvalidArgument);
   EXPECT_THROW((void)planet.surface({0, inf}), InvalidArgument);
-  const auto ps = PolarStereographic::withScaleFactor(mars, PolarStereographic::Pole::North, 1.0, 0.0);
+  const auto ps =
+      PolarStereographic::withScaleFactor(mars, PolarStereographic::Pole::North, 1.0, 0.0);
   EXPECT_THROW((void)ps.forward({nan, 0}), InvalidArgument);
   EXPECT_THROW((void)ps.inverse({0, inf}), InvalidArgument);
   const Equirectangular eq(3396190.0, 0.0, 0.0);
@@ -202,7 +209,8 @@ TEST(HardCases, AProjectionEvaluatedExactlyAtItsPoleAndItsAntipode) {
   using Pole = PolarStereographic::Pole;
   for (Pole pole : {Pole::North, Pole::South}) {
     const double sign = pole == Pole::North ? 1.0 : -1.0;
-    const auto ps = PolarStereographic::withTrueScaleLatitude(mars, pole, sign * 70.0, 45.0, 1000.0, -2000.0);
+    const auto ps =
+        PolarStereographic::withTrueScaleLatitude(mars, pole, sign * 70.0, 45.0, 1000.0, -2000.0);
     const glm::dvec2 xy = ps.forward({sign * 90.0, 123.0});
     EXPECT_EQ(xy, glm::dvec2(1000.0, -2000.0));
     const LatLon back = ps.inverse(xy);

@@ -27,7 +27,8 @@ TEST(Mesh, GridMeshHasOneVertexPerSampleAndTwoUpFacingTrianglesPerCell) {
   ASSERT_EQ(m.triangles.size(), 2u * 2u * 3u);
   EXPECT_EQ(m.vertices[6], glm::dvec3(14.0, 18.0, 7.0));  // sample (1, 2)
   for (const auto& t : m.triangles) {
-    const glm::dvec3 n = glm::cross(m.vertices[t[1]] - m.vertices[t[0]], m.vertices[t[2]] - m.vertices[t[0]]);
+    const glm::dvec3 n =
+        glm::cross(m.vertices[t[1]] - m.vertices[t[0]], m.vertices[t[2]] - m.vertices[t[0]]);
     EXPECT_GT(n.z, 0.0) << "counter-clockwise seen from above";
   }
 }
@@ -80,7 +81,9 @@ TEST(Mesh, ObjTextListsVerticesAndOneBasedFaces) {
   ASSERT_EQ(fs.size(), m.triangles.size());
   for (std::size_t i = 0; i < vs.size(); ++i) EXPECT_EQ(vs[i], m.vertices[i]);
   for (std::size_t i = 0; i < fs.size(); ++i) {
-    for (int k = 0; k < 3; ++k) EXPECT_EQ(static_cast<std::uint32_t>(fs[i][static_cast<std::size_t>(k)]), m.triangles[i][static_cast<std::size_t>(k)] + 1);
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(static_cast<std::uint32_t>(fs[i][static_cast<std::size_t>(k)]),
+                m.triangles[i][static_cast<std::size_t>(k)] + 1);
   }
 }
 

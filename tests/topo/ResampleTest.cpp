@@ -51,10 +51,12 @@ TEST(Resample, CurvatureIsKeptNotFlattenedAway) {
   const Body mars = Body::marsSphere();
   const double h0 = -1400.0;
   const TopoGrid g(400, 400, -5.8 + 0.0005, -1.75 - 0.0005, 0.001, 0.001);
-  const TopoPlanet flat(g, mars, LatitudeType::Planetocentric,
-                        std::make_shared<InMemorySamples>(400, 400, std::vector<float>(400 * 400, float(h0))));
+  const TopoPlanet flat(
+      g, mars, LatitudeType::Planetocentric,
+      std::make_shared<InMemorySamples>(400, 400, std::vector<float>(400 * 400, float(h0))));
   const LocalTangentPlane plane(mars, {-2.05, -5.5, h0}, 40.0);
-  const TopoDem dem = resamplePlanetToDem(flat, plane, TopoGrid(9, 9, -2000.0, 2000.0, 500.0, 500.0));
+  const TopoDem dem =
+      resamplePlanetToDem(flat, plane, TopoGrid(9, 9, -2000.0, 2000.0, 500.0, 500.0));
   const double rp = 3396190.0 + h0;
   for (std::size_t r = 0; r < 9; ++r) {
     for (std::size_t c = 0; c < 9; ++c) {
@@ -70,7 +72,8 @@ TEST(Resample, DemToPlanetAndBackRecoversTheSurface) {
   const Body mars = Body::marsSphere();
   const TopoPlanet planet = regionPlanet(mars);
   const LocalTangentPlane plane(mars, {-2.05, -5.5, -1400.0});
-  const TopoDem dem = resamplePlanetToDem(planet, plane, TopoGrid(81, 81, -2000.0, 2000.0, 50.0, 50.0));
+  const TopoDem dem =
+      resamplePlanetToDem(planet, plane, TopoGrid(81, 81, -2000.0, 2000.0, 50.0, 50.0));
   // Back onto a lat/lon grid inside the DEM's footprint.
   const double d = 0.002;
   const TopoGrid ll(20, 20, -5.52 + d / 2, -2.03 - d / 2, d, d);
@@ -94,5 +97,6 @@ TEST(Resample, DemToPlanetAndBackRecoversTheSurface) {
 TEST(Resample, RejectsAPlaneOnAnotherBody) {
   const TopoPlanet planet = regionPlanet(Body::marsSphere());
   const LocalTangentPlane moonPlane(Body::moon(), {0, 0, 0});
-  EXPECT_THROW((void)resamplePlanetToDem(planet, moonPlane, TopoGrid(2, 2, 0, 0, 1, 1)), InvalidArgument);
+  EXPECT_THROW((void)resamplePlanetToDem(planet, moonPlane, TopoGrid(2, 2, 0, 0, 1, 1)),
+               InvalidArgument);
 }

@@ -23,8 +23,7 @@ Placement marsPlane(double heading = 0.0) {
 }
 
 // rows×cols grid with spacing 1 m, sample (0,0) at x=0, y=0 (so y = −row).
-TopoDem demOf(std::size_t rows, std::size_t cols,
-              const std::function<float(double x, double y)>& f,
+TopoDem demOf(std::size_t rows, std::size_t cols, const std::function<float(double x, double y)>& f,
               std::optional<float> nodata = std::nullopt, double spacing = 1.0) {
   TopoGrid g(rows, cols, 0.0, 0.0, spacing, spacing, nodata);
   auto s = InMemorySamples::fromFunction(rows, cols, [&](std::size_t r, std::size_t c) {
@@ -107,9 +106,9 @@ TEST(TopoDem, AllKernelsAgreeExactlyAtSampleCentres) {
 
 TEST(TopoDem, NodataGivesNanAndInvalidNeverZeroOrANeighbour) {
   const float nd = -32768.0f;
-  TopoDem dem = demOf(6, 6, [&](double x, double y) {
-    return (x == 2.0 && y == -2.0) ? nd : float(100.0 + x);
-  }, nd);
+  TopoDem dem = demOf(
+      6, 6, [&](double x, double y) { return (x == 2.0 && y == -2.0) ? nd : float(100.0 + x); },
+      nd);
   for (Interpolation k : kAll) {
     const HeightSample h = dem.height(2.2, -2.3, k);
     EXPECT_FALSE(h.valid());
@@ -142,8 +141,8 @@ TEST(TopoDem, OutsideThePixelExtentIsExplicitlyOutsideGrid) {
   const TopoDem dem = demOf(4, 5, [](double x, double) { return float(x); });
   // Pixel extent: x in [−0.5, 4.5], y in [−3.5, 0.5].
   for (Interpolation k : kAll) {
-    for (auto [x, y] : {std::pair{-0.51, -1.0}, {4.51, -1.0}, {2.0, 0.51}, {2.0, -3.51},
-                        {1e9, 0.0}}) {
+    for (auto [x, y] :
+         {std::pair{-0.51, -1.0}, {4.51, -1.0}, {2.0, 0.51}, {2.0, -3.51}, {1e9, 0.0}}) {
       const SurfaceSample s = dem.surface(x, y, k);
       EXPECT_EQ(s.status, QueryStatus::OutsideGrid);
       EXPECT_TRUE(std::isnan(s.height));
@@ -209,8 +208,10 @@ TEST(TopoDem, BatchEqualsSingleQueriesBitForBit) {
       const SurfaceSample s = dem.surface(xs[i], ys[i], k, NormalFrame::BodyFixed);
       EXPECT_EQ(st[i], h.status);
       EXPECT_EQ(st2[i], s.status);
-      if (h.valid()) EXPECT_EQ(hs[i], h.height);
-      else EXPECT_TRUE(std::isnan(hs[i]));
+      if (h.valid())
+        EXPECT_EQ(hs[i], h.height);
+      else
+        EXPECT_TRUE(std::isnan(hs[i]));
       if (s.valid()) {
         EXPECT_EQ(hs2[i], s.height);
         EXPECT_EQ(ns[i], s.normal);
@@ -258,8 +259,9 @@ TEST(TopoDem, APagedStyleSourceGivesTheSameAnswersAsTheInMemoryOne) {
 
 TEST(TopoDem, RejectsMismatchedSamples) {
   const TopoGrid g(3, 3, 0, 0, 1, 1);
-  EXPECT_THROW(TopoDem(g, marsPlane(), std::make_shared<InMemorySamples>(3, 4, std::vector<float>(12))),
-               InvalidArgument);
+  EXPECT_THROW(
+      TopoDem(g, marsPlane(), std::make_shared<InMemorySamples>(3, 4, std::vector<float>(12))),
+      InvalidArgument);
   EXPECT_THROW(TopoDem(g, marsPlane(), nullptr), InvalidArgument);
 }
 

@@ -57,8 +57,10 @@ TEST(TopoPlanet, InterpolatesASmoothFieldToTheExpectedAccuracy) {
   double maxLin = 0.0, maxCub = 0.0;
   for (int i = 0; i < 2000; ++i) {
     const double a = lat(rng), b = lon(rng);
-    maxLin = std::max(maxLin, std::abs(p.height({a, b}, Interpolation::Bilinear).height - field(a, b)));
-    maxCub = std::max(maxCub, std::abs(p.height({a, b}, Interpolation::Bicubic).height - field(a, b)));
+    maxLin =
+        std::max(maxLin, std::abs(p.height({a, b}, Interpolation::Bilinear).height - field(a, b)));
+    maxCub =
+        std::max(maxCub, std::abs(p.height({a, b}, Interpolation::Bicubic).height - field(a, b)));
   }
   // Second derivatives are ≲ 5000 m/rad², spacing 0.5° = 0.0087 rad: h''·d²/8 ≈ 0.05 m.
   EXPECT_LT(maxLin, 0.2);
@@ -82,9 +84,8 @@ TEST(TopoPlanet, RegionalGridIsOutsideBeyondItsExtentAndAcceptsEitherLongitudeRa
   // A region straddling 0°: 350°…10°E, 20°S…20°N, 1° pixels.
   const TopoGrid g(40, 20, 350.5, 19.5, 1.0, 1.0);
   const TopoPlanet p(g, Body::marsSphere(), LatitudeType::Planetocentric,
-                     InMemorySamples::fromFunction(40, 20, [&](std::size_t r, std::size_t c) {
-                       return float(100 * r + c);
-                     }));
+                     InMemorySamples::fromFunction(
+                         40, 20, [&](std::size_t r, std::size_t c) { return float(100 * r + c); }));
   EXPECT_TRUE(p.height({0.0, 355.0}).valid());
   EXPECT_DOUBLE_EQ(p.height({0.0, -5.0}).height, p.height({0.0, 355.0}).height);
   EXPECT_DOUBLE_EQ(p.height({19.5, 5.5}, Interpolation::Nearest).height, 15.0);
@@ -100,7 +101,8 @@ TEST(TopoPlanet, PoleHeightIsOneValueAndTheCapJoinsTheGridContinuously) {
   const double pole = p.height({90.0, 0.0}).height;
   EXPECT_NEAR(pole, p.northPoleHeight(), 1e-12);
   for (double lon : {-180.0, -45.0, 33.3, 90.0, 180.0, 359.0}) {
-    for (Interpolation k : {Interpolation::Nearest, Interpolation::Bilinear, Interpolation::Bicubic}) {
+    for (Interpolation k :
+         {Interpolation::Nearest, Interpolation::Bilinear, Interpolation::Bicubic}) {
       EXPECT_DOUBLE_EQ(p.height({90.0, lon}, k).height, pole);
     }
   }
@@ -118,8 +120,12 @@ TEST(TopoPlanet, EnuNormalMatchesFiniteDifferencesOfBodyFixedPositions) {
   for (const bool ellipsoid : {false, true}) {
     const Body body = ellipsoid ? Body::marsEllipsoid() : Body::marsSphere();
     const TopoPlanet p = globalPlanet(4.0, 0.0, body, LatitudeType::Planetocentric);
-    for (auto [lat, lon] : {std::pair{10.1, 20.2}, {-45.3, 300.7}, {70.05, 181.3}, {89.0, 10.0},
-                            {89.95, 123.0}, {-89.95, 2.0}}) {
+    for (auto [lat, lon] : {std::pair{10.1, 20.2},
+                            {-45.3, 300.7},
+                            {70.05, 181.3},
+                            {89.0, 10.0},
+                            {89.95, 123.0},
+                            {-89.95, 2.0}}) {
       const SurfaceSample s = p.surface({lat, lon}, Interpolation::Bicubic, NormalFrame::BodyFixed);
       ASSERT_TRUE(s.valid());
       EXPECT_NEAR(glm::length(s.normal), 1.0, 1e-12);
@@ -128,15 +134,16 @@ TEST(TopoPlanet, EnuNormalMatchesFiniteDifferencesOfBodyFixedPositions) {
       auto P = [&](double a, double b) {
         return p.toBodyFixed({a, b}, p.height({a, b}, Interpolation::Bicubic).height);
       };
-      glm::dvec3 fd = glm::normalize(glm::cross(P(lat, lon + e) - P(lat, lon - e),
-                                                P(lat + e, lon) - P(lat - e, lon)));
+      glm::dvec3 fd = glm::normalize(
+          glm::cross(P(lat, lon + e) - P(lat, lon - e), P(lat + e, lon) - P(lat - e, lon)));
       // In the polar cap the blend is only C0 across longitudes at the same latitude, so
       // compare more loosely there.
       const double tol = std::abs(lat) > 89.875 ? 2e-2 : 1e-5;
       EXPECT_LT(glm::length(s.normal - fd), tol) << lat << "," << lon << " ellipsoid=" << ellipsoid;
       // Grid-frame (ENU) normal rotated into the body frame gives the same vector.
       const SurfaceSample g = p.surface({lat, lon}, Interpolation::Bicubic, NormalFrame::Grid);
-      const glm::dmat3 enu = body.enuFrame(body.toPlanetodetic(lat, LatitudeType::Planetocentric), lon);
+      const glm::dmat3 enu =
+          body.enuFrame(body.toPlanetodetic(lat, LatitudeType::Planetocentric), lon);
       EXPECT_LT(glm::length(enu * g.normal - s.normal), 1e-12);
     }
   }
@@ -144,8 +151,9 @@ TEST(TopoPlanet, EnuNormalMatchesFiniteDifferencesOfBodyFixedPositions) {
 
 TEST(TopoPlanet, FlatPlanetHasUpNormalsEverywhereIncludingThePoles) {
   const TopoGrid g(18, 36, 5.0, 85.0, 10.0, 10.0);
-  const TopoPlanet p(g, Body::marsEllipsoid(), LatitudeType::Planetodetic,
-                     std::make_shared<InMemorySamples>(18, 36, std::vector<float>(18 * 36, 250.0f)));
+  const TopoPlanet p(
+      g, Body::marsEllipsoid(), LatitudeType::Planetodetic,
+      std::make_shared<InMemorySamples>(18, 36, std::vector<float>(18 * 36, 250.0f)));
   for (double lat : {-90.0, -89.99, -30.0, 0.0, 45.0, 89.999, 90.0}) {
     for (double lon : {-180.0, 0.0, 77.0}) {
       const SurfaceSample s = p.surface({lat, lon}, Interpolation::Bilinear, NormalFrame::Grid);
@@ -162,7 +170,8 @@ TEST(TopoPlanet, LatitudeBeyondNinetyAndNonFiniteInputThrow) {
     (void)p.height({90.5, 0.0});
     FAIL();
   } catch (const InvalidArgument& e) {
-    EXPECT_STREQ(e.what(), "TopoPlanet::height(): latitude is 90.500000 deg, expected within [-90, 90]");
+    EXPECT_STREQ(e.what(),
+                 "TopoPlanet::height(): latitude is 90.500000 deg, expected within [-90, 90]");
   }
   EXPECT_THROW((void)p.surface({0.0, std::nan("")}), InvalidArgument);
   std::vector<double> lats{0.0, std::numeric_limits<double>::infinity()}, lons{0.0, 0.0}, out(2);
@@ -179,7 +188,8 @@ TEST(TopoPlanet, BatchEqualsSingleQueries) {
   p.surfaces(lats, lons, h2, n, {}, Interpolation::Bicubic, NormalFrame::BodyFixed);
   for (std::size_t i = 0; i < 5; ++i) {
     EXPECT_EQ(h[i], p.height({lats[i], lons[i]}, Interpolation::Bicubic).height);
-    const SurfaceSample s = p.surface({lats[i], lons[i]}, Interpolation::Bicubic, NormalFrame::BodyFixed);
+    const SurfaceSample s =
+        p.surface({lats[i], lons[i]}, Interpolation::Bicubic, NormalFrame::BodyFixed);
     EXPECT_EQ(h2[i], s.height);
     EXPECT_EQ(n[i], s.normal);
   }
@@ -187,8 +197,10 @@ TEST(TopoPlanet, BatchEqualsSingleQueries) {
 
 TEST(TopoPlanet, RejectsGridsBeyondThePolesOrWiderThan360Degrees) {
   auto s = std::make_shared<InMemorySamples>(2, 2, std::vector<float>(4));
-  EXPECT_THROW(TopoPlanet(TopoGrid(2, 2, 0.5, 90.0, 1.0, 1.0), Body::moon(), LatitudeType::Planetocentric, s),
+  EXPECT_THROW(TopoPlanet(TopoGrid(2, 2, 0.5, 90.0, 1.0, 1.0), Body::moon(),
+                          LatitudeType::Planetocentric, s),
                InvalidArgument);
-  EXPECT_THROW(TopoPlanet(TopoGrid(2, 2, 0.0, 0.0, 200.0, 1.0), Body::moon(), LatitudeType::Planetocentric, s),
+  EXPECT_THROW(TopoPlanet(TopoGrid(2, 2, 0.0, 0.0, 200.0, 1.0), Body::moon(),
+                          LatitudeType::Planetocentric, s),
                InvalidArgument);
 }

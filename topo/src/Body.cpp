@@ -45,9 +45,9 @@ Body Body::sphere(std::string name, double radius) {
 Body Body::ellipsoid(std::string name, double equatorialRadius, double polarRadius) {
   if (!(std::isfinite(equatorialRadius) && std::isfinite(polarRadius) && polarRadius > 0.0 &&
         polarRadius <= equatorialRadius)) {
-    throw InvalidArgument("Body::ellipsoid(): body '" + name + "' has radii a = " +
-                          std::to_string(equatorialRadius) + " m, b = " +
-                          std::to_string(polarRadius) + " m, expected finite 0 < b <= a");
+    throw InvalidArgument(
+        "Body::ellipsoid(): body '" + name + "' has radii a = " + std::to_string(equatorialRadius) +
+        " m, b = " + std::to_string(polarRadius) + " m, expected finite 0 < b <= a");
   }
   return Body(std::move(name), equatorialRadius, polarRadius);
 }

@@ -17,8 +17,8 @@ GridWindow resolve(const TopoGrid& g, GridWindow w, const char* op) {
   if (w.row0 + w.rows > g.rows() || w.col0 + w.cols > g.cols() || w.rows < 2 || w.cols < 2) {
     throw InvalidArgument(std::string(op) + ": window rows " + std::to_string(w.row0) + "+" +
                           std::to_string(w.rows) + ", cols " + std::to_string(w.col0) + "+" +
-                          std::to_string(w.cols) + " does not fit the " +
-                          std::to_string(g.rows()) + "x" + std::to_string(g.cols()) +
+                          std::to_string(w.cols) + " does not fit the " + std::to_string(g.rows()) +
+                          "x" + std::to_string(g.cols()) +
                           " grid, expected at least 2x2 samples inside it");
   }
   if (w.rows * w.cols > std::numeric_limits<std::uint32_t>::max()) {
@@ -114,8 +114,7 @@ void writePly(std::ostream& out, const TriangleMesh& mesh) {
   const auto old = out.precision(std::numeric_limits<double>::max_digits10);
   out << "ply\nformat binary_little_endian 1.0\n"
       << "comment Regolith terrain mesh\n"
-      << "comment origin " << mesh.origin.x << ' ' << mesh.origin.y << ' ' << mesh.origin.z
-      << '\n'
+      << "comment origin " << mesh.origin.x << ' ' << mesh.origin.y << ' ' << mesh.origin.z << '\n'
       << "element vertex " << mesh.vertices.size() << '\n'
       << "property double x\nproperty double y\nproperty double z\n"
       << "element face " << mesh.triangles.size() << '\n'

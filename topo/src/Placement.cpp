@@ -84,8 +84,7 @@ glm::dmat3 Placement::jacobian(double x, double y, double h) const {
   return glm::dmat3(px, py, up);
 }
 
-glm::dvec3 Placement::normalToBodyFixed(const glm::dvec3& n, double x, double y,
-                                        double h) const {
+glm::dvec3 Placement::normalToBodyFixed(const glm::dvec3& n, double x, double y, double h) const {
   const glm::dmat3 j = jacobian(x, y, h);
   if (localTangentPlane() != nullptr) return glm::normalize(j * n);
   // The surface is S(x, y) = P(x, y, h(x, y)); the grid normal (−hx, −hy, 1)·s encodes the

@@ -124,8 +124,13 @@ PolarStereographic PolarStereographic::withScaleFactor(const Body& body, Pole po
     throw InvalidArgument(std::string(op) + ": scale factor is " + std::to_string(k0) +
                           ", expected > 0");
   }
-  return {body.equatorialRadius(), std::sqrt(body.eccentricitySquared()), pole, k0,
-          lonCentreDeg, falseEasting, falseNorthing};
+  return {body.equatorialRadius(),
+          std::sqrt(body.eccentricitySquared()),
+          pole,
+          k0,
+          lonCentreDeg,
+          falseEasting,
+          falseNorthing};
 }
 
 glm::dvec2 PolarStereographic::forward(const LatLon& ll) const {

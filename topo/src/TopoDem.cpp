@@ -48,7 +48,8 @@ KernelResult withAccessor(const TopoGrid& g, const SampleSource& src, const floa
 }
 
 inline void requirePoint(double x, double y, const char* op) {
-  if (!std::isfinite(x) || !std::isfinite(y)) [[unlikely]] throwNonFinite(x, y, op);
+  if (!std::isfinite(x) || !std::isfinite(y)) [[unlikely]]
+    throwNonFinite(x, y, op);
 }
 
 void requireSameLength(std::size_t n, std::size_t m, const char* op, const char* field) {
@@ -137,9 +138,8 @@ SurfaceSample TopoDem::surface(double x, double y, Interpolation interp, NormalF
   return s;
 }
 
-void TopoDem::heights(std::span<const double> xs, std::span<const double> ys,
-                      std::span<double> out, std::span<QueryStatus> status,
-                      Interpolation interp) const {
+void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, std::span<double> out,
+                      std::span<QueryStatus> status, Interpolation interp) const {
   constexpr const char* op = "TopoDem::heights()";
   const std::size_t n = xs.size();
   requireSameLength(n, ys.size(), op, "ys");
@@ -198,14 +198,13 @@ void TopoDem::surfaces(std::span<const double> xs, std::span<const double> ys,
 glm::dvec3 TopoDem::samplePosition(std::size_t row, std::size_t col) const {
   if (row >= grid_.rows() || col >= grid_.cols()) {
     throw InvalidArgument("TopoDem::samplePosition(): sample (" + std::to_string(row) + ", " +
-                          std::to_string(col) + ") is outside the " +
-                          std::to_string(grid_.rows()) + "x" + std::to_string(grid_.cols()) +
-                          " grid");
+                          std::to_string(col) + ") is outside the " + std::to_string(grid_.rows()) +
+                          "x" + std::to_string(grid_.cols()) + " grid");
   }
   const float s = samples_->sample(row, col);
   const glm::dvec2 xy = grid_.sampleCentre(static_cast<double>(row), static_cast<double>(col));
-  const double h = grid_.isNodata(s) ? std::numeric_limits<double>::quiet_NaN()
-                                     : static_cast<double>(s);
+  const double h =
+      grid_.isNodata(s) ? std::numeric_limits<double>::quiet_NaN() : static_cast<double>(s);
   if (std::isnan(h)) return glm::dvec3(std::numeric_limits<double>::quiet_NaN());
   return placement_.toBodyFixed(xy.x, xy.y, h);
 }

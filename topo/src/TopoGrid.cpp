@@ -1,6 +1,6 @@
+#include <regolith/topo/Body.hpp>
 #include <regolith/topo/Error.hpp>
 #include <regolith/topo/TopoGrid.hpp>
-#include <regolith/topo/Body.hpp>
 
 #include <cassert>
 #include <cmath>
@@ -8,8 +8,8 @@
 
 namespace regolith::topo {
 
-TopoGrid::TopoGrid(std::size_t rows, std::size_t cols, double x0, double y0, double dx,
-                   double dy, std::optional<float> nodata)
+TopoGrid::TopoGrid(std::size_t rows, std::size_t cols, double x0, double y0, double dx, double dy,
+                   std::optional<float> nodata)
     : rows_(rows), cols_(cols), x0_(x0), y0_(y0), dx_(dx), dy_(dy), nodata_(nodata) {
   constexpr const char* op = "TopoGrid()";
   if (rows == 0 || cols == 0) {
@@ -34,8 +34,8 @@ TopoGrid TopoGrid::fromGeoTransform(const std::array<double, 6>& gt, std::size_t
                           "), expected 0 (north-up rasters only)");
   }
   if (!(gt[1] > 0.0) || !(gt[5] < 0.0)) {
-    throw InvalidArgument("TopoGrid::fromGeoTransform(): pixel size is (" +
-                          std::to_string(gt[1]) + ", " + std::to_string(gt[5]) +
+    throw InvalidArgument("TopoGrid::fromGeoTransform(): pixel size is (" + std::to_string(gt[1]) +
+                          ", " + std::to_string(gt[5]) +
                           "), expected dx > 0 and dy < 0 (north-up)");
   }
   const double dx = gt[1], dy = -gt[5];
@@ -63,9 +63,9 @@ void SampleSource::readWindow(std::size_t row0, std::size_t col0, std::size_t nr
 InMemorySamples::InMemorySamples(std::size_t rows, std::size_t cols, std::vector<float> data)
     : rows_(rows), cols_(cols), data_(std::move(data)) {
   if (rows == 0 || cols == 0 || data_.size() != rows * cols) {
-    throw InvalidArgument("InMemorySamples(): " + std::to_string(data_.size()) +
-                          " samples for a " + std::to_string(rows) + "x" +
-                          std::to_string(cols) + " grid, expected rows*cols > 0");
+    throw InvalidArgument("InMemorySamples(): " + std::to_string(data_.size()) + " samples for a " +
+                          std::to_string(rows) + "x" + std::to_string(cols) +
+                          " grid, expected rows*cols > 0");
   }
 }
 

@@ -45,7 +45,8 @@ TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
       northPole_(kNan),
       southPole_(kNan) {
   constexpr const char* op = "TopoPlanet()";
-  if (!samples_) throw InvalidArgument(std::string(op) + ": samples is null, expected a SampleSource");
+  if (!samples_)
+    throw InvalidArgument(std::string(op) + ": samples is null, expected a SampleSource");
   if (samples_->rows() != grid_.rows() || samples_->cols() != grid_.cols()) {
     throw InvalidArgument(std::string(op) + ": samples are " + std::to_string(samples_->rows()) +
                           "x" + std::to_string(samples_->cols()) + ", expected the grid's " +
@@ -146,14 +147,12 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, No
   const double nd = detail::nodataOrNan(grid_);
   auto eval = [&](auto grad) {
     constexpr bool G = decltype(grad)::value;
-    return planetAccessor<G>(grid_, *samples_, global_, northCap_, southCap_,
-                             [&](const auto& acc) {
-                               return detail::evaluate<G>(interp, acc, L.u, L.v, nd);
-                             });
+    return planetAccessor<G>(grid_, *samples_, global_, northCap_, southCap_, [&](const auto& acc) {
+      return detail::evaluate<G>(interp, acc, L.u, L.v, nd);
+    });
   };
   const bool analytic = wantNormal && L.cap == 0;
-  const detail::KernelResult k =
-      analytic ? eval(std::true_type{}) : eval(std::false_type{});
+  const detail::KernelResult k = analytic ? eval(std::true_type{}) : eval(std::false_type{});
   s.status = k.status;
   if (k.status != QueryStatus::Ok) return s;
   double h = k.h;

@@ -113,7 +113,7 @@ class LocalTangentPlane {
   Body body_;
   Geodetic origin_;
   double headingDeg_;
-  glm::dvec3 o_, ex_, ey_, ez_;
+  glm::dvec3 o_{}, ex_{}, ey_{}, ez_{};
 };
 
 }  // namespace regolith::topo

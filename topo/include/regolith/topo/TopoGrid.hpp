@@ -93,8 +93,8 @@ class SampleSource {
   /// One sample; row < rows(), col < cols() (an assertion, not a check).
   [[nodiscard]] virtual float sample(std::size_t row, std::size_t col) const = 0;
   /// A row-major window into out (size nrows·ncols). The window must lie inside the grid.
-  virtual void readWindow(std::size_t row0, std::size_t col0, std::size_t nrows,
-                          std::size_t ncols, std::span<float> out) const;
+  virtual void readWindow(std::size_t row0, std::size_t col0, std::size_t nrows, std::size_t ncols,
+                          std::span<float> out) const;
   /// All samples as one row-major array if they are resident, else nullptr. Queries use
   /// it as their fast path.
   [[nodiscard]] virtual const float* contiguous() const noexcept { return nullptr; }

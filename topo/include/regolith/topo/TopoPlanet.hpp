@@ -69,10 +69,9 @@ class TopoPlanet {
  private:
   struct Located;
   [[nodiscard]] Located locate(const LatLon& ll) const;
-  [[nodiscard]] SurfaceSample surfaceImpl(const LatLon& ll, Interpolation interp,
-                                          NormalFrame frame, bool wantNormal) const;
-  [[nodiscard]] glm::dvec3 capNormalEnu(const LatLon& ll, Interpolation interp,
-                                        double h) const;
+  [[nodiscard]] SurfaceSample surfaceImpl(const LatLon& ll, Interpolation interp, NormalFrame frame,
+                                          bool wantNormal) const;
+  [[nodiscard]] glm::dvec3 capNormalEnu(const LatLon& ll, Interpolation interp, double h) const;
 
   TopoGrid grid_;
   Body body_;

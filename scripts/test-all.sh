@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Runs every check CI runs, from a fresh Debian 12 machine (as root) or a developer's:
+#   1. installs the Debian packages (scripts/install-deps.sh)
+#   2. clang-format check                  (scripts/check-format.sh)
+#   3. Release build with -Werror           -> build/
+#   4. clang-tidy over that build           (scripts/run-clang-tidy.sh)
+#   5. ASan+UBSan build and its tests       -> build-asan/ (no benchmarks)
+#   6. the Release tests, last, so the output ends with ctest's summary
+#
+#   bash scripts/test-all.sh
+#
+# Environment (all optional): BUILD_DIR (default build), ASAN_BUILD_DIR (default
+# build-asan), REGOLITH_CMAKE_ARGS (extra arguments for both configure steps, split on
+# spaces). Real-data fixtures come from ../shared/fixtures/dem unless REGOLITH_FIXTURES_DIR
+# says otherwise.
+set -euo pipefail
+
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$root"
+
+build_dir=${BUILD_DIR:-build}
+asan_dir=${ASAN_BUILD_DIR:-build-asan}
+read -r -a extra_args <<<"${REGOLITH_CMAKE_ARGS:-}"
+jobs=2
+start=$SECONDS
+
+section() { printf '\n==== %s [%ds]\n' "$*" $((SECONDS - start)); }
+
+section "Dependencies (scripts/install-deps.sh)"
+bash scripts/install-deps.sh
+
+section "Format (scripts/check-format.sh)"
+bash scripts/check-format.sh
+
+# Every option is spelled out, so a build folder configured earlier by hand (tests off,
+# sanitizers on, ...) cannot quietly change what runs.
+section "Release build with -Werror ($build_dir)"
+cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DREGOLITH_WERROR=ON \
+  -DREGOLITH_SANITIZE= -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=ON \
+  -DREGOLITH_BUILD_BENCH=ON "${extra_args[@]}"
+cmake --build "$build_dir" -j"$jobs"
+
+section "clang-tidy (scripts/run-clang-tidy.sh $build_dir)"
+bash scripts/run-clang-tidy.sh "$build_dir"
+
+# Debug for the clearest reports. -Werror stays with the Release build: GCC's sanitizer
+# instrumentation can raise false -Wmaybe-uninitialized / -Wstringop-* warnings.
+section "ASan+UBSan build and tests ($asan_dir)"
+cmake -S . -B "$asan_dir" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DREGOLITH_WERROR=OFF \
+  -DREGOLITH_SANITIZE=address,undefined -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=ON \
+  -DREGOLITH_BUILD_BENCH=OFF "${extra_args[@]}"
+cmake --build "$asan_dir" -j"$jobs"
+ASAN_OPTIONS=halt_on_error=1:print_stacktrace=1:detect_leaks=1 \
+UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+  ctest --test-dir "$asan_dir" --output-on-failure --no-tests=error -j"$jobs"
+
+section "Release tests ($build_dir)"
+ctest --test-dir "$build_dir" --output-on-failure --no-tests=error -j"$jobs"

@@ -1,0 +1,73 @@
+// Uses the installed Regolith package: a 5x5 DEM on a local tangent plane on the Mars
+// sphere, holding the plane h(x, y) = 100 + 0.5 x - 0.25 y. Bilinear interpolation
+// reproduces a plane exactly, so the query must return the analytic height.
+// Exit status 0 only if every check holds.
+
+#include <regolith/topo/Body.hpp>
+#include <regolith/topo/Error.hpp>
+#include <regolith/topo/Placement.hpp>
+#include <regolith/topo/Projection.hpp>
+#include <regolith/topo/TopoDem.hpp>
+#include <regolith/topo/TopoGrid.hpp>
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <cstddef>
+#include <cstdio>
+#include <exception>
+
+namespace topo = regolith::topo;
+
+namespace {
+
+double plane(double x, double y) { return 100.0 + 0.5 * x - 0.25 * y; }
+
+bool check(bool ok, const char* what) {
+  std::printf("consumer: %-58s %s\n", what, ok ? "ok" : "FAILED");
+  return ok;
+}
+
+}  // namespace
+
+int main() {
+  try {
+    const topo::Body mars = topo::Body::marsSphere();
+    const topo::LocalTangentPlane ltp(mars, topo::Geodetic{-4.5, 137.4, 0.0});
+
+    // Sample (row, col) sits at x = -20 + 10 col, y = 20 - 10 row (row 0 is north).
+    const topo::TopoGrid grid(5, 5, -20.0, 20.0, 10.0, 10.0);
+    auto samples =
+        topo::InMemorySamples::fromFunction(5, 5, [&grid](std::size_t row, std::size_t col) {
+          const glm::dvec2 p =
+              grid.sampleCentre(static_cast<double>(row), static_cast<double>(col));
+          return static_cast<float>(plane(p.x, p.y));
+        });
+    const topo::TopoDem dem(grid, topo::Placement(ltp), samples);
+
+    const double x = 3.5, y = -7.25;
+    const topo::HeightSample h = dem.height(x, y);
+    std::printf("consumer: height at (%g, %g) m = %.6f m, expected %.6f m\n", x, y, h.height,
+                plane(x, y));
+
+    bool ok = check(h.valid(), "query status is Ok");
+    ok &= check(std::abs(h.height - plane(x, y)) < 1e-9, "height matches the analytic plane");
+    // The plane's origin (0, 0, 0) lies on the sphere: |P| = R.
+    ok &= check(std::abs(glm::length(dem.toBodyFixed(0.0, 0.0, 0.0)) - 3396190.0) < 1e-6,
+                "tangent-plane origin lies on the Mars sphere");
+    // A query outside the grid is a status, not an exception.
+    ok &= check(!dem.height(1000.0, 0.0).valid(), "query outside the grid is not valid");
+    // Bad input throws a regolith::Error across the library boundary.
+    bool threw = false;
+    try {
+      (void)dem.height(std::nan(""), 0.0);
+    } catch (const regolith::InvalidArgument&) {
+      threw = true;
+    }
+    ok &= check(threw, "NaN coordinate throws regolith::InvalidArgument");
+    return ok ? 0 : 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "consumer: unexpected exception: %s\n", e.what());
+    return 1;
+  }
+}
