@@ -99,8 +99,13 @@ struct PlanetAcc {
       c += cols / 2;
     }
     if (global) {
-      c %= cols;
-      if (c < 0) c += cols;
+      // Stencils reach at most 2 columns beyond the grid, plus half a turn across a pole,
+      // so one add or subtract wraps (cheaper than an integer division per sample).
+      if (c < 0) {
+        c += cols;
+      } else if (c >= cols) {
+        c -= cols;
+      }
     } else if (c < 0 || c >= cols) {
       return extrapolate(cols, c, [&](long cc) { return (*this)(r, cc); });
     }

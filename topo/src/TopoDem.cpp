@@ -5,7 +5,9 @@
 
 #include <glm/geometric.hpp>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <string>
 
@@ -28,6 +30,23 @@ inline Where locate(const TopoGrid& g, double x, double y, double cmax, double r
   const bool inside = u >= -0.5 && u <= cmax + 0.5 && v >= -0.5 && v <= rmax + 0.5;
   // Within the half-pixel border the stencil sits on the outermost samples.
   return {std::clamp(u, 0.0, cmax), std::clamp(v, 0.0, rmax), inside};
+}
+
+// Bilinear height over resident samples at located (u, v) with 0 ≤ u ≤ cols − 1 and
+// 0 ≤ v ≤ rows − 1 (rows, cols ≥ 2): the rover's query written out, ~30 instructions
+// instead of the generic kernel's ~150. A NaN sample makes h NaN (0·NaN is NaN), so one
+// test covers them; a declared nodata value needs comparing. False means "a sample is
+// missing": the generic kernel then decides, by the weights, whether the query is Nodata.
+inline bool residentBilinear(const float* data, long rows, long cols, double u, double v,
+                             double nodata, bool hasNodata, double& h) noexcept {
+  const long c = std::min(static_cast<long>(u), cols - 2);
+  const long r = std::min(static_cast<long>(v), rows - 2);
+  const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
+  const float* p = data + r * cols + c;
+  const double a = p[0], b = p[1], cc = p[cols], d = p[cols + 1];
+  const double top = a + tu * (b - a), bottom = cc + tu * (d - cc);
+  h = top + tv * (bottom - top);
+  return h == h && (!hasNodata || ((a != nodata) & (b != nodata) & (cc != nodata) & (d != nodata)));
 }
 
 // Calls fn with the accessor that fits the source: plain array loads when the samples are
@@ -60,6 +79,13 @@ void requireSameLength(std::size_t n, std::size_t m, const char* op, const char*
 }
 
 void requireFiniteArray(std::span<const double> a, const char* op, const char* field) {
+  // Branch-free scan that vectorises: the exponent field is all ones exactly for NaN/±inf,
+  // and adding one to it then carries into the sign bit. The loop below names the culprit.
+  std::uint64_t bad = 0;
+  for (const double v : a) {
+    bad |= (std::bit_cast<std::uint64_t>(v) & 0x7ff0000000000000ULL) + 0x0010000000000000ULL;
+  }
+  if ((bad >> 63U) == 0) return;
   for (std::size_t i = 0; i < a.size(); ++i) {
     if (!std::isfinite(a[i])) {
       throw InvalidArgument(std::string(op) + ": " + field + "[" + std::to_string(i) + "] is " +
@@ -90,24 +116,11 @@ HeightSample TopoDem::height(double x, double y, Interpolation interp) const {
   const Where w = locate(grid_, x, y, uMax_, vMax_);
   if (!w.inside) return {};
   if (resident_ != nullptr && interp == Interpolation::Bilinear) {
-    // The rover's query, written out: ~30 instructions instead of the generic kernel's
-    // ~150 (the accessor's edge handling is not needed when the cell is inside the grid).
     const auto cols = static_cast<long>(grid_.cols()), rows = static_cast<long>(grid_.rows());
-    if (cols >= 2 && rows >= 2) {
-      const long c = std::min(static_cast<long>(w.u), cols - 2);  // u, v ≥ 0 here
-      const long r = std::min(static_cast<long>(w.v), rows - 2);
-      const double tu = w.u - static_cast<double>(c), tv = w.v - static_cast<double>(r);
-      const float* p = resident_ + r * cols + c;
-      const double a = p[0], b = p[1], cc = p[cols], d = p[cols + 1];
-      const double top = a + tu * (b - a), bottom = cc + tu * (d - cc);
-      const double h = top + tv * (bottom - top);
-      // A NaN sample makes h NaN (0·NaN is NaN), so one test covers them all; a declared
-      // nodata value needs comparing. Either way the generic kernel below then decides,
-      // by the weights, whether the query is Nodata.
-      if (h == h && (!hasNodataValue_ ||
-                     (a != nodata_ && b != nodata_ && cc != nodata_ && d != nodata_))) [[likely]] {
-        return {h, QueryStatus::Ok};
-      }
+    double h = 0.0;
+    if (cols >= 2 && rows >= 2 &&
+        residentBilinear(resident_, rows, cols, w.u, w.v, nodata_, hasNodataValue_, h)) [[likely]] {
+      return {h, QueryStatus::Ok};
     }
   }
   const KernelResult k = withAccessor(grid_, *samples_, resident_, [&](const auto& acc) {
@@ -147,6 +160,33 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
   if (!status.empty()) requireSameLength(n, status.size(), op, "status");
   requireFiniteArray(xs, op, "xs");
   requireFiniteArray(ys, op, "ys");
+  if (resident_ != nullptr && interp == Interpolation::Bilinear && grid_.cols() >= 2 &&
+      grid_.rows() >= 2) {
+    // The fast path of height(), with every field in a local: stores to out[] could alias
+    // the TopoDem's own doubles, so members would be reloaded on every point. Points off the
+    // interior (border, outside) and missing samples go through height().
+    const float* d = resident_;
+    const double x0 = grid_.x0(), y0 = grid_.y0(), dx = grid_.spacingX(), dy = grid_.spacingY();
+    const double uMax = uMax_, vMax = vMax_, ndv = nodata_;
+    const bool hasNd = hasNodataValue_;
+    const auto cols = static_cast<long>(grid_.cols()), rows = static_cast<long>(grid_.rows());
+    const bool wantStatus = !status.empty();
+    for (std::size_t i = 0; i < n; ++i) {
+      const double u = (xs[i] - x0) / dx;  // the same arithmetic as locate()
+      const double v = (y0 - ys[i]) / dy;
+      double h = 0.0;
+      if ((u >= 0.0) & (v >= 0.0) & (u <= uMax) & (v <= vMax) &&
+          residentBilinear(d, rows, cols, u, v, ndv, hasNd, h)) [[likely]] {
+        out[i] = h;
+        if (wantStatus) status[i] = QueryStatus::Ok;
+        continue;
+      }
+      const HeightSample s = height(xs[i], ys[i], interp);
+      out[i] = s.height;
+      if (wantStatus) status[i] = s.status;
+    }
+    return;
+  }
   const double nd = nodata_;
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
   // The accessor and kernel are chosen once for the whole batch.

@@ -75,7 +75,8 @@ TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
 TopoPlanet::Located TopoPlanet::locate(const LatLon& ll) const {
   Located L;
   const double west = grid_.west();
-  const double lon = west + wrapLongitude360(ll.lonDeg - west);
+  const double rel = ll.lonDeg - west;
+  const double lon = (rel >= 0.0 && rel < 360.0) ? ll.lonDeg : west + wrapLongitude360(rel);
   L.u = (lon - grid_.x0()) / grid_.spacingX();
   const double cmax = static_cast<double>(grid_.cols()) - 1.0;
   if (!global_) {
