@@ -71,6 +71,8 @@ class TopoDem {
   double nodata_;                    // the nodata value, or NaN
   bool hasNodataValue_;              // a nodata value other than NaN is declared
   double uMax_, vMax_;               // cols − 1, rows − 1
+  double invDx_, invDy_;             // 1 / spacing
+  bool exactReciprocal_;             // both reciprocals are exact (powers of two)
 };
 
 }  // namespace regolith::topo
