@@ -23,49 +23,19 @@ struct Where {
   bool inside;
 };
 
-// Grid coordinates → fractional indices. Division keeps sample centres exact for any
-// spacing; when both reciprocals are exact (spacings that are powers of two: 0.25, 1, 2 m…)
-// multiplying gives the same bits for a quarter of the cost, which the batch loop feels.
-struct IndexMap {
-  double x0, y0, dx, dy, idx, idy;
-  bool recip;
-  [[nodiscard]] double u(double x) const noexcept { return recip ? (x - x0) * idx : (x - x0) / dx; }
-  [[nodiscard]] double v(double y) const noexcept { return recip ? (y0 - y) * idy : (y0 - y) / dy; }
-};
-
-IndexMap indexMapOf(const TopoGrid& g, double idx, double idy, bool recip) noexcept {
-  return {g.x0(), g.y0(), g.spacingX(), g.spacingY(), idx, idy, recip};
-}
-
 bool isPowerOfTwo(double d) noexcept {
   int e = 0;
   return std::frexp(d, &e) == 0.5;
 }
 
 // cmax, rmax: cols − 1 and rows − 1 (precomputed: size_t → double is not free).
-inline Where locate(const IndexMap& m, double x, double y, double cmax, double rmax) noexcept {
+inline Where locate(const detail::DemIndexer& m, double x, double y, double cmax,
+                    double rmax) noexcept {
   const double u = m.u(x);
   const double v = m.v(y);
   const bool inside = u >= -0.5 && u <= cmax + 0.5 && v >= -0.5 && v <= rmax + 0.5;
   // Within the half-pixel border the stencil sits on the outermost samples.
   return {std::clamp(u, 0.0, cmax), std::clamp(v, 0.0, rmax), inside};
-}
-
-// Bilinear height over resident samples at located (u, v) with 0 ≤ u ≤ cols − 1 and
-// 0 ≤ v ≤ rows − 1 (rows, cols ≥ 2): the rover's query written out, ~30 instructions
-// instead of the generic kernel's ~150. A NaN sample makes h NaN (0·NaN is NaN), so one
-// test covers them; a declared nodata value needs comparing. False means "a sample is
-// missing": the generic kernel then decides, by the weights, whether the query is Nodata.
-inline bool residentBilinear(const float* data, long rows, long cols, double u, double v,
-                             double nodata, bool hasNodata, double& h) noexcept {
-  const long c = std::min(static_cast<long>(u), cols - 2);
-  const long r = std::min(static_cast<long>(v), rows - 2);
-  const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
-  const float* p = data + r * cols + c;
-  const double a = p[0], b = p[1], cc = p[cols], d = p[cols + 1];
-  const double top = a + tu * (b - a), bottom = cc + tu * (d - cc);
-  h = top + tv * (bottom - top);
-  return h == h && (!hasNodata || ((a != nodata) & (b != nodata) & (cc != nodata) & (d != nodata)));
 }
 
 // Calls fn with the accessor that fits the source: plain array loads when the samples are
@@ -124,29 +94,24 @@ TopoDem::TopoDem(TopoGrid grid, Placement placement, std::shared_ptr<const Sampl
                           std::to_string(grid_.rows()) + "x" + std::to_string(grid_.cols()));
   }
   resident_ = samples_->contiguous();
-  nodata_ = detail::nodataOrNan(grid_);
-  hasNodataValue_ = grid_.nodata().has_value() && !std::isnan(*grid_.nodata());
-  uMax_ = static_cast<double>(grid_.cols()) - 1.0;
-  invDx_ = 1.0 / grid_.spacingX();
-  invDy_ = 1.0 / grid_.spacingY();
-  exactReciprocal_ = isPowerOfTwo(grid_.spacingX()) && isPowerOfTwo(grid_.spacingY());
-  vMax_ = static_cast<double>(grid_.rows()) - 1.0;
+  const double dx = grid_.spacingX(), dy = grid_.spacingY();
+  index_ = {
+      grid_.x0(), grid_.y0(), dx, dy, 1.0 / dx, 1.0 / dy, isPowerOfTwo(dx) && isPowerOfTwo(dy)};
+  fast_.rows = static_cast<long>(grid_.rows());
+  fast_.cols = static_cast<long>(grid_.cols());
+  fast_.data = (fast_.rows >= 2 && fast_.cols >= 2) ? resident_ : nullptr;
+  fast_.uMax = static_cast<double>(grid_.cols()) - 1.0;
+  fast_.vMax = static_cast<double>(grid_.rows()) - 1.0;
+  fast_.nodata = detail::nodataOrNan(grid_);
+  fast_.hasNodata = grid_.nodata().has_value() && !std::isnan(*grid_.nodata());
 }
 
-HeightSample TopoDem::height(double x, double y, Interpolation interp) const {
+HeightSample TopoDem::heightGeneric(double x, double y, Interpolation interp) const {
   requirePoint(x, y, "TopoDem::height()");
-  const Where w = locate(indexMapOf(grid_, invDx_, invDy_, exactReciprocal_), x, y, uMax_, vMax_);
+  const Where w = locate(index_, x, y, fast_.uMax, fast_.vMax);
   if (!w.inside) return {};
-  if (resident_ != nullptr && interp == Interpolation::Bilinear) {
-    const auto cols = static_cast<long>(grid_.cols()), rows = static_cast<long>(grid_.rows());
-    double h = 0.0;
-    if (cols >= 2 && rows >= 2 &&
-        residentBilinear(resident_, rows, cols, w.u, w.v, nodata_, hasNodataValue_, h)) [[likely]] {
-      return {h, QueryStatus::Ok};
-    }
-  }
   const KernelResult k = withAccessor(grid_, *samples_, resident_, [&](const auto& acc) {
-    return detail::evaluate<false>(interp, acc, w.u, w.v, nodata_);
+    return detail::evaluate<false>(interp, acc, w.u, w.v, fast_.nodata);
   });
   if (k.status != QueryStatus::Ok) return {std::numeric_limits<double>::quiet_NaN(), k.status};
   return {k.h, QueryStatus::Ok};
@@ -154,10 +119,10 @@ HeightSample TopoDem::height(double x, double y, Interpolation interp) const {
 
 SurfaceSample TopoDem::surface(double x, double y, Interpolation interp, NormalFrame frame) const {
   requirePoint(x, y, "TopoDem::surface()");
-  const Where w = locate(indexMapOf(grid_, invDx_, invDy_, exactReciprocal_), x, y, uMax_, vMax_);
+  const Where w = locate(index_, x, y, fast_.uMax, fast_.vMax);
   if (!w.inside) return {};
   const KernelResult k = withAccessor(grid_, *samples_, resident_, [&](const auto& acc) {
-    return detail::evaluate<true>(interp, acc, w.u, w.v, nodata_);
+    return detail::evaluate<true>(interp, acc, w.u, w.v, fast_.nodata);
   });
   SurfaceSample s;
   s.status = k.status;
@@ -182,41 +147,44 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
   if (!status.empty()) requireSameLength(n, status.size(), op, "status");
   requireFiniteArray(xs, op, "xs");
   requireFiniteArray(ys, op, "ys");
-  if (resident_ != nullptr && interp == Interpolation::Bilinear && grid_.cols() >= 2 &&
-      grid_.rows() >= 2) {
-    // The fast path of height(), with every field in a local: stores to out[] could alias
-    // the TopoDem's own doubles, so members would be reloaded on every point. Points off the
-    // interior (border, outside) and missing samples go through height().
-    const float* d = resident_;
-    const IndexMap m = indexMapOf(grid_, invDx_, invDy_, exactReciprocal_);
-    const double uMax = uMax_, vMax = vMax_, ndv = nodata_;
-    const bool hasNd = hasNodataValue_;
-    const auto cols = static_cast<long>(grid_.cols()), rows = static_cast<long>(grid_.rows());
-    const bool wantStatus = !status.empty();
-    for (std::size_t i = 0; i < n; ++i) {
-      const double u = m.u(xs[i]);  // the same arithmetic as locate()
-      const double v = m.v(ys[i]);
-      double h = 0.0;
-      if ((u >= 0.0) & (v >= 0.0) & (u <= uMax) & (v <= vMax) &&
-          residentBilinear(d, rows, cols, u, v, ndv, hasNd, h)) [[likely]] {
-        out[i] = h;
-        if (wantStatus) status[i] = QueryStatus::Ok;
-        continue;
+  if (fast_.data != nullptr && interp == Interpolation::Bilinear) {
+    // The fast path of height() on local copies: stores to out[] could alias the TopoDem's
+    // own members, which would then be reloaded for every point.
+    const detail::DemIndexer m = index_;
+    const detail::ResidentBilinear f = fast_;
+    // Specialised on the spacing's reciprocal being exact and on whether status is wanted,
+    // so the loop body has no branches but the bounds and missing-sample tests.
+    auto loop = [&](auto recip, auto wantStatus) {
+      for (std::size_t i = 0; i < n; ++i) {
+        const double u = recip ? (xs[i] - m.x0) * m.idx : (xs[i] - m.x0) / m.dx;
+        const double v = recip ? (m.y0 - ys[i]) * m.idy : (m.y0 - ys[i]) / m.dy;
+        double h = 0.0;
+        if (f.evalResident(u, v, h)) [[likely]] {
+          out[i] = h;
+          if constexpr (wantStatus) status[i] = QueryStatus::Ok;
+          continue;
+        }
+        const HeightSample s = heightGeneric(xs[i], ys[i], interp);
+        out[i] = s.height;
+        if constexpr (wantStatus) status[i] = s.status;
       }
-      const HeightSample s = height(xs[i], ys[i], interp);
-      out[i] = s.height;
-      if (wantStatus) status[i] = s.status;
+    };
+    using Yes = std::true_type;
+    using No = std::false_type;
+    if (m.recip) {
+      status.empty() ? loop(Yes{}, No{}) : loop(Yes{}, Yes{});
+    } else {
+      status.empty() ? loop(No{}, No{}) : loop(No{}, Yes{});
     }
     return;
   }
-  const double nd = nodata_;
-  const IndexMap map = indexMapOf(grid_, invDx_, invDy_, exactReciprocal_);
+  const double nd = fast_.nodata;
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
   // The accessor and kernel are chosen once for the whole batch.
   withAccessor(grid_, *samples_, resident_, [&](const auto& acc) {
     auto run = [&](auto kernel) {
       for (std::size_t i = 0; i < n; ++i) {
-        const Where w = locate(map, xs[i], ys[i], uMax_, vMax_);
+        const Where w = locate(index_, xs[i], ys[i], fast_.uMax, fast_.vMax);
         QueryStatus st = QueryStatus::OutsideGrid;
         double h = nan;
         if (w.inside) {

@@ -8,11 +8,59 @@
 
 #include <glm/vec3.hpp>
 
+#include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 
 namespace regolith::topo {
+
+namespace detail {
+// Internal. These live in the header only so that TopoDem::height() inlines into the
+// caller's loop: the rover's bilinear query costs a few nanoseconds, and an out-of-line call
+// plus the generic kernel would double it (docs/accuracy-vs-time.md).
+
+/// Grid coordinates → fractional sample indices (col u, row v). Division keeps sample
+/// centres exact for any spacing; when 1/dx and 1/dy are exact (powers of two: 0.25, 1,
+/// 2 m…) multiplying gives the same bits at a quarter of the cost.
+struct DemIndexer {
+  double x0 = 0.0, y0 = 0.0, dx = 1.0, dy = 1.0, idx = 1.0, idy = 1.0;
+  bool recip = false;
+  [[nodiscard]] double u(double x) const noexcept { return recip ? (x - x0) * idx : (x - x0) / dx; }
+  [[nodiscard]] double v(double y) const noexcept { return recip ? (y0 - y) * idy : (y0 - y) / dy; }
+};
+
+/// Bilinear height over resident samples, for points whose cell lies inside the grid.
+struct ResidentBilinear {
+  const float* data = nullptr;  // null: no fast path (paged source, or under 2×2 samples)
+  long rows = 0, cols = 0;
+  double uMax = 0.0, vMax = 0.0;  // cols − 1, rows − 1
+  double nodata = std::numeric_limits<double>::quiet_NaN();
+  bool hasNodata = false;  // a nodata value other than NaN is declared
+
+  /// Sets h and returns true, or returns false when the point is not inside the sample
+  /// centres (NaN coordinates included) or a sample is missing; the generic path decides
+  /// those. A NaN sample makes h NaN (0·NaN is NaN), so one test covers them all.
+  [[nodiscard]] bool eval(double u, double v, double& h) const noexcept {
+    return data != nullptr && evalResident(u, v, h);
+  }
+  /// eval() for a source known to be resident (data != nullptr).
+  [[nodiscard]] bool evalResident(double u, double v, double& h) const noexcept {
+    // Strict upper bounds: the cell (c, r) = (⌊u⌋, ⌊v⌋) then needs no clamping; the last
+    // row and column of centres go through the generic path.
+    if (!(u >= 0.0 && v >= 0.0 && u < uMax && v < vMax)) return false;
+    const auto c = static_cast<long>(u), r = static_cast<long>(v);
+    const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
+    const float* p = data + r * cols + c;
+    const double a = p[0], b = p[1], cc = p[cols], d = p[cols + 1];
+    const double top = a + tu * (b - a), bottom = cc + tu * (d - cc);
+    h = top + tv * (bottom - top);
+    return h == h &&
+           (!hasNodata || ((a != nodata) & (b != nodata) & (cc != nodata) & (d != nodata)));
+  }
+};
+}  // namespace detail
 
 /// A planar grid of heights in metres (grid x, y in metres, row 0 north/top), placed on a
 /// body by a Placement.
@@ -67,12 +115,19 @@ class TopoDem {
   TopoGrid grid_;
   Placement placement_;
   std::shared_ptr<const SampleSource> samples_;
-  const float* resident_ = nullptr;  // samples_->contiguous(), cached for the fast path
-  double nodata_;                    // the nodata value, or NaN
-  bool hasNodataValue_;              // a nodata value other than NaN is declared
-  double uMax_, vMax_;               // cols − 1, rows − 1
-  double invDx_, invDy_;             // 1 / spacing
-  bool exactReciprocal_;             // both reciprocals are exact (powers of two)
+  const float* resident_ = nullptr;  // samples_->contiguous(), cached
+  detail::DemIndexer index_;
+  detail::ResidentBilinear fast_;
+
+  [[nodiscard]] HeightSample heightGeneric(double x, double y, Interpolation interp) const;
 };
+
+inline HeightSample TopoDem::height(double x, double y, Interpolation interp) const {
+  double h = 0.0;
+  if (interp == Interpolation::Bilinear && fast_.eval(index_.u(x), index_.v(y), h)) [[likely]] {
+    return {h, QueryStatus::Ok};
+  }
+  return heightGeneric(x, y, interp);
+}
 
 }  // namespace regolith::topo
