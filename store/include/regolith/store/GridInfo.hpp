@@ -1,0 +1,76 @@
+#pragma once
+/// \file
+/// The description of one grid in a store: everything its HDF5 attributes record
+/// (docs/store-format.md), and the conversions to topo's types.
+
+#include <regolith/topo/Body.hpp>
+#include <regolith/topo/Placement.hpp>
+#include <regolith/topo/TopoGrid.hpp>
+
+#include <cstddef>
+#include <optional>
+#include <string>
+
+namespace regolith::store {
+
+/// What kind of grid: a planar DEM placed on a body, or a latitude/longitude planet grid.
+enum class GridKind { Dem, Planet };
+
+/// How a DEM is placed on its body (mirrors topo::Placement, as plain values).
+struct PlacementInfo {
+  enum class Kind { LocalTangentPlane, PolarStereographic, Equirectangular };
+  Kind kind = Kind::LocalTangentPlane;
+  // LocalTangentPlane: origin (planetodetic degrees, metres) and heading (degrees from north).
+  double originLatDeg = 0.0, originLonDeg = 0.0, originHeight = 0.0, headingDeg = 0.0;
+  // PolarStereographic: pole (+1 north, −1 south); scale by true-scale latitude or by k0
+  // (exactly one of the two is set); centre longitude; false easting/northing (metres).
+  int pole = 1;
+  std::optional<double> latTrueScaleDeg;
+  std::optional<double> scaleFactor;
+  double lonCentreDeg = 0.0, falseEasting = 0.0, falseNorthing = 0.0;
+  // Equirectangular: sphere radius of the projection, latitude of true scale, latitude of
+  // origin (lonCentreDeg above is its centre longitude).
+  double projectionRadius = 0.0, latOriginDeg = 0.0;
+};
+
+/// One grid's configuration. Sample (row, col) of level 0 sits at (x0 + col·dx,
+/// y0 − row·dy) (docs/grid-convention.md); for a planet x is longitude and y latitude in
+/// degrees. Level k has ⌈rows/2^k⌉ × ⌈cols/2^k⌉ samples with spacing 2^k·dx, its sample
+/// (r, c) centred on the mean of level k−1's samples (2r…2r+1, 2c…2c+1).
+struct GridInfo {
+  std::string name;
+  GridKind kind = GridKind::Dem;
+  std::size_t rows = 0, cols = 0;
+  double x0 = 0.0, y0 = 0.0, spacingX = 1.0, spacingY = 1.0;
+  /// Heights in metres are offset + scale · stored value.
+  double scale = 1.0, offset = 0.0;
+  /// Stored value marking missing samples (besides NaN), if any.
+  std::optional<float> nodata;
+  std::string units = "m";
+  std::string bodyName = "Mars";
+  double equatorialRadius = 3396190.0, polarRadius = 3396190.0;
+  topo::LatitudeType latitudeType = topo::LatitudeType::Planetocentric;
+  PlacementInfo placement;  // Dem only
+  std::size_t levels = 1;   // pyramid levels stored, level 0 included
+  std::size_t patchRows = 256, patchCols = 256;  // HDF5 chunk = pager patch
+
+  [[nodiscard]] std::size_t levelRows(std::size_t level) const noexcept {
+    return (rows + (std::size_t{1} << level) - 1) >> level;
+  }
+  [[nodiscard]] std::size_t levelCols(std::size_t level) const noexcept {
+    return (cols + (std::size_t{1} << level) - 1) >> level;
+  }
+};
+
+/// The body a grid is on. Throws regolith::InvalidArgument for bad radii.
+[[nodiscard]] topo::Body bodyOf(const GridInfo& info);
+/// The topo geometry of one level (x0/y0 and spacing scaled for level > 0; nodata NaN,
+/// because the pager hands out heights after scale/offset with missing samples as NaN).
+[[nodiscard]] topo::TopoGrid topoGridOf(const GridInfo& info, std::size_t level = 0);
+/// The DEM's placement. Throws regolith::InvalidArgument if info.kind is not Dem or the
+/// parameters are inconsistent.
+[[nodiscard]] topo::Placement placementOf(const GridInfo& info);
+/// The plain-value description of a topo placement.
+[[nodiscard]] PlacementInfo placementInfoOf(const topo::Placement& placement);
+
+}  // namespace regolith::store

@@ -1,0 +1,109 @@
+#pragma once
+/// \file
+/// HDF5 terrain stores: reading grids by hyperslab, and writing them crash-safely.
+
+#include <regolith/store/GridInfo.hpp>
+#include <regolith/topo/Error.hpp>
+#include <regolith/topo/TopoGrid.hpp>
+
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace regolith::store {
+
+/// A store file is unusable: not HDF5, truncated, corrupt, a newer major format version, a
+/// missing grid, a dataset of the wrong rank or type, an attribute that lies. The message
+/// names the operation, the file and the field, and carries HDF5's error stack when there
+/// is one.
+class StoreError : public regolith::Error {
+ public:
+  using Error::Error;
+};
+
+/// Format version written by this library; a store with a newer major version is refused.
+inline constexpr int kFormatVersionMajor = 1;
+inline constexpr int kFormatVersionMinor = 0;
+
+/// Byte counters of one Store (for cache statistics and benchmarks).
+struct ReadCounters {
+  std::uint64_t reads = 0;      // hyperslab reads
+  std::uint64_t bytesRead = 0;  // bytes delivered by those reads (stored sample type)
+};
+
+/// An open store (read-only). Opening validates every grid's attributes and datasets, so
+/// later reads fail only on I/O errors.
+///
+/// Thread-safety: all const members may be called concurrently. HDF5 calls are serialised
+/// by one process-wide mutex (HDF5 keeps global state; Debian's build is thread-safe but
+/// serialises internally anyway).
+class Store {
+ public:
+  /// Throws StoreError naming the file and the reason.
+  static Store open(const std::filesystem::path& path);
+
+  Store(Store&&) noexcept;
+  Store& operator=(Store&&) noexcept;
+  ~Store();
+
+  [[nodiscard]] const std::filesystem::path& path() const noexcept;
+  [[nodiscard]] std::vector<std::string> gridNames() const;
+  [[nodiscard]] bool hasGrid(std::string_view name) const noexcept;
+  /// Throws StoreError naming the file and the grid if there is no such grid.
+  [[nodiscard]] const GridInfo& grid(std::string_view name) const;
+
+  /// Reads samples [row0, row0 + rows·stride) × [col0, col0 + cols·stride) of one level,
+  /// every `stride`-th sample, with one H5Sselect_hyperslab read, into `out` (row-major,
+  /// rows·cols floats) as heights in metres: offset + scale · stored, and NaN where the
+  /// stored value is missing. Throws StoreError for a window outside the level.
+  void readWindow(std::string_view grid, std::size_t level, std::size_t row0, std::size_t col0,
+                  std::size_t rows, std::size_t cols, std::span<float> out,
+                  std::size_t stride = 1) const;
+
+  [[nodiscard]] ReadCounters counters() const noexcept;
+
+ private:
+  struct Impl;
+  explicit Store(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Progress of a long write: fraction done in [0, 1] and a short label.
+using ProgressFn = std::function<void(double fraction, std::string_view what)>;
+
+struct WriteOptions {
+  /// HDF5 chunk (= pager patch) size; 256×256 by default.
+  std::size_t patchRows = 256, patchCols = 256;
+  /// Pyramid levels to write, level 0 included; 0 means "until a level fits one patch".
+  std::size_t levels = 0;
+  /// Deflate level 0–9 (0: uncompressed).
+  int deflate = 0;
+  /// Called now and then during the write (may be empty).
+  ProgressFn progress;
+  /// If set and becomes true, the write stops, removes its temporary file and throws
+  /// StoreError("... cancelled").
+  const std::atomic<bool>* cancel = nullptr;
+};
+
+/// One grid to write: its description (levels, patch size and sample type are set by the
+/// writer) and its level-0 heights in metres. Samples that are NaN (or equal info.nodata)
+/// are stored as the nodata value.
+struct GridSource {
+  GridInfo info;
+  std::shared_ptr<const topo::SampleSource> samples;
+};
+
+/// Writes a store crash-safely: into `<path>.tmp-<pid>` beside the target, then renamed
+/// over `path` only once complete. Pyramid levels are 2×2 means of the level below,
+/// ignoring missing samples (a coarse sample is missing only if all four are).
+/// Throws StoreError (or regolith::InvalidArgument for a bad GridInfo) and leaves no file.
+void writeStore(const std::filesystem::path& path, std::span<const GridSource> grids,
+                const WriteOptions& options = {});
+
+}  // namespace regolith::store

@@ -1,0 +1,93 @@
+#include <regolith/store/GridInfo.hpp>
+#include <regolith/topo/Error.hpp>
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace regolith::store {
+
+topo::Body bodyOf(const GridInfo& info) {
+  if (info.equatorialRadius == info.polarRadius) {
+    return topo::Body::sphere(info.bodyName, info.equatorialRadius);
+  }
+  return topo::Body::ellipsoid(info.bodyName, info.equatorialRadius, info.polarRadius);
+}
+
+topo::TopoGrid topoGridOf(const GridInfo& info, std::size_t level) {
+  // Level k's sample (r, c) is the mean of level 0's samples 2^k·r … 2^k·r + 2^k − 1, so
+  // its centre sits (2^k − 1)/2 level-0 spacings beyond sample (0, 0)'s.
+  const double f = static_cast<double>(std::size_t{1} << level);
+  const double shift = 0.5 * (f - 1.0);
+  return {info.levelRows(level),
+          info.levelCols(level),
+          info.x0 + shift * info.spacingX,
+          info.y0 - shift * info.spacingY,
+          f * info.spacingX,
+          f * info.spacingY,
+          std::nullopt};
+}
+
+topo::Placement placementOf(const GridInfo& info) {
+  if (info.kind != GridKind::Dem) {
+    throw InvalidArgument("store::placementOf(): grid '" + info.name +
+                          "' is a planet grid, expected a DEM");
+  }
+  const topo::Body body = bodyOf(info);
+  const PlacementInfo& p = info.placement;
+  switch (p.kind) {
+    case PlacementInfo::Kind::LocalTangentPlane:
+      return topo::Placement(topo::LocalTangentPlane(
+          body, {p.originLatDeg, p.originLonDeg, p.originHeight}, p.headingDeg));
+    case PlacementInfo::Kind::PolarStereographic: {
+      const auto pole = p.pole >= 0 ? topo::PolarStereographic::Pole::North
+                                    : topo::PolarStereographic::Pole::South;
+      if (p.latTrueScaleDeg.has_value() == p.scaleFactor.has_value()) {
+        throw InvalidArgument("store::placementOf(): grid '" + info.name +
+                              "' polar stereographic placement needs exactly one of "
+                              "lat_true_scale and scale_factor");
+      }
+      if (p.latTrueScaleDeg) {
+        return {body, topo::PolarStereographic::withTrueScaleLatitude(
+                          body, pole, *p.latTrueScaleDeg, p.lonCentreDeg, p.falseEasting,
+                          p.falseNorthing)};
+      }
+      return {body, topo::PolarStereographic::withScaleFactor(body, pole, *p.scaleFactor,
+                                                              p.lonCentreDeg, p.falseEasting,
+                                                              p.falseNorthing)};
+    }
+    case PlacementInfo::Kind::Equirectangular:
+      return {body,
+              topo::Equirectangular(p.projectionRadius, p.latTrueScaleDeg.value_or(0.0),
+                                    p.lonCentreDeg, p.latOriginDeg),
+              info.latitudeType};
+  }
+  throw InvalidArgument("store::placementOf(): grid '" + info.name + "' has an unknown placement");
+}
+
+PlacementInfo placementInfoOf(const topo::Placement& placement) {
+  PlacementInfo p;
+  if (const auto* ltp = placement.localTangentPlane()) {
+    p.kind = PlacementInfo::Kind::LocalTangentPlane;
+    p.originLatDeg = ltp->origin().latDeg;
+    p.originLonDeg = ltp->origin().lonDeg;
+    p.originHeight = ltp->origin().height;
+    p.headingDeg = ltp->headingDeg();
+  } else if (const auto* ps = placement.polarStereographic()) {
+    p.kind = PlacementInfo::Kind::PolarStereographic;
+    p.pole = ps->pole() == topo::PolarStereographic::Pole::North ? 1 : -1;
+    p.scaleFactor = ps->scaleFactorAtPole();
+    p.lonCentreDeg = ps->lonCentreDeg();
+    p.falseEasting = ps->falseEasting();
+    p.falseNorthing = ps->falseNorthing();
+  } else if (const auto* eq = placement.equirectangular()) {
+    p.kind = PlacementInfo::Kind::Equirectangular;
+    p.projectionRadius = eq->radius();
+    p.latTrueScaleDeg = eq->latTrueScaleDeg();
+    p.lonCentreDeg = eq->lonCentreDeg();
+    p.latOriginDeg = eq->latOriginDeg();
+  }
+  return p;
+}
+
+}  // namespace regolith::store
