@@ -50,6 +50,18 @@ struct SourceFetch {
   }
 };
 
+// Paged sources: loads from the current block when it holds the sample, else asks the
+// source (a stencil straddling two blocks).
+struct BlockFetch {
+  const SampleSource* src;
+  const SampleBlock* blk;
+  float operator()(long r, long c) const {
+    const auto ur = static_cast<std::size_t>(r), uc = static_cast<std::size_t>(c);
+    if (blk->contains(ur, uc)) return blk->data[(ur - blk->row0) * blk->stride + (uc - blk->col0)];
+    return src->sample(ur, uc);
+  }
+};
+
 // Samples beyond a non-periodic edge are extrapolated with Keys' own boundary condition,
 // f(−1) = 3f(0) − 3f(1) + f(2), which keeps cubic convolution exact for quadratics right up
 // to the border (edge replication would bend a plane there). With two samples the rule is

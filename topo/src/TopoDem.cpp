@@ -38,14 +38,37 @@ inline Where locate(const detail::DemIndexer& m, double x, double y, double cmax
   return {std::clamp(u, 0.0, cmax), std::clamp(v, 0.0, rmax), inside};
 }
 
+// The block of a paged source that the calling thread read last. Runs of queries inside
+// one block (the rover's case) then cost no call into the source at all. Keyed by the
+// source's unique id, never by its address; holds a reference to the block's memory until
+// the thread moves to another block or exits.
+struct ThreadBlock {
+  std::uint64_t source = 0;
+  SampleBlock block;
+};
+thread_local ThreadBlock tlBlock;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
+
 // Calls fn with the accessor that fits the source: plain array loads when the samples are
-// resident, SampleSource::sample() otherwise.
+// resident; otherwise loads from the block holding the point's cell (fetched through
+// SampleSource::block() when the thread's last block does not hold it), falling back to
+// SampleSource::sample() for stencil samples outside the block.
 template <class Fn>
 KernelResult withAccessor(const TopoGrid& g, const SampleSource& src, const float* resident,
-                          Fn&& fn) {
+                          const Where& w, Fn&& fn) {
   const long rows = static_cast<long>(g.rows()), cols = static_cast<long>(g.cols());
   if (resident != nullptr) return fn(ClampAcc<detail::MemFetch>{{resident, cols}, rows, cols});
-  return fn(ClampAcc<detail::SourceFetch>{{&src}, rows, cols});
+  const auto r = static_cast<std::size_t>(w.v), c = static_cast<std::size_t>(w.u);
+  ThreadBlock& tb = tlBlock;
+  if (tb.source != src.id() || !tb.block.contains(r, c)) {
+    SampleBlock fresh;
+    if (src.block(r, c, fresh)) {
+      tb.source = src.id();
+      tb.block = std::move(fresh);
+    } else {
+      tb = {};
+    }
+  }
+  return fn(ClampAcc<detail::BlockFetch>{{&src, &tb.block}, rows, cols});
 }
 
 // The check is inline and the throwing part out of line, so that the hot path stays small.
@@ -110,7 +133,7 @@ HeightSample TopoDem::heightGeneric(double x, double y, Interpolation interp) co
   requirePoint(x, y, "TopoDem::height()");
   const Where w = locate(index_, x, y, fast_.uMax, fast_.vMax);
   if (!w.inside) return {};
-  const KernelResult k = withAccessor(grid_, *samples_, resident_, [&](const auto& acc) {
+  const KernelResult k = withAccessor(grid_, *samples_, resident_, w, [&](const auto& acc) {
     return detail::evaluate<false>(interp, acc, w.u, w.v, fast_.nodata);
   });
   if (k.status != QueryStatus::Ok) return {std::numeric_limits<double>::quiet_NaN(), k.status};
@@ -121,7 +144,7 @@ SurfaceSample TopoDem::surface(double x, double y, Interpolation interp, NormalF
   requirePoint(x, y, "TopoDem::surface()");
   const Where w = locate(index_, x, y, fast_.uMax, fast_.vMax);
   if (!w.inside) return {};
-  const KernelResult k = withAccessor(grid_, *samples_, resident_, [&](const auto& acc) {
+  const KernelResult k = withAccessor(grid_, *samples_, resident_, w, [&](const auto& acc) {
     return detail::evaluate<true>(interp, acc, w.u, w.v, fast_.nodata);
   });
   SurfaceSample s;
@@ -178,32 +201,39 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
     }
     return;
   }
+  if (resident_ == nullptr) {  // paged: per point, each reusing the thread's block
+    for (std::size_t i = 0; i < n; ++i) {
+      const HeightSample s = heightGeneric(xs[i], ys[i], interp);
+      out[i] = s.height;
+      if (!status.empty()) status[i] = s.status;
+    }
+    return;
+  }
   const double nd = fast_.nodata;
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-  // The accessor and kernel are chosen once for the whole batch.
-  withAccessor(grid_, *samples_, resident_, [&](const auto& acc) {
-    auto run = [&](auto kernel) {
-      for (std::size_t i = 0; i < n; ++i) {
-        const Where w = locate(index_, xs[i], ys[i], fast_.uMax, fast_.vMax);
-        QueryStatus st = QueryStatus::OutsideGrid;
-        double h = nan;
-        if (w.inside) {
-          const KernelResult k = kernel(acc, w.u, w.v, nd);
-          st = k.status;
-          h = st == QueryStatus::Ok ? k.h : nan;
-        }
-        out[i] = h;
-        if (!status.empty()) status[i] = st;
+  const long rows = static_cast<long>(grid_.rows()), cols = static_cast<long>(grid_.cols());
+  const ClampAcc<detail::MemFetch> acc{{resident_, cols}, rows, cols};
+  // The kernel is chosen once for the whole batch.
+  auto run = [&](auto kernel) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const Where w = locate(index_, xs[i], ys[i], fast_.uMax, fast_.vMax);
+      QueryStatus st = QueryStatus::OutsideGrid;
+      double h = nan;
+      if (w.inside) {
+        const KernelResult k = kernel(acc, w.u, w.v, nd);
+        st = k.status;
+        h = st == QueryStatus::Ok ? k.h : nan;
       }
-    };
-    using Acc = std::decay_t<decltype(acc)>;
-    switch (interp) {
-      case Interpolation::Nearest: run(detail::nearest<false, Acc>); break;
-      case Interpolation::Bicubic: run(detail::bicubic<false, Acc>); break;
-      case Interpolation::Bilinear: run(detail::bilinear<false, Acc>); break;
+      out[i] = h;
+      if (!status.empty()) status[i] = st;
     }
-    return KernelResult{};
-  });
+  };
+  using Acc = ClampAcc<detail::MemFetch>;
+  switch (interp) {
+    case Interpolation::Nearest: run(detail::nearest<false, Acc>); break;
+    case Interpolation::Bicubic: run(detail::bicubic<false, Acc>); break;
+    case Interpolation::Bilinear: run(detail::bilinear<false, Acc>); break;
+  }
 }
 
 void TopoDem::surfaces(std::span<const double> xs, std::span<const double> ys,

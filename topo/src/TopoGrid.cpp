@@ -2,6 +2,7 @@
 #include <regolith/topo/Error.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
+#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <string>
@@ -50,6 +51,15 @@ bool TopoGrid::contains(double x, double y) const noexcept {
   const glm::dvec2 f = fractionalIndex(x, y);
   return f.x >= -0.5 && f.x <= static_cast<double>(cols_) - 0.5 && f.y >= -0.5 &&
          f.y <= static_cast<double>(rows_) - 0.5;
+}
+
+SampleSource::SampleSource() {
+  static std::atomic<std::uint64_t> next{1};  // ids only; no state is shared through it
+  id_ = next.fetch_add(1, std::memory_order_relaxed);
+}
+
+bool SampleSource::block(std::size_t /*row*/, std::size_t /*col*/, SampleBlock& /*out*/) const {
+  return false;
 }
 
 void SampleSource::readWindow(std::size_t row0, std::size_t col0, std::size_t nrows,
