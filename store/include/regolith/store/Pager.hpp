@@ -1,0 +1,66 @@
+#pragma once
+/// \file
+/// Lazy paging of store grids into a shared patch cache.
+
+#include <regolith/store/PatchCache.hpp>
+#include <regolith/store/Store.hpp>
+#include <regolith/topo/TopoDem.hpp>
+#include <regolith/topo/TopoPlanet.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <string_view>
+#include <unordered_map>
+
+namespace regolith::store {
+
+/// Serves the grids of one Store patch by patch (the JPL paper, section III.A): reading a
+/// point loads only the aligned patch (one HDF5 chunk, patchRows × patchCols samples of
+/// one level) that holds it, with one hyperslab read, into a PatchCache shared by every
+/// grid and level. TopoDem and TopoPlanet built here answer exactly the queries of
+/// in-memory ones.
+///
+/// Hit counting: a query asks the cache for a patch only when the calling thread moves
+/// into a patch it does not hold already (topo keeps each thread's last patch), so a hit is
+/// "a run of queries entered this patch" rather than "one sample was read".
+///
+/// Thread-safety: all members may be called concurrently; sources and grids made here may
+/// be queried from any number of threads.
+class Pager {
+ public:
+  /// Throws InvalidArgument if store or cache is null.
+  Pager(std::shared_ptr<const Store> store, std::shared_ptr<PatchCache> cache);
+
+  [[nodiscard]] const Store& store() const noexcept { return *store_; }
+  [[nodiscard]] PatchCache& cache() const noexcept { return *cache_; }
+
+  /// The samples of one level of a grid, paged. Throws StoreError for an unknown grid or a
+  /// level the grid does not have.
+  [[nodiscard]] std::shared_ptr<const topo::SampleSource> source(std::string_view grid,
+                                                                 std::size_t level = 0) const;
+  /// A paged TopoDem of one level. Throws StoreError if the grid is a planet grid.
+  [[nodiscard]] topo::TopoDem dem(std::string_view grid, std::size_t level = 0) const;
+  /// A paged TopoPlanet of one level. Throws StoreError if the grid is a DEM.
+  [[nodiscard]] topo::TopoPlanet planet(std::string_view grid, std::size_t level = 0) const;
+
+  /// The cache key of the patch holding sample (row, col) of a level.
+  [[nodiscard]] PatchKey keyOf(std::string_view grid, std::size_t level, std::size_t row,
+                               std::size_t col) const;
+  /// The patch for `key`, through the cache (loading it on a miss); for prefetching.
+  [[nodiscard]] std::shared_ptr<const Patch> patch(const PatchKey& key) const;
+
+ private:
+  struct GridEntry {
+    const GridInfo* info;
+    std::uint32_t id;
+  };
+  [[nodiscard]] const GridEntry& entry(std::string_view grid, std::size_t level,
+                                       const char* op) const;
+
+  std::shared_ptr<const Store> store_;
+  std::shared_ptr<PatchCache> cache_;
+  std::unordered_map<std::string, GridEntry> grids_;
+  std::unordered_map<std::uint32_t, const GridInfo*> byId_;
+};
+
+}  // namespace regolith::store

@@ -1,0 +1,269 @@
+// Pager: paged grids answer exactly like in-memory ones, load only the patches they touch,
+// stay within the cache budget, and give the same answers from many threads.
+#include <regolith/store/Pager.hpp>
+#include <regolith/topo/Error.hpp>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <thread>
+
+using namespace regolith;
+using namespace regolith::store;
+using namespace regolith::topo;
+
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("regolith-pager-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir / name;
+}
+
+float terrain(std::size_t r, std::size_t c) {
+  const double x = static_cast<double>(c), y = static_cast<double>(r);
+  if (r == 300 && c == 301) return std::nanf("");  // one hole
+  return static_cast<float>(40.0 * std::sin(x / 37.0) + 25.0 * std::cos(y / 23.0) +
+                            0.01 * x * y / 10.0);
+}
+
+GridInfo demInfo(std::size_t rows, std::size_t cols) {
+  GridInfo g;
+  g.name = "dem";
+  g.kind = GridKind::Dem;
+  g.rows = rows;
+  g.cols = cols;
+  g.x0 = -500.0;
+  g.y0 = 400.0;
+  g.spacingX = g.spacingY = 1.0;
+  g.nodata = -32768.0f;
+  g.bodyName = "Mars";
+  g.equatorialRadius = 3396190.0;
+  g.polarRadius = 3376200.0;
+  g.placement.kind = PlacementInfo::Kind::LocalTangentPlane;
+  g.placement.originLatDeg = -2.05;
+  g.placement.originLonDeg = -5.5;
+  return g;
+}
+
+GridInfo planetInfo() {
+  GridInfo g;
+  g.name = "planet";
+  g.kind = GridKind::Planet;
+  g.rows = 180;
+  g.cols = 360;
+  g.x0 = 0.5;
+  g.y0 = 89.5;
+  g.spacingX = g.spacingY = 1.0;
+  g.equatorialRadius = g.polarRadius = 3396190.0;
+  return g;
+}
+
+struct Fixture {
+  fs::path path;
+  std::shared_ptr<InMemorySamples> demSamples, planetSamples;
+};
+
+// Writes one store with a 700×900 DEM and a 1° global planet, 128×128 patches.
+const Fixture& fixture() {
+  static const Fixture f = [] {
+    Fixture fx;
+    fx.path = scratch("pager.h5");
+    fx.demSamples = InMemorySamples::fromFunction(700, 900, terrain);
+    fx.planetSamples = InMemorySamples::fromFunction(180, 360, [](std::size_t r, std::size_t c) {
+      return static_cast<float>(100.0 * static_cast<double>(r) - static_cast<double>(c));
+    });
+    const std::vector<GridSource> grids{{demInfo(700, 900), fx.demSamples},
+                                        {planetInfo(), fx.planetSamples}};
+    WriteOptions o;
+    o.patchRows = o.patchCols = 128;
+    writeStore(fx.path, grids, o);
+    return fx;
+  }();
+  return f;
+}
+
+struct Opened {
+  std::shared_ptr<const Store> store;
+  std::shared_ptr<PatchCache> cache;
+  Pager pager;
+};
+
+Opened open(std::size_t capacity = std::size_t{64} << 20) {
+  auto store = std::make_shared<const Store>(Store::open(fixture().path));
+  auto cache = std::make_shared<PatchCache>(capacity);
+  return {store, cache, Pager(store, cache)};
+}
+
+constexpr Interpolation kAll[] = {Interpolation::Nearest, Interpolation::Bilinear,
+                                  Interpolation::Bicubic};
+}  // namespace
+
+TEST(Pager, PagedDemAnswersExactlyLikeTheInMemoryDem) {
+  Opened o = open();
+  const TopoDem paged = o.pager.dem("dem");
+  GridInfo info = demInfo(700, 900);
+  const TopoDem mem(topoGridOf(info), placementOf(info), fixture().demSamples);
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> x(-501.0, 400.0), y(-300.0, 401.0);
+  for (int i = 0; i < 3000; ++i) {
+    const double px = x(rng), py = y(rng);
+    for (Interpolation k : kAll) {
+      const SurfaceSample a = mem.surface(px, py, k, NormalFrame::BodyFixed);
+      const SurfaceSample b = paged.surface(px, py, k, NormalFrame::BodyFixed);
+      ASSERT_EQ(a.status, b.status) << px << "," << py;
+      if (a.valid()) {
+        ASSERT_EQ(a.height, b.height);
+        ASSERT_EQ(a.normal, b.normal);
+      }
+    }
+  }
+}
+
+TEST(Pager, ReadingOnePointLoadsOnlyThePatchThatHoldsIt) {
+  Opened o = open();
+  const TopoDem dem = o.pager.dem("dem");
+  // Sample (200, 200) is inside patch (1, 1) of 128×128; its bilinear cell too.
+  (void)dem.height(-500.0 + 200.25, 400.0 - 200.25);
+  CacheStats s = o.cache->stats();
+  EXPECT_EQ(s.loads, 1u);
+  EXPECT_EQ(o.store->counters().reads, 1u);
+  EXPECT_EQ(o.store->counters().bytesRead, 128u * 128u * sizeof(float));
+  EXPECT_TRUE(o.cache->contains(o.pager.keyOf("dem", 0, 200, 200)));
+  // At a patch corner the bicubic stencil needs all four patches around it.
+  (void)dem.height(-500.0 + 383.5, 400.0 - 383.5, Interpolation::Bicubic);
+  s = o.cache->stats();
+  EXPECT_EQ(s.loads, 1u + 4u);
+}
+
+TEST(Pager, RunsOfQueriesInOnePatchAskTheCacheOnce) {
+  Opened o = open();
+  const TopoDem dem = o.pager.dem("dem");
+  for (int i = 0; i < 10000; ++i) (void)dem.height(-500.0 + 140.0 + 0.01 * i, 400.0 - 140.0);
+  const CacheStats s = o.cache->stats();
+  EXPECT_EQ(s.loads, 1u);
+  EXPECT_LE(s.hits + s.misses, 2u);
+}
+
+TEST(Pager, ResidentBytesStayWithinTheBudgetOnAGridEightTimesLarger) {
+  // 700×900 floats = 2.5 MB; a budget of 4 patches of 128×128 (~260 KB) is ~10× smaller.
+  const std::size_t patchBytes = 128 * 128 * sizeof(float) + 256;
+  Opened o = open(4 * patchBytes);
+  const TopoDem dem = o.pager.dem("dem");
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> x(-500.0, 399.0), y(-299.0, 400.0);
+  for (int i = 0; i < 20000; ++i) {
+    (void)dem.height(x(rng), y(rng), Interpolation::Bicubic);
+    ASSERT_LE(o.cache->stats().residentBytes, o.cache->capacityBytes());
+  }
+  EXPECT_GT(o.cache->stats().evictions, 100u);
+}
+
+TEST(Pager, EightThreadsGetTheSameAnswersAsOne) {
+  Opened o = open(6 * (128 * 128 * sizeof(float) + 256));
+  const TopoDem dem = o.pager.dem("dem");
+  std::vector<double> xs(4000), ys(4000), ref(4000);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> x(-500.0, 399.0), y(-299.0, 400.0);
+  for (std::size_t i = 0; i < xs.size(); ++i) xs[i] = x(rng), ys[i] = y(rng);
+  dem.heights(xs, ys, ref, {}, Interpolation::Bicubic);
+  std::vector<std::vector<double>> got(8, std::vector<double>(xs.size()));
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < 8; ++t) {
+    threads.emplace_back([&, t] {
+      for (std::size_t i = 0; i < xs.size(); ++i) {
+        const std::size_t j = (i + 500 * t) % xs.size();  // different orders, same points
+        got[t][j] = dem.height(xs[j], ys[j], Interpolation::Bicubic).height;
+      }
+    });
+  }
+  for (auto& th : threads) th.join();
+  for (std::size_t t = 0; t < 8; ++t) {
+    for (std::size_t i = 0; i < xs.size(); ++i) {
+      if (std::isnan(ref[i])) {
+        EXPECT_TRUE(std::isnan(got[t][i]));
+      } else {
+        ASSERT_EQ(got[t][i], ref[i]) << "thread " << t << " point " << i;
+      }
+    }
+  }
+}
+
+TEST(Pager, PagedPlanetAnswersExactlyLikeTheInMemoryPlanet) {
+  Opened o = open();
+  const TopoPlanet paged = o.pager.planet("planet");
+  const TopoPlanet mem(topoGridOf(planetInfo()), bodyOf(planetInfo()), LatitudeType::Planetocentric,
+                       fixture().planetSamples);
+  for (double lat : {-90.0, -89.7, -10.3, 0.0, 45.5, 89.9, 90.0}) {
+    for (double lon : {-180.0, -0.2, 0.0, 127.9, 179.99, 359.5}) {
+      for (Interpolation k : kAll) {
+        const SurfaceSample a = mem.surface({lat, lon}, k), b = paged.surface({lat, lon}, k);
+        ASSERT_EQ(a.status, b.status);
+        EXPECT_EQ(a.height, b.height) << lat << "," << lon;
+        EXPECT_EQ(a.normal, b.normal);
+      }
+    }
+  }
+}
+
+TEST(Pager, CoarseLevelsAreTwoByTwoMeansWithTheirOwnGeometry) {
+  Opened o = open();
+  const TopoDem l1 = o.pager.dem("dem", 1);
+  EXPECT_EQ(l1.grid().rows(), 350u);
+  EXPECT_EQ(l1.grid().cols(), 450u);
+  EXPECT_DOUBLE_EQ(l1.grid().spacingX(), 2.0);
+  // Sample (10, 20) of level 1 = mean of level-0 samples (20…21, 40…41), centred between them.
+  const double mean =
+      (static_cast<double>(terrain(20, 40)) + terrain(20, 41) + terrain(21, 40) + terrain(21, 41)) /
+      4.0;
+  const glm::dvec2 c = l1.grid().sampleCentre(10, 20);
+  EXPECT_DOUBLE_EQ(c.x, -500.0 + 40.5);
+  EXPECT_DOUBLE_EQ(c.y, 400.0 - 20.5);
+  EXPECT_NEAR(l1.height(c.x, c.y, Interpolation::Nearest).height, mean, 1e-4);
+}
+
+TEST(Pager, ReadWindowAcrossPatchesEqualsTheSource) {
+  Opened o = open();
+  const auto src = o.pager.source("dem");
+  std::vector<float> w(150 * 170);
+  src->readWindow(100, 90, 150, 170, w);
+  for (std::size_t r = 0; r < 150; r += 7) {
+    for (std::size_t c = 0; c < 170; c += 5) {
+      const float want = terrain(100 + r, 90 + c);
+      if (std::isnan(want)) {
+        EXPECT_TRUE(std::isnan(w[r * 170 + c]));
+      } else {
+        EXPECT_EQ(w[r * 170 + c], want);
+      }
+    }
+  }
+}
+
+TEST(Pager, ClearErrorsForUnknownGridsLevelsAndKinds) {
+  Opened o = open();
+  try {
+    (void)o.pager.dem("nope");
+    FAIL();
+  } catch (const StoreError& e) {
+    EXPECT_NE(std::string(e.what()).find("store::Pager::dem(): "), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("no grid 'nope'"), std::string::npos);
+  }
+  EXPECT_THROW((void)o.pager.dem("dem", 99), StoreError);
+  EXPECT_THROW((void)o.pager.dem("planet"), StoreError);
+  EXPECT_THROW((void)o.pager.planet("dem"), StoreError);
+  EXPECT_THROW((void)o.pager.patch({9999, 0, 0, 0}), InvalidArgument);
+}
+
+TEST(Pager, GridsOutliveThePagerThatMadeThem) {
+  std::optional<TopoDem> dem;
+  {
+    Opened o = open();
+    dem.emplace(o.pager.dem("dem"));
+  }
+  EXPECT_TRUE(dem->height(0.0, 0.0).valid());
+}
