@@ -5,7 +5,8 @@
 #   3. Release build with -Werror           -> build/
 #   4. clang-tidy over that build           (scripts/run-clang-tidy.sh)
 #   5. ASan+UBSan build and its tests       -> build-asan/ (no benchmarks)
-#   6. the Release tests, last, so the output ends with ctest's summary
+#   6. TSan build of the store tests (pager, patch cache: the concurrent code) -> build-tsan/
+#   7. the Release tests, last, so the output ends with ctest's summary
 #
 #   bash scripts/test-all.sh
 #
@@ -20,6 +21,7 @@ cd "$root"
 
 build_dir=${BUILD_DIR:-build}
 asan_dir=${ASAN_BUILD_DIR:-build-asan}
+tsan_dir=${TSAN_BUILD_DIR:-build-tsan}
 read -r -a extra_args <<<"${REGOLITH_CMAKE_ARGS:-}"
 jobs=2
 start=$SECONDS
@@ -53,6 +55,15 @@ cmake --build "$asan_dir" -j"$jobs"
 ASAN_OPTIONS=halt_on_error=1:print_stacktrace=1:detect_leaks=1 \
 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
   ctest --test-dir "$asan_dir" --output-on-failure --no-tests=error -j"$jobs"
+
+# ThreadSanitizer on the concurrent code only: the pager and its cache (tests/store).
+section "TSan build and store tests ($tsan_dir)"
+cmake -S . -B "$tsan_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DREGOLITH_WERROR=OFF \
+  -DREGOLITH_SANITIZE=thread -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=OFF \
+  -DREGOLITH_BUILD_BENCH=OFF "${extra_args[@]}"
+cmake --build "$tsan_dir" -j"$jobs" --target store_tests
+TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+  "$tsan_dir/tests/store/store_tests" --gtest_brief=1
 
 section "Release tests ($build_dir)"
 ctest --test-dir "$build_dir" --output-on-failure --no-tests=error -j"$jobs"

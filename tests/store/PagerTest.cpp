@@ -3,6 +3,8 @@
 #include <regolith/store/Pager.hpp>
 #include <regolith/topo/Error.hpp>
 
+#include "store/PagerFixture.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -16,96 +18,13 @@ using namespace regolith::store;
 using namespace regolith::topo;
 
 namespace {
-
-namespace fs = std::filesystem;
-
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("regolith-pager-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir / name;
-}
-
-float terrain(std::size_t r, std::size_t c) {
-  const double x = static_cast<double>(c), y = static_cast<double>(r);
-  if (r == 300 && c == 301) return std::nanf("");  // one hole
-  return static_cast<float>(40.0 * std::sin(x / 37.0) + 25.0 * std::cos(y / 23.0) +
-                            0.01 * x * y / 10.0);
-}
-
-GridInfo demInfo(std::size_t rows, std::size_t cols) {
-  GridInfo g;
-  g.name = "dem";
-  g.kind = GridKind::Dem;
-  g.rows = rows;
-  g.cols = cols;
-  g.x0 = -500.0;
-  g.y0 = 400.0;
-  g.spacingX = g.spacingY = 1.0;
-  g.nodata = -32768.0f;
-  g.bodyName = "Mars";
-  g.equatorialRadius = 3396190.0;
-  g.polarRadius = 3376200.0;
-  g.placement.kind = PlacementInfo::Kind::LocalTangentPlane;
-  g.placement.originLatDeg = -2.05;
-  g.placement.originLonDeg = -5.5;
-  return g;
-}
-
-GridInfo planetInfo() {
-  GridInfo g;
-  g.name = "planet";
-  g.kind = GridKind::Planet;
-  g.rows = 180;
-  g.cols = 360;
-  g.x0 = 0.5;
-  g.y0 = 89.5;
-  g.spacingX = g.spacingY = 1.0;
-  g.equatorialRadius = g.polarRadius = 3396190.0;
-  return g;
-}
-
-struct Fixture {
-  fs::path path;
-  std::shared_ptr<InMemorySamples> demSamples, planetSamples;
-};
-
-// Writes one store with a 700×900 DEM and a 1° global planet, 128×128 patches.
-const Fixture& fixture() {
-  static const Fixture f = [] {
-    Fixture fx;
-    fx.path = scratch("pager.h5");
-    fx.demSamples = InMemorySamples::fromFunction(700, 900, terrain);
-    fx.planetSamples = InMemorySamples::fromFunction(180, 360, [](std::size_t r, std::size_t c) {
-      return static_cast<float>(100.0 * static_cast<double>(r) - static_cast<double>(c));
-    });
-    const std::vector<GridSource> grids{{demInfo(700, 900), fx.demSamples},
-                                        {planetInfo(), fx.planetSamples}};
-    WriteOptions o;
-    o.patchRows = o.patchCols = 128;
-    writeStore(fx.path, grids, o);
-    return fx;
-  }();
-  return f;
-}
-
-struct Opened {
-  std::shared_ptr<const Store> store;
-  std::shared_ptr<PatchCache> cache;
-  Pager pager;
-};
-
-Opened open(std::size_t capacity = std::size_t{64} << 20) {
-  auto store = std::make_shared<const Store>(Store::open(fixture().path));
-  auto cache = std::make_shared<PatchCache>(capacity);
-  return {store, cache, Pager(store, cache)};
-}
-
+using namespace regolith::test;
 constexpr Interpolation kAll[] = {Interpolation::Nearest, Interpolation::Bilinear,
                                   Interpolation::Bicubic};
 }  // namespace
 
 TEST(Pager, PagedDemAnswersExactlyLikeTheInMemoryDem) {
-  Opened o = open();
+  Opened o = openFixture();
   const TopoDem paged = o.pager.dem("dem");
   GridInfo info = demInfo(700, 900);
   const TopoDem mem(topoGridOf(info), placementOf(info), fixture().demSamples);
@@ -126,7 +45,7 @@ TEST(Pager, PagedDemAnswersExactlyLikeTheInMemoryDem) {
 }
 
 TEST(Pager, ReadingOnePointLoadsOnlyThePatchThatHoldsIt) {
-  Opened o = open();
+  Opened o = openFixture();
   const TopoDem dem = o.pager.dem("dem");
   // Sample (200, 200) is inside patch (1, 1) of 128×128; its bilinear cell too.
   (void)dem.height(-500.0 + 200.25, 400.0 - 200.25);
@@ -142,7 +61,7 @@ TEST(Pager, ReadingOnePointLoadsOnlyThePatchThatHoldsIt) {
 }
 
 TEST(Pager, RunsOfQueriesInOnePatchAskTheCacheOnce) {
-  Opened o = open();
+  Opened o = openFixture();
   const TopoDem dem = o.pager.dem("dem");
   for (int i = 0; i < 10000; ++i) (void)dem.height(-500.0 + 140.0 + 0.01 * i, 400.0 - 140.0);
   const CacheStats s = o.cache->stats();
@@ -153,7 +72,7 @@ TEST(Pager, RunsOfQueriesInOnePatchAskTheCacheOnce) {
 TEST(Pager, ResidentBytesStayWithinTheBudgetOnAGridEightTimesLarger) {
   // 700×900 floats = 2.5 MB; a budget of 4 patches of 128×128 (~260 KB) is ~10× smaller.
   const std::size_t patchBytes = 128 * 128 * sizeof(float) + 256;
-  Opened o = open(4 * patchBytes);
+  Opened o = openFixture(4 * patchBytes);
   const TopoDem dem = o.pager.dem("dem");
   std::mt19937 rng(2);
   std::uniform_real_distribution<double> x(-500.0, 399.0), y(-299.0, 400.0);
@@ -165,7 +84,7 @@ TEST(Pager, ResidentBytesStayWithinTheBudgetOnAGridEightTimesLarger) {
 }
 
 TEST(Pager, EightThreadsGetTheSameAnswersAsOne) {
-  Opened o = open(6 * (128 * 128 * sizeof(float) + 256));
+  Opened o = openFixture(6 * (128 * 128 * sizeof(float) + 256));
   const TopoDem dem = o.pager.dem("dem");
   std::vector<double> xs(4000), ys(4000), ref(4000);
   std::mt19937 rng(3);
@@ -195,7 +114,7 @@ TEST(Pager, EightThreadsGetTheSameAnswersAsOne) {
 }
 
 TEST(Pager, PagedPlanetAnswersExactlyLikeTheInMemoryPlanet) {
-  Opened o = open();
+  Opened o = openFixture();
   const TopoPlanet paged = o.pager.planet("planet");
   const TopoPlanet mem(topoGridOf(planetInfo()), bodyOf(planetInfo()), LatitudeType::Planetocentric,
                        fixture().planetSamples);
@@ -212,7 +131,7 @@ TEST(Pager, PagedPlanetAnswersExactlyLikeTheInMemoryPlanet) {
 }
 
 TEST(Pager, CoarseLevelsAreTwoByTwoMeansWithTheirOwnGeometry) {
-  Opened o = open();
+  Opened o = openFixture();
   const TopoDem l1 = o.pager.dem("dem", 1);
   EXPECT_EQ(l1.grid().rows(), 350u);
   EXPECT_EQ(l1.grid().cols(), 450u);
@@ -228,7 +147,7 @@ TEST(Pager, CoarseLevelsAreTwoByTwoMeansWithTheirOwnGeometry) {
 }
 
 TEST(Pager, ReadWindowAcrossPatchesEqualsTheSource) {
-  Opened o = open();
+  Opened o = openFixture();
   const auto src = o.pager.source("dem");
   std::vector<float> w(150 * 170);
   src->readWindow(100, 90, 150, 170, w);
@@ -245,7 +164,7 @@ TEST(Pager, ReadWindowAcrossPatchesEqualsTheSource) {
 }
 
 TEST(Pager, ClearErrorsForUnknownGridsLevelsAndKinds) {
-  Opened o = open();
+  Opened o = openFixture();
   try {
     (void)o.pager.dem("nope");
     FAIL();
@@ -262,7 +181,7 @@ TEST(Pager, ClearErrorsForUnknownGridsLevelsAndKinds) {
 TEST(Pager, GridsOutliveThePagerThatMadeThem) {
   std::optional<TopoDem> dem;
   {
-    Opened o = open();
+    Opened o = openFixture();
     dem.emplace(o.pager.dem("dem"));
   }
   EXPECT_TRUE(dem->height(0.0, 0.0).valid());

@@ -1,0 +1,104 @@
+#pragma once
+/// \file
+/// Background loading of patches: a thread pool that prefetches windows by priority.
+
+#include <regolith/store/Pager.hpp>
+
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <queue>
+#include <string_view>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+namespace regolith::store {
+
+/// A block of samples of one level: rows [row0, row0 + rows), cols [col0, col0 + cols).
+struct LevelWindow {
+  std::size_t level = 0;
+  std::size_t row0 = 0, col0 = 0, rows = 0, cols = 0;
+};
+
+/// Counters since construction.
+struct PrefetchStats {
+  std::uint64_t queued = 0;     // patches put in the queue
+  std::uint64_t loaded = 0;     // patches fetched by a worker (cache hits included)
+  std::uint64_t cancelled = 0;  // patches dropped from the queue by cancel()
+  std::uint64_t failed = 0;     // loads that threw (the error is kept, see lastError())
+};
+
+/// Loads patches in the background so that queries find them resident, e.g. the lazy-load
+/// window around a moving focus. Work runs by priority: a request's coarse levels before
+/// its finer ones, and among requests the higher priority first (then the older).
+/// Requests can be cancelled; a focus that moves cancels its previous window.
+///
+/// Thread-safety: every member may be called from any thread. The destructor cancels what
+/// is queued and joins the workers (a load in progress finishes first).
+class Prefetcher {
+ public:
+  using Ticket = std::uint64_t;
+
+  /// Throws InvalidArgument if pager is null or threads is 0.
+  Prefetcher(std::shared_ptr<const Pager> pager, std::size_t threads = 2);
+  ~Prefetcher();
+  Prefetcher(const Prefetcher&) = delete;
+  Prefetcher& operator=(const Prefetcher&) = delete;
+
+  /// Queues the patches covering the windows of `grid` (windows are clipped to their
+  /// levels; an unknown grid or level throws StoreError at once). Within the request,
+  /// coarser levels load first. Returns a ticket for wait() and cancel().
+  Ticket request(std::string_view grid, const std::vector<LevelWindow>& windows, int priority = 0);
+  /// The windows of every level of `grid` that cover a square of half-width `radius`
+  /// level-0 samples around level-0 sample (row, col), from `finestLevel` up to the
+  /// coarsest stored level.
+  [[nodiscard]] std::vector<LevelWindow> focusWindows(std::string_view grid, std::size_t row,
+                                                      std::size_t col, std::size_t radius,
+                                                      std::size_t finestLevel = 0) const;
+  /// Drops the ticket's queued patches (loads in progress finish).
+  void cancel(Ticket ticket);
+  /// Blocks until the ticket's patches are all loaded, cancelled or failed.
+  void wait(Ticket ticket);
+  /// Blocks until the queue is empty and no worker is busy.
+  void waitIdle();
+
+  [[nodiscard]] PrefetchStats stats() const;
+  /// Message of the last failed load (empty if none).
+  [[nodiscard]] std::string lastError() const;
+  /// Called by a worker after each patch it fetched (for tests and progress); may be empty.
+  void setOnLoaded(std::function<void(const PatchKey&)> fn);
+
+ private:
+  struct Item {
+    int priority;
+    std::uint32_t level;
+    std::uint64_t sequence;
+    Ticket ticket;
+    PatchKey key;
+  };
+  struct ItemOrder {
+    bool operator()(const Item& a, const Item& b) const noexcept;
+  };
+  void work();
+
+  std::shared_ptr<const Pager> pager_;
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;  // workers: work arrived or stopping
+  std::condition_variable done_;  // waiters: a ticket or the queue drained
+  std::priority_queue<Item, std::vector<Item>, ItemOrder> queue_;
+  std::unordered_map<Ticket, std::size_t> pending_;  // ticket → patches not yet finished
+  std::unordered_map<Ticket, bool> cancelled_;
+  std::size_t busy_ = 0;
+  bool stopping_ = false;
+  Ticket nextTicket_ = 1;
+  std::uint64_t nextSequence_ = 0;
+  PrefetchStats stats_;
+  std::string lastError_;
+  std::function<void(const PatchKey&)> onLoaded_;
+  std::vector<std::thread> workers_;
+};
+
+}  // namespace regolith::store

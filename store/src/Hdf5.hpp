@@ -1,0 +1,153 @@
+#pragma once
+/// \file
+/// Private HDF5 plumbing of the store: move-only RAII handles for hid_t, the process-wide
+/// lock that serialises HDF5 calls, the scoped silencing of HDF5's automatic error printing,
+/// and the translation of HDF5's error stack into StoreError (tier 3 → tier 2,
+/// docs/store-format.md). No hid_t leaves store/src.
+
+#include <regolith/store/Store.hpp>
+
+#include <hdf5.h>
+
+#include <cstddef>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace regolith::store::hdf5 {
+
+/// The one process-wide mutex that serialises every HDF5 call Regolith makes. HDF5 keeps
+/// global state (its identifier tables, its free lists, the per-file metadata caches); even
+/// the thread-safe build takes one global lock inside. This is the only global in the store
+/// module, and it is unavoidable: two Store objects on different files still share HDF5's
+/// library state. Recursive so that a handle may be closed while the lock is held.
+std::recursive_mutex& mutex() noexcept;
+
+/// Holds mutex() for a scope and silences HDF5's automatic error printing on this thread
+/// for that scope (HDF5 keeps the setting per thread in its thread-safe build); the previous
+/// setting is restored on exit, so an application's own HDF5 error handler survives.
+class Lock {
+ public:
+  Lock();
+  ~Lock();
+  Lock(const Lock&) = delete;
+  Lock& operator=(const Lock&) = delete;
+  Lock(Lock&&) = delete;
+  Lock& operator=(Lock&&) = delete;
+
+ private:
+  std::unique_lock<std::recursive_mutex> lock_;
+  H5E_auto2_t oldFunc_ = nullptr;
+  void* oldData_ = nullptr;
+};
+
+/// A move-only owner of one HDF5 identifier, closed with Close (taking the lock) on
+/// destruction. An empty handle holds H5I_INVALID_HID.
+template <herr_t (*Close)(hid_t)>
+class Handle {
+ public:
+  Handle() noexcept = default;
+  explicit Handle(hid_t id) noexcept : id_(id) {}
+  Handle(Handle&& other) noexcept : id_(std::exchange(other.id_, H5I_INVALID_HID)) {}
+  Handle& operator=(Handle&& other) noexcept {
+    if (this != &other) {
+      reset();
+      id_ = std::exchange(other.id_, H5I_INVALID_HID);
+    }
+    return *this;
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  ~Handle() { reset(); }
+
+  [[nodiscard]] hid_t get() const noexcept { return id_; }
+  [[nodiscard]] bool valid() const noexcept { return id_ >= 0; }
+  /// Closes the identifier now (errors from the close are ignored: nothing can be done
+  /// about them, and a write path flushes explicitly before closing).
+  void reset() noexcept {
+    if (id_ >= 0) {
+      try {
+        const Lock lock;
+        (void)Close(id_);
+      } catch (...) {  // NOLINT(bugprone-empty-catch): a failed close cannot be reported
+      }
+      id_ = H5I_INVALID_HID;
+    }
+  }
+
+ private:
+  hid_t id_ = H5I_INVALID_HID;
+};
+
+using File = Handle<H5Fclose>;
+using Group = Handle<H5Gclose>;
+using Dataset = Handle<H5Dclose>;
+using Attribute = Handle<H5Aclose>;
+using Dataspace = Handle<H5Sclose>;
+using Datatype = Handle<H5Tclose>;
+using PropertyList = Handle<H5Pclose>;
+using Object = Handle<H5Oclose>;
+
+/// HDF5's error stack of this thread as one line ("H5Fopen(): unable to open file; ..."),
+/// innermost last; clears the stack. Empty if there is none.
+[[nodiscard]] std::string takeErrorStack();
+
+/// The context of one operation, for messages: "store::open(): /path/x.h5".
+struct Context {
+  std::string prefix;
+  Context(std::string_view operation, const std::filesystem::path& path);
+};
+
+/// Throws StoreError("<prefix>: <what>").
+[[noreturn]] void fail(const Context& ctx, const std::string& what);
+/// Throws StoreError("<prefix>: <what> [HDF5: <error stack>]"), taking the stack.
+[[noreturn]] void failHdf5(const Context& ctx, const std::string& what);
+
+/// Returns id if it is valid, else throws failHdf5(ctx, what).
+hid_t check(hid_t id, const Context& ctx, const std::string& what);
+/// Throws failHdf5(ctx, what) if status < 0.
+void check(herr_t status, const Context& ctx, const std::string& what);
+
+/// A number as a message shows it: shortest round-trip form, with ".0" on integral values
+/// ("-1.0", "0.25", "1e-300", "nan").
+[[nodiscard]] std::string formatNumber(double v);
+
+// ---- attributes ----------------------------------------------------------------------------
+// Readers take the object's description for messages ("grid 'victoria'" or "the root group")
+// and throw StoreError naming the attribute when it is missing or of the wrong class/shape.
+
+[[nodiscard]] bool hasAttribute(hid_t obj, const char* name, const Context& ctx);
+/// One number (integer or float class, one element), converted to double.
+[[nodiscard]] double readNumber(hid_t obj, const char* name, const Context& ctx,
+                                const std::string& owner);
+/// Exactly n numbers (integer or float class), converted to double.
+[[nodiscard]] std::vector<double> readNumbers(hid_t obj, const char* name, std::size_t n,
+                                              const Context& ctx, const std::string& owner);
+/// A non-negative integer (integer class, one element).
+[[nodiscard]] std::size_t readCount(hid_t obj, const char* name, const Context& ctx,
+                                    const std::string& owner);
+/// Exactly n integers (integer class).
+[[nodiscard]] std::vector<long long> readIntegers(hid_t obj, const char* name, std::size_t n,
+                                                  const Context& ctx, const std::string& owner);
+/// A string (fixed or variable length, one element).
+[[nodiscard]] std::string readString(hid_t obj, const char* name, const Context& ctx,
+                                     const std::string& owner);
+
+void writeDouble(hid_t obj, const char* name, double v, const Context& ctx);
+void writeDoubles(hid_t obj, const char* name, const std::vector<double>& v, const Context& ctx);
+void writeFloat(hid_t obj, const char* name, float v, const Context& ctx);
+void writeUInt64(hid_t obj, const char* name, std::uint64_t v, const Context& ctx);
+void writeUInt64s(hid_t obj, const char* name, const std::vector<std::uint64_t>& v,
+                  const Context& ctx);
+void writeInt32(hid_t obj, const char* name, int v, const Context& ctx);
+void writeInt32s(hid_t obj, const char* name, const std::vector<int>& v, const Context& ctx);
+/// A scalar variable-length UTF-8 string (h5py reads it as str).
+void writeString(hid_t obj, const char* name, const std::string& v, const Context& ctx);
+
+/// A short name of a datatype's class for messages: "string", "compound", "int16", ...
+[[nodiscard]] std::string describeType(hid_t type);
+
+}  // namespace regolith::store::hdf5

@@ -1,0 +1,116 @@
+// Prefetcher: background loading by priority, with cancellation.
+#include <regolith/store/Prefetcher.hpp>
+#include <regolith/topo/Error.hpp>
+
+#include "store/PagerFixture.hpp"
+
+#include <gtest/gtest.h>
+
+#include <mutex>
+#include <vector>
+
+using namespace regolith;
+using namespace regolith::store;
+using namespace regolith::test;
+
+namespace {
+std::shared_ptr<const Pager> sharedPager(Opened& o) {
+  return std::make_shared<const Pager>(o.store, o.cache);
+}
+}  // namespace
+
+TEST(Prefetcher, LoadsEveryPatchOfTheRequestedWindows) {
+  Opened o = openFixture();
+  Prefetcher pf(sharedPager(o), 2);
+  // Level 0 rows 100…399, cols 200…599 → patch rows 0…3, cols 1…4 of 128: 4 × 4 patches.
+  const auto t = pf.request("dem", {{0, 100, 200, 300, 400}});
+  pf.wait(t);
+  for (std::size_t r = 0; r < 4; ++r) {
+    for (std::size_t c = 1; c <= 4; ++c) {
+      EXPECT_TRUE(o.cache->contains({o.pager.keyOf("dem", 0, r * 128, c * 128)}));
+    }
+  }
+  EXPECT_FALSE(o.cache->contains(o.pager.keyOf("dem", 0, 600, 0)));
+  EXPECT_EQ(pf.stats().queued, 16u);
+  EXPECT_EQ(pf.stats().loaded, 16u);
+  // A query in the window is now a cache hit, not a load.
+  const auto loads = o.cache->stats().loads;
+  (void)o.pager.dem("dem").height(-500.0 + 300.0, 400.0 - 200.0);
+  EXPECT_EQ(o.cache->stats().loads, loads);
+}
+
+TEST(Prefetcher, CoarseLevelsLoadBeforeFinerOnes) {
+  Opened o = openFixture();
+  Prefetcher pf(sharedPager(o), 1);
+  std::mutex m;
+  std::vector<std::uint32_t> order;
+  pf.setOnLoaded([&](const PatchKey& k) {
+    const std::lock_guard lock(m);
+    order.push_back(k.level);
+  });
+  const auto windows = pf.focusWindows("dem", 350, 450, 200);
+  ASSERT_EQ(windows.size(), o.store->grid("dem").levels);
+  pf.wait(pf.request("dem", windows));
+  ASSERT_FALSE(order.empty());
+  EXPECT_TRUE(std::is_sorted(order.rbegin(), order.rend())) << "levels must not increase";
+  EXPECT_EQ(order.front(), o.store->grid("dem").levels - 1);
+  EXPECT_EQ(order.back(), 0u);
+}
+
+TEST(Prefetcher, HigherPriorityRequestsGoFirst) {
+  Opened o = openFixture();
+  Prefetcher pf(sharedPager(o), 1);
+  std::mutex m;
+  std::vector<std::uint32_t> rows;
+  std::atomic<bool> gate{false};
+  pf.setOnLoaded([&](const PatchKey& k) {
+    while (!gate.load()) std::this_thread::yield();  // hold the single worker
+    const std::lock_guard lock(m);
+    rows.push_back(k.row);
+  });
+  const auto low = pf.request("dem", {{0, 0, 0, 128, 900}}, 0);     // patch row 0
+  const auto high = pf.request("dem", {{0, 512, 0, 128, 900}}, 5);  // patch row 4
+  gate = true;
+  pf.wait(low);
+  pf.wait(high);
+  // The first patch may already have been taken from the low request before the high
+  // one arrived; after it, every patch of the high request comes before the rest.
+  ASSERT_EQ(rows.size(), 16u);
+  std::size_t firstLow = rows[0] == 0 ? 1 : 0;
+  for (std::size_t i = firstLow; i < firstLow + 8; ++i) EXPECT_EQ(rows[i], 4u) << i;
+}
+
+TEST(Prefetcher, CancelDropsQueuedWorkAndWaitReturns) {
+  Opened o = openFixture();
+  Prefetcher pf(sharedPager(o), 1);
+  std::atomic<bool> gate{false};
+  pf.setOnLoaded([&](const PatchKey&) {
+    while (!gate.load()) std::this_thread::yield();
+  });
+  const auto t = pf.request("dem", {{0, 0, 0, 700, 900}});  // 6 × 8 = 48 patches
+  pf.cancel(t);
+  gate = true;
+  pf.wait(t);
+  pf.waitIdle();
+  const PrefetchStats s = pf.stats();
+  EXPECT_EQ(s.queued, 48u);
+  EXPECT_GE(s.cancelled, 46u);
+  EXPECT_EQ(s.loaded + s.cancelled, 48u);
+}
+
+TEST(Prefetcher, UnknownGridsAndLevelsThrowAtOnce) {
+  Opened o = openFixture();
+  Prefetcher pf(sharedPager(o), 1);
+  EXPECT_THROW((void)pf.request("nope", {{0, 0, 0, 1, 1}}), StoreError);
+  EXPECT_THROW((void)pf.request("dem", {{42, 0, 0, 1, 1}}), StoreError);
+  EXPECT_THROW(Prefetcher(nullptr), InvalidArgument);
+}
+
+TEST(Prefetcher, DestructionWhileBusyJoinsCleanly) {
+  Opened o = openFixture();
+  {
+    Prefetcher pf(sharedPager(o), 2);
+    (void)pf.request("dem", {{0, 0, 0, 700, 900}});
+  }  // destructor cancels the queue and joins
+  SUCCEED();
+}
