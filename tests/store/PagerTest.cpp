@@ -137,9 +137,8 @@ TEST(Pager, CoarseLevelsAreTwoByTwoMeansWithTheirOwnGeometry) {
   EXPECT_EQ(l1.grid().cols(), 450u);
   EXPECT_DOUBLE_EQ(l1.grid().spacingX(), 2.0);
   // Sample (10, 20) of level 1 = mean of level-0 samples (20…21, 40…41), centred between them.
-  const double mean =
-      (static_cast<double>(terrain(20, 40)) + terrain(20, 41) + terrain(21, 40) + terrain(21, 41)) /
-      4.0;
+  auto t = [](std::size_t r, std::size_t c) { return static_cast<double>(terrain(r, c)); };
+  const double mean = (t(20, 40) + t(20, 41) + t(21, 40) + t(21, 41)) / 4.0;
   const glm::dvec2 c = l1.grid().sampleCentre(10, 20);
   EXPECT_DOUBLE_EQ(c.x, -500.0 + 40.5);
   EXPECT_DOUBLE_EQ(c.y, 400.0 - 20.5);
