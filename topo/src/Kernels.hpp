@@ -11,6 +11,7 @@
 // the accessor's range by the caller.
 
 #include <regolith/topo/Query.hpp>
+#include <regolith/topo/TopoDem.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
 #include <algorithm>
@@ -54,10 +55,12 @@ struct SourceFetch {
 // source (a stencil straddling two blocks).
 struct BlockFetch {
   const SampleSource* src;
-  const SampleBlock* blk;
+  const ThreadBlock* blk;
   float operator()(long r, long c) const {
     const auto ur = static_cast<std::size_t>(r), uc = static_cast<std::size_t>(c);
-    if (blk->contains(ur, uc)) return blk->data[(ur - blk->row0) * blk->stride + (uc - blk->col0)];
+    if (blk->holds(ur, uc)) {
+      return blk->data[(ur - blk->row0) * blk->stride + (uc - blk->col0)];
+    }
     return src->sample(ur, uc);
   }
 };

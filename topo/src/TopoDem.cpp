@@ -38,15 +38,37 @@ inline Where locate(const detail::DemIndexer& m, double x, double y, double cmax
   return {std::clamp(u, 0.0, cmax), std::clamp(v, 0.0, rmax), inside};
 }
 
-// The block of a paged source that the calling thread read last. Runs of queries inside
-// one block (the rover's case) then cost no call into the source at all. Keyed by the
-// source's unique id, never by its address; holds a reference to the block's memory until
-// the thread moves to another block or exits.
-struct ThreadBlock {
-  std::uint64_t source = 0;
-  SampleBlock block;
-};
-thread_local ThreadBlock tlBlock;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
+// Keeps the memory of the calling thread's detail::tlBlock alive.
+thread_local std::shared_ptr<const void> tlBlockOwner;  // NOLINT
+
+// The calling thread's block (detail::tlBlock), moved to the one holding the cell of `w`
+// if it does not hold it already.
+inline const detail::ThreadBlock& threadBlock(const SampleSource& src, const Where& w) {
+  const auto r = static_cast<std::size_t>(w.v), c = static_cast<std::size_t>(w.u);
+  detail::ThreadBlock& tb = detail::tlBlock;
+  if (tb.source != src.id() || !tb.holds(r, c)) {
+    SampleBlock fresh;
+    if (src.block(r, c, fresh)) {
+      const auto d = [](std::size_t i) { return static_cast<double>(i); };
+      tb = {src.id(),
+            fresh.data,
+            fresh.row0,
+            fresh.col0,
+            fresh.rows,
+            fresh.cols,
+            fresh.stride,
+            d(fresh.col0),
+            d(fresh.col0 + fresh.cols) - 1.0,
+            d(fresh.row0),
+            d(fresh.row0 + fresh.rows) - 1.0};
+      tlBlockOwner = std::move(fresh.owner);
+    } else {
+      tb = {};
+      tlBlockOwner.reset();
+    }
+  }
+  return tb;
+}
 
 // Calls fn with the accessor that fits the source: plain array loads when the samples are
 // resident; otherwise loads from the block holding the point's cell (fetched through
@@ -57,18 +79,8 @@ KernelResult withAccessor(const TopoGrid& g, const SampleSource& src, const floa
                           const Where& w, Fn&& fn) {
   const long rows = static_cast<long>(g.rows()), cols = static_cast<long>(g.cols());
   if (resident != nullptr) return fn(ClampAcc<detail::MemFetch>{{resident, cols}, rows, cols});
-  const auto r = static_cast<std::size_t>(w.v), c = static_cast<std::size_t>(w.u);
-  ThreadBlock& tb = tlBlock;
-  if (tb.source != src.id() || !tb.block.contains(r, c)) {
-    SampleBlock fresh;
-    if (src.block(r, c, fresh)) {
-      tb.source = src.id();
-      tb.block = std::move(fresh);
-    } else {
-      tb = {};
-    }
-  }
-  return fn(ClampAcc<detail::BlockFetch>{{&src, &tb.block}, rows, cols});
+  const detail::ThreadBlock& tb = threadBlock(src, w);
+  return fn(ClampAcc<detail::BlockFetch>{{&src, &tb}, rows, cols});
 }
 
 // The check is inline and the throwing part out of line, so that the hot path stays small.
@@ -117,6 +129,7 @@ TopoDem::TopoDem(TopoGrid grid, Placement placement, std::shared_ptr<const Sampl
                           std::to_string(grid_.rows()) + "x" + std::to_string(grid_.cols()));
   }
   resident_ = samples_->contiguous();
+  sourceId_ = samples_->id();
   const double dx = grid_.spacingX(), dy = grid_.spacingY();
   index_ = {
       grid_.x0(), grid_.y0(), dx, dy, 1.0 / dx, 1.0 / dy, isPowerOfTwo(dx) && isPowerOfTwo(dy)};
@@ -133,6 +146,13 @@ HeightSample TopoDem::heightGeneric(double x, double y, Interpolation interp) co
   requirePoint(x, y, "TopoDem::height()");
   const Where w = locate(index_, x, y, fast_.uMax, fast_.vMax);
   if (!w.inside) return {};
+  if (resident_ == nullptr && interp == Interpolation::Bilinear) {
+    double h = 0.0;
+    if (detail::blockBilinear(threadBlock(*samples_, w), w.u, w.v, fast_.nodata, fast_.hasNodata,
+                              h)) [[likely]] {
+      return {h, QueryStatus::Ok};
+    }
+  }
   const KernelResult k = withAccessor(grid_, *samples_, resident_, w, [&](const auto& acc) {
     return detail::evaluate<false>(interp, acc, w.u, w.v, fast_.nodata);
   });

@@ -45,6 +45,11 @@ struct ResidentBilinear {
   [[nodiscard]] bool eval(double u, double v, double& h) const noexcept {
     return data != nullptr && evalResident(u, v, h);
   }
+  /// True if (u, v) lies on or inside the outermost sample centres, short of the last row
+  /// and column (false for NaN).
+  [[nodiscard]] bool interior(double u, double v) const noexcept {
+    return u >= 0.0 && v >= 0.0 && u < uMax && v < vMax;
+  }
   /// eval() for a source known to be resident (data != nullptr).
   [[nodiscard]] bool evalResident(double u, double v, double& h) const noexcept {
     // Strict upper bounds: the cell (c, r) = (⌊u⌋, ⌊v⌋) then needs no clamping; the last
@@ -60,6 +65,40 @@ struct ResidentBilinear {
            (!hasNodata || ((a != nodata) & (b != nodata) & (cc != nodata) & (d != nodata)));
   }
 };
+/// The block of a paged source that the calling thread read last (see SampleSource::block):
+/// runs of queries inside one block cost no call into the source. Keyed by the source's
+/// unique id, never its address. Trivially destructible on purpose, so that reading it
+/// needs no thread-local initialisation guard; the block's memory is kept alive by a
+/// companion thread-local owner in TopoDem.cpp.
+struct ThreadBlock {
+  std::uint64_t source = 0;
+  const float* data = nullptr;
+  std::size_t row0 = 0, col0 = 0, rows = 0, cols = 0, stride = 0;
+  /// Fractional (u, v) whose whole bilinear cell lies in the block:
+  /// uLo ≤ u < uHi and vLo ≤ v < vHi (empty when there is no block).
+  double uLo = 0.0, uHi = 0.0, vLo = 0.0, vHi = 0.0;
+
+  [[nodiscard]] bool holds(std::size_t r, std::size_t c) const noexcept {
+    return data != nullptr && r >= row0 && c >= col0 && r - row0 < rows && c - col0 < cols;
+  }
+};
+inline thread_local ThreadBlock
+    tlBlock;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
+
+/// Bilinear height from a block when the whole cell of (u, v) lies in it (false for NaN).
+/// False leaves the point to the generic kernel.
+inline bool blockBilinear(const ThreadBlock& b, double u, double v, double nodata, bool hasNodata,
+                          double& h) noexcept {
+  if (!(u >= b.uLo && u < b.uHi && v >= b.vLo && v < b.vHi)) return false;
+  const auto c = static_cast<std::size_t>(u), r = static_cast<std::size_t>(v);
+  const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
+  const float* p = b.data + (r - b.row0) * b.stride + (c - b.col0);
+  const double a = p[0], bb = p[1], cc = p[b.stride], d = p[b.stride + 1];
+  const double top = a + tu * (bb - a), bottom = cc + tu * (d - cc);
+  h = top + tv * (bottom - top);
+  return h == h &&
+         (!hasNodata || ((a != nodata) & (bb != nodata) & (cc != nodata) & (d != nodata)));
+}
 }  // namespace detail
 
 /// A planar grid of heights in metres (grid x, y in metres, row 0 north/top), placed on a
@@ -118,14 +157,26 @@ class TopoDem {
   const float* resident_ = nullptr;  // samples_->contiguous(), cached
   detail::DemIndexer index_;
   detail::ResidentBilinear fast_;
+  std::uint64_t sourceId_ = 0;  // samples_->id()
 
   [[nodiscard]] HeightSample heightGeneric(double x, double y, Interpolation interp) const;
 };
 
 inline HeightSample TopoDem::height(double x, double y, Interpolation interp) const {
-  double h = 0.0;
-  if (interp == Interpolation::Bilinear && fast_.eval(index_.u(x), index_.v(y), h)) [[likely]] {
-    return {h, QueryStatus::Ok};
+  if (interp == Interpolation::Bilinear) {
+    const double u = index_.u(x), v = index_.v(y);
+    double h = 0.0;
+    if (fast_.data != nullptr) {
+      if (fast_.evalResident(u, v, h)) [[likely]]
+        return {h, QueryStatus::Ok};
+    } else {
+      // Paged: the thread's last block, if it holds this cell.
+      const detail::ThreadBlock& tb = detail::tlBlock;
+      if (tb.source == sourceId_ &&
+          detail::blockBilinear(tb, u, v, fast_.nodata, fast_.hasNodata, h)) [[likely]] {
+        return {h, QueryStatus::Ok};
+      }
+    }
   }
   return heightGeneric(x, y, interp);
 }

@@ -1,0 +1,340 @@
+// Store and pager speed, against the alternatives a user would reach for (issue: Store).
+//
+//   store/rover/paged_heights, paged_surfaces   6 wheels at 1 kHz along a 1 km path over a
+//       4096² float DEM (64 MiB) paged through an 8 MiB cache (8× smaller), starting cold:
+//       wheel queries per second with misses included, patch loads, bytes read, and bytes
+//       read over the bytes of the unique patches the wheels touched
+//   store/rover/gdal_rasterio   the same wheel points through GDAL RasterIO (2×2 window
+//       per query, bilinear in code) on the same data as a 256×256-tiled GeoTIFF, with
+//       GDAL's block cache set to the same 8 MiB
+//   store/resident/{paged,inmemory}/{rover,random}   queries on resident patches against
+//       the same samples held in one array
+//   store/patch/{cold_load,raw_hyperslab}   one 256×256 patch through the pager with an
+//       empty cache, against a bare H5Dread of the same window
+//   store/coarse/{pyramid,strided}   a 256×256 window at 1/8 resolution: read from pyramid
+//       level 3, or from level 0 with an HDF5 hyperslab stride of 8
+//
+// The data are written once into $TMPDIR/regolith-store-bench (about 150 MB).
+#include <regolith/store/Pager.hpp>
+#include <regolith/store/Store.hpp>
+
+#include <benchmark/benchmark.h>
+#include <gdal.h>
+#include <hdf5.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <unordered_set>
+#include <vector>
+
+namespace {
+
+using namespace regolith;
+using namespace regolith::store;
+using namespace regolith::topo;
+namespace fs = std::filesystem;
+
+constexpr std::size_t kSize = 4096;                  // samples per side, 1 m spacing
+constexpr std::size_t kPatch = 256;
+constexpr std::size_t kBudget = std::size_t{8} << 20;  // 8 MiB: the grid is 8× larger
+constexpr double kOrigin = 0.0;                      // sample (0,0) at x = 0, y = 0
+
+float terrain(std::size_t r, std::size_t c) {
+  const double x = static_cast<double>(c), y = -static_cast<double>(r);
+  return static_cast<float>(40.0 * std::sin(x / 310.0) * std::cos(y / 270.0) +
+                            6.0 * std::sin((x + 2.0 * y) / 53.0) + 0.8 * std::sin((3.0 * x - y) / 7.1));
+}
+
+struct Data {
+  fs::path dir, store, tiff;
+  std::shared_ptr<InMemorySamples> samples;
+  GridInfo info;
+};
+
+const Data& data() {
+  static const Data d = [] {
+    Data x;
+    x.dir = fs::temp_directory_path() / "regolith-store-bench";
+    fs::create_directories(x.dir);
+    x.store = x.dir / "dem.h5";
+    x.tiff = x.dir / "dem.tif";
+    x.samples = InMemorySamples::fromFunction(kSize, kSize, terrain);
+    x.info.name = "dem";
+    x.info.kind = GridKind::Dem;
+    x.info.rows = x.info.cols = kSize;
+    x.info.x0 = kOrigin;
+    x.info.y0 = kOrigin;
+    x.info.placement.originLatDeg = -2.05;
+    x.info.placement.originLonDeg = -5.5;
+    if (!fs::exists(x.store)) {
+      std::fprintf(stderr, "store_bench: writing %s\n", x.store.c_str());
+      const std::vector<GridSource> grids{{x.info, x.samples}};
+      WriteOptions o;
+      o.patchRows = o.patchCols = kPatch;
+      writeStore(x.store, grids, o);
+    }
+    if (!fs::exists(x.tiff)) {
+      std::fprintf(stderr, "store_bench: writing %s\n", x.tiff.c_str());
+      GDALAllRegister();
+      const char* opts[] = {"TILED=YES", "BLOCKXSIZE=256", "BLOCKYSIZE=256", nullptr};
+      GDALDatasetH ds = GDALCreate(GDALGetDriverByName("GTiff"), x.tiff.c_str(), kSize, kSize, 1,
+                                   GDT_Float32, const_cast<char**>(opts));
+      const double gt[6] = {-0.5, 1.0, 0.0, 0.5, 0.0, -1.0};
+      GDALSetGeoTransform(ds, const_cast<double*>(gt));
+      if (GDALRasterIO(GDALGetRasterBand(ds, 1), GF_Write, 0, 0, kSize, kSize,
+                       const_cast<float*>(x.samples->data().data()), kSize, kSize, GDT_Float32,
+                       0, 0) != CE_None) {
+        std::abort();
+      }
+      GDALClose(ds);
+    }
+    return x;
+  }();
+  return d;
+}
+
+// Six wheel contact points per 1 ms step, the rover driving 1 km at 1 m/s along a gentle
+// S-curve: wheels at ±0.9 m across and −1, 0, +1 m along the heading.
+struct Wheels {
+  std::vector<double> xs, ys;
+};
+const Wheels& wheels() {
+  static const Wheels w = [] {
+    Wheels x;
+    const std::size_t steps = 1000000;  // 1 km in 1 mm steps
+    x.xs.reserve(6 * steps);
+    x.ys.reserve(6 * steps);
+    for (std::size_t i = 0; i < steps; ++i) {
+      const double s = 1e-3 * static_cast<double>(i);
+      const double cx = 600.0 + 0.7 * s, cy = -(600.0 + 0.7 * s + 80.0 * std::sin(s / 120.0));
+      const double dx = 0.7, dy = -(0.7 + 80.0 / 120.0 * std::cos(s / 120.0));
+      const double n = std::hypot(dx, dy), hx = dx / n, hy = dy / n;
+      for (double along : {-1.0, 0.0, 1.0}) {
+        for (double across : {-0.9, 0.9}) {
+          x.xs.push_back(cx + along * hx - across * hy);
+          x.ys.push_back(cy + along * hy + across * hx);
+        }
+      }
+    }
+    return x;
+  }();
+  return w;
+}
+
+std::size_t uniquePatches(const Wheels& w) {
+  std::unordered_set<std::uint64_t> seen;
+  for (std::size_t i = 0; i < w.xs.size(); ++i) {
+    // bilinear cells: the 2×2 stencil's samples
+    const auto c = static_cast<std::uint64_t>(w.xs[i]), r = static_cast<std::uint64_t>(-w.ys[i]);
+    for (std::uint64_t dr : {0u, 1u}) {
+      for (std::uint64_t dc : {0u, 1u}) seen.insert(((r + dr) / kPatch) << 32U | ((c + dc) / kPatch));
+    }
+  }
+  return seen.size();
+}
+
+void roverPaged(benchmark::State& state, bool surfaces) {
+  const Data& d = data();
+  const Wheels& w = wheels();
+  CacheStats last{};
+  ReadCounters reads{};
+  for (auto _ : state) {
+    state.PauseTiming();
+    auto store = std::make_shared<const Store>(Store::open(d.store));
+    auto cache = std::make_shared<PatchCache>(kBudget, CachePolicy::Lru);
+    const Pager pager(store, cache);
+    const TopoDem dem = pager.dem("dem");
+    state.ResumeTiming();
+    double sink = 0.0;
+    for (std::size_t i = 0; i < w.xs.size(); ++i) {
+      if (surfaces) {
+        sink += dem.surface(w.xs[i], w.ys[i]).normal.z;
+      } else {
+        sink += dem.height(w.xs[i], w.ys[i]).height;
+      }
+    }
+    benchmark::DoNotOptimize(sink);
+    last = cache->stats();
+    reads = store->counters();
+  }
+  const double unique = static_cast<double>(uniquePatches(w));
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(w.xs.size()));
+  state.counters["patch_loads"] = static_cast<double>(last.loads);
+  state.counters["bytes_read_MB"] = static_cast<double>(reads.bytesRead) / 1e6;
+  state.counters["unique_patches"] = unique;
+  state.counters["bytes_read_over_unique"] =
+      static_cast<double>(reads.bytesRead) / (unique * kPatch * kPatch * sizeof(float));
+}
+
+void roverGdal(benchmark::State& state) {
+  const Data& d = data();
+  const Wheels& w = wheels();
+  GDALAllRegister();
+  for (auto _ : state) {
+    state.PauseTiming();
+    GDALSetCacheMax64(static_cast<GIntBig>(kBudget));
+    GDALDatasetH ds = GDALOpen(d.tiff.c_str(), GA_ReadOnly);
+    GDALRasterBandH band = GDALGetRasterBand(ds, 1);
+    state.ResumeTiming();
+    double sink = 0.0;
+    float s[4];
+    for (std::size_t i = 0; i < w.xs.size(); ++i) {
+      const double u = w.xs[i], v = -w.ys[i];
+      const auto c = static_cast<int>(u), r = static_cast<int>(v);
+      if (GDALRasterIO(band, GF_Read, c, r, 2, 2, s, 2, 2, GDT_Float32, 0, 0) != CE_None) {
+        state.SkipWithError("RasterIO failed");
+        break;
+      }
+      const double tu = u - c, tv = v - r;
+      const double a = s[0], b = s[1], c2 = s[2], d2 = s[3];
+      const double top = a + tu * (b - a), bottom = c2 + tu * (d2 - c2);
+      sink += top + tv * (bottom - top);
+    }
+    benchmark::DoNotOptimize(sink);
+    state.PauseTiming();
+    GDALClose(ds);
+    state.ResumeTiming();
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(w.xs.size()));
+}
+
+struct Resident {
+  std::shared_ptr<const Store> store;
+  std::shared_ptr<PatchCache> cache;
+  std::unique_ptr<Pager> pager;
+  std::unique_ptr<TopoDem> paged, mem;
+  std::vector<double> rx, ry, qx, qy;  // rover points (1 cm steps), random points
+};
+
+Resident& resident() {
+  static Resident r = [] {
+    Resident x;
+    const Data& d = data();
+    x.store = std::make_shared<const Store>(Store::open(d.store));
+    x.cache = std::make_shared<PatchCache>(std::size_t{128} << 20, CachePolicy::Lru);
+    x.pager = std::make_unique<Pager>(x.store, x.cache);
+    x.paged = std::make_unique<TopoDem>(x.pager->dem("dem"));
+    x.mem = std::make_unique<TopoDem>(topoGridOf(d.info), placementOf(d.info), d.samples);
+    for (std::size_t i = 0; i < (1U << 16U); ++i) {
+      const double s = 0.01 * static_cast<double>(i);
+      x.rx.push_back(1000.0 + s);
+      x.ry.push_back(-(1000.0 + 30.0 * std::sin(s / 50.0)));
+    }
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<double> u(0.0, kSize - 1.0);
+    for (std::size_t i = 0; i < (1U << 18U); ++i) {
+      x.qx.push_back(u(rng));
+      x.qy.push_back(-u(rng));
+    }
+    std::vector<float> all(kSize * kSize);  // make every patch resident
+    x.pager->source("dem")->readWindow(0, 0, kSize, kSize, all);
+    return x;
+  }();
+  return r;
+}
+
+void residentQueries(benchmark::State& state, bool paged, bool rover) {
+  Resident& r = resident();
+  const TopoDem& dem = paged ? *r.paged : *r.mem;
+  const auto& xs = rover ? r.rx : r.qx;
+  const auto& ys = rover ? r.ry : r.qy;
+  std::size_t i = 0;
+  double sink = 0.0;
+  for (auto _ : state) {
+    for (int k = 0; k < 4096; ++k) {
+      sink += dem.height(xs[i], ys[i]).height;
+      if (++i == xs.size()) i = 0;
+    }
+  }
+  benchmark::DoNotOptimize(sink);
+  state.SetItemsProcessed(state.iterations() * 4096);
+  state.counters["per_query_ns"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * 4096.0,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+void coldPatch(benchmark::State& state) {
+  const Data& d = data();
+  auto store = std::make_shared<const Store>(Store::open(d.store));
+  auto cache = std::make_shared<PatchCache>(kBudget);
+  const Pager pager(store, cache);
+  std::uint32_t k = 0;
+  for (auto _ : state) {
+    cache->clear();
+    const PatchKey key = pager.keyOf("dem", 0, (k % 16) * kPatch, ((k / 16) % 16) * kPatch);
+    benchmark::DoNotOptimize(pager.patch(key));
+    ++k;
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(kPatch * kPatch * 4));
+}
+
+void rawHyperslab(benchmark::State& state) {
+  const Data& d = data();
+  const hid_t file = H5Fopen(d.store.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  const hid_t dset = H5Dopen2(file, "/grids/dem/level0", H5P_DEFAULT);
+  const hid_t fspace = H5Dget_space(dset);
+  const hsize_t count[2] = {kPatch, kPatch};
+  const hid_t mspace = H5Screate_simple(2, count, nullptr);
+  std::vector<float> buf(kPatch * kPatch);
+  std::uint32_t k = 0;
+  for (auto _ : state) {
+    const hsize_t start[2] = {(k % 16) * kPatch, ((k / 16) % 16) * kPatch};
+    H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, nullptr, count, nullptr);
+    if (H5Dread(dset, H5T_NATIVE_FLOAT, mspace, fspace, H5P_DEFAULT, buf.data()) < 0) {
+      state.SkipWithError("H5Dread failed (is the dataset path /grids/dem/level0?)");
+      break;
+    }
+    benchmark::DoNotOptimize(buf.data());
+    ++k;
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(kPatch * kPatch * 4));
+  H5Sclose(mspace);
+  H5Sclose(fspace);
+  H5Dclose(dset);
+  H5Fclose(file);
+}
+
+void coarse(benchmark::State& state, bool pyramid) {
+  const Data& d = data();
+  const Store store = Store::open(d.store);
+  std::vector<float> out(256 * 256);
+  for (auto _ : state) {
+    if (pyramid) {
+      store.readWindow("dem", 3, 0, 0, 256, 256, out);
+    } else {
+      store.readWindow("dem", 0, 0, 0, 256, 256, out, 8);
+    }
+    benchmark::DoNotOptimize(out.data());
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::RegisterBenchmark("store/rover/paged_heights", roverPaged, false)
+      ->Unit(benchmark::kMillisecond)->Iterations(3);
+  benchmark::RegisterBenchmark("store/rover/paged_surfaces", roverPaged, true)
+      ->Unit(benchmark::kMillisecond)->Iterations(3);
+  benchmark::RegisterBenchmark("store/rover/gdal_rasterio", roverGdal)
+      ->Unit(benchmark::kMillisecond)->Iterations(1);
+  for (bool rover : {true, false}) {
+    const char* where = rover ? "rover" : "random";
+    benchmark::RegisterBenchmark((std::string("store/resident/paged/") + where).c_str(),
+                                 residentQueries, true, rover);
+    benchmark::RegisterBenchmark((std::string("store/resident/inmemory/") + where).c_str(),
+                                 residentQueries, false, rover);
+  }
+  benchmark::RegisterBenchmark("store/patch/cold_load", coldPatch)->Unit(benchmark::kMicrosecond);
+  benchmark::RegisterBenchmark("store/patch/raw_hyperslab", rawHyperslab)
+      ->Unit(benchmark::kMicrosecond);
+  benchmark::RegisterBenchmark("store/coarse/pyramid", coarse, true)->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("store/coarse/strided", coarse, false)->Unit(benchmark::kMillisecond);
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
