@@ -10,8 +10,9 @@
 #include <hdf5.h>
 
 #include <cstddef>
+#include <cstdint>
+#include <filesystem>
 #include <mutex>
-#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -24,7 +25,7 @@ namespace regolith::store::hdf5 {
 /// the thread-safe build takes one global lock inside. This is the only global in the store
 /// module, and it is unavoidable: two Store objects on different files still share HDF5's
 /// library state. Recursive so that a handle may be closed while the lock is held.
-std::recursive_mutex& mutex() noexcept;
+std::recursive_mutex& mutex();
 
 /// Holds mutex() for a scope and silences HDF5's automatic error printing on this thread
 /// for that scope (HDF5 keeps the setting per thread in its thread-safe build); the previous
@@ -65,6 +66,8 @@ class Handle {
 
   [[nodiscard]] hid_t get() const noexcept { return id_; }
   [[nodiscard]] bool valid() const noexcept { return id_ >= 0; }
+  /// Gives up ownership (the caller closes the identifier and checks the result).
+  [[nodiscard]] hid_t release() noexcept { return std::exchange(id_, H5I_INVALID_HID); }
   /// Closes the identifier now (errors from the close are ignored: nothing can be done
   /// about them, and a write path flushes explicitly before closing).
   void reset() noexcept {

@@ -1,0 +1,485 @@
+// writeStore(): writes grids and their pyramids into a temporary file, then renames it into
+// place (docs/store-format.md, "Crash-safe writing").
+#include <regolith/store/Store.hpp>
+
+#include "Hdf5.hpp"
+#include "StoreFormat.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <set>
+
+namespace regolith::store {
+
+namespace {
+
+using hdf5::Context;
+using hdf5::fail;
+
+constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+
+[[noreturn]] void invalid(const Context& ctx, const std::string& what) {
+  throw InvalidArgument(ctx.prefix + ": " + what);
+}
+
+void validateOptions(const WriteOptions& o, const Context& ctx) {
+  if (o.patchRows == 0 || o.patchCols == 0) {
+    invalid(ctx, "patch size " + std::to_string(o.patchRows) + "x" + std::to_string(o.patchCols) +
+                     ", expected both > 0");
+  }
+  // HDF5 chunks are limited to 4 GiB.
+  constexpr std::size_t kMaxChunkSamples = (std::size_t{1} << 32U) / sizeof(float) - 1;
+  if (o.patchRows > kMaxChunkSamples / o.patchCols) {
+    invalid(ctx, "patch size " + std::to_string(o.patchRows) + "x" + std::to_string(o.patchCols) +
+                     " exceeds HDF5's 4 GiB chunk limit");
+  }
+  if (o.deflate < 0 || o.deflate > 9) {
+    invalid(ctx, "deflate level " + std::to_string(o.deflate) + ", expected 0 to 9");
+  }
+}
+
+/// Checks one grid and returns the description that will be written: levels and patch size
+/// from the options, scale 1 and offset 0 (the writer stores heights in metres as float32).
+GridInfo prepare(const GridSource& src, const WriteOptions& o, const Context& ctx) {
+  GridInfo info = src.info;
+  const std::string owner = "grid '" + info.name + "'";
+  if (info.name.empty() || info.name.find('/') != std::string::npos || info.name == "." ||
+      info.name == "..") {
+    invalid(ctx, owner + ": name must be non-empty and contain no '/'");
+  }
+  if (!src.samples) invalid(ctx, owner + " has no samples");
+  if (info.rows == 0 || info.cols == 0) {
+    invalid(ctx, owner + " has " + std::to_string(info.rows) + "x" + std::to_string(info.cols) +
+                     " samples, expected both > 0");
+  }
+  if (src.samples->rows() != info.rows || src.samples->cols() != info.cols) {
+    invalid(ctx, owner + " describes " + std::to_string(info.rows) + "x" +
+                     std::to_string(info.cols) + " samples but its source holds " +
+                     std::to_string(src.samples->rows()) + "x" +
+                     std::to_string(src.samples->cols()));
+  }
+  const std::string unit = info.kind == GridKind::Dem ? " m" : " deg";
+  const auto checkSpacing = [&](double s) {
+    if (!(std::isfinite(s) && s > 0.0)) {
+      invalid(ctx, owner + " has spacing " + hdf5::formatNumber(s) + unit + ", expected > 0");
+    }
+  };
+  checkSpacing(info.spacingX);
+  checkSpacing(info.spacingY);
+  for (const auto& [name, v] : {std::pair{"x0", info.x0}, std::pair{"y0", info.y0},
+                                std::pair{"scale", info.scale}, std::pair{"offset", info.offset}}) {
+    if (!std::isfinite(v)) {
+      invalid(ctx,
+              owner + " has " + name + " " + hdf5::formatNumber(v) + ", expected a finite number");
+    }
+  }
+  if (info.nodata && std::isnan(*info.nodata)) info.nodata.reset();
+  if (info.nodata && std::isinf(*info.nodata)) {
+    invalid(ctx, owner + " has nodata " + hdf5::formatNumber(static_cast<double>(*info.nodata)) +
+                     ", expected a finite number or none");
+  }
+  try {
+    (void)bodyOf(info);
+    if (info.kind == GridKind::Dem) (void)placementOf(info);
+  } catch (const InvalidArgument& e) {
+    invalid(ctx, owner + ": " + e.what());
+  }
+
+  const std::size_t maxLevels = format::maxLevels(info.rows, info.cols);
+  info.patchRows = o.patchRows;
+  info.patchCols = o.patchCols;
+  if (o.levels == 0) {
+    info.levels = 1;
+    while (info.levelRows(info.levels - 1) > o.patchRows ||
+           info.levelCols(info.levels - 1) > o.patchCols) {
+      ++info.levels;
+    }
+  } else if (o.levels > maxLevels) {
+    invalid(ctx, "options.levels is " + std::to_string(o.levels) + ", but " + owner +
+                     " reaches 1x1 samples at " + std::to_string(maxLevels) + " levels");
+  } else {
+    info.levels = o.levels;
+  }
+  info.scale = 1.0;
+  info.offset = 0.0;
+  return info;
+}
+
+std::string_view placementName(PlacementInfo::Kind k) {
+  switch (k) {
+    case PlacementInfo::Kind::LocalTangentPlane: return format::kLocalTangentPlane;
+    case PlacementInfo::Kind::PolarStereographic: return format::kPolarStereographic;
+    case PlacementInfo::Kind::Equirectangular: return format::kEquirectangular;
+  }
+  return "?";
+}
+
+void writeAttributes(hid_t g, const GridInfo& info, const Context& ctx) {
+  using namespace hdf5;
+  writeInt32s(g, format::kFormatVersion, {kFormatVersionMajor, kFormatVersionMinor}, ctx);
+  writeString(g, format::kKind,
+              std::string(info.kind == GridKind::Dem ? format::kDem : format::kPlanet), ctx);
+  writeUInt64(g, format::kRows, info.rows, ctx);
+  writeUInt64(g, format::kCols, info.cols, ctx);
+  writeDouble(g, format::kX0, info.x0, ctx);
+  writeDouble(g, format::kY0, info.y0, ctx);
+  writeDoubles(g, format::kSpacing, {info.spacingX, info.spacingY}, ctx);
+  writeString(g, format::kUnits, info.units, ctx);
+  writeString(g, format::kSampleType, std::string(format::toString(format::SampleType::Float32)),
+              ctx);
+  writeDouble(g, format::kScale, info.scale, ctx);
+  writeDouble(g, format::kOffset, info.offset, ctx);
+  // Always present: NaN says "no nodata value; missing samples are stored as NaN".
+  writeFloat(g, format::kNodata, info.nodata.value_or(kNan), ctx);
+  writeString(g, format::kBody, info.bodyName, ctx);
+  writeDouble(g, format::kEquatorialRadius, info.equatorialRadius, ctx);
+  writeDouble(g, format::kPolarRadius, info.polarRadius, ctx);
+  writeString(
+      g, format::kLatitudeType,
+      std::string(info.latitudeType == topo::LatitudeType::Planetocentric ? format::kPlanetocentric
+                                                                          : format::kPlanetodetic),
+      ctx);
+  writeUInt64(g, format::kLevels, info.levels, ctx);
+  writeUInt64s(g, format::kPatchShape, {info.patchRows, info.patchCols}, ctx);
+  if (info.kind != GridKind::Dem) return;
+  const PlacementInfo& p = info.placement;
+  writeString(g, format::kPlacement, std::string(placementName(p.kind)), ctx);
+  switch (p.kind) {
+    case PlacementInfo::Kind::LocalTangentPlane:
+      writeDouble(g, format::kOriginLat, p.originLatDeg, ctx);
+      writeDouble(g, format::kOriginLon, p.originLonDeg, ctx);
+      writeDouble(g, format::kOriginHeight, p.originHeight, ctx);
+      writeDouble(g, format::kHeading, p.headingDeg, ctx);
+      break;
+    case PlacementInfo::Kind::PolarStereographic:
+      writeInt32(g, format::kPole, p.pole >= 0 ? 1 : -1, ctx);
+      if (p.latTrueScaleDeg) writeDouble(g, format::kLatTrueScale, *p.latTrueScaleDeg, ctx);
+      if (p.scaleFactor) writeDouble(g, format::kScaleFactor, *p.scaleFactor, ctx);
+      writeDouble(g, format::kLonCentre, p.lonCentreDeg, ctx);
+      writeDouble(g, format::kFalseEasting, p.falseEasting, ctx);
+      writeDouble(g, format::kFalseNorthing, p.falseNorthing, ctx);
+      break;
+    case PlacementInfo::Kind::Equirectangular:
+      writeDouble(g, format::kProjectionRadius, p.projectionRadius, ctx);
+      if (p.latTrueScaleDeg) writeDouble(g, format::kLatTrueScale, *p.latTrueScaleDeg, ctx);
+      writeDouble(g, format::kLonCentre, p.lonCentreDeg, ctx);
+      writeDouble(g, format::kLatOrigin, p.latOriginDeg, ctx);
+      break;
+  }
+}
+
+/// Reports progress by samples written, at most about once per 1/1000 of the work.
+class Progress {
+ public:
+  Progress(const WriteOptions& o, double total) : fn_(o.progress), total_(total) {}
+  void advance(double samples, std::string_view what) {
+    done_ += samples;
+    const double f = std::min(1.0, done_ / total_);
+    if (fn_ && (f - last_ >= 1e-3 || what != lastWhat_)) {
+      last_ = f;
+      lastWhat_ = what;
+      fn_(f, what);
+    }
+  }
+  void finish() const {
+    if (fn_) fn_(1.0, "done");
+  }
+
+ private:
+  const ProgressFn& fn_;
+  double total_;
+  double done_ = 0.0, last_ = -1.0;
+  std::string lastWhat_;
+};
+
+/// A group (the same input gives the same bytes: no modification times).
+hdf5::Group createGroup(hid_t parent, const std::string& name, const Context& ctx) {
+  const hdf5::Lock lock;
+  const std::string what = "cannot create group '" + name + "'";
+  const hdf5::PropertyList gcpl(hdf5::check(H5Pcreate(H5P_GROUP_CREATE), ctx, what));
+  hdf5::check(H5Pset_obj_track_times(gcpl.get(), 0), ctx, what);
+  return hdf5::Group(hdf5::check(
+      H5Gcreate2(parent, name.c_str(), H5P_DEFAULT, gcpl.get(), H5P_DEFAULT), ctx, what));
+}
+
+void checkCancel(const WriteOptions& o, const Context& ctx) {
+  if (o.cancel != nullptr && o.cancel->load()) fail(ctx, "cancelled");
+}
+
+/// Missing-sample test in the stored domain.
+struct Missing {
+  std::optional<float> nodata;
+  [[nodiscard]] bool operator()(float v) const noexcept {
+    return std::isnan(v) || (nodata && v == *nodata);
+  }
+  [[nodiscard]] float stored() const noexcept { return nodata.value_or(kNan); }
+};
+
+class LevelWriter {
+ public:
+  LevelWriter(hid_t group, const GridInfo& info, std::size_t level, const WriteOptions& o,
+              const Context& ctx)
+      : info_(info), ctx_(ctx), name_(format::levelName(level)) {
+    const hdf5::Lock lock;
+    const std::string what = "cannot create grid '" + info.name + "' dataset '" + name_ + "'";
+    const std::array<hsize_t, 2> shape{info.levelRows(level), info.levelCols(level)};
+    const std::array<hsize_t, 2> chunk = format::chunkShape(info, level);
+    const hdf5::Dataspace space(hdf5::check(H5Screate_simple(2, shape.data(), nullptr), ctx, what));
+    const hdf5::PropertyList dcpl(hdf5::check(H5Pcreate(H5P_DATASET_CREATE), ctx, what));
+    hdf5::check(H5Pset_chunk(dcpl.get(), 2, chunk.data()), ctx, what);
+    // No modification times in object headers: the same input gives the same bytes.
+    hdf5::check(H5Pset_obj_track_times(dcpl.get(), 0), ctx, what);
+    const float fill = Missing{info.nodata}.stored();
+    hdf5::check(H5Pset_fill_value(dcpl.get(), H5T_NATIVE_FLOAT, &fill), ctx, what);
+    if (o.deflate > 0) {
+      hdf5::check(H5Pset_shuffle(dcpl.get()), ctx, what);
+      hdf5::check(H5Pset_deflate(dcpl.get(), static_cast<unsigned>(o.deflate)), ctx, what);
+    }
+    // Every write covers whole chunks (clipped at the level's edge), so no chunk cache is
+    // needed here either.
+    const hdf5::PropertyList dapl(hdf5::check(H5Pcreate(H5P_DATASET_ACCESS), ctx, what));
+    hdf5::check(H5Pset_chunk_cache(dapl.get(), 0, 0, 1.0), ctx, what);
+    ds_ = hdf5::Dataset(hdf5::check(H5Dcreate2(group, name_.c_str(), H5T_IEEE_F32LE, space.get(),
+                                               H5P_DEFAULT, dcpl.get(), dapl.get()),
+                                    ctx, what));
+  }
+
+  [[nodiscard]] hid_t id() const noexcept { return ds_.get(); }
+
+  /// Writes (or, with read = true, reads) a rows×cols block at (row0, col0).
+  void io(std::size_t row0, std::size_t col0, std::size_t rows, std::size_t cols, float* data,
+          bool read) const {
+    const hdf5::Lock lock;
+    const std::string what = std::string(read ? "cannot read back" : "cannot write") + " grid '" +
+                             info_.name + "' dataset '" + name_ + "'";
+    const std::array<hsize_t, 2> start{row0, col0};
+    const std::array<hsize_t, 2> count{rows, cols};
+    const hdf5::Dataspace fileSpace(hdf5::check(H5Dget_space(ds_.get()), ctx_, what));
+    hdf5::check(H5Sselect_hyperslab(fileSpace.get(), H5S_SELECT_SET, start.data(), nullptr,
+                                    count.data(), nullptr),
+                ctx_, what);
+    const hdf5::Dataspace memSpace(
+        hdf5::check(H5Screate_simple(2, count.data(), nullptr), ctx_, what));
+    if (read) {
+      hdf5::check(
+          H5Dread(ds_.get(), H5T_NATIVE_FLOAT, memSpace.get(), fileSpace.get(), H5P_DEFAULT, data),
+          ctx_, what);
+    } else {
+      hdf5::check(
+          H5Dwrite(ds_.get(), H5T_NATIVE_FLOAT, memSpace.get(), fileSpace.get(), H5P_DEFAULT, data),
+          ctx_, what);
+    }
+  }
+
+  void close() {
+    const hdf5::Lock lock;
+    hdf5::check(H5Dclose(ds_.release()), ctx_,
+                "cannot close grid '" + info_.name + "' dataset '" + name_ + "'");
+  }
+
+ private:
+  const GridInfo& info_;
+  const Context& ctx_;
+  std::string name_;
+  hdf5::Dataset ds_;
+};
+
+/// Level 0 of one chunk: the source's heights, missing samples as the stored nodata value.
+/// Infinite heights are refused (they are neither data nor a declared nodata).
+void level0Block(const GridSource& src, const GridInfo& info, std::size_t r0, std::size_t c0,
+                 std::size_t nr, std::size_t nc, std::vector<float>& out, const Context& ctx) {
+  out.resize(nr * nc);
+  src.samples->readWindow(r0, c0, nr, nc, out);
+  const Missing missing{info.nodata};
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    float& v = out[i];
+    if (missing(v)) {
+      v = missing.stored();
+    } else if (std::isinf(v)) {
+      invalid(ctx, "grid '" + info.name + "' sample (" + std::to_string(r0 + i / nc) + ", " +
+                       std::to_string(c0 + i % nc) + ") is " +
+                       hdf5::formatNumber(static_cast<double>(v)) +
+                       ", expected a finite height or NaN");
+    }
+  }
+}
+
+/// Level k ≥ 1 of one chunk: 2×2 means of level k−1 (read back from the file), ignoring
+/// missing samples and samples beyond the edge; missing only if all of them are.
+void coarseBlock(const LevelWriter& below, const GridInfo& info, std::size_t level, std::size_t r0,
+                 std::size_t c0, std::size_t nr, std::size_t nc, std::vector<float>& fine,
+                 std::vector<float>& out) {
+  const std::size_t fineRows = info.levelRows(level - 1), fineCols = info.levelCols(level - 1);
+  const std::size_t fr0 = 2 * r0, fc0 = 2 * c0;
+  const std::size_t fnr = std::min(2 * nr, fineRows - fr0);
+  const std::size_t fnc = std::min(2 * nc, fineCols - fc0);
+  fine.resize(fnr * fnc);
+  below.io(fr0, fc0, fnr, fnc, fine.data(), true);
+  const Missing missing{info.nodata};
+  out.resize(nr * nc);
+  for (std::size_t r = 0; r < nr; ++r) {
+    for (std::size_t c = 0; c < nc; ++c) {
+      double sum = 0.0;
+      int count = 0;
+      for (std::size_t dr = 0; dr < 2 && 2 * r + dr < fnr; ++dr) {
+        for (std::size_t dc = 0; dc < 2 && 2 * c + dc < fnc; ++dc) {
+          const float v = fine[(2 * r + dr) * fnc + 2 * c + dc];
+          if (!missing(v)) {
+            sum += static_cast<double>(v);
+            ++count;
+          }
+        }
+      }
+      out[r * nc + c] = count > 0 ? static_cast<float>(sum / count) : missing.stored();
+    }
+  }
+}
+
+void writeGrid(hid_t grids, const GridSource& src, const GridInfo& info, const WriteOptions& o,
+               Progress& progress, const Context& ctx) {
+  hdf5::Group group = createGroup(grids, info.name, ctx);
+  writeAttributes(group.get(), info, ctx);
+  std::vector<float> block, fine;
+  std::optional<LevelWriter> below;
+  for (std::size_t level = 0; level < info.levels; ++level) {
+    LevelWriter writer(group.get(), info, level, o, ctx);
+    const std::string what = "grid '" + info.name + "' level " + std::to_string(level);
+    const std::size_t rows = info.levelRows(level), cols = info.levelCols(level);
+    // Chunk by chunk, row-major: each write covers exactly one chunk.
+    for (std::size_t r0 = 0; r0 < rows; r0 += info.patchRows) {
+      const std::size_t nr = std::min(info.patchRows, rows - r0);
+      for (std::size_t c0 = 0; c0 < cols; c0 += info.patchCols) {
+        const std::size_t nc = std::min(info.patchCols, cols - c0);
+        checkCancel(o, ctx);
+        // The source and the progress callback run without the HDF5 lock: the source may
+        // itself be a pager reading another store.
+        if (level == 0) {
+          level0Block(src, info, r0, c0, nr, nc, block, ctx);
+        } else {
+          coarseBlock(*below, info, level, r0, c0, nr, nc, fine, block);
+        }
+        writer.io(r0, c0, nr, nc, block.data(), false);
+        progress.advance(static_cast<double>(nr * nc), what);
+      }
+    }
+    if (below) below->close();
+    below.emplace(std::move(writer));
+  }
+  if (below) below->close();
+  const hdf5::Lock lock;
+  hdf5::check(H5Gclose(group.release()), ctx, "cannot close group '/grids/" + info.name + "'");
+}
+
+/// fsync() a file or directory; throws StoreError on failure.
+void syncPath(const std::filesystem::path& p, bool directory, const Context& ctx) {
+  const int fd = ::open(p.c_str(), directory ? (O_RDONLY | O_DIRECTORY) : O_RDONLY);
+  if (fd < 0) fail(ctx, "cannot open " + p.string() + " to sync it: " + std::strerror(errno));
+  const int rc = ::fsync(fd);
+  const int err = errno;
+  ::close(fd);
+  if (rc != 0) fail(ctx, "cannot sync " + p.string() + ": " + std::strerror(err));
+}
+
+/// Removes the temporary file unless the write committed (renamed it into place).
+class TempFile {
+ public:
+  explicit TempFile(std::filesystem::path p) : path_(std::move(p)) {}
+  ~TempFile() {
+    if (!committed_) {
+      std::error_code ec;
+      std::filesystem::remove(path_, ec);
+    }
+  }
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+  TempFile(TempFile&&) = delete;
+  TempFile& operator=(TempFile&&) = delete;
+  [[nodiscard]] const std::filesystem::path& path() const noexcept { return path_; }
+  void commit() noexcept { committed_ = true; }
+
+ private:
+  std::filesystem::path path_;
+  bool committed_ = false;
+};
+
+}  // namespace
+
+void writeStore(const std::filesystem::path& path, std::span<const GridSource> grids,
+                const WriteOptions& options) {
+  const Context ctx("store::writeStore()", path);
+  validateOptions(options, ctx);
+  std::vector<GridInfo> infos;
+  std::set<std::string, std::less<>> names;
+  double totalSamples = 0.0;
+  for (const GridSource& src : grids) {
+    infos.push_back(prepare(src, options, ctx));
+    const GridInfo& info = infos.back();
+    if (!names.insert(info.name).second) {
+      invalid(ctx, "grid '" + info.name + "' appears twice");
+    }
+    for (std::size_t k = 0; k < info.levels; ++k) {
+      totalSamples += static_cast<double>(info.levelRows(k) * info.levelCols(k));
+    }
+  }
+  if (options.deflate > 0) {
+    const hdf5::Lock lock;
+    if (H5Zfilter_avail(H5Z_FILTER_DEFLATE) <= 0) {
+      fail(ctx, "deflate level " + std::to_string(options.deflate) +
+                    " requested, but this HDF5 library has no deflate filter");
+    }
+  }
+  checkCancel(options, ctx);
+
+  std::filesystem::path dir = path.parent_path();
+  if (dir.empty()) dir = ".";
+  TempFile tmp(path.string() + ".tmp-" + std::to_string(::getpid()));
+  Progress progress(options, std::max(totalSamples, 1.0));
+  {
+    hdf5::File file;
+    hdf5::Group gridsGroup;
+    {
+      const hdf5::Lock lock;
+      const std::string what = "cannot create the temporary file " + tmp.path().string();
+      // The HDF5 1.8 file format: checksummed metadata (corruption is reported, not
+      // misread), readable by any HDF5 since 1.8.
+      const hdf5::PropertyList fapl(hdf5::check(H5Pcreate(H5P_FILE_ACCESS), ctx, what));
+      hdf5::check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18), ctx, what);
+      file = hdf5::File(hdf5::check(
+          H5Fcreate(tmp.path().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), ctx, what));
+      const hdf5::Group root(
+          hdf5::check(H5Gopen2(file.get(), "/", H5P_DEFAULT), ctx, "cannot open '/'"));
+      hdf5::writeString(root.get(), format::kMarker, format::kMarkerValue, ctx);
+      hdf5::writeInt32s(root.get(), format::kFormatVersion,
+                        {kFormatVersionMajor, kFormatVersionMinor}, ctx);
+      gridsGroup = createGroup(file.get(), format::kGrids, ctx);
+    }
+    for (std::size_t i = 0; i < grids.size(); ++i) {
+      writeGrid(gridsGroup.get(), grids[i], infos[i], options, progress, ctx);
+    }
+    checkCancel(options, ctx);
+    const hdf5::Lock lock;
+    hdf5::check(H5Gclose(gridsGroup.release()), ctx, "cannot close group '/grids'");
+    hdf5::check(H5Fflush(file.get(), H5F_SCOPE_GLOBAL), ctx, "cannot flush " + tmp.path().string());
+    hdf5::check(H5Fclose(file.release()), ctx, "cannot close " + tmp.path().string());
+  }
+  // Durable before visible: the data reach the disk, then the rename publishes them, then
+  // the directory entry itself is synced.
+  syncPath(tmp.path(), false, ctx);
+  checkCancel(options, ctx);
+  std::error_code ec;
+  std::filesystem::rename(tmp.path(), path, ec);
+  if (ec) {
+    fail(ctx, "cannot rename " + tmp.path().string() + " into place: " + ec.message());
+  }
+  tmp.commit();
+  syncPath(dir, true, ctx);
+  progress.finish();
+}
+
+}  // namespace regolith::store

@@ -1,0 +1,1224 @@
+// Store (reader) and writeStore (writer). Write and read are checked separately: the writer's
+// output is inspected with the raw HDF5 C API, and the reader is fed files crafted with the
+// raw API. Then round trips over every level, strided and edge windows, every bad-input error
+// with its message, crash safety under SIGKILL, cancellation and progress.
+// (tests/store/test_store_h5py.py checks the same layout with h5py as an outside oracle.)
+#include <regolith/store/Store.hpp>
+#include <regolith/topo/Error.hpp>
+
+#include <gtest/gtest.h>
+#include <hdf5.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <iterator>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+using namespace regolith;
+using namespace regolith::store;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+constexpr double kNanD = std::numeric_limits<double>::quiet_NaN();
+
+/// A scratch folder for this test process, removed when the process exits normally.
+fs::path scratch(const std::string& name) {
+  struct Dir {
+    fs::path path = fs::temp_directory_path() / ("regolith-store-" + std::to_string(::getpid()));
+    Dir() { fs::create_directories(path); }
+    Dir(const Dir&) = delete;
+    Dir& operator=(const Dir&) = delete;
+    ~Dir() {
+      std::error_code ec;
+      fs::remove_all(path, ec);
+    }
+  };
+  static const Dir dir;
+  return dir.path / name;
+}
+
+// ---- analytic content ---------------------------------------------------------------------
+
+/// A crater-ish DEM with a 4×8 hole (whole 2×2 blocks missing) and scattered missing samples.
+float crater(std::size_t r, std::size_t c) {
+  if (r >= 10 && r < 14 && c >= 20 && c < 28) return kNan;
+  if ((r * 7 + c * 3) % 29 == 0) return kNan;
+  const auto x = static_cast<double>(c), y = static_cast<double>(r);
+  return static_cast<float>(100.0 + 0.5 * x - 0.25 * y +
+                            10.0 * std::sin(x / 5.0) * std::cos(y / 7.0));
+}
+
+GridInfo demInfo(const std::string& name, std::size_t rows, std::size_t cols) {
+  GridInfo g;
+  g.name = name;
+  g.kind = GridKind::Dem;
+  g.rows = rows;
+  g.cols = cols;
+  g.x0 = -100.0;
+  g.y0 = 50.0;
+  g.spacingX = 1.0;
+  g.spacingY = 2.0;
+  g.nodata = -9999.0f;
+  g.bodyName = "Mars";
+  g.equatorialRadius = 3396190.0;
+  g.polarRadius = 3376200.0;
+  g.latitudeType = topo::LatitudeType::Planetodetic;
+  g.placement.kind = PlacementInfo::Kind::LocalTangentPlane;
+  g.placement.originLatDeg = -2.05;
+  g.placement.originLonDeg = -5.5;
+  g.placement.originHeight = -1400.0;
+  g.placement.headingDeg = 10.0;
+  return g;
+}
+
+GridInfo planetInfo(const std::string& name, std::size_t rows, std::size_t cols) {
+  GridInfo g;
+  g.name = name;
+  g.kind = GridKind::Planet;
+  g.rows = rows;
+  g.cols = cols;
+  g.spacingX = 360.0 / static_cast<double>(cols);
+  g.spacingY = 180.0 / static_cast<double>(rows);
+  g.x0 = -180.0 + 0.5 * g.spacingX;
+  g.y0 = 90.0 - 0.5 * g.spacingY;
+  g.bodyName = "Moon";
+  g.equatorialRadius = g.polarRadius = 1737400.0;
+  return g;
+}
+
+GridSource source(GridInfo info, const std::function<float(std::size_t, std::size_t)>& f) {
+  auto samples = topo::InMemorySamples::fromFunction(info.rows, info.cols, f);
+  return {std::move(info), std::move(samples)};
+}
+
+float planetHeight(std::size_t r, std::size_t c) {
+  if (r < 3) return kNan;  // no data near the north pole
+  return static_cast<float>(1000.0 * std::cos(static_cast<double>(r) / 9.0) +
+                            static_cast<double>(c));
+}
+
+/// The test's own 2×2-mean pyramid (NaN = missing), independent of the writer's code.
+std::vector<std::vector<float>> referencePyramid(std::vector<float> level0, std::size_t rows,
+                                                 std::size_t cols, std::size_t levels) {
+  std::vector<std::vector<float>> out{std::move(level0)};
+  for (std::size_t k = 1; k < levels; ++k) {
+    const std::vector<float>& fine = out.back();
+    const std::size_t r2 = (rows + 1) / 2, c2 = (cols + 1) / 2;
+    std::vector<float> coarse(r2 * c2);
+    for (std::size_t i = 0; i < r2; ++i) {
+      for (std::size_t j = 0; j < c2; ++j) {
+        double sum = 0.0;
+        int n = 0;
+        for (std::size_t fi = 2 * i; fi < std::min(2 * i + 2, rows); ++fi) {
+          for (std::size_t fj = 2 * j; fj < std::min(2 * j + 2, cols); ++fj) {
+            const float v = fine[fi * cols + fj];
+            if (!std::isnan(v)) {
+              sum += static_cast<double>(v);
+              ++n;
+            }
+          }
+        }
+        coarse[i * c2 + j] = n > 0 ? static_cast<float>(sum / n) : kNan;
+      }
+    }
+    out.push_back(std::move(coarse));
+    rows = r2;
+    cols = c2;
+  }
+  return out;
+}
+
+std::vector<float> tabulate(std::size_t rows, std::size_t cols,
+                            const std::function<float(std::size_t, std::size_t)>& f) {
+  std::vector<float> v(rows * cols);
+  for (std::size_t r = 0; r < rows; ++r) {
+    for (std::size_t c = 0; c < cols; ++c) v[r * cols + c] = f(r, c);
+  }
+  return v;
+}
+
+void expectSameHeights(const std::vector<float>& got, const std::vector<float>& want,
+                       const std::string& what) {
+  ASSERT_EQ(got.size(), want.size()) << what;
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    if (std::isnan(want[i])) {
+      ASSERT_TRUE(std::isnan(got[i])) << what << " index " << i << " got " << got[i];
+    } else {
+      ASSERT_NEAR(got[i], want[i], 1e-4f * (1.0f + std::abs(want[i]))) << what << " index " << i;
+    }
+  }
+}
+
+std::vector<float> readLevel(const Store& s, const std::string& grid, std::size_t level) {
+  const GridInfo& info = s.grid(grid);
+  std::vector<float> v(info.levelRows(level) * info.levelCols(level));
+  s.readWindow(grid, level, 0, 0, info.levelRows(level), info.levelCols(level), v);
+  return v;
+}
+
+/// A 37×53 DEM 'crater' (odd sizes) and a 45×91 planet 'moon', in 16×8 patches.
+fs::path writeStandardStore(const std::string& file, const std::string& demName = "crater") {
+  const fs::path p = scratch(file);
+  const std::vector<GridSource> grids{source(demInfo(demName, 37, 53), crater),
+                                      source(planetInfo("moon", 45, 91), planetHeight)};
+  WriteOptions o;
+  o.patchRows = 16;
+  o.patchCols = 8;
+  writeStore(p, grids, o);
+  return p;
+}
+
+std::string fileBytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+std::vector<fs::path> filesBeside(const fs::path& p) {
+  std::vector<fs::path> out;
+  for (const auto& e : fs::directory_iterator(p.parent_path())) {
+    if (e.path().filename().string().rfind(p.filename().string(), 0) == 0) out.push_back(e.path());
+  }
+  return out;
+}
+
+// ---- the raw HDF5 C API, for inspecting and crafting files independently of the store ------
+
+/// Owns one raw HDF5 identifier in the test; throws if the call that made it failed.
+class H5 {
+ public:
+  H5(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {
+    if (id < 0) throw std::runtime_error("raw HDF5 call failed in the test");
+  }
+  H5(const H5&) = delete;
+  H5& operator=(const H5&) = delete;
+  ~H5() { close_(id_); }
+  operator hid_t() const { return id_; }  // NOLINT(google-explicit-constructor)
+
+ private:
+  hid_t id_;
+  herr_t (*close_)(hid_t);
+};
+
+void ok(herr_t status) {
+  if (status < 0) throw std::runtime_error("raw HDF5 call failed in the test");
+}
+
+std::vector<double> rawAttrNumbers(hid_t obj, const char* name) {
+  const H5 a(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
+  const H5 s(H5Aget_space(a), H5Sclose);
+  std::vector<double> v(static_cast<std::size_t>(H5Sget_simple_extent_npoints(s)));
+  ok(H5Aread(a, H5T_NATIVE_DOUBLE, v.data()));
+  return v;
+}
+
+std::string rawAttrString(hid_t obj, const char* name) {
+  const H5 a(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
+  const H5 t(H5Aget_type(a), H5Tclose);
+  EXPECT_EQ(H5Tget_class(t), H5T_STRING) << name;
+  EXPECT_GT(H5Tis_variable_str(t), 0) << name;
+  const H5 mem(H5Tcopy(H5T_C_S1), H5Tclose);
+  ok(H5Tset_size(mem, H5T_VARIABLE));
+  ok(H5Tset_cset(mem, H5T_CSET_UTF8));
+  EXPECT_EQ(H5Tget_cset(t), H5T_CSET_UTF8) << name;
+  char* p = nullptr;
+  ok(H5Aread(a, mem, static_cast<void*>(&p)));
+  std::string s(p);
+  H5free_memory(p);
+  return s;
+}
+
+void rawSetNumbers(hid_t obj, const char* name, const std::vector<double>& v, hid_t fileType) {
+  if (H5Aexists(obj, name) > 0) ok(H5Adelete(obj, name));
+  const hsize_t n = v.size();
+  const H5 s(v.size() == 1 ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &n, nullptr), H5Sclose);
+  const H5 a(H5Acreate2(obj, name, fileType, s, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+  ok(H5Awrite(a, H5T_NATIVE_DOUBLE, v.data()));
+}
+
+/// A fixed-length string attribute (the writer writes variable-length ones; the reader
+/// accepts both).
+void rawSetString(hid_t obj, const char* name, const std::string& v) {
+  if (H5Aexists(obj, name) > 0) ok(H5Adelete(obj, name));
+  const H5 t(H5Tcopy(H5T_C_S1), H5Tclose);
+  ok(H5Tset_size(t, v.size() + 1));
+  const H5 s(H5Screate(H5S_SCALAR), H5Sclose);
+  const H5 a(H5Acreate2(obj, name, t, s, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+  ok(H5Awrite(a, t, v.c_str()));
+}
+
+/// Replaces (or creates) dataset `name` in `group` with a chunked dataset of the given shape,
+/// chunk and file type, filled from doubles (HDF5 converts).
+void rawDataset(hid_t group, const std::string& name, const std::vector<hsize_t>& shape,
+                const std::vector<hsize_t>& chunk, hid_t fileType,
+                const std::vector<double>& values) {
+  if (H5Lexists(group, name.c_str(), H5P_DEFAULT) > 0) {
+    ok(H5Ldelete(group, name.c_str(), H5P_DEFAULT));
+  }
+  const H5 space(H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr), H5Sclose);
+  const H5 dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+  if (!chunk.empty()) ok(H5Pset_chunk(dcpl, static_cast<int>(chunk.size()), chunk.data()));
+  const H5 ds(H5Dcreate2(group, name.c_str(), fileType, space, H5P_DEFAULT, dcpl, H5P_DEFAULT),
+              H5Dclose);
+  if (!values.empty()) {
+    ok(H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()));
+  }
+}
+
+/// Opens a store file read-write with the raw API and runs f on the file id.
+template <typename F>
+void editRaw(const fs::path& p, F&& f) {
+  const H5 file(H5Fopen(p.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose);
+  f(static_cast<hid_t>(file));
+}
+
+std::string openError(const fs::path& p) {
+  try {
+    (void)Store::open(p);
+  } catch (const StoreError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+}  // namespace
+
+// ---- the writer, checked with the raw HDF5 API --------------------------------------------
+
+TEST(StoreWriter, WritesTheDocumentedLayoutReadBackWithTheRawHdf5Api) {
+  const fs::path p = writeStandardStore("layout.h5");
+  const H5 file(H5Fopen(p.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  const H5 root(H5Gopen2(file, "/", H5P_DEFAULT), H5Gclose);
+  EXPECT_EQ(rawAttrString(root, "regolith_store"),
+            "Regolith terrain store; see docs/store-format.md");
+  EXPECT_EQ(rawAttrNumbers(root, "format_version"), (std::vector<double>{1.0, 0.0}));
+
+  const H5 g(H5Gopen2(file, "/grids/crater", H5P_DEFAULT), H5Gclose);
+  EXPECT_EQ(rawAttrNumbers(g, "format_version"), (std::vector<double>{1.0, 0.0}));
+  EXPECT_EQ(rawAttrString(g, "kind"), "dem");
+  EXPECT_EQ(rawAttrNumbers(g, "rows"), std::vector<double>{37.0});
+  EXPECT_EQ(rawAttrNumbers(g, "cols"), std::vector<double>{53.0});
+  EXPECT_EQ(rawAttrNumbers(g, "x0"), std::vector<double>{-100.0});
+  EXPECT_EQ(rawAttrNumbers(g, "y0"), std::vector<double>{50.0});
+  EXPECT_EQ(rawAttrNumbers(g, "spacing"), (std::vector<double>{1.0, 2.0}));
+  EXPECT_EQ(rawAttrString(g, "units"), "m");
+  EXPECT_EQ(rawAttrString(g, "sample_type"), "float32");
+  EXPECT_EQ(rawAttrNumbers(g, "scale"), std::vector<double>{1.0});
+  EXPECT_EQ(rawAttrNumbers(g, "offset"), std::vector<double>{0.0});
+  EXPECT_EQ(rawAttrNumbers(g, "nodata"), std::vector<double>{-9999.0});
+  EXPECT_EQ(rawAttrString(g, "body"), "Mars");
+  EXPECT_EQ(rawAttrNumbers(g, "equatorial_radius"), std::vector<double>{3396190.0});
+  EXPECT_EQ(rawAttrNumbers(g, "polar_radius"), std::vector<double>{3376200.0});
+  EXPECT_EQ(rawAttrString(g, "latitude_type"), "planetodetic");
+  EXPECT_EQ(rawAttrString(g, "placement"), "local_tangent_plane");
+  EXPECT_EQ(rawAttrNumbers(g, "origin_lat_deg"), std::vector<double>{-2.05});
+  EXPECT_EQ(rawAttrNumbers(g, "origin_lon_deg"), std::vector<double>{-5.5});
+  EXPECT_EQ(rawAttrNumbers(g, "origin_height"), std::vector<double>{-1400.0});
+  EXPECT_EQ(rawAttrNumbers(g, "heading_deg"), std::vector<double>{10.0});
+  // 37×53 in 16×8 patches: 37×53, 19×27, 10×14, 5×7 (the first that fits one patch).
+  EXPECT_EQ(rawAttrNumbers(g, "levels"), std::vector<double>{4.0});
+  EXPECT_EQ(rawAttrNumbers(g, "patch_shape"), (std::vector<double>{16.0, 8.0}));
+
+  const std::array<std::array<hsize_t, 2>, 4> shapes{{{37, 53}, {19, 27}, {10, 14}, {5, 7}}};
+  const std::array<std::array<hsize_t, 2>, 4> chunks{{{16, 8}, {16, 8}, {10, 8}, {5, 7}}};
+  for (std::size_t k = 0; k < 4; ++k) {
+    const H5 ds(H5Dopen2(g, ("level" + std::to_string(k)).c_str(), H5P_DEFAULT), H5Dclose);
+    const H5 space(H5Dget_space(ds), H5Sclose);
+    std::array<hsize_t, 2> dims{};
+    ASSERT_EQ(H5Sget_simple_extent_ndims(space), 2);
+    ok(H5Sget_simple_extent_dims(space, dims.data(), nullptr));
+    EXPECT_EQ(dims, shapes[k]) << "level " << k;
+    const H5 dcpl(H5Dget_create_plist(ds), H5Pclose);
+    std::array<hsize_t, 2> chunk{};
+    ASSERT_EQ(H5Pget_chunk(dcpl, 2, chunk.data()), 2);
+    EXPECT_EQ(chunk, chunks[k]) << "level " << k;
+    const H5 type(H5Dget_type(ds), H5Tclose);
+    EXPECT_GT(H5Tequal(type, H5T_IEEE_F32LE), 0);
+  }
+
+  // Row-major and north-up, sample by sample: stored element [r][c] is sample (r, c), row 0
+  // north. (3, 5) and (5, 3) tell a transpose apart; (36, 0) is the south-west corner.
+  const H5 ds(H5Dopen2(g, "level0", H5P_DEFAULT), H5Dclose);
+  const auto element = [&](hsize_t r, hsize_t c) {
+    const H5 fs(H5Dget_space(ds), H5Sclose);
+    const std::array<hsize_t, 2> start{r, c}, count{1, 1};
+    ok(H5Sselect_hyperslab(fs, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr));
+    const H5 ms(H5Screate_simple(2, count.data(), nullptr), H5Sclose);
+    float v = 0.0f;
+    ok(H5Dread(ds, H5T_NATIVE_FLOAT, ms, fs, H5P_DEFAULT, &v));
+    return v;
+  };
+  EXPECT_EQ(element(3, 5), crater(3, 5));
+  EXPECT_EQ(element(5, 3), crater(5, 3));
+  EXPECT_EQ(element(36, 0), crater(36, 0));
+  EXPECT_EQ(element(0, 52), crater(0, 52));
+  EXPECT_EQ(element(11, 21), -9999.0f);  // in the hole: stored as the nodata value
+  EXPECT_EQ(element(0, 0), -9999.0f);    // (0·7 + 0·3) % 29 == 0: a scattered missing sample
+}
+
+TEST(StoreWriter, StoresNanAndRecordsNodataNanWhenNoNodataIsDeclared) {
+  const fs::path p = writeStandardStore("nan-nodata.h5");
+  const H5 file(H5Fopen(p.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  const H5 g(H5Gopen2(file, "/grids/moon", H5P_DEFAULT), H5Gclose);
+  const std::vector<double> nodata = rawAttrNumbers(g, "nodata");
+  ASSERT_EQ(nodata.size(), 1u);
+  EXPECT_TRUE(std::isnan(nodata[0]));
+  EXPECT_EQ(rawAttrString(g, "kind"), "planet");
+  EXPECT_EQ(H5Aexists(g, "placement"), 0);
+  const H5 ds(H5Dopen2(g, "level0", H5P_DEFAULT), H5Dclose);
+  std::vector<float> all(45 * 91);
+  ok(H5Dread(ds, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, all.data()));
+  EXPECT_TRUE(std::isnan(all[2 * 91 + 7]));
+  EXPECT_EQ(all[3 * 91 + 7], planetHeight(3, 7));
+  EXPECT_EQ(all[44 * 91 + 90], planetHeight(44, 90));
+}
+
+TEST(StoreWriter, DeflateIsRecordedAsAFilterAndReadsBackTheSame) {
+  const fs::path p = scratch("deflate.h5");
+  const std::vector<GridSource> grids{source(demInfo("crater", 37, 53), crater)};
+  WriteOptions o;
+  o.patchRows = o.patchCols = 16;
+  o.deflate = 6;
+  writeStore(p, grids, o);
+  {
+    const H5 file(H5Fopen(p.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+    const H5 ds(H5Dopen2(file, "/grids/crater/level0", H5P_DEFAULT), H5Dclose);
+    const H5 dcpl(H5Dget_create_plist(ds), H5Pclose);
+    EXPECT_GT(H5Pall_filters_avail(dcpl), 0);
+    EXPECT_EQ(H5Pget_nfilters(dcpl), 2);  // shuffle, deflate
+  }
+  const Store s = Store::open(p);
+  expectSameHeights(readLevel(s, "crater", 0), tabulate(37, 53, crater), "level 0");
+}
+
+// ---- the reader, on files crafted with the raw HDF5 API -----------------------------------
+
+namespace {
+
+struct Crafted {
+  const char* name;
+  hid_t fileType;
+  const char* sampleType;
+  double scale, offset;
+  std::optional<double> nodata;
+  std::vector<double> stored;  // 3×4, row-major
+};
+
+/// A complete one-level store written with the raw API only, following docs/store-format.md.
+void craftStore(const fs::path& p, const std::vector<Crafted>& grids) {
+  const H5 file(H5Fcreate(p.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
+  const H5 root(H5Gopen2(file, "/", H5P_DEFAULT), H5Gclose);
+  rawSetString(root, "regolith_store", "crafted by StoreTest");
+  rawSetNumbers(root, "format_version", {1.0, 3.0}, H5T_STD_I64LE);  // a newer minor is fine
+  const H5 gs(H5Gcreate2(file, "grids", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
+  for (const Crafted& c : grids) {
+    const H5 g(H5Gcreate2(gs, c.name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(g, "format_version", {1.0, 0.0}, H5T_STD_I16LE);
+    rawSetString(g, "kind", "dem");
+    rawSetNumbers(g, "rows", {3.0}, H5T_STD_I32LE);
+    rawSetNumbers(g, "cols", {4.0}, H5T_STD_U8LE);
+    rawSetNumbers(g, "x0", {500.5}, H5T_IEEE_F64LE);
+    rawSetNumbers(g, "y0", {-200.25}, H5T_IEEE_F32LE);
+    rawSetNumbers(g, "spacing", {0.5, 0.25}, H5T_IEEE_F64BE);
+    rawSetString(g, "units", "m");
+    rawSetString(g, "sample_type", c.sampleType);
+    rawSetNumbers(g, "scale", {c.scale}, H5T_IEEE_F64LE);
+    rawSetNumbers(g, "offset", {c.offset}, H5T_IEEE_F64LE);
+    if (c.nodata) rawSetNumbers(g, "nodata", {*c.nodata}, c.fileType);
+    rawSetString(g, "body", "Mars");
+    rawSetNumbers(g, "equatorial_radius", {3396190.0}, H5T_IEEE_F64LE);
+    rawSetNumbers(g, "polar_radius", {3376200.0}, H5T_IEEE_F64LE);
+    rawSetString(g, "latitude_type", "planetocentric");
+    rawSetString(g, "placement", "polar_stereographic");
+    rawSetNumbers(g, "pole", {-1.0}, H5T_STD_I32LE);
+    rawSetNumbers(g, "lat_true_scale_deg", {-90.0}, H5T_IEEE_F64LE);
+    rawSetNumbers(g, "lon_centre_deg", {0.0}, H5T_IEEE_F64LE);
+    rawSetNumbers(g, "false_easting", {0.0}, H5T_IEEE_F64LE);
+    rawSetNumbers(g, "false_northing", {0.0}, H5T_IEEE_F64LE);
+    rawSetNumbers(g, "levels", {1.0}, H5T_STD_U64LE);
+    rawSetNumbers(g, "patch_shape", {2.0, 2.0}, H5T_STD_U64LE);
+    rawDataset(g, "level0", {3, 4}, {2, 2}, c.fileType, c.stored);
+  }
+}
+
+}  // namespace
+
+TEST(Store, ReadsEverySampleTypeWithScaleOffsetAndNodataFromACraftedFile) {
+  const fs::path p = scratch("crafted.h5");
+  // MOLA-style int16 with a scale and an offset, and the other accepted types.
+  const std::vector<double> ints{-32768, 0, 1, 2, 3, -4, 5, 6, 7, 8, 9, 1000};
+  const std::vector<double> uints{65535, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 1000};
+  const std::vector<Crafted> grids{
+      {"i16", H5T_STD_I16LE, "int16", 0.5, -100.0, -32768.0, ints},
+      {"u16", H5T_STD_U16BE, "uint16", 2.0, 10.0, 65535.0, uints},
+      {"i32", H5T_STD_I32LE, "int32", 1.0, 0.0, std::nullopt, ints},
+      {"f64",
+       H5T_IEEE_F64LE,
+       "float64",
+       0.25,
+       1.0,
+       -32768.0,
+       {-32768, 0.5, 1, 2, 3, -4, 5, 6, 7, 8, kNanD, 1e6}},
+      {"f32",
+       H5T_IEEE_F32LE,
+       "float32",
+       1.0,
+       0.0,
+       std::nullopt,
+       {kNanD, 0.5, 1, 2, 3, -4, 5, 6, 7, 8, 9, 1000}},
+  };
+  craftStore(p, grids);
+
+  const Store s = Store::open(p);
+  EXPECT_EQ(s.gridNames(), (std::vector<std::string>{"f32", "f64", "i16", "i32", "u16"}));
+  for (const Crafted& c : grids) {
+    std::vector<float> want(12);
+    for (std::size_t i = 0; i < 12; ++i) {
+      const double v = c.stored[i];
+      want[i] = (std::isnan(v) || (c.nodata && v == *c.nodata))
+                    ? kNan
+                    : static_cast<float>(c.offset + c.scale * v);
+    }
+    std::vector<float> got(12);
+    s.readWindow(c.name, 0, 0, 0, 3, 4, got);
+    expectSameHeights(got, want, c.name);
+    const GridInfo& g = s.grid(c.name);
+    EXPECT_EQ(g.scale, c.scale) << c.name;
+    EXPECT_EQ(g.offset, c.offset) << c.name;
+    EXPECT_EQ(g.nodata.has_value(), c.nodata.has_value()) << c.name;
+  }
+  // -32768 · 0.5 − 100 would be −16484 m: it must be missing instead, never a height.
+  std::vector<float> one(1);
+  s.readWindow("i16", 0, 0, 0, 1, 1, one);
+  EXPECT_TRUE(std::isnan(one[0]));
+  s.readWindow("i16", 0, 2, 3, 1, 1, one);
+  EXPECT_EQ(one[0], 400.0f);  // 1000 · 0.5 − 100: (row 2, col 3) is the last stored element
+
+  const GridInfo& g = s.grid("i16");
+  EXPECT_EQ(g.kind, GridKind::Dem);
+  EXPECT_EQ(g.rows, 3u);
+  EXPECT_EQ(g.cols, 4u);
+  EXPECT_EQ(g.x0, 500.5);
+  EXPECT_EQ(g.y0, -200.25);
+  EXPECT_EQ(g.spacingX, 0.5);
+  EXPECT_EQ(g.spacingY, 0.25);
+  EXPECT_EQ(g.placement.kind, PlacementInfo::Kind::PolarStereographic);
+  EXPECT_EQ(g.placement.pole, -1);
+  EXPECT_EQ(g.placement.latTrueScaleDeg, -90.0);
+  EXPECT_FALSE(g.placement.scaleFactor.has_value());
+  EXPECT_EQ(g.polarRadius, 3376200.0);
+  EXPECT_EQ(g.latitudeType, topo::LatitudeType::Planetocentric);
+  EXPECT_EQ(g.levels, 1u);
+  EXPECT_EQ(g.patchRows, 2u);
+}
+
+// ---- round trips --------------------------------------------------------------------------
+
+TEST(Store, RoundTripsEveryLevelIncludingThePyramidWithMissingSamplesAndOddSizes) {
+  const fs::path p = writeStandardStore("roundtrip.h5");
+  const Store s = Store::open(p);
+  EXPECT_EQ(s.path(), p);
+  EXPECT_EQ(s.gridNames(), (std::vector<std::string>{"crater", "moon"}));
+  EXPECT_TRUE(s.hasGrid("crater"));
+  EXPECT_FALSE(s.hasGrid("crate"));
+
+  const GridInfo want = demInfo("crater", 37, 53);
+  const GridInfo& got = s.grid("crater");
+  EXPECT_EQ(got.name, "crater");
+  EXPECT_EQ(got.kind, GridKind::Dem);
+  EXPECT_EQ(got.x0, want.x0);
+  EXPECT_EQ(got.y0, want.y0);
+  EXPECT_EQ(got.spacingX, want.spacingX);
+  EXPECT_EQ(got.spacingY, want.spacingY);
+  EXPECT_EQ(got.nodata, want.nodata);
+  EXPECT_EQ(got.units, "m");
+  EXPECT_EQ(got.bodyName, "Mars");
+  EXPECT_EQ(got.equatorialRadius, want.equatorialRadius);
+  EXPECT_EQ(got.polarRadius, want.polarRadius);
+  EXPECT_EQ(got.latitudeType, topo::LatitudeType::Planetodetic);
+  EXPECT_EQ(got.placement.kind, PlacementInfo::Kind::LocalTangentPlane);
+  EXPECT_EQ(got.placement.originLatDeg, -2.05);
+  EXPECT_EQ(got.placement.originLonDeg, -5.5);
+  EXPECT_EQ(got.placement.originHeight, -1400.0);
+  EXPECT_EQ(got.placement.headingDeg, 10.0);
+  EXPECT_EQ(got.levels, 4u);
+  EXPECT_EQ(got.patchRows, 16u);
+  EXPECT_EQ(got.patchCols, 8u);
+  EXPECT_EQ(got.scale, 1.0);
+  EXPECT_EQ(got.offset, 0.0);
+  EXPECT_EQ(s.grid("moon").kind, GridKind::Planet);
+  EXPECT_FALSE(s.grid("moon").nodata.has_value());
+
+  for (const auto& [name, f] :
+       {std::pair<std::string, float (*)(std::size_t, std::size_t)>{"crater", crater},
+        std::pair<std::string, float (*)(std::size_t, std::size_t)>{"moon", planetHeight}}) {
+    const GridInfo& info = s.grid(name);
+    const auto ref =
+        referencePyramid(tabulate(info.rows, info.cols, f), info.rows, info.cols, info.levels);
+    for (std::size_t k = 0; k < info.levels; ++k) {
+      expectSameHeights(readLevel(s, name, k), ref[k], name + " level " + std::to_string(k));
+    }
+  }
+  // The hole (rows 10–13, cols 20–27) is whole 2×2 blocks: missing at level 1 too; the
+  // scattered singles are averaged over.
+  std::vector<float> v(1);
+  s.readWindow("crater", 1, 6, 12, 1, 1, v);
+  EXPECT_TRUE(std::isnan(v[0]));
+  s.readWindow("crater", 1, 0, 0, 1, 1, v);  // (0,0) missing, (0,1), (1,0), (1,1) not
+  EXPECT_FLOAT_EQ(v[0], static_cast<float>((static_cast<double>(crater(0, 1)) +
+                                            static_cast<double>(crater(1, 0)) +
+                                            static_cast<double>(crater(1, 1))) /
+                                           3.0));
+  // The odd last row and column of level 1 average only the samples that exist.
+  s.readWindow("crater", 1, 18, 26, 1, 1, v);
+  EXPECT_EQ(v[0], crater(36, 52));
+}
+
+TEST(Store, OneByOneAndExplicitLevelCounts) {
+  const fs::path p = scratch("tiny.h5");
+  WriteOptions o;
+  o.levels = 3;
+  const std::vector<GridSource> grids{
+      source(demInfo("one", 1, 1), [](std::size_t, std::size_t) { return 7.0f; }),
+      source(demInfo("row", 1, 4),
+             [](std::size_t, std::size_t c) { return static_cast<float>(c); })};
+  EXPECT_THROW(writeStore(p, grids, o), InvalidArgument);  // "one" is 1×1 at one level
+  o.levels = 1;
+  writeStore(p, grids, o);
+  const Store s = Store::open(p);
+  EXPECT_EQ(s.grid("one").levels, 1u);
+  std::vector<float> v(4);
+  s.readWindow("row", 0, 0, 0, 1, 4, v);
+  EXPECT_EQ(v, (std::vector<float>{0, 1, 2, 3}));
+}
+
+TEST(Store, StridedReadsReturnEveryKthSample) {
+  const fs::path p = writeStandardStore("strided.h5");
+  const Store s = Store::open(p);
+  const std::vector<float> all = readLevel(s, "crater", 0);
+  for (const std::size_t stride : {1u, 2u, 3u, 5u, 36u}) {
+    for (const auto& [r0, c0] :
+         std::array<std::pair<std::size_t, std::size_t>, 3>{{{0, 0}, {1, 2}, {4, 7}}}) {
+      const std::size_t rows = (37 - 1 - r0) / stride + 1, cols = (53 - 1 - c0) / stride + 1;
+      std::vector<float> got(rows * cols), want(rows * cols);
+      s.readWindow("crater", 0, r0, c0, rows, cols, got, stride);
+      for (std::size_t r = 0; r < rows; ++r) {
+        for (std::size_t c = 0; c < cols; ++c) {
+          want[r * cols + c] = all[(r0 + r * stride) * 53 + c0 + c * stride];
+        }
+      }
+      expectSameHeights(got, want, "stride " + std::to_string(stride));
+    }
+  }
+  // A strided coarse read, as the pager does for overviews.
+  const std::vector<float> l1 = readLevel(s, "moon", 1);
+  std::vector<float> got(12 * 23);
+  s.readWindow("moon", 1, 0, 0, 12, 23, got, 2);
+  for (std::size_t r = 0; r < 12; ++r) {
+    for (std::size_t c = 0; c < 23; ++c) {
+      const float w = l1[(2 * r) * 46 + 2 * c];
+      if (std::isnan(w)) {
+        EXPECT_TRUE(std::isnan(got[r * 23 + c]));
+      } else {
+        EXPECT_EQ(got[r * 23 + c], w);
+      }
+    }
+  }
+}
+
+TEST(Store, WindowsAtTheEdgesAndOutsideTheLevel) {
+  const fs::path p = writeStandardStore("edges.h5");
+  const Store s = Store::open(p);
+  const auto all = tabulate(37, 53, crater);
+  // The last row, the last column, the south-east corner, a window ending exactly at the edge.
+  std::vector<float> row(53), col(37), corner(1), block(5 * 3);
+  s.readWindow("crater", 0, 36, 0, 1, 53, row);
+  expectSameHeights(row, std::vector<float>(all.end() - 53, all.end()), "last row");
+  s.readWindow("crater", 0, 0, 52, 37, 1, col);
+  for (std::size_t r = 0; r < 37; ++r) ASSERT_EQ(std::isnan(col[r]), std::isnan(all[r * 53 + 52]));
+  s.readWindow("crater", 0, 36, 52, 1, 1, corner);
+  EXPECT_EQ(corner[0], crater(36, 52));
+  s.readWindow("crater", 0, 32, 50, 5, 3, block);
+  EXPECT_EQ(block[14], crater(36, 52));
+  EXPECT_EQ(block[0], crater(32, 50));
+
+  const std::string prefix = "store::readWindow(): " + p.string() + ": ";
+  try {
+    s.readWindow("crater", 0, 33, 50, 5, 3, block);
+    FAIL() << "window past the last row accepted";
+  } catch (const StoreError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              prefix +
+                  "grid 'crater' level 0: window of 5x3 samples at (33, 50) with stride 1 "
+                  "reaches outside the level's 37x53 samples");
+  }
+  // Strided: samples 0, 18, 36 exist; 0, 18, 36, 54 do not.
+  std::vector<float> three(3), four(4);
+  s.readWindow("crater", 0, 0, 0, 3, 1, three, 18);
+  EXPECT_THROW(s.readWindow("crater", 0, 0, 0, 4, 1, four, 18), StoreError);
+  EXPECT_THROW(s.readWindow("crater", 0, 0, 53, 1, 1, corner), StoreError);
+  EXPECT_THROW(s.readWindow("crater", 3, 0, 0, 6, 1, std::span<float>(block.data(), 6)),
+               StoreError);  // level 3 is 5×7
+  try {
+    s.readWindow("crater", 4, 0, 0, 1, 1, corner);
+    FAIL();
+  } catch (const StoreError& e) {
+    EXPECT_EQ(std::string(e.what()), prefix + "grid 'crater' has no level 4 (levels 0 to 3)");
+  }
+  EXPECT_THROW(s.readWindow("crater", 0, 0, 0, 2, 2, corner), InvalidArgument);  // out too small
+  EXPECT_THROW(s.readWindow("crater", 0, 0, 0, 1, 1, corner, 0), InvalidArgument);
+  s.readWindow("crater", 0, 0, 0, 0, 0, {});  // an empty window reads nothing
+}
+
+TEST(Store, AMissingGridIsAClearError) {
+  const fs::path p = writeStandardStore("missing-grid.h5");
+  const Store s = Store::open(p);
+  try {
+    (void)s.grid("victoria");
+    FAIL();
+  } catch (const StoreError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "store::grid(): " + p.string() + ": no grid 'victoria' (grids: crater, moon)");
+  }
+  std::vector<float> v(1);
+  try {
+    s.readWindow("victoria", 0, 0, 0, 1, 1, v);
+    FAIL();
+  } catch (const StoreError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "store::readWindow(): " + p.string() + ": no grid 'victoria' (grids: crater, moon)");
+  }
+}
+
+TEST(Store, CountsHyperslabReadsAndTheBytesTheyDeliver) {
+  const fs::path p = writeStandardStore("counters.h5");
+  const Store s = Store::open(p);
+  EXPECT_EQ(s.counters().reads, 0u);
+  std::vector<float> v(16 * 8);
+  s.readWindow("crater", 0, 16, 8, 16, 8, v);
+  EXPECT_EQ(s.counters().reads, 1u);
+  EXPECT_EQ(s.counters().bytesRead, 16u * 8u * 4u);
+  s.readWindow("crater", 0, 0, 0, 4, 4, std::span<float>(v.data(), 16), 3);
+  EXPECT_EQ(s.counters().reads, 2u);
+  EXPECT_EQ(s.counters().bytesRead, 16u * 8u * 4u + 16u * 4u);
+  // Stores are movable; the counters move with them.
+  const Store moved = Store::open(p);
+  Store other = Store::open(p);
+  other = Store::open(p);
+  EXPECT_EQ(other.counters().reads, 0u);
+  EXPECT_EQ(moved.grid("crater").rows, 37u);
+}
+
+TEST(Store, ConcurrentReadsFromManyThreadsAgree) {
+  const fs::path p = writeStandardStore("threads.h5");
+  const Store s = Store::open(p);
+  const std::vector<float> all = readLevel(s, "crater", 0);
+  std::atomic<int> mismatches{0};
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t) {
+    threads.emplace_back([&, t] {
+      std::vector<float> v(16 * 8);
+      for (int i = 0; i < 200; ++i) {
+        const auto r0 = static_cast<std::size_t>((i * 7 + t) % 21);
+        const auto c0 = static_cast<std::size_t>((i * 5 + t) % 45);
+        s.readWindow("crater", 0, r0, c0, 16, 8, v);
+        for (std::size_t r = 0; r < 16; ++r) {
+          for (std::size_t c = 0; c < 8; ++c) {
+            const float a = v[r * 8 + c], b = all[(r0 + r) * 53 + c0 + c];
+            if (!(a == b || (std::isnan(a) && std::isnan(b)))) ++mismatches;
+          }
+        }
+      }
+    });
+  }
+  for (auto& th : threads) th.join();
+  EXPECT_EQ(mismatches.load(), 0);
+  EXPECT_EQ(s.counters().reads, 1u + 4u * 200u);
+}
+
+// ---- bad files: every error names the operation, the file and the field -------------------
+
+TEST(Store, RejectsNonPositiveSpacing) {
+  const fs::path p = writeStandardStore("bad-spacing.h5", "victoria");
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/victoria", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(g, "spacing", {-1.0, 2.0}, H5T_IEEE_F64LE);
+  });
+  EXPECT_EQ(openError(p),
+            "store::open(): " + p.string() + ": grid 'victoria' has spacing -1.0 m, expected > 0");
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/victoria", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(g, "spacing", {1.0, 0.0}, H5T_IEEE_F64LE);
+  });
+  EXPECT_EQ(openError(p),
+            "store::open(): " + p.string() + ": grid 'victoria' has spacing 0.0 m, expected > 0");
+}
+
+TEST(Store, RejectsADatasetOfTheWrongRank) {
+  const fs::path p = writeStandardStore("bad-rank.h5");
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
+    rawDataset(g, "level0", {37, 53, 2}, {16, 8, 2}, H5T_IEEE_F32LE, {});
+  });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'crater' dataset 'level0' has rank 3, expected 2");
+}
+
+TEST(Store, RejectsADatasetOfTheWrongType) {
+  const fs::path p = writeStandardStore("bad-type.h5");
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
+    const H5 str(H5Tcopy(H5T_C_S1), H5Tclose);
+    ok(H5Tset_size(str, 8));
+    rawDataset(g, "level1", {19, 27}, {16, 8}, str, {});
+  });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'crater' dataset 'level1' has type string, expected float32 "
+                              "(attribute sample_type)");
+  // A number of the wrong width is as wrong as a string.
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
+    rawDataset(g, "level1", {19, 27}, {16, 8}, H5T_IEEE_F64LE, {});
+  });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'crater' dataset 'level1' has type float64, expected float32 "
+                              "(attribute sample_type)");
+}
+
+TEST(Store, RejectsChunkDimensionsThatDoNotMatchThePatchShape) {
+  const fs::path p = writeStandardStore("bad-chunks.h5");
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
+    rawDataset(g, "level0", {37, 53}, {10, 10}, H5T_IEEE_F32LE, {});
+  });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'crater' dataset 'level0' has chunks 10x10, expected 16x8 "
+                              "(attribute patch_shape 16x8, clipped to the level)");
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
+    rawDataset(g, "level0", {37, 53}, {}, H5T_IEEE_F32LE, {});  // contiguous
+  });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'crater' dataset 'level0' is not chunked, expected chunks "
+                              "of 16x8 (attribute patch_shape 16x8, clipped to the level)");
+}
+
+TEST(Store, RejectsAShapeThatContradictsTheAttributesAndAMissingLevel) {
+  const fs::path p = writeStandardStore("bad-shape.h5");
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
+    rawDataset(g, "level2", {10, 13}, {10, 8}, H5T_IEEE_F32LE, {});
+  });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'crater' dataset 'level2' has shape 10x13, expected 10x14 "
+                              "(attributes rows, cols, halved per level)");
+  editRaw(p, [](hid_t f) { ok(H5Ldelete(f, "/grids/crater/level2", H5P_DEFAULT)); });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'crater' has no dataset 'level2' (attribute levels is 4)");
+}
+
+TEST(Store, RejectsMissingAndMistypedAttributes) {
+  const fs::path p = writeStandardStore("bad-attrs.h5");
+  editRaw(p, [](hid_t f) { ok(H5Adelete_by_name(f, "/grids/moon", "rows", H5P_DEFAULT)); });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() + ": grid 'moon' has no attribute 'rows'");
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/moon", H5P_DEFAULT), H5Gclose);
+    rawSetString(g, "rows", "45");
+  });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'moon' attribute 'rows' is a string, expected an integer");
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/moon", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(g, "rows", {45.0}, H5T_STD_I64LE);
+    rawSetString(g, "sample_type", "bfloat16");
+  });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'moon' has sample_type 'bfloat16', expected int16, uint16, "
+                              "int32, float32 or float64");
+}
+
+TEST(Store, RejectsANewerMajorFormatVersionButAcceptsANewerMinor) {
+  const fs::path p = writeStandardStore("newer.h5");
+  editRaw(p, [](hid_t f) {
+    const H5 root(H5Gopen2(f, "/", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(root, "format_version", {1.0, 9.0}, H5T_STD_I32LE);
+  });
+  EXPECT_NO_THROW((void)Store::open(p));
+  editRaw(p, [](hid_t f) {
+    const H5 root(H5Gopen2(f, "/", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(root, "format_version", {2.0, 0.0}, H5T_STD_I32LE);
+  });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": the root group has format version 2.0, newer than 1.0 that this "
+                              "library reads; a newer Regolith is needed");
+  editRaw(p, [](hid_t f) {
+    const H5 root(H5Gopen2(f, "/", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(root, "format_version", {1.0, 0.0}, H5T_STD_I32LE);
+    const H5 g(H5Gopen2(f, "/grids/moon", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(g, "format_version", {3.0, 1.0}, H5T_STD_I32LE);
+  });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'moon' has format version 3.1, newer than 1.0 that this "
+                              "library reads; a newer Regolith is needed");
+}
+
+TEST(Store, RejectsATruncatedFile) {
+  const fs::path good = writeStandardStore("whole.h5");
+  const fs::path p = scratch("truncated.h5");
+  const std::string bytes = fileBytes(good);
+  std::ofstream(p, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size() / 2));
+  const std::string msg = openError(p);
+  const std::string prefix =
+      "store::open(): " + p.string() +
+      ": cannot open the HDF5 file (truncated or corrupt?) [HDF5: H5Fopen(): ";
+  EXPECT_EQ(msg.substr(0, prefix.size()), prefix) << msg;
+  EXPECT_NE(msg.find("truncated file"), std::string::npos) << msg;  // HDF5's own diagnosis
+}
+
+namespace {
+
+void writeBytes(const fs::path& p, const std::string& bytes) {
+  std::ofstream(p, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+/// Runs f in a forked child and returns the string it produced. The child ends with _exit(),
+/// skipping HDF5's and LeakSanitizer's exit handlers (see the corrupt-header test).
+std::string inChild(const std::function<std::string()>& f) {
+  std::array<int, 2> fds{};
+  if (::pipe(fds.data()) != 0) throw std::runtime_error("pipe failed");
+  std::cout.flush();  // the child must not inherit (and repeat) buffered output
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) throw std::runtime_error("fork failed");
+  if (pid == 0) {
+    ::close(fds[0]);
+    const std::string s = f();
+    (void)!::write(fds[1], s.data(), s.size());
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  std::string out;
+  std::array<char, 4096> buf{};
+  for (ssize_t n = 0; (n = ::read(fds[0], buf.data(), buf.size())) > 0;) {
+    out.append(buf.data(), static_cast<std::size_t>(n));
+  }
+  ::close(fds[0]);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  return out;
+}
+
+}  // namespace
+
+TEST(Store, RejectsAFileWithACorruptSuperblock) {
+  const fs::path good = writeStandardStore("whole2.h5");
+  const fs::path p = scratch("corrupt-superblock.h5");
+  std::string bytes = fileBytes(good);
+  bytes[20] = static_cast<char>(bytes[20] ^ 0x10);  // one bit of the superblock
+  writeBytes(p, bytes);
+  const std::string msg = openError(p);
+  const std::string prefix =
+      "store::open(): " + p.string() +
+      ": cannot open the HDF5 file (truncated or corrupt?) [HDF5: H5Fopen(): ";
+  EXPECT_EQ(msg.substr(0, prefix.size()), prefix) << msg;
+  EXPECT_NE(msg.find("incorrect metadata checksum"), std::string::npos) << msg;
+}
+
+TEST(Store, RejectsAFileWithACorruptObjectHeader) {
+  const fs::path good = writeStandardStore("whole4.h5");
+  haddr_t addr = 0;
+  {
+    const H5 file(H5Fopen(good.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+    H5O_info_t info{};
+    ok(H5Oget_info_by_name2(file, "/grids/moon", &info, H5O_INFO_BASIC, H5P_DEFAULT));
+    addr = info.addr;
+  }
+  const fs::path p = scratch("corrupt-header.h5");
+  std::string bytes = fileBytes(good);
+  bytes[addr + 8] = static_cast<char>(bytes[addr + 8] ^ 0x10);  // one bit of grid 'moon''s header
+  writeBytes(p, bytes);
+  // In a child: after a metadata checksum failure HDF5 1.10.8 leaks one internal block, which
+  // its exit handler reports ("HDF5: infinite loop closing library") and LeakSanitizer flags.
+  // Neither is Regolith's to fix; the error itself is what this test checks.
+  const std::string msg = inChild([&] { return openError(p); });
+  const std::string prefix =
+      "store::open(): " + p.string() + ": cannot open grid 'moon' [HDF5: H5Oopen(): ";
+  EXPECT_EQ(msg.substr(0, prefix.size()), prefix) << msg;
+  EXPECT_NE(msg.find("incorrect metadata checksum"), std::string::npos) << msg;
+}
+
+TEST(Store, RejectsFilesThatAreNotHdf5OrNotStoresOrMissing) {
+  const fs::path text = scratch("not-hdf5.h5");
+  std::ofstream(text) << "elevation,lat,lon\n1,2,3\n";
+  EXPECT_EQ(openError(text),
+            "store::open(): " + text.string() + ": is not an HDF5 file (no HDF5 signature)");
+  const fs::path empty = scratch("empty.h5");
+  { const std::ofstream out(empty); }
+  EXPECT_EQ(openError(empty),
+            "store::open(): " + empty.string() + ": is not an HDF5 file (no HDF5 signature)");
+
+  const fs::path plain = scratch("plain.h5");
+  { const H5 f(H5Fcreate(plain.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose); }
+  EXPECT_EQ(openError(plain),
+            "store::open(): " + plain.string() +
+                ": is not a Regolith store (the root group has no attribute 'regolith_store')");
+
+  const fs::path none = scratch("does-not-exist.h5");
+  EXPECT_EQ(openError(none), "store::open(): " + none.string() + ": no such file");
+}
+
+TEST(Store, Hdf5PrintsNothingToStderrOnBadFiles) {
+  const fs::path good = writeStandardStore("whole3.h5");
+  const fs::path p = scratch("truncated3.h5");
+  const std::string bytes = fileBytes(good);
+  std::ofstream(p, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size() / 3));
+  const fs::path text = scratch("not-hdf5-3.h5");
+  std::ofstream(text) << "hello";
+  testing::internal::CaptureStderr();
+  EXPECT_THROW((void)Store::open(p), StoreError);
+  EXPECT_THROW((void)Store::open(text), StoreError);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(err, "");
+  // The setting is restored afterwards: HDF5's default printer is back on this thread.
+  H5E_auto2_t func = nullptr;
+  void* data = nullptr;
+  ok(H5Eget_auto2(H5E_DEFAULT, &func, &data));
+  EXPECT_NE(func, nullptr);
+}
+
+// ---- the writer: invalid input, replacement, cancellation, progress, crash safety ----------
+
+TEST(StoreWriter, RejectsInvalidGridsAndLeavesNoFile) {
+  const fs::path p = scratch("invalid.h5");
+  const std::string prefix = "store::writeStore(): " + p.string() + ": ";
+  const auto expectInvalid = [&](const std::vector<GridSource>& grids, const std::string& msg,
+                                 WriteOptions o = {}) {
+    try {
+      writeStore(p, grids, o);
+      ADD_FAILURE() << "accepted: " << msg;
+    } catch (const InvalidArgument& e) {
+      EXPECT_EQ(std::string(e.what()), prefix + msg);
+    }
+    EXPECT_TRUE(filesBeside(p).empty());
+  };
+  GridInfo bad = demInfo("victoria", 4, 4);
+  bad.spacingX = -1.0;
+  expectInvalid({source(bad, crater)}, "grid 'victoria' has spacing -1.0 m, expected > 0");
+  GridSource mismatched = source(demInfo("crater", 4, 4), crater);
+  mismatched.info.rows = 5;
+  expectInvalid({mismatched}, "grid 'crater' describes 5x4 samples but its source holds 4x4");
+  expectInvalid({source(demInfo("a", 4, 4), crater), source(demInfo("a", 4, 4), crater)},
+                "grid 'a' appears twice");
+  expectInvalid({source(demInfo("a/b", 4, 4), crater)},
+                "grid 'a/b': name must be non-empty and contain no '/'");
+  WriteOptions zero;
+  zero.patchRows = 0;
+  expectInvalid({source(demInfo("a", 4, 4), crater)}, "patch size 0x256, expected both > 0", zero);
+  // An infinite height is refused mid-write, and the temporary file goes with it.
+  expectInvalid({source(demInfo("inf", 4, 4),
+                        [](std::size_t r, std::size_t c) {
+                          return r == 2 && c == 1 ? std::numeric_limits<float>::infinity() : 1.0f;
+                        })},
+                "grid 'inf' sample (2, 1) is inf, expected a finite height or NaN");
+}
+
+TEST(StoreWriter, ReplacesAnExistingStoreWhileOpenReadersKeepTheOldOne) {
+  const fs::path p = scratch("replace.h5");
+  const std::vector<GridSource> a{
+      source(demInfo("a", 8, 8), [](std::size_t, std::size_t) { return 1.0f; })};
+  const std::vector<GridSource> b{
+      source(demInfo("b", 8, 8), [](std::size_t, std::size_t) { return 2.0f; })};
+  writeStore(p, a);
+  const Store old = Store::open(p);
+  writeStore(p, b);
+  const Store fresh = Store::open(p);
+  EXPECT_EQ(fresh.gridNames(), std::vector<std::string>{"b"});
+  std::vector<float> v(1);
+  old.readWindow("a", 0, 7, 7, 1, 1, v);
+  EXPECT_EQ(v[0], 1.0f);
+  fresh.readWindow("b", 0, 7, 7, 1, 1, v);
+  EXPECT_EQ(v[0], 2.0f);
+  EXPECT_EQ(filesBeside(p), std::vector<fs::path>{p});  // no temporary left behind
+}
+
+TEST(StoreWriter, TheSameInputWritesTheSameBytes) {
+  const fs::path a = writeStandardStore("same-a.h5"), b = writeStandardStore("same-b.h5");
+  EXPECT_EQ(fileBytes(a), fileBytes(b));
+}
+
+TEST(StoreWriter, ReportsProgressMonotonicallyUpToOne) {
+  const fs::path p = scratch("progress.h5");
+  const std::vector<GridSource> grids{source(demInfo("crater", 300, 200), crater)};
+  WriteOptions o;
+  o.patchRows = o.patchCols = 32;
+  std::vector<double> seen;
+  std::vector<std::string> labels;
+  o.progress = [&](double f, std::string_view what) {
+    seen.push_back(f);
+    labels.emplace_back(what);
+  };
+  writeStore(p, grids, o);
+  ASSERT_GE(seen.size(), 10u);
+  for (std::size_t i = 1; i < seen.size(); ++i) EXPECT_GE(seen[i], seen[i - 1]);
+  EXPECT_EQ(seen.back(), 1.0);
+  EXPECT_EQ(labels.back(), "done");
+  EXPECT_EQ(labels.front(), "grid 'crater' level 0");
+}
+
+TEST(StoreWriter, CancelStopsTheWriteRemovesTheTemporaryAndKeepsThePreviousStore) {
+  const fs::path p = scratch("cancel.h5");
+  const std::vector<GridSource> small{
+      source(demInfo("old", 8, 8), [](std::size_t, std::size_t) { return 1.0f; })};
+  writeStore(p, small);
+  const std::string before = fileBytes(p);
+
+  const std::vector<GridSource> grids{source(demInfo("crater", 400, 300), crater)};
+  std::atomic<bool> cancel{false};
+  WriteOptions o;
+  o.patchRows = o.patchCols = 32;
+  o.cancel = &cancel;
+  double lastSeen = 0.0;
+  o.progress = [&](double f, std::string_view) {
+    lastSeen = f;
+    if (f > 0.3) cancel = true;
+  };
+  try {
+    writeStore(p, grids, o);
+    FAIL() << "not cancelled";
+  } catch (const StoreError& e) {
+    EXPECT_EQ(std::string(e.what()), "store::writeStore(): " + p.string() + ": cancelled");
+  }
+  EXPECT_LT(lastSeen, 0.5);
+  EXPECT_EQ(fileBytes(p), before);
+  EXPECT_EQ(filesBeside(p), std::vector<fs::path>{p});
+
+  // Cancelled before it starts: nothing is created at all.
+  const fs::path q = scratch("cancel-early.h5");
+  EXPECT_THROW(writeStore(q, grids, o), StoreError);
+  EXPECT_TRUE(filesBeside(q).empty());
+}
+
+namespace {
+
+/// Forks a child that writes a 1536×1536 store over `p` and is SIGKILLed: once it reports
+/// `killAt` of the work done (it then waits inside the write to be killed), or after
+/// `delay` if killAt < 0 (wherever it happens to be, possibly already finished).
+/// Returns the child's pid.
+pid_t killWriterMidWay(const fs::path& p, double killAt, std::chrono::microseconds delay) {
+  std::array<int, 2> fds{};
+  if (::pipe(fds.data()) != 0) throw std::runtime_error("pipe failed");
+  std::cout.flush();  // the child must not inherit (and repeat) buffered output
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) throw std::runtime_error("fork failed");
+  if (pid == 0) {
+    ::close(fds[0]);
+    const std::vector<GridSource> big{
+        source(demInfo("big", 1536, 1536), [](std::size_t r, std::size_t c) {
+          return static_cast<float>(r) - 0.5f * static_cast<float>(c);
+        })};
+    WriteOptions o;
+    o.patchRows = o.patchCols = 128;
+    bool told = false;
+    o.progress = [&](double f, std::string_view) {
+      if (killAt >= 0.0 && !told && f >= killAt) {
+        told = true;
+        const char byte = 'k';
+        (void)!::write(fds[1], &byte, 1);
+        for (;;) ::pause();  // mid-write, temporary file open, until SIGKILL
+      }
+    };
+    try {
+      writeStore(p, big, o);
+    } catch (...) {
+      ::_exit(3);
+    }
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  if (killAt >= 0.0) {
+    char byte = 0;
+    const ssize_t n = ::read(fds[0], &byte, 1);
+    EXPECT_EQ(n, 1) << "the writer ended before reaching " << killAt;
+  } else {
+    std::this_thread::sleep_for(delay);
+  }
+  ::close(fds[0]);
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return pid;
+}
+
+}  // namespace
+
+TEST(StoreWriter, ASigkilledWriterNeverLeavesAPartialFileUnderTheFinalName) {
+  const fs::path p = scratch("crash.h5");
+  const std::vector<GridSource> previous{
+      source(demInfo("previous", 20, 30),
+             [](std::size_t r, std::size_t c) { return static_cast<float>(r * 100 + c); })};
+
+  // No previous file: killed mid-write, the final name must not exist.
+  for (const double at : {0.0, 0.5, 0.99}) {
+    const pid_t pid = killWriterMidWay(p, at, {});
+    EXPECT_FALSE(fs::exists(p)) << "killed at " << at;
+    const fs::path tmp = p.string() + ".tmp-" + std::to_string(pid);
+    EXPECT_TRUE(fs::exists(tmp)) << "the partial write lives under " << tmp;
+    fs::remove(tmp);
+  }
+
+  // A previous store: killed anywhere, the final name holds it, byte for byte.
+  writeStore(p, previous);
+  const std::string before = fileBytes(p);
+  for (const double at : {0.0, 0.02, 0.3, 0.6, 0.95, 0.999}) {
+    const pid_t pid = killWriterMidWay(p, at, {});
+    EXPECT_EQ(fileBytes(p), before) << "killed at " << at;
+    fs::remove(p.string() + ".tmp-" + std::to_string(pid));
+  }
+  const Store s = Store::open(p);
+  std::vector<float> v(1);
+  s.readWindow("previous", 0, 19, 29, 1, 1, v);
+  EXPECT_EQ(v[0], 1929.0f);
+
+  // Killed after arbitrary delays (possibly during the final sync and rename, possibly after
+  // it finished): the final name holds either the previous store or the complete new one.
+  int replaced = 0;
+  for (const int us : {0, 1000, 3000, 10000, 20000, 40000, 70000, 100000, 150000, 250000}) {
+    writeStore(p, previous);
+    const std::string previousBytes = fileBytes(p);
+    const pid_t pid = killWriterMidWay(p, -1.0, std::chrono::microseconds(us));
+    fs::remove(p.string() + ".tmp-" + std::to_string(pid));
+    if (fileBytes(p) == previousBytes) continue;
+    ++replaced;
+    const Store n = Store::open(p);  // must be complete
+    ASSERT_EQ(n.gridNames(), std::vector<std::string>{"big"}) << "after " << us << " us";
+    const GridInfo& info = n.grid("big");
+    std::vector<float> last(1);
+    n.readWindow("big", info.levels - 1, 0, 0, 1, 1, last);
+    EXPECT_FALSE(std::isnan(last[0]));
+    n.readWindow("big", 0, 1535, 1535, 1, 1, last);
+    EXPECT_EQ(last[0], 1535.0f - 0.5f * 1535.0f);
+  }
+  std::cout << "[          ] " << replaced << " of 10 timed kills came after the rename\n";
+  EXPECT_TRUE(filesBeside(p) == std::vector<fs::path>{p});
+}

@@ -1,0 +1,243 @@
+#!/usr/bin/env python3
+"""h5py as an outside oracle of the Regolith store format.
+
+Runs write_fixture_store (the path to the binary is the first argument, or the environment
+variable REGOLITH_WRITE_FIXTURE_STORE), then reads the store it wrote with h5py and numpy
+ONLY, following docs/store-format.md: attributes, level datasets, chunk shapes, nodata,
+scale/offset and pixel-centre geometry. Every value is checked against the analytic formulas
+of tests/store/write_fixture_store.cpp. Any mismatch raises and the script exits non-zero.
+
+    /usr/bin/python3 tests/store/test_store_h5py.py build/tests/store/write_fixture_store
+"""
+
+import os
+import subprocess
+import sys
+import tempfile
+
+import h5py
+import numpy as np
+
+CHECKS = 0
+
+
+def check(cond, what):
+    global CHECKS
+    CHECKS += 1
+    if not cond:
+        raise AssertionError(what)
+
+
+def check_close(got, want, what, rtol=2e-6, atol=2e-5):
+    """Equal within float32 rounding; NaN where (and only where) want is NaN."""
+    got = np.asarray(got, dtype=np.float64)
+    want = np.asarray(want, dtype=np.float64)
+    check(got.shape == want.shape, f"{what}: shape {got.shape}, expected {want.shape}")
+    gn, wn = np.isnan(got), np.isnan(want)
+    bad = np.argwhere(gn != wn)
+    check(bad.size == 0, f"{what}: missing samples differ, first at {bad[:1].tolist()}")
+    ok = ~wn
+    err = np.abs(got[ok] - want[ok])
+    tol = atol + rtol * np.abs(want[ok])
+    if err.size:
+        i = int(np.argmax(err - tol))
+        check(bool(np.all(err <= tol)),
+              f"{what}: max error {err.max()} (at flat index {i}), tolerance {tol[i]}")
+
+
+# ---- the analytic content (same formulas as write_fixture_store.cpp) -----------------------
+
+def victoria(x, y):
+    h = 20.0 + 0.25 * x - 0.5 * y + 15.0 * np.sin(x / 23.0) * np.cos(y / 31.0)
+    return np.where((x - 20.0) ** 2 + (y - 100.0) ** 2 < 30.0 ** 2, np.nan, h)
+
+
+def mars(lon, lat):
+    d = np.pi / 180.0
+    h = 1000.0 * np.cos(lat * d) * np.sin(2.0 * lon * d) + 10.0 * lat
+    missing = (lat > 85.0) | ((lon > 10.0) & (lon < 20.0) & (lat > -10.0) & (lat < 0.0))
+    return np.where(missing, np.nan, h)
+
+
+def tilt(x, y):
+    return 3.0 + 0.125 * x - 0.0625 * y
+
+
+# ---- reading a grid as docs/store-format.md says ------------------------------------------
+
+def level_shape(g, k):
+    """Level k has ceil(rows / 2^k) x ceil(cols / 2^k) samples."""
+    f = 2 ** k
+    return (-(-int(g.attrs["rows"]) // f), -(-int(g.attrs["cols"]) // f))
+
+
+def centres(g, k):
+    """Pixel-centre coordinates (x of each column, y of each row) of level k."""
+    x0, y0 = float(g.attrs["x0"]), float(g.attrs["y0"])
+    dx, dy = (float(v) for v in g.attrs["spacing"])
+    f = 2 ** k
+    shift = (f - 1) / 2.0
+    rows, cols = level_shape(g, k)
+    x = x0 + shift * dx + np.arange(cols) * f * dx
+    y = y0 - shift * dy - np.arange(rows) * f * dy
+    return x, y
+
+
+def heights(g, k, rows=slice(None), cols=slice(None)):
+    """Heights in metres of (part of) level k: offset + scale * stored, NaN where missing."""
+    stored = g[f"level{k}"][rows, cols].astype(np.float64)
+    missing = np.isnan(stored)
+    if "nodata" in g.attrs:
+        nodata = float(g.attrs["nodata"])
+        if not np.isnan(nodata):
+            missing |= stored == nodata
+    h = float(g.attrs["offset"]) + float(g.attrs["scale"]) * stored
+    h[missing] = np.nan
+    return h
+
+
+def mean2x2(fine):
+    """The documented pyramid rule: 2x2 mean ignoring missing samples and samples beyond
+    the edge; missing only if all of them are."""
+    r, c = fine.shape
+    pad = np.full((r + (r % 2), c + (c % 2)), np.nan)
+    pad[:r, :c] = fine
+    blocks = np.stack([pad[0::2, 0::2], pad[0::2, 1::2], pad[1::2, 0::2], pad[1::2, 1::2]])
+    n = np.sum(~np.isnan(blocks), axis=0)
+    s = np.nansum(blocks, axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n > 0, s / np.maximum(n, 1), np.nan)
+
+
+# ---- checks ----------------------------------------------------------------------------------
+
+def check_common(g, name, kind, rows, cols, x0, y0, spacing, patch, levels, nodata, body, a, b,
+                 lat_type):
+    def attr(key):
+        check(key in g.attrs, f"{name}: attribute {key} missing")
+        return g.attrs[key]
+
+    check(list(attr("format_version")) == [1, 0], f"{name}: format_version")
+    check(attr("kind") == kind, f"{name}: kind {attr('kind')!r}")
+    check(int(attr("rows")) == rows and int(attr("cols")) == cols, f"{name}: rows/cols")
+    check(float(attr("x0")) == x0 and float(attr("y0")) == y0, f"{name}: x0/y0")
+    check([float(v) for v in attr("spacing")] == spacing, f"{name}: spacing")
+    check(attr("units") == "m", f"{name}: units")
+    check(attr("sample_type") == "float32", f"{name}: sample_type")
+    check(float(attr("scale")) == 1.0 and float(attr("offset")) == 0.0, f"{name}: scale/offset")
+    nd = float(attr("nodata"))
+    check((np.isnan(nd) and nodata is None) or nd == nodata, f"{name}: nodata {nd}")
+    check(attr("body") == body, f"{name}: body")
+    check(float(attr("equatorial_radius")) == a and float(attr("polar_radius")) == b,
+          f"{name}: radii")
+    check(attr("latitude_type") == lat_type, f"{name}: latitude_type")
+    check(int(attr("levels")) == levels, f"{name}: levels {attr('levels')}")
+    check([int(v) for v in attr("patch_shape")] == patch, f"{name}: patch_shape")
+    for k in range(levels):
+        ds = g[f"level{k}"]
+        shape = level_shape(g, k)
+        check(ds.shape == shape, f"{name} level{k}: shape {ds.shape}, expected {shape}")
+        check(ds.dtype == np.dtype("<f4"), f"{name} level{k}: dtype {ds.dtype}")
+        chunks = (min(patch[0], shape[0]), min(patch[1], shape[1]))
+        check(ds.chunks == chunks, f"{name} level{k}: chunks {ds.chunks}, expected {chunks}")
+    check(f"level{levels}" not in g, f"{name}: a level beyond 'levels'")
+
+
+def check_pyramid(g, name, levels):
+    for k in range(1, levels):
+        check_close(heights(g, k), mean2x2(heights(g, k - 1)), f"{name} level{k} vs 2x2 mean")
+
+
+def check_victoria(g):
+    check_common(g, "victoria", "dem", 301, 203, -101.0, 300.0, [1.0, 2.0], [64, 48], 4,
+                 -32768.0, "Mars", 3396190.0, 3376200.0, "planetodetic")
+    check(g.attrs["placement"] == "local_tangent_plane", "victoria: placement")
+    for key, want in [("origin_lat_deg", -2.05), ("origin_lon_deg", -5.5),
+                      ("origin_height", -1400.0), ("heading_deg", 0.0)]:
+        check(float(g.attrs[key]) == want, f"victoria: {key}")
+    x, y = centres(g, 0)
+    X, Y = np.meshgrid(x, y)
+    check_close(heights(g, 0), victoria(X, Y), "victoria level0 vs analytic")
+    # Missing samples are stored as the nodata value, not NaN.
+    raw = g["level0"][...]
+    check(not np.isnan(raw).any(), "victoria: NaN stored although nodata is declared")
+    check(int(np.sum(raw == np.float32(-32768.0))) == int(np.sum(np.isnan(victoria(X, Y)))),
+          "victoria: nodata count")
+    # One sample by hand: row 5, col 7 is x = -101 + 7*1 = -94 m, y = 300 - 5*2 = 290 m
+    # (row-major, row 0 north); its transpose (row 7, col 5) is a different place.
+    check_close(g["level0"][5, 7], victoria(-94.0, 290.0), "victoria (5, 7)")
+    check_close(g["level0"][7, 5], victoria(-96.0, 286.0), "victoria (7, 5)")
+    # The south-east corner, and a sample inside the missing disc (x = 20, y = 100).
+    check_close(g["level0"][300, 202], victoria(101.0, -300.0), "victoria (300, 202)")
+    check(g["level0"][100, 121] == np.float32(-32768.0), "victoria (100, 121) is nodata")
+    # One whole chunk through a slice aligned to patch_shape.
+    check_close(heights(g, 0, slice(64, 128), slice(48, 96)),
+                victoria(X[64:128, 48:96], Y[64:128, 48:96]), "victoria chunk (1, 1)")
+    check_pyramid(g, "victoria", 4)
+    # Some coarse sample is missing (all four below are) and some is a partial mean.
+    l1 = heights(g, 1)
+    check(bool(np.isnan(l1).any()), "victoria level1 has missing samples")
+
+
+def check_mars(g):
+    check_common(g, "mars", "planet", 360, 720, -179.75, 89.75, [0.5, 0.5], [64, 48], 5, None,
+                 "Mars", 3396190.0, 3376200.0, "planetocentric")
+    check("placement" not in g.attrs, "mars: a planet grid has no placement")
+    lon, lat = centres(g, 0)
+    LON, LAT = np.meshgrid(lon, lat)
+    h = heights(g, 0)
+    check_close(h, mars(LON, LAT), "mars level0 vs analytic")
+    check(bool(np.isnan(g["level0"][...]).any()), "mars: missing samples stored as NaN")
+    # Row 0 is the north edge: latitude 89.75 (missing); row 359 is -89.75.
+    check(np.isnan(g["level0"][0, 0]), "mars (0, 0) north cap is missing")
+    check_close(g["level0"][359, 360], mars(0.25, -89.75), "mars (359, 360)")
+    # Column 400 is longitude -179.75 + 200 = 20.25 degrees east.
+    check_close(g["level0"][180, 400], mars(20.25, -0.25), "mars (180, 400)")
+    check_pyramid(g, "mars", 5)
+
+
+def check_tilt(g):
+    check_common(g, "tilt", "dem", 97, 131, 1000.0, -2000.0, [5.0, 5.0], [64, 48], 3, None,
+                 "Moon", 1737400.0, 1737400.0, "planetocentric")
+    check(g.attrs["placement"] == "polar_stereographic", "tilt: placement")
+    check(int(g.attrs["pole"]) == -1, "tilt: pole")
+    check(float(g.attrs["lat_true_scale_deg"]) == -90.0, "tilt: lat_true_scale_deg")
+    check("scale_factor" not in g.attrs, "tilt: only one of lat_true_scale_deg/scale_factor")
+    for key in ("lon_centre_deg", "false_easting", "false_northing"):
+        check(float(g.attrs[key]) == 0.0, f"tilt: {key}")
+    # A plane: each level's full 2x2 samples equal the plane at the documented level centres.
+    for k in range(3):
+        x, y = centres(g, k)
+        X, Y = np.meshgrid(x, y)
+        rows, cols = level_shape(g, k)
+        full_r = int(g.attrs["rows"]) // 2 ** k  # rows whose whole 2^k block exists
+        full_c = int(g.attrs["cols"]) // 2 ** k
+        check_close(heights(g, k)[:full_r, :full_c], tilt(X, Y)[:full_r, :full_c],
+                    f"tilt level{k} vs plane at level centres", rtol=1e-6, atol=1e-4)
+        check(full_r < rows or k == 0, f"tilt level{k}: has an odd partial row")
+    check_pyramid(g, "tilt", 3)
+
+
+def main():
+    binary = sys.argv[1] if len(sys.argv) > 1 else os.environ.get("REGOLITH_WRITE_FIXTURE_STORE")
+    if not binary:
+        sys.exit("usage: test_store_h5py.py <write_fixture_store> "
+                 "(or set REGOLITH_WRITE_FIXTURE_STORE)")
+    with tempfile.TemporaryDirectory(prefix="regolith-h5py-") as tmp:
+        path = os.path.join(tmp, "fixture.h5")
+        subprocess.run([binary, path], check=True)
+        check(os.path.exists(path), "the store exists")
+        check([n for n in os.listdir(tmp)] == ["fixture.h5"], "no temporary file left")
+        with h5py.File(path, "r") as f:
+            check(f.attrs["regolith_store"].startswith("Regolith terrain store"), "marker")
+            check(list(f.attrs["format_version"]) == [1, 0], "root format_version")
+            check(sorted(f["grids"].keys()) == ["mars", "tilt", "victoria"], "grid names")
+            check_victoria(f["grids/victoria"])
+            check_mars(f["grids/mars"])
+            check_tilt(f["grids/tilt"])
+    print(f"test_store_h5py: OK ({CHECKS} checks, h5py {h5py.__version__}, "
+          f"numpy {np.__version__})")
+
+
+if __name__ == "__main__":
+    main()

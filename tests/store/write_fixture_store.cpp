@@ -1,0 +1,127 @@
+// Writes a store with known analytic content for tests/store/test_store_h5py.py, which reads
+// it back with h5py and numpy only, following docs/store-format.md. The formulas here and in
+// the script must agree; they are evaluated at pixel centres (x0 + col·dx, y0 − row·dy).
+//
+//   write_fixture_store <output.h5>
+#include <regolith/store/Store.hpp>
+#include <regolith/topo/TopoGrid.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <limits>
+#include <vector>
+
+namespace {
+
+using namespace regolith;
+using namespace regolith::store;
+
+constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+
+/// "victoria": a DEM on a local tangent plane at Victoria crater, 301 × 203 samples at
+/// dx = 1 m, dy = 2 m (unequal, so a transpose cannot pass), nodata −32768 inside a disc.
+GridSource victoria() {
+  GridInfo g;
+  g.name = "victoria";
+  g.kind = GridKind::Dem;
+  g.rows = 301;
+  g.cols = 203;
+  g.x0 = -101.0;
+  g.y0 = 300.0;
+  g.spacingX = 1.0;
+  g.spacingY = 2.0;
+  g.nodata = -32768.0f;
+  g.bodyName = "Mars";
+  g.equatorialRadius = 3396190.0;
+  g.polarRadius = 3376200.0;
+  g.latitudeType = topo::LatitudeType::Planetodetic;
+  g.placement.kind = PlacementInfo::Kind::LocalTangentPlane;
+  g.placement.originLatDeg = -2.05;
+  g.placement.originLonDeg = -5.5;
+  g.placement.originHeight = -1400.0;
+  g.placement.headingDeg = 0.0;
+  auto samples =
+      topo::InMemorySamples::fromFunction(g.rows, g.cols, [g](std::size_t r, std::size_t c) {
+        const double x = g.x0 + static_cast<double>(c) * g.spacingX;
+        const double y = g.y0 - static_cast<double>(r) * g.spacingY;
+        if ((x - 20.0) * (x - 20.0) + (y - 100.0) * (y - 100.0) < 30.0 * 30.0) return kNan;
+        return static_cast<float>(20.0 + 0.25 * x - 0.5 * y +
+                                  15.0 * std::sin(x / 23.0) * std::cos(y / 31.0));
+      });
+  return {g, samples};
+}
+
+/// "mars": a global 0.5° planet grid (longitude −180…180, latitude 90…−90), no nodata value:
+/// missing samples (north of 85°N, and a box 10–20°E, 10°S–0°) are stored as NaN.
+GridSource mars() {
+  GridInfo g;
+  g.name = "mars";
+  g.kind = GridKind::Planet;
+  g.rows = 360;
+  g.cols = 720;
+  g.x0 = -179.75;
+  g.y0 = 89.75;
+  g.spacingX = g.spacingY = 0.5;
+  g.bodyName = "Mars";
+  g.equatorialRadius = 3396190.0;
+  g.polarRadius = 3376200.0;
+  g.latitudeType = topo::LatitudeType::Planetocentric;
+  auto samples =
+      topo::InMemorySamples::fromFunction(g.rows, g.cols, [g](std::size_t r, std::size_t c) {
+        const double lon = g.x0 + static_cast<double>(c) * g.spacingX;
+        const double lat = g.y0 - static_cast<double>(r) * g.spacingY;
+        if (lat > 85.0 || (lon > 10.0 && lon < 20.0 && lat > -10.0 && lat < 0.0)) return kNan;
+        const double d = std::acos(-1.0) / 180.0;
+        return static_cast<float>(1000.0 * std::cos(lat * d) * std::sin(2.0 * lon * d) +
+                                  10.0 * lat);
+      });
+  return {g, samples};
+}
+
+/// "tilt": a plane h = 3 + 0.125·x − 0.0625·y on a south polar stereographic DEM, 97 × 131
+/// samples at 5 m. The 2×2 mean of a plane is the plane at the mean position, so every
+/// coarse level shows where its sample centres are.
+GridSource tilt() {
+  GridInfo g;
+  g.name = "tilt";
+  g.kind = GridKind::Dem;
+  g.rows = 97;
+  g.cols = 131;
+  g.x0 = 1000.0;
+  g.y0 = -2000.0;
+  g.spacingX = g.spacingY = 5.0;
+  g.bodyName = "Moon";
+  g.equatorialRadius = g.polarRadius = 1737400.0;
+  g.placement.kind = PlacementInfo::Kind::PolarStereographic;
+  g.placement.pole = -1;
+  g.placement.latTrueScaleDeg = -90.0;
+  g.placement.lonCentreDeg = 0.0;
+  auto samples =
+      topo::InMemorySamples::fromFunction(g.rows, g.cols, [g](std::size_t r, std::size_t c) {
+        const double x = g.x0 + static_cast<double>(c) * g.spacingX;
+        const double y = g.y0 - static_cast<double>(r) * g.spacingY;
+        return static_cast<float>(3.0 + 0.125 * x - 0.0625 * y);
+      });
+  return {g, samples};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: write_fixture_store <output.h5>\n");
+    return 2;
+  }
+  try {
+    const std::vector<GridSource> grids{victoria(), mars(), tilt()};
+    WriteOptions o;
+    o.patchRows = 64;
+    o.patchCols = 48;
+    writeStore(argv[1], grids, o);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "write_fixture_store: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
