@@ -38,15 +38,16 @@ using namespace regolith::store;
 using namespace regolith::topo;
 namespace fs = std::filesystem;
 
-constexpr std::size_t kSize = 4096;                  // samples per side, 1 m spacing
+constexpr std::size_t kSize = 4096;  // samples per side, 1 m spacing
 constexpr std::size_t kPatch = 256;
 constexpr std::size_t kBudget = std::size_t{8} << 20;  // 8 MiB: the grid is 8× larger
-constexpr double kOrigin = 0.0;                      // sample (0,0) at x = 0, y = 0
+constexpr double kOrigin = 0.0;                        // sample (0,0) at x = 0, y = 0
 
 float terrain(std::size_t r, std::size_t c) {
   const double x = static_cast<double>(c), y = -static_cast<double>(r);
   return static_cast<float>(40.0 * std::sin(x / 310.0) * std::cos(y / 270.0) +
-                            6.0 * std::sin((x + 2.0 * y) / 53.0) + 0.8 * std::sin((3.0 * x - y) / 7.1));
+                            6.0 * std::sin((x + 2.0 * y) / 53.0) +
+                            0.8 * std::sin((3.0 * x - y) / 7.1));
 }
 
 struct Data {
@@ -86,8 +87,8 @@ const Data& data() {
       const double gt[6] = {-0.5, 1.0, 0.0, 0.5, 0.0, -1.0};
       GDALSetGeoTransform(ds, const_cast<double*>(gt));
       if (GDALRasterIO(GDALGetRasterBand(ds, 1), GF_Write, 0, 0, kSize, kSize,
-                       const_cast<float*>(x.samples->data().data()), kSize, kSize, GDT_Float32,
-                       0, 0) != CE_None) {
+                       const_cast<float*>(x.samples->data().data()), kSize, kSize, GDT_Float32, 0,
+                       0) != CE_None) {
         std::abort();
       }
       GDALClose(ds);
@@ -131,7 +132,8 @@ std::size_t uniquePatches(const Wheels& w) {
     // bilinear cells: the 2×2 stencil's samples
     const auto c = static_cast<std::uint64_t>(w.xs[i]), r = static_cast<std::uint64_t>(-w.ys[i]);
     for (std::uint64_t dr : {0u, 1u}) {
-      for (std::uint64_t dc : {0u, 1u}) seen.insert(((r + dr) / kPatch) << 32U | ((c + dc) / kPatch));
+      for (std::uint64_t dc : {0u, 1u})
+        seen.insert(((r + dr) / kPatch) << 32U | ((c + dc) / kPatch));
     }
   }
   return seen.size();
@@ -316,11 +318,14 @@ void coarse(benchmark::State& state, bool pyramid) {
 
 int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("store/rover/paged_heights", roverPaged, false)
-      ->Unit(benchmark::kMillisecond)->Iterations(3);
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(3);
   benchmark::RegisterBenchmark("store/rover/paged_surfaces", roverPaged, true)
-      ->Unit(benchmark::kMillisecond)->Iterations(3);
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(3);
   benchmark::RegisterBenchmark("store/rover/gdal_rasterio", roverGdal)
-      ->Unit(benchmark::kMillisecond)->Iterations(1);
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(1);
   for (bool rover : {true, false}) {
     const char* where = rover ? "rover" : "random";
     benchmark::RegisterBenchmark((std::string("store/resident/paged/") + where).c_str(),
@@ -332,7 +337,8 @@ int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("store/patch/raw_hyperslab", rawHyperslab)
       ->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark("store/coarse/pyramid", coarse, true)->Unit(benchmark::kMillisecond);
-  benchmark::RegisterBenchmark("store/coarse/strided", coarse, false)->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("store/coarse/strided", coarse, false)
+      ->Unit(benchmark::kMillisecond);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

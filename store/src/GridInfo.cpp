@@ -52,9 +52,9 @@ topo::Placement placementOf(const GridInfo& info) {
                           body, pole, *p.latTrueScaleDeg, p.lonCentreDeg, p.falseEasting,
                           p.falseNorthing)};
       }
-      return {body, topo::PolarStereographic::withScaleFactor(body, pole, *p.scaleFactor,
-                                                              p.lonCentreDeg, p.falseEasting,
-                                                              p.falseNorthing)};
+      return {body,
+              topo::PolarStereographic::withScaleFactor(body, pole, *p.scaleFactor, p.lonCentreDeg,
+                                                        p.falseEasting, p.falseNorthing)};
     }
     case PlacementInfo::Kind::Equirectangular:
       return {body,

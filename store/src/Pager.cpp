@@ -172,8 +172,8 @@ std::shared_ptr<const Patch> Pager::patch(const PatchKey& key) const {
       std::size_t{key.row} * info.patchRows >= info.levelRows(key.level) ||
       std::size_t{key.col} * info.patchCols >= info.levelCols(key.level)) {
     throw InvalidArgument("store::Pager::patch(): patch (level " + std::to_string(key.level) +
-                          ", row " + std::to_string(key.row) + ", col " +
-                          std::to_string(key.col) + ") is outside grid '" + info.name + "'");
+                          ", row " + std::to_string(key.row) + ", col " + std::to_string(key.col) +
+                          ") is outside grid '" + info.name + "'");
   }
   return cache_->get(key, [&](const PatchKey& k) { return loadPatch(*store_, info, k); });
 }

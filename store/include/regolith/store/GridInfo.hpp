@@ -50,8 +50,8 @@ struct GridInfo {
   std::string bodyName = "Mars";
   double equatorialRadius = 3396190.0, polarRadius = 3396190.0;
   topo::LatitudeType latitudeType = topo::LatitudeType::Planetocentric;
-  PlacementInfo placement;  // Dem only
-  std::size_t levels = 1;   // pyramid levels stored, level 0 included
+  PlacementInfo placement;                       // Dem only
+  std::size_t levels = 1;                        // pyramid levels stored, level 0 included
   std::size_t patchRows = 256, patchCols = 256;  // HDF5 chunk = pager patch
 
   [[nodiscard]] std::size_t levelRows(std::size_t level) const noexcept {

@@ -53,10 +53,10 @@ enum class CachePolicy : std::uint8_t {
 struct CacheStats {
   std::uint64_t hits = 0;
   std::uint64_t misses = 0;
-  std::uint64_t loads = 0;       // loader calls that produced a patch
+  std::uint64_t loads = 0;  // loader calls that produced a patch
   std::uint64_t evictions = 0;
-  std::uint64_t bytesLoaded = 0; // sum of Patch::bytes() of loaded patches
-  std::size_t residentBytes = 0; // now held by the cache
+  std::uint64_t bytesLoaded = 0;  // sum of Patch::bytes() of loaded patches
+  std::size_t residentBytes = 0;  // now held by the cache
   std::size_t residentPatches = 0;
   std::size_t capacityBytes = 0;
 };
