@@ -75,7 +75,9 @@ class PatchCache {
  public:
   using Loader = std::function<std::shared_ptr<const Patch>(const PatchKey&)>;
 
-  explicit PatchCache(std::size_t capacityBytes, CachePolicy policy = CachePolicy::HitCount,
+  /// The default policy is LRU, chosen by measurement on rover traces
+  /// (docs/cache-policies.md); the paper's HitCount is there to select.
+  explicit PatchCache(std::size_t capacityBytes, CachePolicy policy = CachePolicy::Lru,
                       std::uint64_t decayPeriod = 4096);
   ~PatchCache();
   PatchCache(const PatchCache&) = delete;
