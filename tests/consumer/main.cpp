@@ -3,6 +3,8 @@
 // reproduces a plane exactly, so the query must return the analytic height.
 // Exit status 0 only if every check holds.
 
+#include <regolith/store/Pager.hpp>
+#include <regolith/store/Store.hpp>
 #include <regolith/topo/Body.hpp>
 #include <regolith/topo/Error.hpp>
 #include <regolith/topo/Placement.hpp>
@@ -16,8 +18,11 @@
 #include <cstddef>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
+#include <vector>
 
 namespace topo = regolith::topo;
+namespace store = regolith::store;
 
 namespace {
 
@@ -65,6 +70,26 @@ int main() {
       threw = true;
     }
     ok &= check(threw, "NaN coordinate throws regolith::InvalidArgument");
+
+    // regolith::store through the package: write the DEM as a store, page it back.
+    store::GridInfo info;
+    info.name = "plane";
+    info.rows = info.cols = 5;
+    info.x0 = -20.0;
+    info.y0 = 20.0;
+    info.spacingX = info.spacingY = 10.0;
+    info.equatorialRadius = info.polarRadius = 3396190.0;
+    info.placement.originLatDeg = -4.5;
+    info.placement.originLonDeg = 137.4;
+    const std::filesystem::path path =
+        std::filesystem::temp_directory_path() / "regolith-consumer-store.h5";
+    const std::vector<store::GridSource> grids{{info, samples}};
+    store::writeStore(path, grids);
+    auto opened = std::make_shared<const store::Store>(store::Store::open(path));
+    const store::Pager pager(opened, std::make_shared<store::PatchCache>(1 << 20));
+    const topo::HeightSample paged = pager.dem("plane").height(x, y);
+    ok &= check(paged.valid() && paged.height == h.height, "paged store gives the same height");
+    std::filesystem::remove(path);
     return ok ? 0 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "consumer: unexpected exception: %s\n", e.what());
