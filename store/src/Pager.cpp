@@ -43,7 +43,8 @@ class PagedSource final : public topo::SampleSource {
         gridId_(gridId),
         level_(static_cast<std::uint32_t>(level)),
         store_(std::move(store)),
-        cache_(std::move(cache)) {}
+        cache_(std::move(cache)),
+        loader_([this](const PatchKey& k) { return loadPatch(*store_, info_, k); }) {}
 
   std::size_t rows() const noexcept override { return rows_; }
   std::size_t cols() const noexcept override { return cols_; }
@@ -88,7 +89,7 @@ class PagedSource final : public topo::SampleSource {
   std::shared_ptr<const Patch> patchAt(std::size_t row, std::size_t col) const {
     const PatchKey key{gridId_, level_, static_cast<std::uint32_t>(row / pr_),
                        static_cast<std::uint32_t>(col / pc_)};
-    return cache_->get(key, [this](const PatchKey& k) { return loadPatch(*store_, info_, k); });
+    return cache_->get(key, loader_);
   }
 
   const GridInfo& info_;  // owned by store_
@@ -96,6 +97,7 @@ class PagedSource final : public topo::SampleSource {
   std::uint32_t gridId_, level_;
   std::shared_ptr<const Store> store_;
   std::shared_ptr<PatchCache> cache_;
+  PatchCache::Loader loader_;  // made once: a std::function per lookup costs more than a hit
 };
 
 }  // namespace
