@@ -198,7 +198,7 @@ class Progress {
   std::string lastWhat_;
 };
 
-/// A group (the same input gives the same bytes: no modification times).
+/// A group (no modification times: rewriting the same input changes no content).
 hdf5::Group createGroup(hid_t parent, const std::string& name, const Context& ctx) {
   const hdf5::Lock lock;
   const std::string what = "cannot create group '" + name + "'";
@@ -233,7 +233,7 @@ class LevelWriter {
     const hdf5::Dataspace space(hdf5::check(H5Screate_simple(2, shape.data(), nullptr), ctx, what));
     const hdf5::PropertyList dcpl(hdf5::check(H5Pcreate(H5P_DATASET_CREATE), ctx, what));
     hdf5::check(H5Pset_chunk(dcpl.get(), 2, chunk.data()), ctx, what);
-    // No modification times in object headers: the same input gives the same bytes.
+    // No modification times in object headers: rewriting the same input changes no content.
     hdf5::check(H5Pset_obj_track_times(dcpl.get(), 0), ctx, what);
     const float fill = Missing{info.nodata}.stored();
     hdf5::check(H5Pset_fill_value(dcpl.get(), H5T_NATIVE_FLOAT, &fill), ctx, what);

