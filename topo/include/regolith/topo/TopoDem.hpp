@@ -42,15 +42,7 @@ struct ResidentBilinear {
   /// Sets h and returns true, or returns false when the point is not inside the sample
   /// centres (NaN coordinates included) or a sample is missing; the generic path decides
   /// those. A NaN sample makes h NaN (0·NaN is NaN), so one test covers them all.
-  [[nodiscard]] bool eval(double u, double v, double& h) const noexcept {
-    return data != nullptr && evalResident(u, v, h);
-  }
-  /// True if (u, v) lies on or inside the outermost sample centres, short of the last row
-  /// and column (false for NaN).
-  [[nodiscard]] bool interior(double u, double v) const noexcept {
-    return u >= 0.0 && v >= 0.0 && u < uMax && v < vMax;
-  }
-  /// eval() for a source known to be resident (data != nullptr).
+  /// Requires data != nullptr.
   [[nodiscard]] bool evalResident(double u, double v, double& h) const noexcept {
     // Strict upper bounds: the cell (c, r) = (⌊u⌋, ⌊v⌋) then needs no clamping; the last
     // row and column of centres go through the generic path.
@@ -65,6 +57,7 @@ struct ResidentBilinear {
            (!hasNodata || ((a != nodata) & (b != nodata) & (cc != nodata) & (d != nodata)));
   }
 };
+
 /// The block of a paged source that the calling thread read last (see SampleSource::block):
 /// runs of queries inside one block cost no call into the source. Keyed by the source's
 /// unique id, never its address. Trivially destructible on purpose, so that reading it
