@@ -9,6 +9,8 @@
 #include <regolith/topo/Error.hpp>
 #include <regolith/topo/Projection.hpp>
 
+#include "support/ProjOracle.hpp"
+
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
@@ -39,55 +41,9 @@ constexpr double kRadPerDeg = kPi / 180.0;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// ---- PROJ wrapper ----------------------------------------------------------------------
-
-/// One PROJ context plus one operation created from a PROJ string. Non-copyable.
-class Proj {
- public:
-  explicit Proj(const std::string& definition)
-      : ctx_(proj_context_create()), pj_(proj_create(ctx_, definition.c_str())) {
-    if (pj_ == nullptr) {
-      error_ = "PROJ could not create '" + definition +
-               "': " + proj_context_errno_string(ctx_, proj_context_errno(ctx_));
-    }
-  }
-  Proj(const Proj&) = delete;
-  Proj& operator=(const Proj&) = delete;
-  ~Proj() {
-    if (pj_ != nullptr) proj_destroy(pj_);
-    proj_context_destroy(ctx_);
-  }
-
-  [[nodiscard]] bool ok() const { return pj_ != nullptr; }
-  [[nodiscard]] const std::string& error() const { return error_; }
-  [[nodiscard]] PJ* get() const { return pj_; }
-
-  /// Transforms (a, b, c) in the given direction; returns the three output components.
-  [[nodiscard]] glm::dvec3 trans(PJ_DIRECTION dir, double a, double b, double c = 0.0) const {
-    proj_errno_reset(pj_);
-    const PJ_COORD out = proj_trans(pj_, dir, proj_coord(a, b, c, 0.0));
-    return {out.v[0], out.v[1], out.v[2]};
-  }
-  /// proj_errno after the last trans().
-  [[nodiscard]] int lastError() const { return proj_errno(pj_); }
-
- private:
-  PJ_CONTEXT* ctx_;
-  PJ* pj_;
-  std::string error_;
-};
-
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
-
-std::string projEllipsoid(const Body& body) {
-  return body.isSphere() ? " +R=" + num(body.equatorialRadius())
-                         : " +a=" + num(body.equatorialRadius()) + " +b=" + num(body.polarRadius());
-}
+using regolith::test::num;
+using regolith::test::Proj;
+using regolith::test::projEllipsoid;
 
 /// A projection taking (lon deg, lat deg) in and giving metres out.
 std::string degreesIn(const std::string& projection) {

@@ -127,6 +127,16 @@ void requireLatLon(const LatLon& ll, const char* op) {
                           " deg, expected within [-90, 90]");
   }
 }
+// Checks every point of a batch before anything is written; the message names the index.
+void requireLatLons(std::span<const double> lats, std::span<const double> lons, const char* op) {
+  for (std::size_t i = 0; i < lats.size(); ++i) {
+    try {
+      requireLatLon({lats[i], lons[i]}, op);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(std::string(e.what()) + " (point " + std::to_string(i) + ")");
+    }
+  }
+}
 }  // namespace
 
 HeightSample TopoPlanet::height(const LatLon& ll, Interpolation interp) const {
@@ -228,13 +238,7 @@ void TopoPlanet::heights(std::span<const double> latsDeg, std::span<const double
                           std::to_string(lonsDeg.size()) + ", " + std::to_string(out.size()) +
                           ", " + std::to_string(status.size()) + ", expected equal lengths");
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    try {
-      requireLatLon({latsDeg[i], lonsDeg[i]}, op);
-    } catch (const InvalidArgument& e) {
-      throw InvalidArgument(std::string(e.what()) + " (point " + std::to_string(i) + ")");
-    }
-  }
+  requireLatLons(latsDeg, lonsDeg, op);
   for (std::size_t i = 0; i < n; ++i) {
     const SurfaceSample s = surfaceImpl({latsDeg[i], lonsDeg[i]}, interp, NormalFrame::Grid, false);
     out[i] = s.height;
@@ -253,13 +257,7 @@ void TopoPlanet::surfaces(std::span<const double> latsDeg, std::span<const doubl
     throw InvalidArgument(std::string(op) + ": arrays differ in length, expected " +
                           std::to_string(n) + " elements each");
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    try {
-      requireLatLon({latsDeg[i], lonsDeg[i]}, op);
-    } catch (const InvalidArgument& e) {
-      throw InvalidArgument(std::string(e.what()) + " (point " + std::to_string(i) + ")");
-    }
-  }
+  requireLatLons(latsDeg, lonsDeg, op);
   for (std::size_t i = 0; i < n; ++i) {
     const SurfaceSample s = surfaceImpl({latsDeg[i], lonsDeg[i]}, interp, frame, true);
     outHeights[i] = s.height;
