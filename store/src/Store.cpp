@@ -21,14 +21,36 @@ using hdf5::Context;
 using hdf5::fail;
 using hdf5::failHdf5;
 
+/// One level-0 tile of a tiled grid: a dataset of this file or a grid of another store.
+struct Tile {
+  std::size_t index = 0, row0 = 0, col0 = 0, rows = 0, cols = 0;
+  hdf5::Dataset dataset;                  // internal tile
+  std::shared_ptr<const Store> external;  // external tile
+  std::string externalGrid;
+};
+
 /// One validated grid of an open store.
 struct GridEntry {
   GridInfo info;
   SampleType type = SampleType::Float32;
   /// The stored value that marks missing samples (besides NaN), if any.
   std::optional<double> nodata;
-  std::vector<hdf5::Dataset> levels;
+  std::vector<hdf5::Dataset> levels;  // levels[0] is empty for a tiled grid
+  std::vector<Tile> tiles;            // empty for a plain grid
 };
+
+/// External stores opened while one store opens, by resolved path (several tiles may share a
+/// file), and the nesting depth of Store::open on this thread (a guard against cycles).
+struct OpenState {
+  std::map<std::string, std::shared_ptr<const Store>> externals;
+};
+thread_local int tlOpenDepth = 0;
+constexpr int kMaxOpenDepth = 8;
+
+std::string tileRange(const Tile& t) {
+  return "rows " + std::to_string(t.row0) + "-" + std::to_string(t.row0 + t.rows - 1) + ", cols " +
+         std::to_string(t.col0) + "-" + std::to_string(t.col0 + t.cols - 1);
+}
 
 std::string dims(hsize_t r, hsize_t c) { return std::to_string(r) + "x" + std::to_string(c); }
 
@@ -205,24 +227,22 @@ void readAttributes(hid_t g, GridEntry& entry, const Context& ctx, const std::st
   info.patchCols = static_cast<std::size_t>(patch[1]);
 }
 
-/// Opens and checks one level dataset: rank, shape, type, chunking and filters.
-hdf5::Dataset openLevel(hid_t g, const GridEntry& entry, std::size_t level, const Context& ctx,
-                        const std::string& owner) {
+/// Opens and checks one sample dataset: rank, shape, type, chunking and filters. `shapeNote`
+/// says where the expected shape comes from, `missing` what to say if it does not exist.
+hdf5::Dataset openDataset(hid_t g, const GridEntry& entry, const std::string& name,
+                          const std::string& what, hsize_t rows, hsize_t cols,
+                          const std::array<hsize_t, 2>& expected, const std::string& shapeNote,
+                          const std::string& missing, const char* clipTo, const Context& ctx) {
   const hdf5::Lock lock;
   const GridInfo& info = entry.info;
-  const std::string name = format::levelName(level);
-  const std::string what = owner + " dataset '" + name + "'";
   const htri_t exists = H5Lexists(g, name.c_str(), H5P_DEFAULT);
   if (exists < 0) failHdf5(ctx, "cannot look up " + what);
-  if (exists == 0) {
-    fail(ctx, owner + " has no dataset '" + name + "' (attribute levels is " +
-                  std::to_string(info.levels) + ")");
-  }
+  if (exists == 0) fail(ctx, missing);
   {
     const hdf5::Object obj(
         hdf5::check(H5Oopen(g, name.c_str(), H5P_DEFAULT), ctx, "cannot open " + what));
     if (H5Iget_type(obj.get()) != H5I_DATASET) {
-      fail(ctx, owner + " member '" + name + "' is not a dataset");
+      fail(ctx, what + " is not a dataset");
     }
   }
   // The pager caches whole patches itself; HDF5's own chunk cache would hold the same bytes
@@ -242,10 +262,9 @@ hdf5::Dataset openLevel(hid_t g, const GridEntry& entry, std::size_t level, cons
   std::array<hsize_t, 2> shape{};
   hdf5::check(H5Sget_simple_extent_dims(space.get(), shape.data(), nullptr), ctx,
               "cannot read the shape of " + what);
-  const hsize_t rows = info.levelRows(level), cols = info.levelCols(level);
   if (shape[0] != rows || shape[1] != cols) {
     fail(ctx, what + " has shape " + dims(shape[0], shape[1]) + ", expected " + dims(rows, cols) +
-                  " (attributes rows, cols" + (level > 0 ? ", halved per level)" : ")"));
+                  " (" + shapeNote + ")");
   }
 
   const hdf5::Datatype type(
@@ -257,9 +276,9 @@ hdf5::Dataset openLevel(hid_t g, const GridEntry& entry, std::size_t level, cons
 
   const hdf5::PropertyList dcpl(
       hdf5::check(H5Dget_create_plist(ds.get()), ctx, "cannot read the layout of " + what));
-  const std::array<hsize_t, 2> expected = format::chunkShape(info, level);
   const std::string expectedText = dims(expected[0], expected[1]) + " (attribute patch_shape " +
-                                   dims(info.patchRows, info.patchCols) + ", clipped to the level)";
+                                   dims(info.patchRows, info.patchCols) + ", clipped to the " +
+                                   clipTo + ")";
   if (H5Pget_layout(dcpl.get()) != H5D_CHUNKED) {
     fail(ctx, what + " is not chunked, expected chunks of " + expectedText);
   }
@@ -287,7 +306,118 @@ hdf5::Dataset openLevel(hid_t g, const GridEntry& entry, std::size_t level, cons
   return ds;
 }
 
-GridEntry openGrid(hid_t grids, const std::string& name, const Context& ctx) {
+/// Opens and checks one level dataset of a grid.
+hdf5::Dataset openLevel(hid_t g, const GridEntry& entry, std::size_t level, const Context& ctx,
+                        const std::string& owner) {
+  const GridInfo& info = entry.info;
+  const std::string name = format::levelName(level);
+  return openDataset(
+      g, entry, name, owner + " dataset '" + name + "'", info.levelRows(level),
+      info.levelCols(level), format::chunkShape(info, level),
+      level > 0 ? "attributes rows, cols, halved per level" : "attributes rows, cols",
+      owner + " has no dataset '" + name + "' (attribute levels is " + std::to_string(info.levels) +
+          ")",
+      "level", ctx);
+}
+
+/// Reads and checks tile i of a tiled grid: its bounds, and its dataset or its external grid.
+Tile openTile(hid_t tiles, std::size_t i, const GridEntry& entry, const Context& ctx,
+              const std::string& owner, const std::filesystem::path& storePath, OpenState& state) {
+  const GridInfo& info = entry.info;
+  const std::string tname = std::to_string(i);
+  const std::string towner = owner + " tile " + tname;
+  const htri_t has = H5Lexists(tiles, tname.c_str(), H5P_DEFAULT);
+  if (has < 0) failHdf5(ctx, "cannot look up " + towner);
+  if (has == 0) fail(ctx, owner + " has no group 'tiles/" + tname + "' (attribute tile_count)");
+  const hdf5::Group tg(
+      hdf5::check(H5Gopen2(tiles, tname.c_str(), H5P_DEFAULT), ctx, "cannot open " + towner));
+  Tile t;
+  t.index = i;
+  t.row0 = hdf5::readCount(tg.get(), format::kTileRow0, ctx, towner);
+  t.col0 = hdf5::readCount(tg.get(), format::kTileCol0, ctx, towner);
+  t.rows = hdf5::readCount(tg.get(), format::kTileRows, ctx, towner);
+  t.cols = hdf5::readCount(tg.get(), format::kTileCols, ctx, towner);
+  if (t.rows == 0 || t.cols == 0) {
+    fail(ctx, towner + " has rows x cols " + dims(t.rows, t.cols) + ", expected both > 0");
+  }
+  if (t.rows > info.rows || t.row0 > info.rows - t.rows || t.cols > info.cols ||
+      t.col0 > info.cols - t.cols) {
+    fail(ctx, towner + " (row0 " + std::to_string(t.row0) + ", col0 " + std::to_string(t.col0) +
+                  ", " + dims(t.rows, t.cols) + " samples) reaches outside the mosaic's " +
+                  dims(info.rows, info.cols) + " samples (attributes rows, cols)");
+  }
+  if (!hdf5::hasAttribute(tg.get(), format::kExternalFile, ctx)) {
+    t.dataset = openDataset(
+        tg.get(), entry, "level0", towner + " dataset 'level0'", t.rows, t.cols,
+        format::tileChunkShape(info, t.rows, t.cols), "the tile's attributes rows, cols",
+        towner + " has neither a dataset 'level0' nor an attribute 'external_file'", "tile", ctx);
+    return t;
+  }
+  const std::string file = hdf5::readString(tg.get(), format::kExternalFile, ctx, towner);
+  t.externalGrid = hdf5::readString(tg.get(), format::kExternalGrid, ctx, towner);
+  std::filesystem::path resolved(file);
+  if (resolved.is_relative()) resolved = storePath.parent_path() / resolved;
+  const std::string key = resolved.lexically_normal().string();
+  auto it = state.externals.find(key);
+  if (it == state.externals.end()) {
+    try {
+      it = state.externals.emplace(key, std::make_shared<const Store>(Store::open(resolved))).first;
+    } catch (const StoreError& e) {
+      fail(ctx, towner + " has external_file '" + file + "' that cannot be opened: " + e.what());
+    }
+  }
+  t.external = it->second;
+  const std::string ext = "external_grid '" + t.externalGrid + "'";
+  if (!t.external->hasGrid(t.externalGrid)) {
+    fail(ctx, towner + " has " + ext + ", which " + key + " does not have");
+  }
+  if (t.external->tiled(t.externalGrid)) {
+    fail(ctx,
+         towner + " has " + ext + " of " + key + ", which is itself tiled; expected a plain grid");
+  }
+  const GridInfo& x = t.external->grid(t.externalGrid);
+  if (x.rows != t.rows || x.cols != t.cols) {
+    fail(ctx, towner + " is " + dims(t.rows, t.cols) + " samples (attributes rows, cols) but its " +
+                  ext + " of " + key + " has " + dims(x.rows, x.cols));
+  }
+  return t;
+}
+
+std::string readTileWhat(const std::string& owner, const Tile& t) {
+  return "cannot read " + owner + " tile " + std::to_string(t.index) + " dataset 'level0'";
+}
+
+[[noreturn]] void failOverlap(const Context& ctx, const std::string& owner, const Tile& a,
+                              const Tile& b) {
+  fail(ctx, owner + " tiles " + std::to_string(a.index) + " (" + tileRange(a) + ") and " +
+                std::to_string(b.index) + " (" + tileRange(b) + ") overlap");
+}
+
+/// Reads and checks the tiles of a tiled grid (tile_count present), and that no two overlap.
+void openTiles(hid_t g, GridEntry& entry, const Context& ctx, const std::string& owner,
+               const std::filesystem::path& storePath, OpenState& state) {
+  const std::size_t count = hdf5::readCount(g, format::kTileCount, ctx, owner);
+  if (count == 0) fail(ctx, owner + " has tile_count 0, expected >= 1");
+  const htri_t exists = H5Lexists(g, format::kTiles, H5P_DEFAULT);
+  if (exists < 0) failHdf5(ctx, "cannot look up " + owner + " group 'tiles'");
+  if (exists == 0) {
+    fail(ctx, owner + " has tile_count " + std::to_string(count) + " but no group 'tiles'");
+  }
+  const hdf5::Group tiles(hdf5::check(H5Gopen2(g, format::kTiles, H5P_DEFAULT), ctx,
+                                      "cannot open " + owner + " group 'tiles'"));
+  for (std::size_t i = 0; i < count; ++i) {
+    Tile t = openTile(tiles.get(), i, entry, ctx, owner, storePath, state);
+    for (const Tile& o : entry.tiles) {
+      const bool rowsMeet = t.row0 < o.row0 + o.rows && o.row0 < t.row0 + t.rows;
+      const bool colsMeet = t.col0 < o.col0 + o.cols && o.col0 < t.col0 + t.cols;
+      if (rowsMeet && colsMeet) failOverlap(ctx, owner, o, t);
+    }
+    entry.tiles.push_back(std::move(t));
+  }
+}
+
+GridEntry openGrid(hid_t grids, const std::string& name, const Context& ctx,
+                   const std::filesystem::path& storePath, OpenState& state) {
   const hdf5::Lock lock;
   const std::string owner = "grid '" + name + "'";
   const hdf5::Object obj(
@@ -298,8 +428,11 @@ GridEntry openGrid(hid_t grids, const std::string& name, const Context& ctx) {
   GridEntry entry;
   entry.info.name = name;
   readAttributes(obj.get(), entry, ctx, owner);
+  const bool tiled = hdf5::hasAttribute(obj.get(), format::kTileCount, ctx);
+  if (tiled) openTiles(obj.get(), entry, ctx, owner, storePath, state);
   for (std::size_t k = 0; k < entry.info.levels; ++k) {
-    entry.levels.push_back(openLevel(obj.get(), entry, k, ctx, owner));
+    entry.levels.push_back(tiled && k == 0 ? hdf5::Dataset()
+                                           : openLevel(obj.get(), entry, k, ctx, owner));
   }
   return entry;
 }
@@ -337,127 +470,18 @@ void toHeights(const T* in, std::span<float> out, double scale, double offset,
   }
 }
 
-}  // namespace
-
-struct Store::Impl {
-  std::filesystem::path path;
-  hdf5::File file;  // declared before the grids: closed after their datasets
-  std::map<std::string, GridEntry, std::less<>> grids;
-  mutable std::atomic<std::uint64_t> reads{0};
-  mutable std::atomic<std::uint64_t> bytesRead{0};
-
-  [[nodiscard]] const GridEntry& entry(std::string_view name, const Context& ctx) const {
-    const auto it = grids.find(name);
-    if (it == grids.end()) {
-      std::string known;
-      for (const auto& [n, e] : grids) known += (known.empty() ? "" : ", ") + n;
-      fail(ctx, "no grid '" + std::string(name) +
-                    "' (grids: " + (known.empty() ? std::string("none") : known) + ")");
-    }
-    return it->second;
-  }
-};
-
-Store::Store(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-Store::Store(Store&&) noexcept = default;
-Store& Store::operator=(Store&&) noexcept = default;
-Store::~Store() = default;
-
-Store Store::open(const std::filesystem::path& path) {
-  const Context ctx("store::open()", path);
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (!std::filesystem::exists(status)) fail(ctx, "no such file");
-  if (std::filesystem::is_directory(status)) fail(ctx, "is a directory, expected a file");
-
-  auto impl = std::make_unique<Impl>();
-  impl->path = path;
-  const hdf5::Lock lock;
-  const htri_t isHdf5 = H5Fis_hdf5(path.c_str());
-  if (isHdf5 < 0) failHdf5(ctx, "cannot be read");
-  if (isHdf5 == 0) fail(ctx, "is not an HDF5 file (no HDF5 signature)");
-  impl->file = hdf5::File(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
-  if (!impl->file.valid()) {
-    failHdf5(ctx, "cannot open the HDF5 file (truncated or corrupt?)");
-  }
-  const hdf5::Group root(
-      hdf5::check(H5Gopen2(impl->file.get(), "/", H5P_DEFAULT), ctx, "cannot open '/'"));
-  const std::string rootOwner = "the root group";
-  if (!hdf5::hasAttribute(root.get(), format::kMarker, ctx)) {
-    fail(ctx, "is not a Regolith store (the root group has no attribute 'regolith_store')");
-  }
-  checkVersion(hdf5::readIntegers(root.get(), format::kFormatVersion, 2, ctx, rootOwner), ctx,
-               rootOwner);
-  const htri_t hasGrids = H5Lexists(root.get(), format::kGrids, H5P_DEFAULT);
-  if (hasGrids < 0) failHdf5(ctx, "cannot look up '/grids'");
-  if (hasGrids == 0) fail(ctx, "has no group '/grids'");
-  const hdf5::Object grids(
-      hdf5::check(H5Oopen(root.get(), format::kGrids, H5P_DEFAULT), ctx, "cannot open '/grids'"));
-  if (H5Iget_type(grids.get()) != H5I_GROUP) fail(ctx, "'/grids' is not a group");
-  for (const std::string& name : memberNames(grids.get(), ctx)) {
-    impl->grids.emplace(name, openGrid(grids.get(), name, ctx));
-  }
-  return Store(std::move(impl));
-}
-
-const std::filesystem::path& Store::path() const noexcept { return impl_->path; }
-
-std::vector<std::string> Store::gridNames() const {
-  std::vector<std::string> names;
-  names.reserve(impl_->grids.size());
-  for (const auto& [name, entry] : impl_->grids) names.push_back(name);
-  return names;
-}
-
-bool Store::hasGrid(std::string_view name) const noexcept {
-  return impl_->grids.find(name) != impl_->grids.end();
-}
-
-const GridInfo& Store::grid(std::string_view name) const {
-  return impl_->entry(name, Context("store::grid()", impl_->path)).info;
-}
-
-void Store::readWindow(std::string_view grid, std::size_t level, std::size_t row0, std::size_t col0,
-                       std::size_t rows, std::size_t cols, std::span<float> out,
-                       std::size_t stride) const {
-  const Context ctx("store::readWindow()", impl_->path);
-  const GridEntry& e = impl_->entry(grid, ctx);
+/// Reads rows×cols samples at (row0, col0), every `stride`-th, of one dataset of a grid with
+/// one hyperslab read, into `out` as heights (NaN where missing).
+void readDataset(const GridEntry& e, hid_t ds, const Context& ctx, const std::string& what,
+                 std::size_t row0, std::size_t col0, std::size_t rows, std::size_t cols,
+                 std::size_t stride, std::span<float> out) {
   const GridInfo& info = e.info;
-  const std::string owner = "grid '" + info.name + "'";
-  if (level >= info.levels) {
-    fail(ctx, owner + " has no level " + std::to_string(level) + " (levels 0 to " +
-                  std::to_string(info.levels - 1) + ")");
-  }
-  if (stride == 0) {
-    throw InvalidArgument(ctx.prefix + ": " + owner + " stride 0, expected >= 1");
-  }
-  if (out.size() != rows * cols) {
-    throw InvalidArgument(ctx.prefix + ": " + owner + " output holds " +
-                          std::to_string(out.size()) +
-                          " floats, expected rows x cols = " + std::to_string(rows * cols));
-  }
-  if (rows == 0 || cols == 0) return;
-  const std::size_t levelRows = info.levelRows(level), levelCols = info.levelCols(level);
-  // The last sample read in each direction must lie inside the level (no overflow: each
-  // term is checked against the level size before it is added).
-  const auto inside = [stride](std::size_t first, std::size_t n, std::size_t size) {
-    return first < size && (n - 1) <= (size - 1 - first) / stride;
-  };
-  if (!inside(row0, rows, levelRows) || !inside(col0, cols, levelCols)) {
-    fail(ctx, owner + " level " + std::to_string(level) + ": window of " + dims(rows, cols) +
-                  " samples at (" + std::to_string(row0) + ", " + std::to_string(col0) +
-                  ") with stride " + std::to_string(stride) + " reaches outside the level's " +
-                  dims(levelRows, levelCols) + " samples");
-  }
-
   const std::size_t n = rows * cols;
   const std::array<hsize_t, 2> start{row0, col0};
   const std::array<hsize_t, 2> step{stride, stride};
   const std::array<hsize_t, 2> count{rows, cols};
   const auto read = [&](hid_t memType, void* buffer) {
     const hdf5::Lock lock;
-    const std::string what = "cannot read " + owner + " dataset '" + format::levelName(level) + "'";
-    const hid_t ds = e.levels[level].get();
     const hdf5::Dataspace fileSpace(hdf5::check(H5Dget_space(ds), ctx, what));
     hdf5::check(H5Sselect_hyperslab(fileSpace.get(), H5S_SELECT_SET, start.data(), step.data(),
                                     count.data(), nullptr),
@@ -495,8 +519,173 @@ void Store::readWindow(std::string_view grid, std::size_t level, std::size_t row
     case SampleType::Float32: readAs(float{}); break;
     case SampleType::Float64: readAs(double{}); break;
   }
-  impl_->reads.fetch_add(1, std::memory_order_relaxed);
-  impl_->bytesRead.fetch_add(n * format::sizeOf(e.type), std::memory_order_relaxed);
+}
+
+}  // namespace
+
+struct Store::Impl {
+  std::filesystem::path path;
+  hdf5::File file;  // declared before the grids: closed after their datasets
+  std::map<std::string, GridEntry, std::less<>> grids;
+  mutable std::atomic<std::uint64_t> reads{0};
+  mutable std::atomic<std::uint64_t> bytesRead{0};
+
+  [[nodiscard]] const GridEntry& entry(std::string_view name, const Context& ctx) const {
+    const auto it = grids.find(name);
+    if (it == grids.end()) {
+      std::string known;
+      for (const auto& [n, e] : grids) known += (known.empty() ? "" : ", ") + n;
+      fail(ctx, "no grid '" + std::string(name) +
+                    "' (grids: " + (known.empty() ? std::string("none") : known) + ")");
+    }
+    return it->second;
+  }
+};
+
+Store::Store(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Store::Store(Store&&) noexcept = default;
+Store& Store::operator=(Store&&) noexcept = default;
+Store::~Store() = default;
+
+Store Store::open(const std::filesystem::path& path) {
+  const Context ctx("store::open()", path);
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (!std::filesystem::exists(status)) fail(ctx, "no such file");
+  if (std::filesystem::is_directory(status)) fail(ctx, "is a directory, expected a file");
+  if (tlOpenDepth >= kMaxOpenDepth) {
+    fail(ctx, "external tiles nest more than " + std::to_string(kMaxOpenDepth) +
+                  " stores deep (a cycle of external_file references?)");
+  }
+  struct Depth {
+    Depth() { ++tlOpenDepth; }
+    ~Depth() { --tlOpenDepth; }
+    Depth(const Depth&) = delete;
+    Depth& operator=(const Depth&) = delete;
+    Depth(Depth&&) = delete;
+    Depth& operator=(Depth&&) = delete;
+  } const depth;
+  OpenState state;
+
+  auto impl = std::make_unique<Impl>();
+  impl->path = path;
+  const hdf5::Lock lock;
+  const htri_t isHdf5 = H5Fis_hdf5(path.c_str());
+  if (isHdf5 < 0) failHdf5(ctx, "cannot be read");
+  if (isHdf5 == 0) fail(ctx, "is not an HDF5 file (no HDF5 signature)");
+  impl->file = hdf5::File(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
+  if (!impl->file.valid()) {
+    failHdf5(ctx, "cannot open the HDF5 file (truncated or corrupt?)");
+  }
+  const hdf5::Group root(
+      hdf5::check(H5Gopen2(impl->file.get(), "/", H5P_DEFAULT), ctx, "cannot open '/'"));
+  const std::string rootOwner = "the root group";
+  if (!hdf5::hasAttribute(root.get(), format::kMarker, ctx)) {
+    fail(ctx, "is not a Regolith store (the root group has no attribute 'regolith_store')");
+  }
+  checkVersion(hdf5::readIntegers(root.get(), format::kFormatVersion, 2, ctx, rootOwner), ctx,
+               rootOwner);
+  const htri_t hasGrids = H5Lexists(root.get(), format::kGrids, H5P_DEFAULT);
+  if (hasGrids < 0) failHdf5(ctx, "cannot look up '/grids'");
+  if (hasGrids == 0) fail(ctx, "has no group '/grids'");
+  const hdf5::Object grids(
+      hdf5::check(H5Oopen(root.get(), format::kGrids, H5P_DEFAULT), ctx, "cannot open '/grids'"));
+  if (H5Iget_type(grids.get()) != H5I_GROUP) fail(ctx, "'/grids' is not a group");
+  for (const std::string& name : memberNames(grids.get(), ctx)) {
+    impl->grids.emplace(name, openGrid(grids.get(), name, ctx, path, state));
+  }
+  return Store(std::move(impl));
+}
+
+const std::filesystem::path& Store::path() const noexcept { return impl_->path; }
+
+std::vector<std::string> Store::gridNames() const {
+  std::vector<std::string> names;
+  names.reserve(impl_->grids.size());
+  for (const auto& [name, entry] : impl_->grids) names.push_back(name);
+  return names;
+}
+
+bool Store::hasGrid(std::string_view name) const noexcept {
+  return impl_->grids.find(name) != impl_->grids.end();
+}
+
+const GridInfo& Store::grid(std::string_view name) const {
+  return impl_->entry(name, Context("store::grid()", impl_->path)).info;
+}
+
+bool Store::tiled(std::string_view name) const {
+  return !impl_->entry(name, Context("store::tiled()", impl_->path)).tiles.empty();
+}
+
+void Store::readWindow(std::string_view grid, std::size_t level, std::size_t row0, std::size_t col0,
+                       std::size_t rows, std::size_t cols, std::span<float> out,
+                       std::size_t stride) const {
+  const Context ctx("store::readWindow()", impl_->path);
+  const GridEntry& e = impl_->entry(grid, ctx);
+  const GridInfo& info = e.info;
+  const std::string owner = "grid '" + info.name + "'";
+  if (level >= info.levels) {
+    fail(ctx, owner + " has no level " + std::to_string(level) + " (levels 0 to " +
+                  std::to_string(info.levels - 1) + ")");
+  }
+  if (stride == 0) {
+    throw InvalidArgument(ctx.prefix + ": " + owner + " stride 0, expected >= 1");
+  }
+  if (out.size() != rows * cols) {
+    throw InvalidArgument(ctx.prefix + ": " + owner + " output holds " +
+                          std::to_string(out.size()) +
+                          " floats, expected rows x cols = " + std::to_string(rows * cols));
+  }
+  if (rows == 0 || cols == 0) return;
+  const std::size_t levelRows = info.levelRows(level), levelCols = info.levelCols(level);
+  // The last sample read in each direction must lie inside the level (no overflow: each
+  // term is checked against the level size before it is added).
+  const auto inside = [stride](std::size_t first, std::size_t n, std::size_t size) {
+    return first < size && (n - 1) <= (size - 1 - first) / stride;
+  };
+  if (!inside(row0, rows, levelRows) || !inside(col0, cols, levelCols)) {
+    fail(ctx, owner + " level " + std::to_string(level) + ": window of " + dims(rows, cols) +
+                  " samples at (" + std::to_string(row0) + ", " + std::to_string(col0) +
+                  ") with stride " + std::to_string(stride) + " reaches outside the level's " +
+                  dims(levelRows, levelCols) + " samples");
+  }
+
+  const std::size_t bytesPerSample = format::sizeOf(e.type);
+  if (level > 0 || e.tiles.empty()) {
+    readDataset(e, e.levels[level].get(), ctx,
+                "cannot read " + owner + " dataset '" + format::levelName(level) + "'", row0, col0,
+                rows, cols, stride, out);
+    impl_->reads.fetch_add(1, std::memory_order_relaxed);
+    impl_->bytesRead.fetch_add(rows * cols * bytesPerSample, std::memory_order_relaxed);
+    return;
+  }
+  // A tiled level 0: one read per tile the window meets; samples no tile covers stay NaN.
+  if (stride != 1) {
+    fail(ctx, owner + " level 0 is tiled: stride " + std::to_string(stride) +
+                  " is not supported there, only 1 (coarse views read a pyramid level)");
+  }
+  std::fill(out.begin(), out.end(), std::numeric_limits<float>::quiet_NaN());
+  std::vector<float> buffer;
+  for (const Tile& t : e.tiles) {
+    const std::size_t r0 = std::max(row0, t.row0), r1 = std::min(row0 + rows, t.row0 + t.rows);
+    const std::size_t c0 = std::max(col0, t.col0), c1 = std::min(col0 + cols, t.col0 + t.cols);
+    if (r0 >= r1 || c0 >= c1) continue;
+    const std::size_t nr = r1 - r0, nc = c1 - c0;
+    buffer.resize(nr * nc);
+    if (t.external) {
+      t.external->readWindow(t.externalGrid, 0, r0 - t.row0, c0 - t.col0, nr, nc, buffer);
+    } else {
+      readDataset(e, t.dataset.get(), ctx, readTileWhat(owner, t), r0 - t.row0, c0 - t.col0, nr, nc,
+                  1, buffer);
+      impl_->bytesRead.fetch_add(nr * nc * bytesPerSample, std::memory_order_relaxed);
+    }
+    impl_->reads.fetch_add(1, std::memory_order_relaxed);
+    for (std::size_t r = 0; r < nr; ++r) {
+      std::copy_n(buffer.begin() + static_cast<std::ptrdiff_t>(r * nc), nc,
+                  out.begin() + static_cast<std::ptrdiff_t>((r0 - row0 + r) * cols + (c0 - col0)));
+    }
+  }
 }
 
 ReadCounters Store::counters() const noexcept {

@@ -54,6 +54,18 @@ inline constexpr const char* kFalseNorthing = "false_northing";
 inline constexpr const char* kProjectionRadius = "projection_radius";
 inline constexpr const char* kLatOrigin = "lat_origin_deg";
 
+// Tiled grids (format 1.1): the grid's attribute tile_count, its group tiles/<i> per tile
+// with the attributes below, and either a dataset level0 or the two external attributes.
+inline constexpr int kTiledFormatMinor = 1;
+inline constexpr const char* kTileCount = "tile_count";
+inline constexpr const char* kTiles = "tiles";
+inline constexpr const char* kTileRow0 = "row0";
+inline constexpr const char* kTileCol0 = "col0";
+inline constexpr const char* kTileRows = "rows";
+inline constexpr const char* kTileCols = "cols";
+inline constexpr const char* kExternalFile = "external_file";
+inline constexpr const char* kExternalGrid = "external_grid";
+
 inline constexpr std::string_view kDem = "dem";
 inline constexpr std::string_view kPlanet = "planet";
 inline constexpr std::string_view kPlanetocentric = "planetocentric";
@@ -83,6 +95,13 @@ inline constexpr std::string_view kEquirectangular = "equirectangular";
   const std::size_t r = info.levelRows(level), c = info.levelCols(level);
   return {static_cast<hsize_t>(info.patchRows < r ? info.patchRows : r),
           static_cast<hsize_t>(info.patchCols < c ? info.patchCols : c)};
+}
+
+/// Chunk shape of an internal tile's level0 dataset: the patch shape clipped to the tile.
+[[nodiscard]] inline std::array<hsize_t, 2> tileChunkShape(const GridInfo& info, std::size_t rows,
+                                                           std::size_t cols) {
+  return {static_cast<hsize_t>(info.patchRows < rows ? info.patchRows : rows),
+          static_cast<hsize_t>(info.patchCols < cols ? info.patchCols : cols)};
 }
 
 /// Stored sample types the reader accepts (the writer writes Float32).

@@ -12,6 +12,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <set>
 
@@ -44,21 +45,117 @@ void validateOptions(const WriteOptions& o, const Context& ctx) {
   }
 }
 
+/// One tile as it will be written: its bounds, and its samples or its opened external store.
+struct PreparedTile {
+  std::size_t row0 = 0, col0 = 0, rows = 0, cols = 0;
+  std::shared_ptr<const topo::SampleSource> samples;
+  std::shared_ptr<const Store> external;
+  std::string file, grid;  // as recorded
+};
+
+struct Prepared {
+  GridInfo info;
+  std::vector<PreparedTile> tiles;
+};
+
+std::string tileRange(const PreparedTile& t) {
+  return "rows " + std::to_string(t.row0) + "-" + std::to_string(t.row0 + t.rows - 1) + ", cols " +
+         std::to_string(t.col0) + "-" + std::to_string(t.col0 + t.cols - 1);
+}
+
+/// Checks tile i of a tiled grid: one source, inside the mosaic, and an external grid that
+/// opens, is plain and gives the tile's size.
+PreparedTile prepareTile(const TileSource& ts, std::size_t i, const GridInfo& info,
+                         const std::filesystem::path& storeDir, const Context& ctx) {
+  const std::string towner = "grid '" + info.name + "' tile " + std::to_string(i);
+  PreparedTile t;
+  t.row0 = ts.row0;
+  t.col0 = ts.col0;
+  const bool hasExternal = !ts.externalStore.empty();
+  if (static_cast<bool>(ts.samples) == hasExternal) {
+    invalid(ctx, towner + " has " +
+                     (hasExternal ? "both samples and externalStore"
+                                  : "neither samples nor externalStore") +
+                     ", expected exactly one");
+  }
+  if (ts.samples) {
+    t.samples = ts.samples;
+    t.rows = ts.samples->rows();
+    t.cols = ts.samples->cols();
+  } else {
+    t.file = ts.externalStore.string();
+    t.grid = ts.externalGrid;
+    const std::filesystem::path resolved =
+        ts.externalStore.is_relative() ? storeDir / ts.externalStore : ts.externalStore;
+    try {
+      t.external = std::make_shared<const Store>(Store::open(resolved));
+    } catch (const StoreError& e) {
+      invalid(ctx,
+              towner + " has externalStore '" + t.file + "' that cannot be opened: " + e.what());
+    }
+    const std::string ext = "externalGrid '" + t.grid + "'";
+    if (!t.external->hasGrid(t.grid)) {
+      invalid(ctx, towner + " has " + ext + ", which " + resolved.string() + " does not have");
+    }
+    if (t.external->tiled(t.grid)) {
+      invalid(ctx, towner + " has " + ext + " of " + resolved.string() +
+                       ", which is itself tiled; expected a plain grid");
+    }
+    t.rows = t.external->grid(t.grid).rows;
+    t.cols = t.external->grid(t.grid).cols;
+  }
+  if (t.rows == 0 || t.cols == 0 || t.rows > info.rows || t.row0 > info.rows - t.rows ||
+      t.cols > info.cols || t.col0 > info.cols - t.cols) {
+    invalid(ctx, towner + " (row0 " + std::to_string(t.row0) + ", col0 " + std::to_string(t.col0) +
+                     ", " + std::to_string(t.rows) + "x" + std::to_string(t.cols) +
+                     " samples) reaches outside the mosaic's " + std::to_string(info.rows) + "x" +
+                     std::to_string(info.cols) + " samples (info.rows, info.cols)");
+  }
+  return t;
+}
+
+[[noreturn]] void overlap(const Context& ctx, const GridInfo& info, std::size_t i,
+                          const PreparedTile& a, std::size_t j, const PreparedTile& b) {
+  invalid(ctx, "grid '" + info.name + "' tiles " + std::to_string(i) + " (" + tileRange(a) +
+                   ") and " + std::to_string(j) + " (" + tileRange(b) + ") overlap");
+}
+
+/// Checks the tiles of a tiled grid (prepareTile) and that no two overlap.
+std::vector<PreparedTile> prepareTiles(const GridSource& src, const GridInfo& info,
+                                       const std::filesystem::path& storeDir, const Context& ctx) {
+  std::vector<PreparedTile> out;
+  for (std::size_t i = 0; i < src.tiles.size(); ++i) {
+    PreparedTile t = prepareTile(src.tiles[i], i, info, storeDir, ctx);
+    for (std::size_t j = 0; j < out.size(); ++j) {
+      const PreparedTile& o = out[j];
+      if (t.row0 < o.row0 + o.rows && o.row0 < t.row0 + t.rows && t.col0 < o.col0 + o.cols &&
+          o.col0 < t.col0 + t.cols) {
+        overlap(ctx, info, j, o, i, t);
+      }
+    }
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
 /// Checks one grid and returns the description that will be written: levels and patch size
 /// from the options, scale 1 and offset 0 (the writer stores heights in metres as float32).
-GridInfo prepare(const GridSource& src, const WriteOptions& o, const Context& ctx) {
+Prepared prepare(const GridSource& src, const WriteOptions& o,
+                 const std::filesystem::path& storeDir, const Context& ctx) {
   GridInfo info = src.info;
   const std::string owner = "grid '" + info.name + "'";
   if (info.name.empty() || info.name.find('/') != std::string::npos || info.name == "." ||
       info.name == "..") {
     invalid(ctx, owner + ": name must be non-empty and contain no '/'");
   }
-  if (!src.samples) invalid(ctx, owner + " has no samples");
+  const bool tiled = !src.tiles.empty();
+  if (tiled && src.samples) invalid(ctx, owner + " has both samples and tiles, expected one");
+  if (!tiled && !src.samples) invalid(ctx, owner + " has no samples");
   if (info.rows == 0 || info.cols == 0) {
     invalid(ctx, owner + " has " + std::to_string(info.rows) + "x" + std::to_string(info.cols) +
                      " samples, expected both > 0");
   }
-  if (src.samples->rows() != info.rows || src.samples->cols() != info.cols) {
+  if (!tiled && (src.samples->rows() != info.rows || src.samples->cols() != info.cols)) {
     invalid(ctx, owner + " describes " + std::to_string(info.rows) + "x" +
                      std::to_string(info.cols) + " samples but its source holds " +
                      std::to_string(src.samples->rows()) + "x" +
@@ -108,7 +205,10 @@ GridInfo prepare(const GridSource& src, const WriteOptions& o, const Context& ct
   }
   info.scale = 1.0;
   info.offset = 0.0;
-  return info;
+  Prepared p;
+  if (tiled) p.tiles = prepareTiles(src, info, storeDir, ctx);
+  p.info = std::move(info);
+  return p;
 }
 
 std::string_view placementName(PlacementInfo::Kind k) {
@@ -120,9 +220,10 @@ std::string_view placementName(PlacementInfo::Kind k) {
   return "?";
 }
 
-void writeAttributes(hid_t g, const GridInfo& info, const Context& ctx) {
+void writeAttributes(hid_t g, const GridInfo& info, bool tiled, const Context& ctx) {
   using namespace hdf5;
-  writeInt32s(g, format::kFormatVersion, {kFormatVersionMajor, kFormatVersionMinor}, ctx);
+  writeInt32s(g, format::kFormatVersion,
+              {kFormatVersionMajor, tiled ? format::kTiledFormatMinor : kFormatVersionMinor}, ctx);
   writeString(g, format::kKind,
               std::string(info.kind == GridKind::Dem ? format::kDem : format::kPlanet), ctx);
   writeUInt64(g, format::kRows, info.rows, ctx);
@@ -225,11 +326,16 @@ class LevelWriter {
  public:
   LevelWriter(hid_t group, const GridInfo& info, std::size_t level, const WriteOptions& o,
               const Context& ctx)
-      : info_(info), ctx_(ctx), name_(format::levelName(level)) {
+      : LevelWriter(group, info, format::levelName(level),
+                    {info.levelRows(level), info.levelCols(level)}, format::chunkShape(info, level),
+                    o, ctx) {}
+
+  LevelWriter(hid_t group, const GridInfo& info, std::string name,
+              const std::array<hsize_t, 2>& shape, const std::array<hsize_t, 2>& chunk,
+              const WriteOptions& o, const Context& ctx)
+      : info_(info), ctx_(ctx), name_(std::move(name)) {
     const hdf5::Lock lock;
     const std::string what = "cannot create grid '" + info.name + "' dataset '" + name_ + "'";
-    const std::array<hsize_t, 2> shape{info.levelRows(level), info.levelCols(level)};
-    const std::array<hsize_t, 2> chunk = format::chunkShape(info, level);
     const hdf5::Dataspace space(hdf5::check(H5Screate_simple(2, shape.data(), nullptr), ctx, what));
     const hdf5::PropertyList dcpl(hdf5::check(H5Pcreate(H5P_DATASET_CREATE), ctx, what));
     hdf5::check(H5Pset_chunk(dcpl.get(), 2, chunk.data()), ctx, what);
@@ -292,10 +398,11 @@ class LevelWriter {
 
 /// Level 0 of one chunk: the source's heights, missing samples as the stored nodata value.
 /// Infinite heights are refused (they are neither data nor a declared nodata).
-void level0Block(const GridSource& src, const GridInfo& info, std::size_t r0, std::size_t c0,
-                 std::size_t nr, std::size_t nc, std::vector<float>& out, const Context& ctx) {
+void level0Block(const topo::SampleSource& src, const GridInfo& info, std::size_t r0,
+                 std::size_t c0, std::size_t nr, std::size_t nc, std::vector<float>& out,
+                 const Context& ctx) {
   out.resize(nr * nc);
-  src.samples->readWindow(r0, c0, nr, nc, out);
+  src.readWindow(r0, c0, nr, nc, out);
   const Missing missing{info.nodata};
   for (std::size_t i = 0; i < out.size(); ++i) {
     float& v = out[i];
@@ -312,7 +419,9 @@ void level0Block(const GridSource& src, const GridInfo& info, std::size_t r0, st
 
 /// Level k ≥ 1 of one chunk: 2×2 means of level k−1 (read back from the file), ignoring
 /// missing samples and samples beyond the edge; missing only if all of them are.
-void coarseBlock(const LevelWriter& below, const GridInfo& info, std::size_t level, std::size_t r0,
+using FineReader = std::function<void(std::size_t, std::size_t, std::size_t, std::size_t, float*)>;
+
+void coarseBlock(const FineReader& below, const GridInfo& info, std::size_t level, std::size_t r0,
                  std::size_t c0, std::size_t nr, std::size_t nc, std::vector<float>& fine,
                  std::vector<float>& out) {
   const std::size_t fineRows = info.levelRows(level - 1), fineCols = info.levelCols(level - 1);
@@ -320,7 +429,7 @@ void coarseBlock(const LevelWriter& below, const GridInfo& info, std::size_t lev
   const std::size_t fnr = std::min(2 * nr, fineRows - fr0);
   const std::size_t fnc = std::min(2 * nc, fineCols - fc0);
   fine.resize(fnr * fnc);
-  below.io(fr0, fc0, fnr, fnc, fine.data(), true);
+  below(fr0, fc0, fnr, fnc, fine.data());
   const Missing missing{info.nodata};
   out.resize(nr * nc);
   for (std::size_t r = 0; r < nr; ++r) {
@@ -341,16 +450,103 @@ void coarseBlock(const LevelWriter& below, const GridInfo& info, std::size_t lev
   }
 }
 
-void writeGrid(hid_t grids, const GridSource& src, const GridInfo& info, const WriteOptions& o,
+/// Level 0 of a tiled grid's block as stored: each tile's samples (missing as the stored
+/// nodata value), the stored nodata value where no tile lies.
+void mosaicBlock(const Prepared& p, std::size_t r0, std::size_t c0, std::size_t nr, std::size_t nc,
+                 float* out, const Context& ctx) {
+  const Missing missing{p.info.nodata};
+  std::fill(out, out + nr * nc, missing.stored());
+  std::vector<float> buffer;
+  for (const PreparedTile& t : p.tiles) {
+    const std::size_t a0 = std::max(r0, t.row0), a1 = std::min(r0 + nr, t.row0 + t.rows);
+    const std::size_t b0 = std::max(c0, t.col0), b1 = std::min(c0 + nc, t.col0 + t.cols);
+    if (a0 >= a1 || b0 >= b1) continue;
+    const std::size_t tr = a1 - a0, tc = b1 - b0;
+    if (t.samples) {
+      level0Block(*t.samples, p.info, a0 - t.row0, b0 - t.col0, tr, tc, buffer, ctx);
+    } else {
+      buffer.resize(tr * tc);
+      t.external->readWindow(t.grid, 0, a0 - t.row0, b0 - t.col0, tr, tc, buffer);
+      for (float& v : buffer) {
+        if (std::isnan(v)) v = missing.stored();
+      }
+    }
+    for (std::size_t r = 0; r < tr; ++r) {
+      std::copy_n(buffer.begin() + static_cast<std::ptrdiff_t>(r * tc), tc,
+                  out + (a0 - r0 + r) * nc + (b0 - c0));
+    }
+  }
+}
+
+/// Writes tile i of a tiled grid: its group tiles/<i> with its bounds and either its level0
+/// dataset or the reference to its external grid.
+void writeTile(hid_t tilesGroup, std::size_t i, const Prepared& p, const WriteOptions& o,
                Progress& progress, const Context& ctx) {
+  const GridInfo& info = p.info;
+  const PreparedTile& t = p.tiles[i];
+  const std::string what = "grid '" + info.name + "' tile " + std::to_string(i);
+  hdf5::Group tg = createGroup(tilesGroup, std::to_string(i), ctx);
+  hdf5::writeUInt64(tg.get(), format::kTileRow0, t.row0, ctx);
+  hdf5::writeUInt64(tg.get(), format::kTileCol0, t.col0, ctx);
+  hdf5::writeUInt64(tg.get(), format::kTileRows, t.rows, ctx);
+  hdf5::writeUInt64(tg.get(), format::kTileCols, t.cols, ctx);
+  if (t.external) {
+    hdf5::writeString(tg.get(), format::kExternalFile, t.file, ctx);
+    hdf5::writeString(tg.get(), format::kExternalGrid, t.grid, ctx);
+  } else {
+    LevelWriter writer(tg.get(), info, "level0", {t.rows, t.cols},
+                       format::tileChunkShape(info, t.rows, t.cols), o, ctx);
+    std::vector<float> block;
+    for (std::size_t r0 = 0; r0 < t.rows; r0 += info.patchRows) {
+      const std::size_t nr = std::min(info.patchRows, t.rows - r0);
+      for (std::size_t c0 = 0; c0 < t.cols; c0 += info.patchCols) {
+        const std::size_t nc = std::min(info.patchCols, t.cols - c0);
+        checkCancel(o, ctx);
+        level0Block(*t.samples, info, r0, c0, nr, nc, block, ctx);
+        writer.io(r0, c0, nr, nc, block.data(), false);
+        progress.advance(static_cast<double>(nr * nc), what);
+      }
+    }
+    writer.close();
+  }
+  const hdf5::Lock lock;
+  hdf5::check(H5Gclose(tg.release()), ctx, "cannot close the group of " + what);
+}
+
+/// Writes the tiles of a tiled grid: tile_count and a group tiles/<i> per tile.
+void writeTiles(hid_t group, const Prepared& p, const WriteOptions& o, Progress& progress,
+                const Context& ctx) {
+  hdf5::writeUInt64(group, format::kTileCount, p.tiles.size(), ctx);
+  hdf5::Group tilesGroup = createGroup(group, format::kTiles, ctx);
+  for (std::size_t i = 0; i < p.tiles.size(); ++i) {
+    writeTile(tilesGroup.get(), i, p, o, progress, ctx);
+  }
+  const hdf5::Lock lock;
+  hdf5::check(H5Gclose(tilesGroup.release()), ctx,
+              "cannot close group '/grids/" + p.info.name + "/tiles'");
+}
+
+void writeGrid(hid_t grids, const GridSource& src, const Prepared& p, const WriteOptions& o,
+               Progress& progress, const Context& ctx) {
+  const GridInfo& info = p.info;
+  const bool tiled = !p.tiles.empty();
   hdf5::Group group = createGroup(grids, info.name, ctx);
-  writeAttributes(group.get(), info, ctx);
+  writeAttributes(group.get(), info, tiled, ctx);
+  if (tiled) writeTiles(group.get(), p, o, progress, ctx);
   std::vector<float> block, fine;
   std::optional<LevelWriter> below;
-  for (std::size_t level = 0; level < info.levels; ++level) {
+  for (std::size_t level = tiled ? 1 : 0; level < info.levels; ++level) {
     LevelWriter writer(group.get(), info, level, o, ctx);
     const std::string what = "grid '" + info.name + "' level " + std::to_string(level);
     const std::size_t rows = info.levelRows(level), cols = info.levelCols(level);
+    const FineReader readBelow = [&](std::size_t r0, std::size_t c0, std::size_t nr, std::size_t nc,
+                                     float* data) {
+      if (below) {
+        below->io(r0, c0, nr, nc, data, true);
+      } else {
+        mosaicBlock(p, r0, c0, nr, nc, data, ctx);  // level 1 of a tiled grid
+      }
+    };
     // Chunk by chunk, row-major: each write covers exactly one chunk.
     for (std::size_t r0 = 0; r0 < rows; r0 += info.patchRows) {
       const std::size_t nr = std::min(info.patchRows, rows - r0);
@@ -360,9 +556,9 @@ void writeGrid(hid_t grids, const GridSource& src, const GridInfo& info, const W
         // The source and the progress callback run without the HDF5 lock: the source may
         // itself be a pager reading another store.
         if (level == 0) {
-          level0Block(src, info, r0, c0, nr, nc, block, ctx);
+          level0Block(*src.samples, info, r0, c0, nr, nc, block, ctx);
         } else {
-          coarseBlock(*below, info, level, r0, c0, nr, nc, fine, block);
+          coarseBlock(readBelow, info, level, r0, c0, nr, nc, fine, block);
         }
         writer.io(r0, c0, nr, nc, block.data(), false);
         progress.advance(static_cast<double>(nr * nc), what);
@@ -414,16 +610,23 @@ void writeStore(const std::filesystem::path& path, std::span<const GridSource> g
                 const WriteOptions& options) {
   const Context ctx("store::writeStore()", path);
   validateOptions(options, ctx);
-  std::vector<GridInfo> infos;
+  std::filesystem::path dir = path.parent_path();
+  if (dir.empty()) dir = ".";
+  std::vector<Prepared> prepared;
   std::set<std::string, std::less<>> names;
   double totalSamples = 0.0;
+  bool anyTiled = false;
   for (const GridSource& src : grids) {
-    infos.push_back(prepare(src, options, ctx));
-    const GridInfo& info = infos.back();
+    prepared.push_back(prepare(src, options, dir, ctx));
+    const GridInfo& info = prepared.back().info;
+    anyTiled = anyTiled || !prepared.back().tiles.empty();
+    for (const PreparedTile& t : prepared.back().tiles) {
+      if (t.samples) totalSamples += static_cast<double>(t.rows * t.cols);
+    }
     if (!names.insert(info.name).second) {
       invalid(ctx, "grid '" + info.name + "' appears twice");
     }
-    for (std::size_t k = 0; k < info.levels; ++k) {
+    for (std::size_t k = prepared.back().tiles.empty() ? 0 : 1; k < info.levels; ++k) {
       totalSamples += static_cast<double>(info.levelRows(k) * info.levelCols(k));
     }
   }
@@ -436,8 +639,6 @@ void writeStore(const std::filesystem::path& path, std::span<const GridSource> g
   }
   checkCancel(options, ctx);
 
-  std::filesystem::path dir = path.parent_path();
-  if (dir.empty()) dir = ".";
   TempFile tmp(path.string() + ".tmp-" + std::to_string(::getpid()));
   Progress progress(options, std::max(totalSamples, 1.0));
   {
@@ -455,12 +656,13 @@ void writeStore(const std::filesystem::path& path, std::span<const GridSource> g
       const hdf5::Group root(
           hdf5::check(H5Gopen2(file.get(), "/", H5P_DEFAULT), ctx, "cannot open '/'"));
       hdf5::writeString(root.get(), format::kMarker, format::kMarkerValue, ctx);
-      hdf5::writeInt32s(root.get(), format::kFormatVersion,
-                        {kFormatVersionMajor, kFormatVersionMinor}, ctx);
+      hdf5::writeInt32s(
+          root.get(), format::kFormatVersion,
+          {kFormatVersionMajor, anyTiled ? format::kTiledFormatMinor : kFormatVersionMinor}, ctx);
       gridsGroup = createGroup(file.get(), format::kGrids, ctx);
     }
     for (std::size_t i = 0; i < grids.size(); ++i) {
-      writeGrid(gridsGroup.get(), grids[i], infos[i], options, progress, ctx);
+      writeGrid(gridsGroup.get(), grids[i], prepared[i], options, progress, ctx);
     }
     checkCancel(options, ctx);
     const hdf5::Lock lock;

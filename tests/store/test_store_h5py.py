@@ -14,6 +14,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import warnings
 
 import h5py
 import numpy as np
@@ -218,6 +219,69 @@ def check_tilt(g):
     check_pyramid(g, "tilt", 3)
 
 
+def read_level0(path, grid, r0, c0, nr, nc):
+    """docs/store-format.md, "Tiled grids": heights of level-0 rows r0..r0+nr-1, cols
+    c0..c0+nc-1 of a tiled or plain grid (NaN where missing or uncovered)."""
+    out = np.full((nr, nc), np.nan)
+    with h5py.File(path, "r") as f:
+        g = f["grids/" + grid]
+        if "tile_count" not in g.attrs:
+            a = g["level0"][r0:r0 + nr, c0:c0 + nc].astype(np.float64)
+            nodata = float(g.attrs.get("nodata", np.nan))
+            a[np.isnan(a) | (a == nodata)] = np.nan
+            return g.attrs["offset"] + g.attrs["scale"] * a
+        for i in range(int(g.attrs["tile_count"])):
+            t = g[f"tiles/{i}"].attrs
+            tr0, tc0, tr, tc = (int(t[k]) for k in ("row0", "col0", "rows", "cols"))
+            a0, a1 = max(r0, tr0), min(r0 + nr, tr0 + tr)
+            b0, b1 = max(c0, tc0), min(c0 + nc, tc0 + tc)
+            if a0 >= a1 or b0 >= b1:
+                continue
+            if "external_file" in t:
+                ext = os.path.join(os.path.dirname(path), t["external_file"])
+                h = read_level0(ext, t["external_grid"], a0 - tr0, b0 - tc0, a1 - a0, b1 - b0)
+            else:
+                a = g[f"tiles/{i}/level0"][a0 - tr0:a1 - tr0, b0 - tc0:b1 - tc0].astype(np.float64)
+                nodata = float(g.attrs.get("nodata", np.nan))
+                a[np.isnan(a) | (a == nodata)] = np.nan
+                h = g.attrs["offset"] + g.attrs["scale"] * a
+            out[a0 - r0:a1 - r0, b0 - c0:b1 - c0] = h
+    return out
+
+
+def mosaic_height(r, c):
+    h = 5.0 + 0.5 * r - 0.25 * c + 3.0 * np.sin(c / 7.0)
+    return np.where((r + c) % 37 == 0, np.nan, h)
+
+
+def check_tiled(path):
+    with h5py.File(path, "r") as f:
+        check(list(f.attrs["format_version"]) == [1, 1], "tiled: root format_version")
+        g = f["grids/mosaic"]
+        check(list(g.attrs["format_version"]) == [1, 1], "tiled: grid format_version")
+        check(int(g.attrs["tile_count"]) == 3, "tiled: tile_count")
+        check("level0" not in g, "tiled: no level0 dataset")
+        check(g["tiles/0/level0"].chunks == (64, 48), "tiled: tile 0 chunks")
+        check(g["tiles/2"].attrs["external_file"] == "tiled_ext.h5", "tiled: external_file")
+        rows, cols = int(g.attrs["rows"]), int(g.attrs["cols"])
+        R, C = np.meshgrid(np.arange(rows), np.arange(cols), indexing="ij")
+        want = mosaic_height(R, C)
+        want[130:, :] = np.nan  # no tile there
+        got = read_level0(path, "mosaic", 0, 0, rows, cols)
+        check_close(got, want, "tiled level0 vs analytic")
+        # A window at the corner of all three tiles equals the same part of the whole.
+        check_close(read_level0(path, "mosaic", 65, 45, 10, 10), got[65:75, 45:55],
+                    "tiled corner window", rtol=0, atol=0)
+        # Level 1: 2x2 means of the assembled mosaic, across tile borders.
+        a = g["level1"][...].astype(np.float64)
+        a[np.isnan(a) | (a == float(g.attrs["nodata"]))] = np.nan
+        blocks = want.reshape(rows // 2, 2, cols // 2, 2)
+        with warnings.catch_warnings():  # all-NaN blocks give NaN, as documented
+            warnings.simplefilter("ignore", RuntimeWarning)
+            mean = np.nanmean(blocks.transpose(0, 2, 1, 3).reshape(rows // 2, cols // 2, 4), axis=2)
+        check_close(a, mean, "tiled level1 vs 2x2 means")
+
+
 def main():
     binary = sys.argv[1] if len(sys.argv) > 1 else os.environ.get("REGOLITH_WRITE_FIXTURE_STORE")
     if not binary:
@@ -227,7 +291,8 @@ def main():
         path = os.path.join(tmp, "fixture.h5")
         subprocess.run([binary, path], check=True)
         check(os.path.exists(path), "the store exists")
-        check([n for n in os.listdir(tmp)] == ["fixture.h5"], "no temporary file left")
+        check(sorted(os.listdir(tmp)) == ["fixture.h5", "tiled.h5", "tiled_ext.h5"],
+              "no temporary file left")
         with h5py.File(path, "r") as f:
             check(f.attrs["regolith_store"].startswith("Regolith terrain store"), "marker")
             check(list(f.attrs["format_version"]) == [1, 0], "root format_version")
@@ -235,6 +300,7 @@ def main():
             check_victoria(f["grids/victoria"])
             check_mars(f["grids/mars"])
             check_tilt(f["grids/tilt"])
+        check_tiled(os.path.join(tmp, "tiled.h5"))
     print(f"test_store_h5py: OK ({CHECKS} checks, h5py {h5py.__version__}, "
           f"numpy {np.__version__})")
 

@@ -3,13 +3,21 @@
 // the script must agree; they are evaluated at pixel centres (x0 + col·dx, y0 − row·dy).
 //
 //   write_fixture_store <output.h5>
+//
+// Beside it, in the same directory, it writes a tiled grid (docs/store-format.md, "Tiled
+// grids"): tiled.h5 with grid "mosaic", 150 × 130 samples, from two internal tiles and one
+// external tile (grid "ext" of tiled_ext.h5, referenced by relative path); rows 130–149 are
+// covered by no tile.
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <limits>
+#include <memory>
+#include <span>
 #include <vector>
 
 namespace {
@@ -106,6 +114,42 @@ GridSource tilt() {
   return {g, samples};
 }
 
+/// Height of mosaic sample (r, c) of the tiled fixture; NaN on a diagonal pattern.
+float mosaicHeight(std::size_t r, std::size_t c) {
+  if ((r + c) % 37 == 0) return kNan;
+  return static_cast<float>(5.0 + 0.5 * static_cast<double>(r) - 0.25 * static_cast<double>(c) +
+                            3.0 * std::sin(static_cast<double>(c) / 7.0));
+}
+
+std::shared_ptr<const topo::SampleSource> mosaicPart(std::size_t row0, std::size_t col0,
+                                                     std::size_t rows, std::size_t cols) {
+  return topo::InMemorySamples::fromFunction(
+      rows, cols, [=](std::size_t r, std::size_t c) { return mosaicHeight(row0 + r, col0 + c); });
+}
+
+GridInfo mosaicInfo(const char* name, std::size_t rows, std::size_t cols) {
+  GridInfo g;
+  g.name = name;
+  g.kind = GridKind::Dem;
+  g.rows = rows;
+  g.cols = cols;
+  g.x0 = 0.0;
+  g.y0 = 0.0;
+  g.nodata = -32768.0f;
+  g.placement.kind = PlacementInfo::Kind::LocalTangentPlane;
+  return g;
+}
+
+void writeTiled(const std::filesystem::path& dir, const WriteOptions& o) {
+  const GridSource ext{mosaicInfo("ext", 60, 130), mosaicPart(70, 0, 60, 130)};
+  writeStore(dir / "tiled_ext.h5", std::span<const GridSource>(&ext, 1), o);
+  GridSource mosaic{mosaicInfo("mosaic", 150, 130), nullptr};
+  mosaic.tiles.push_back({0, 0, mosaicPart(0, 0, 70, 50), {}, {}});
+  mosaic.tiles.push_back({0, 50, mosaicPart(0, 50, 70, 80), {}, {}});
+  mosaic.tiles.push_back({70, 0, nullptr, "tiled_ext.h5", "ext"});
+  writeStore(dir / "tiled.h5", std::span<const GridSource>(&mosaic, 1), o);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -119,6 +163,9 @@ int main(int argc, char** argv) {
     o.patchRows = 64;
     o.patchCols = 48;
     writeStore(argv[1], grids, o);
+    std::filesystem::path dir = std::filesystem::path(argv[1]).parent_path();
+    if (dir.empty()) dir = ".";
+    writeTiled(dir, o);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "write_fixture_store: %s\n", e.what());
     return 1;

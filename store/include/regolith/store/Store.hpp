@@ -31,7 +31,8 @@ class StoreError : public regolith::Error {
 inline constexpr int kFormatVersionMajor = 1;
 inline constexpr int kFormatVersionMinor = 0;
 
-/// Byte counters of one Store (for cache statistics and benchmarks).
+/// Byte counters of one Store (for cache statistics and benchmarks). A read of a tiled level 0
+/// counts one read per tile; bytes of external tiles are counted by their own Store.
 struct ReadCounters {
   std::uint64_t reads = 0;      // hyperslab reads
   std::uint64_t bytesRead = 0;  // bytes delivered by those reads (stored sample type)
@@ -57,11 +58,16 @@ class Store {
   [[nodiscard]] bool hasGrid(std::string_view name) const noexcept;
   /// Throws StoreError naming the file and the grid if there is no such grid.
   [[nodiscard]] const GridInfo& grid(std::string_view name) const;
+  /// Whether level 0 of a grid is a mosaic of tiles (docs/store-format.md, "Tiled grids").
+  /// Throws StoreError if there is no such grid.
+  [[nodiscard]] bool tiled(std::string_view name) const;
 
   /// Reads samples [row0, row0 + rows·stride) × [col0, col0 + cols·stride) of one level,
   /// every `stride`-th sample, with one H5Sselect_hyperslab read, into `out` (row-major,
   /// rows·cols floats) as heights in metres: offset + scale · stored, and NaN where the
   /// stored value is missing. Throws StoreError for a window outside the level.
+  /// On a tiled grid, level 0 is assembled from one read per tile the window meets (samples
+  /// no tile covers read NaN), and only stride 1 is supported there (StoreError otherwise).
   void readWindow(std::string_view grid, std::size_t level, std::size_t row0, std::size_t col0,
                   std::size_t rows, std::size_t cols, std::span<float> out,
                   std::size_t stride = 1) const;
@@ -94,9 +100,25 @@ struct WriteOptions {
 /// One grid to write: its description (levels, patch size and sample type are set by the
 /// writer) and its level-0 heights in metres. Samples that are NaN (or equal info.nodata)
 /// are stored as the nodata value.
+///
+/// A tiled grid (docs/store-format.md, "Tiled grids") leaves `samples` null and lists its
+/// level-0 tiles instead; info.rows × info.cols is then the size of the whole mosaic.
+struct TileSource {
+  /// Level-0 sample of the mosaic at which the tile's sample (0, 0) sits.
+  std::size_t row0 = 0, col0 = 0;
+  /// Exactly one of the two: the tile's heights (written into this store) ...
+  std::shared_ptr<const topo::SampleSource> samples;
+  /// ... or a plain (untiled) grid of another store, referenced, not copied. A relative path
+  /// is recorded as given and resolved against the directory of the store being written.
+  std::filesystem::path externalStore;
+  std::string externalGrid;
+};
+
 struct GridSource {
   GridInfo info;
   std::shared_ptr<const topo::SampleSource> samples;
+  /// Non-empty for a tiled grid (then `samples` must be null).
+  std::vector<TileSource> tiles{};
 };
 
 /// Writes a store crash-safely: into `<path>.tmp-<pid>` beside the target, then renamed
