@@ -139,7 +139,7 @@ std::size_t uniquePatches(const Wheels& w) {
   return seen.size();
 }
 
-void roverPaged(benchmark::State& state, bool surfaces) {
+void roverPaged(benchmark::State& state, bool surfaces, std::size_t budget) {
   const Data& d = data();
   const Wheels& w = wheels();
   CacheStats last{};
@@ -147,7 +147,7 @@ void roverPaged(benchmark::State& state, bool surfaces) {
   for (auto _ : state) {
     state.PauseTiming();
     auto store = std::make_shared<const Store>(Store::open(d.store));
-    auto cache = std::make_shared<PatchCache>(kBudget, CachePolicy::Lru);
+    auto cache = std::make_shared<PatchCache>(budget, CachePolicy::Lru);
     const Pager pager(store, cache);
     const TopoDem dem = pager.dem("dem");
     state.ResumeTiming();
@@ -166,6 +166,7 @@ void roverPaged(benchmark::State& state, bool surfaces) {
   const double unique = static_cast<double>(uniquePatches(w));
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(w.xs.size()));
   state.counters["patch_loads"] = static_cast<double>(last.loads);
+  state.counters["evictions"] = static_cast<double>(last.evictions);
   state.counters["bytes_read_MB"] = static_cast<double>(reads.bytesRead) / 1e6;
   state.counters["unique_patches"] = unique;
   state.counters["bytes_read_over_unique"] =
@@ -317,10 +318,15 @@ void coarse(benchmark::State& state, bool pyramid) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::RegisterBenchmark("store/rover/paged_heights", roverPaged, false)
+  benchmark::RegisterBenchmark("store/rover/paged_heights", roverPaged, false, kBudget)
       ->Unit(benchmark::kMillisecond)
       ->Iterations(3);
-  benchmark::RegisterBenchmark("store/rover/paged_surfaces", roverPaged, true)
+  benchmark::RegisterBenchmark("store/rover/paged_surfaces", roverPaged, true, kBudget)
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(3);
+  // A budget of 4 patches (1 MiB, 64× smaller than the grid): fewer than the path touches.
+  benchmark::RegisterBenchmark("store/rover/paged_heights_4_patches", roverPaged, false,
+                               4 * (kPatch * kPatch * sizeof(float) + 320))
       ->Unit(benchmark::kMillisecond)
       ->Iterations(3);
   benchmark::RegisterBenchmark("store/rover/gdal_rasterio", roverGdal)
