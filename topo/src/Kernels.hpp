@@ -18,6 +18,7 @@
 #include <climits>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace regolith::topo::detail {
 
@@ -64,6 +65,37 @@ struct BlockFetch {
     return src->sample(ur, uc);
   }
 };
+
+// Keeps the memory of the calling thread's detail::tlBlock alive.
+inline thread_local std::shared_ptr<const void> tlBlockOwner;  // NOLINT
+
+// The calling thread's block (detail::tlBlock), moved to the one holding sample (r, c) if
+// it does not hold it already (or emptied if the source has no blocks).
+inline const ThreadBlock& acquireBlock(const SampleSource& src, std::size_t r, std::size_t c) {
+  ThreadBlock& tb = tlBlock;
+  if (tb.source != src.id() || !tb.holds(r, c)) {
+    SampleBlock fresh;
+    if (src.block(r, c, fresh)) {
+      const auto d = [](std::size_t i) { return static_cast<double>(i); };
+      tb = {src.id(),
+            fresh.data,
+            fresh.row0,
+            fresh.col0,
+            fresh.rows,
+            fresh.cols,
+            fresh.stride,
+            d(fresh.col0),
+            d(fresh.col0 + fresh.cols) - 1.0,
+            d(fresh.row0),
+            d(fresh.row0 + fresh.rows) - 1.0};
+      tlBlockOwner = std::move(fresh.owner);
+    } else {
+      tb = {};
+      tlBlockOwner.reset();
+    }
+  }
+  return tb;
+}
 
 // Samples beyond a non-periodic edge are extrapolated with Keys' own boundary condition,
 // f(−1) = 3f(0) − 3f(1) + f(2), which keeps cubic convolution exact for quadratics right up

@@ -38,36 +38,9 @@ inline Where locate(const detail::DemIndexer& m, double x, double y, double cmax
   return {std::clamp(u, 0.0, cmax), std::clamp(v, 0.0, rmax), inside};
 }
 
-// Keeps the memory of the calling thread's detail::tlBlock alive.
-thread_local std::shared_ptr<const void> tlBlockOwner;  // NOLINT
-
-// The calling thread's block (detail::tlBlock), moved to the one holding the cell of `w`
-// if it does not hold it already.
+// The calling thread's block, moved to the one holding the cell of `w` if needed.
 inline const detail::ThreadBlock& threadBlock(const SampleSource& src, const Where& w) {
-  const auto r = static_cast<std::size_t>(w.v), c = static_cast<std::size_t>(w.u);
-  detail::ThreadBlock& tb = detail::tlBlock;
-  if (tb.source != src.id() || !tb.holds(r, c)) {
-    SampleBlock fresh;
-    if (src.block(r, c, fresh)) {
-      const auto d = [](std::size_t i) { return static_cast<double>(i); };
-      tb = {src.id(),
-            fresh.data,
-            fresh.row0,
-            fresh.col0,
-            fresh.rows,
-            fresh.cols,
-            fresh.stride,
-            d(fresh.col0),
-            d(fresh.col0 + fresh.cols) - 1.0,
-            d(fresh.row0),
-            d(fresh.row0 + fresh.rows) - 1.0};
-      tlBlockOwner = std::move(fresh.owner);
-    } else {
-      tb = {};
-      tlBlockOwner.reset();
-    }
-  }
-  return tb;
+  return detail::acquireBlock(src, static_cast<std::size_t>(w.v), static_cast<std::size_t>(w.u));
 }
 
 // Calls fn with the accessor that fits the source: plain array loads when the samples are

@@ -107,16 +107,24 @@ TopoPlanet::Located TopoPlanet::locate(const LatLon& ll) const {
 }
 
 namespace {
+// Calls fn with the accessor that fits the source: array loads when resident, else loads
+// from the calling thread's block (the one holding the cell at fractional (u, v)), asking
+// the source only for stencil samples outside it.
 template <bool Grad, class Fn>
 detail::KernelResult planetAccessor(const TopoGrid& g, const SampleSource& src, bool global,
-                                    bool northCap, bool southCap, Fn&& fn) {
+                                    bool northCap, bool southCap, double u, double v, Fn&& fn) {
   const long rows = static_cast<long>(g.rows()), cols = static_cast<long>(g.cols());
   const bool even = cols % 2 == 0;
   const bool rn = global && even && northCap, rs = global && even && southCap;
   if (const float* d = src.contiguous()) {
     return fn(detail::PlanetAcc<detail::MemFetch>{{d, cols}, rows, cols, global, rn, rs});
   }
-  return fn(detail::PlanetAcc<detail::SourceFetch>{{&src}, rows, cols, global, rn, rs});
+  const long r = std::clamp(detail::floorToLong(v), 0L, rows - 1);
+  long c = detail::floorToLong(u);
+  c = global ? ((c % cols) + cols) % cols : std::clamp(c, 0L, cols - 1);
+  const detail::ThreadBlock& tb =
+      detail::acquireBlock(src, static_cast<std::size_t>(r), static_cast<std::size_t>(c));
+  return fn(detail::PlanetAcc<detail::BlockFetch>{{&src, &tb}, rows, cols, global, rn, rs});
 }
 
 void requireLatLon(const LatLon& ll, const char* op) {
@@ -158,9 +166,9 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, No
   const double nd = detail::nodataOrNan(grid_);
   auto eval = [&](auto grad) {
     constexpr bool G = decltype(grad)::value;
-    return planetAccessor<G>(grid_, *samples_, global_, northCap_, southCap_, [&](const auto& acc) {
-      return detail::evaluate<G>(interp, acc, L.u, L.v, nd);
-    });
+    return planetAccessor<G>(
+        grid_, *samples_, global_, northCap_, southCap_, L.u, L.v,
+        [&](const auto& acc) { return detail::evaluate<G>(interp, acc, L.u, L.v, nd); });
   };
   const bool analytic = wantNormal && L.cap == 0;
   const detail::KernelResult k = analytic ? eval(std::true_type{}) : eval(std::false_type{});
