@@ -181,6 +181,19 @@ struct PatchCache::Impl {
     e.rank = ranks.insert(std::move(node)).position;
   }
 
+  /// One request (get or find), under the lock: the resident patch and a hit, or nullptr
+  /// and a miss.
+  std::shared_ptr<const Patch> lookup(const PatchKey& key) {
+    countAccess();
+    if (const auto it = entries.find(key); it != entries.end()) {
+      ++counters.hits;
+      touch(it->second);
+      return it->second.patch;
+    }
+    ++counters.misses;
+    return nullptr;
+  }
+
   /// Records a hit on a resident entry.
   void touch(Entry& e) {
     ++e.hits;
@@ -248,13 +261,7 @@ std::shared_ptr<const Patch> PatchCache::get(const PatchKey& key, const Loader& 
   std::shared_ptr<Impl::Pending> pending;
   {
     std::unique_lock lock(m.mutex);
-    m.countAccess();
-    if (const auto it = m.entries.find(key); it != m.entries.end()) {
-      ++m.counters.hits;
-      m.touch(it->second);
-      return it->second.patch;
-    }
-    ++m.counters.misses;
+    if (auto hit = m.lookup(key)) return hit;
     if (const auto it = m.inFlight.find(key); it != m.inFlight.end()) {
       // Another thread is loading this key: wait for it (the wait releases the lock).
       const std::shared_ptr<Impl::Pending> other = it->second;
@@ -305,14 +312,7 @@ std::shared_ptr<const Patch> PatchCache::get(const PatchKey& key, const Loader& 
 std::shared_ptr<const Patch> PatchCache::find(const PatchKey& key) {
   Impl& m = *impl_;
   const std::lock_guard lock(m.mutex);
-  m.countAccess();
-  if (const auto it = m.entries.find(key); it != m.entries.end()) {
-    ++m.counters.hits;
-    m.touch(it->second);
-    return it->second.patch;
-  }
-  ++m.counters.misses;
-  return nullptr;
+  return m.lookup(key);
 }
 
 bool PatchCache::contains(const PatchKey& key) const {

@@ -289,6 +289,16 @@ void editRaw(const fs::path& p, F&& f) {
   f(static_cast<hid_t>(file));
 }
 
+/// Replaces dataset `name` of the standard store's grid 'crater' (see rawDataset).
+void replaceCraterDataset(const fs::path& p, const std::string& name,
+                          const std::vector<hsize_t>& shape, const std::vector<hsize_t>& chunk,
+                          hid_t fileType) {
+  editRaw(p, [&](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
+    rawDataset(g, name, shape, chunk, fileType, {});
+  });
+}
+
 std::string openError(const fs::path& p) {
   try {
     (void)Store::open(p);
@@ -773,30 +783,21 @@ TEST(Store, RejectsNonPositiveSpacing) {
 
 TEST(Store, RejectsADatasetOfTheWrongRank) {
   const fs::path p = writeStandardStore("bad-rank.h5");
-  editRaw(p, [](hid_t f) {
-    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
-    rawDataset(g, "level0", {37, 53, 2}, {16, 8, 2}, H5T_IEEE_F32LE, {});
-  });
+  replaceCraterDataset(p, "level0", {37, 53, 2}, {16, 8, 2}, H5T_IEEE_F32LE);
   EXPECT_EQ(openError(p), "store::open(): " + p.string() +
                               ": grid 'crater' dataset 'level0' has rank 3, expected 2");
 }
 
 TEST(Store, RejectsADatasetOfTheWrongType) {
   const fs::path p = writeStandardStore("bad-type.h5");
-  editRaw(p, [](hid_t f) {
-    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
-    const H5 str(H5Tcopy(H5T_C_S1), H5Tclose);
-    ok(H5Tset_size(str, 8));
-    rawDataset(g, "level1", {19, 27}, {16, 8}, str, {});
-  });
+  const H5 str(H5Tcopy(H5T_C_S1), H5Tclose);
+  ok(H5Tset_size(str, 8));
+  replaceCraterDataset(p, "level1", {19, 27}, {16, 8}, str);
   EXPECT_EQ(openError(p), "store::open(): " + p.string() +
                               ": grid 'crater' dataset 'level1' has type string, expected float32 "
                               "(attribute sample_type)");
   // A number of the wrong width is as wrong as a string.
-  editRaw(p, [](hid_t f) {
-    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
-    rawDataset(g, "level1", {19, 27}, {16, 8}, H5T_IEEE_F64LE, {});
-  });
+  replaceCraterDataset(p, "level1", {19, 27}, {16, 8}, H5T_IEEE_F64LE);
   EXPECT_EQ(openError(p), "store::open(): " + p.string() +
                               ": grid 'crater' dataset 'level1' has type float64, expected float32 "
                               "(attribute sample_type)");
@@ -804,17 +805,11 @@ TEST(Store, RejectsADatasetOfTheWrongType) {
 
 TEST(Store, RejectsChunkDimensionsThatDoNotMatchThePatchShape) {
   const fs::path p = writeStandardStore("bad-chunks.h5");
-  editRaw(p, [](hid_t f) {
-    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
-    rawDataset(g, "level0", {37, 53}, {10, 10}, H5T_IEEE_F32LE, {});
-  });
+  replaceCraterDataset(p, "level0", {37, 53}, {10, 10}, H5T_IEEE_F32LE);
   EXPECT_EQ(openError(p), "store::open(): " + p.string() +
                               ": grid 'crater' dataset 'level0' has chunks 10x10, expected 16x8 "
                               "(attribute patch_shape 16x8, clipped to the level)");
-  editRaw(p, [](hid_t f) {
-    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
-    rawDataset(g, "level0", {37, 53}, {}, H5T_IEEE_F32LE, {});  // contiguous
-  });
+  replaceCraterDataset(p, "level0", {37, 53}, {}, H5T_IEEE_F32LE);  // contiguous
   EXPECT_EQ(openError(p), "store::open(): " + p.string() +
                               ": grid 'crater' dataset 'level0' is not chunked, expected chunks "
                               "of 16x8 (attribute patch_shape 16x8, clipped to the level)");
@@ -822,10 +817,7 @@ TEST(Store, RejectsChunkDimensionsThatDoNotMatchThePatchShape) {
 
 TEST(Store, RejectsAShapeThatContradictsTheAttributesAndAMissingLevel) {
   const fs::path p = writeStandardStore("bad-shape.h5");
-  editRaw(p, [](hid_t f) {
-    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
-    rawDataset(g, "level2", {10, 13}, {10, 8}, H5T_IEEE_F32LE, {});
-  });
+  replaceCraterDataset(p, "level2", {10, 13}, {10, 8}, H5T_IEEE_F32LE);
   EXPECT_EQ(openError(p), "store::open(): " + p.string() +
                               ": grid 'crater' dataset 'level2' has shape 10x13, expected 10x14 "
                               "(attributes rows, cols, halved per level)");

@@ -5,8 +5,10 @@
 #include <regolith/topo/Body.hpp>
 
 #include <glm/vec3.hpp>
+#include <gtest/gtest.h>
 #include <proj.h>
 
+#include <iostream>
 #include <sstream>
 #include <string>
 
@@ -61,6 +63,27 @@ inline std::string num(double v) {
 inline std::string projEllipsoid(const topo::Body& body) {
   return body.isSphere() ? " +R=" + num(body.equatorialRadius())
                          : " +a=" + num(body.equatorialRadius()) + " +b=" + num(body.polarRadius());
+}
+
+/// Records and prints a measured maximum error so that the figure can be quoted.
+inline void report(const std::string& key, double value) {
+  std::ostringstream s;
+  s.precision(3);
+  s << std::scientific << value;
+  ::testing::Test::RecordProperty(key, s.str());
+  std::cout << "[ measured ] " << key << " = " << s.str() << '\n';
+}
+
+/// Message of the exception of type Ex thrown by f, or an empty string (and a failure).
+template <class Ex, class F>
+std::string messageOf(F&& f) {
+  try {
+    f();
+  } catch (const Ex& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected an exception, none was thrown";
+  return {};
 }
 
 }  // namespace regolith::test

@@ -49,26 +49,8 @@ std::string projCart(const Body& body) {
          projEllipsoid(body);
 }
 
-/// Records and prints a measured maximum error so that the figure can be quoted.
-void report(const std::string& key, double value) {
-  std::ostringstream s;
-  s.precision(3);
-  s << std::scientific << value;
-  ::testing::Test::RecordProperty(key, s.str());
-  std::cout << "[ measured ] " << key << " = " << s.str() << '\n';
-}
-
-/// Message of the exception of type Ex thrown by f, or an empty string (and a failure).
-template <class Ex, class F>
-std::string messageOf(F&& f) {
-  try {
-    f();
-  } catch (const Ex& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected an exception, none was thrown";
-  return {};
-}
+using regolith::test::messageOf;
+using regolith::test::report;
 
 double lonDiffDeg(double a, double b) { return std::remainder(a - b, 360.0); }
 

@@ -50,24 +50,8 @@ std::string degreesIn(const std::string& projection) {
   return "+proj=pipeline +step +proj=unitconvert +xy_in=deg +xy_out=rad +step " + projection;
 }
 
-void report(const std::string& key, double value) {
-  std::ostringstream s;
-  s.precision(3);
-  s << std::scientific << value;
-  ::testing::Test::RecordProperty(key, s.str());
-  std::cout << "[ measured ] " << key << " = " << s.str() << '\n';
-}
-
-template <class Ex, class F>
-std::string messageOf(F&& f) {
-  try {
-    f();
-  } catch (const Ex& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected an exception, none was thrown";
-  return {};
-}
+using regolith::test::messageOf;
+using regolith::test::report;
 
 bool contains(const std::string& s, const std::string& part) {
   return s.find(part) != std::string::npos;

@@ -45,12 +45,6 @@ struct MemFetch {
   long cols;
   float operator()(long r, long c) const noexcept { return data[r * cols + c]; }
 };
-struct SourceFetch {
-  const SampleSource* src;
-  float operator()(long r, long c) const {
-    return src->sample(static_cast<std::size_t>(r), static_cast<std::size_t>(c));
-  }
-};
 
 // Paged sources: loads from the current block when it holds the sample, else asks the
 // source (a stencil straddling two blocks).
