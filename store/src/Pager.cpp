@@ -1,4 +1,5 @@
 #include <regolith/store/Pager.hpp>
+#include <regolith/topo/BlockTable.hpp>
 #include <regolith/topo/Error.hpp>
 
 #include <algorithm>
@@ -44,6 +45,7 @@ class PagedSource final : public topo::SampleSource {
         level_(static_cast<std::uint32_t>(level)),
         store_(std::move(store)),
         cache_(std::move(cache)),
+        table_(cache_->blockTable(gridId, level_, rows_, cols_, pr_, pc_)),
         loader_([this](const PatchKey& k) { return loadPatch(*store_, info_, k); }) {}
 
   std::size_t rows() const noexcept override { return rows_; }
@@ -73,6 +75,8 @@ class PagedSource final : public topo::SampleSource {
     }
   }
 
+  const topo::BlockTable* blockTable() const noexcept override { return table_.get(); }
+
   bool block(std::size_t row, std::size_t col, topo::SampleBlock& out) const override {
     auto p = patchAt(row, col);
     out.data = p->samples.data();
@@ -97,6 +101,7 @@ class PagedSource final : public topo::SampleSource {
   std::uint32_t gridId_, level_;
   std::shared_ptr<const Store> store_;
   std::shared_ptr<PatchCache> cache_;
+  std::shared_ptr<const topo::BlockTable> table_;  // lock-free hits on resident patches
   PatchCache::Loader loader_;  // made once: a std::function per lookup costs more than a hit
 };
 

@@ -1,13 +1,31 @@
 // PatchCache: a byte-budgeted patch cache with three eviction policies
 // (docs/cache-policies.md).
 //
-// One mutex guards everything. A hit is one hash lookup plus the policy's bookkeeping:
-//   Lru               splice the entry's list node to the back               O(1)
-//   HitCount          re-rank the entry in an ordered index (hits, lastUse)  O(log n)
-//   DecayingHitCount  the same index, keyed by a decayed score               O(log n)
-// Re-ranking updates the key in place when the order allows it (the patch in use is usually
-// the last element), else moves the std::set node with extract()/insert(); either way a hit
-// allocates nothing. The victim is the front of the list or the first element of the index.
+// One mutex guards the maps and the index. Every policy ranks resident patches in one
+// ordered index (std::set) of (score, lastUse), whose first element is the next victim:
+//   Lru               score 0, so the order is lastUse                        O(log n)
+//   HitCount          score = hits                                            O(log n)
+//   DecayingHitCount  score = decayed hits                                    O(log n)
+// A hit under the lock re-ranks at once: in place when the order allows it (the patch in
+// use is usually the last element), else by moving the std::set node with extract()/
+// insert(); either way a hit allocates nothing.
+//
+// Lock-free hits. With Lru and HitCount, every resident patch of a grid level that has a
+// topo::BlockTable (Pager sources register one) is published there, and queries entering it
+// count their hit in the patch's own counters without the lock (topo/BlockTable.hpp). The
+// index then lags behind those counters; eviction corrects it lazily: while the first
+// element's live (hits, lastUse) is newer than its indexed key, it is re-ranked with the live
+// key and the next first element examined. Keys only grow within one thread, so the victim is
+// the one an eager index would choose (across threads, recency ticks are reserved in runs
+// of 64 and the order is approximate). Each lock-free hit costs at most one re-rank, so
+// eviction stays O(log n) amortised. DecayingHitCount publishes nothing: its scores are
+// rescaled under the lock, so all its hits take the lock.
+//
+// Reclamation. An evicted patch is retracted from its table and kept on a retired list until
+// no thread's hazard record names it (checked after a process-wide barrier), so a query that
+// found it in the table a moment before can finish reading it. Retired patches no longer
+// count against the budget, like patches handed out by get(); each thread protects at most
+// one, so at most one per querying thread is retired at a time.
 //
 // Decay is lazy. Halving every resident count at each period boundary would be O(n) per
 // period; instead a hit made e periods after the last rescale adds 2^e to the patch's score.
@@ -26,13 +44,13 @@
 // 260 ns of bookkeeping per miss.)
 
 #include <regolith/store/PatchCache.hpp>
+#include <regolith/topo/BlockTable.hpp>
 #include <regolith/topo/Error.hpp>
 
 #include <cmath>
 #include <condition_variable>
 #include <exception>
 #include <iterator>
-#include <list>
 #include <mutex>
 #include <set>
 #include <string>
@@ -45,11 +63,11 @@ namespace {
 
 /// Bytes charged per patch on top of its samples: what the patch and the cache's
 /// bookkeeping take besides the sample array, rounded up. On x86-64 with glibc and
-/// libstdc++: the Patch in its make_shared block (80 B), the hash-map node (80 B) and its
-/// bucket slot (8 B), the policy's index node (48 B list node or 80 B set node, with
-/// malloc's header) and the sample buffer's malloc header (16 B): 230 to 270 B. The rest
-/// covers an in-flight record and allocator rounding.
-constexpr std::size_t kPatchOverheadBytes = 320;
+/// libstdc++: the Patch in its make_shared block (80 B), the hash-map node (64 B) and its
+/// bucket slot (8 B), the index's set node (80 B), the Resident record with its published
+/// block (112 B) and the sample buffer's malloc header (16 B): 360 B, with malloc's headers.
+/// The rest covers allocator rounding.
+constexpr std::size_t kPatchOverheadBytes = 384;
 
 /// Scores of DecayingHitCount are rescaled when a hit's weight reaches 2^kRescaleExponent.
 constexpr int kRescaleExponent = 64;
@@ -94,11 +112,11 @@ std::string_view toString(CachePolicy p) noexcept {
 
 struct PatchCache::Impl {
   /// Position of a patch in the ranked index: the first element is the next victim.
-  /// score and lastUse are mutable so that rerank() can raise them in place when that keeps
+  /// score and lastUse are mutable so that rerank() can change them in place when that keeps
   /// the set's order (see there).
   struct Rank {
-    mutable double score = 0.0;         // hits (HitCount) or decayed hits (DecayingHitCount)
-    mutable std::uint64_t lastUse = 0;  // unique tick: ties in score go to the least recent
+    mutable double score = 0.0;         // 0 (Lru), hits (HitCount) or decayed hits
+    mutable std::uint64_t lastUse = 0;  // recency tick: ties in score go to the least recent
     PatchKey key;
   };
   struct RankLess {
@@ -107,14 +125,23 @@ struct PatchCache::Impl {
     }
   };
   using RankIndex = std::set<Rank, RankLess>;
-  using LruList = std::list<PatchKey>;
+
+  /// A resident patch. Separately allocated: its address is published in a BlockTable, and
+  /// it may outlive its map entry on the retired list.
+  struct Resident {
+    topo::PublishedBlock block;  // the patch's samples and geometry, and its live counters
+    PatchPtr patch;
+    std::uint64_t lockedHits = 0;  // hits taken under the lock
+    [[nodiscard]] std::uint64_t hits() const noexcept {
+      return lockedHits + block.fastHits.load(std::memory_order_relaxed);
+    }
+  };
 
   struct Entry {
-    PatchPtr patch;
+    std::unique_ptr<Resident> res;
     std::size_t bytes = 0;
-    std::uint64_t hits = 0;
-    RankIndex::iterator rank;  // HitCount, DecayingHitCount
-    LruList::iterator lru;     // Lru
+    RankIndex::iterator rank;
+    topo::BlockTable* table = nullptr;  // where the patch is published, if anywhere
   };
 
   /// A load in flight; the fields are guarded by the cache's mutex.
@@ -128,6 +155,17 @@ struct PatchCache::Impl {
   Impl(std::size_t capacityBytes, CachePolicy p, std::uint64_t period)
       : policy(p), decayPeriod(period), capacity(capacityBytes), untilNextEpoch(period) {}
 
+  ~Impl() {
+    // No source of this cache is alive (each holds the cache), so no query can be reading a
+    // retired patch: free them all, and clear the hazard records that still name them.
+    for (const auto& r : retired) topo::hazard::forget(&r->block);
+    for (const auto& [key, e] : entries) {
+      if (e.table != nullptr) topo::hazard::forget(&e.res->block);
+    }
+  }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+
   const CachePolicy policy;
   const std::uint64_t decayPeriod;
 
@@ -136,13 +174,21 @@ struct PatchCache::Impl {
   std::size_t capacity;
   std::unordered_map<PatchKey, Entry, PatchKeyHash> entries;
   RankIndex ranks;
-  LruList lru;
   std::unordered_map<PatchKey, std::shared_ptr<Pending>, PatchKeyHash> inFlight;
+  /// Block tables by (grid << 32 | level).
+  std::unordered_map<std::uint64_t, std::shared_ptr<topo::BlockTable>> tables;
+  std::vector<std::unique_ptr<Resident>> retired;
   std::size_t residentBytes = 0;
-  CacheStats counters;           // hits, misses, loads, evictions, bytesLoaded
-  std::uint64_t clock = 0;       // lastUse ticks
-  std::uint64_t untilNextEpoch;  // accesses left in this decay period
-  double hitWeight = 1.0;        // 2^(decay periods since the last rescale)
+  CacheStats counters;  // hits (under the lock), misses, loads, evictions, bytesLoaded
+  std::uint64_t fastHitsEvicted = 0;  // lock-free hits of patches no longer resident
+  std::uint64_t fastHitsBase = 0;     // lock-free hits before the last resetStats()
+  std::uint64_t untilNextEpoch;       // accesses left in this decay period
+  double hitWeight = 1.0;             // 2^(decay periods since the last rescale)
+
+  static std::uint64_t tableKey(std::uint32_t grid, std::uint32_t level) noexcept {
+    return (std::uint64_t{grid} << 32U) | level;
+  }
+  [[nodiscard]] bool publishes() const noexcept { return policy != CachePolicy::DecayingHitCount; }
 
   /// Counts one access (get or find) towards the decay period.
   void countAccess() {
@@ -166,12 +212,13 @@ struct PatchCache::Impl {
     ranks.swap(rebuilt);
   }
 
-  /// Moves an entry to its new rank, which is above its old one (a higher score or an equal
-  /// one with a later tick). When it still sorts below its successor, as for the patch in
-  /// use (usually the last), the order is unchanged and the key is updated in place.
-  void rerank(Entry& e, double score) {
-    const Rank updated{score, ++clock, e.rank->key};
-    if (const auto next = std::next(e.rank); next == ranks.end() || RankLess{}(updated, *next)) {
+  /// Gives an entry the rank (score, lastUse): in place when it still sorts between its
+  /// neighbours (the patch in use is usually the last element), else by moving its node.
+  void rerank(Entry& e, double score, std::uint64_t lastUse) {
+    const Rank updated{score, lastUse, e.rank->key};
+    const bool afterPrev = e.rank == ranks.begin() || RankLess{}(*std::prev(e.rank), updated);
+    const auto next = std::next(e.rank);
+    if (afterPrev && (next == ranks.end() || RankLess{}(updated, *next))) {
       e.rank->score = updated.score;
       e.rank->lastUse = updated.lastUse;
       return;
@@ -188,7 +235,7 @@ struct PatchCache::Impl {
     if (const auto it = entries.find(key); it != entries.end()) {
       ++counters.hits;
       touch(it->second);
-      return it->second.patch;
+      return it->second.res->patch;
     }
     ++counters.misses;
     return nullptr;
@@ -196,30 +243,86 @@ struct PatchCache::Impl {
 
   /// Records a hit on a resident entry.
   void touch(Entry& e) {
-    ++e.hits;
+    constexpr auto relaxed = std::memory_order_relaxed;
+    topo::PublishedBlock& b = e.res->block;
+    ++e.res->lockedHits;
+    const std::uint64_t hits = e.res->hits();
+    const std::uint64_t now = topo::hazard::tick(topo::hazard::acquire());
+    b.lastUse.store(now, relaxed);
     switch (policy) {
-      case CachePolicy::Lru: lru.splice(lru.end(), lru, e.lru); break;
-      case CachePolicy::HitCount: rerank(e, static_cast<double>(e.hits)); break;
-      case CachePolicy::DecayingHitCount: rerank(e, e.rank->score + hitWeight); break;
+      case CachePolicy::Lru: rerank(e, 0.0, now); break;
+      case CachePolicy::HitCount: rerank(e, static_cast<double>(hits), now); break;
+      case CachePolicy::DecayingHitCount: rerank(e, e.rank->score + hitWeight, now); break;
     }
   }
 
+  /// The entry's live rank, from its counters (lock-free hits included).
+  Rank liveRank(const Entry& e) const {
+    constexpr auto relaxed = std::memory_order_relaxed;
+    const topo::PublishedBlock& b = e.res->block;
+    const double score = policy == CachePolicy::HitCount
+                             ? static_cast<double>(e.res->hits())
+                             : e.rank->score;  // Lru: 0; Decaying: only locked hits
+    return {score, b.lastUse.load(relaxed), e.rank->key};
+  }
+
+  /// Evicts the policy's victim (the index must not be empty).
   void evictOne() {
-    const PatchKey victim = policy == CachePolicy::Lru ? lru.front() : ranks.begin()->key;
-    const auto it = entries.find(victim);
-    if (policy == CachePolicy::Lru) {
-      lru.erase(it->second.lru);
-    } else {
-      ranks.erase(it->second.rank);
+    // Lazy correction of ranks that lock-free hits have made stale (bounded: each entry is
+    // corrected at most once per call, then the first element is taken as it is).
+    for (std::size_t corrections = 0; publishes() && corrections < ranks.size(); ++corrections) {
+      Entry& first = entries.find(ranks.begin()->key)->second;
+      const Rank live = liveRank(first);
+      if (live.score == first.rank->score && live.lastUse == first.rank->lastUse) break;
+      rerank(first, live.score, live.lastUse);
     }
-    residentBytes -= it->second.bytes;
+    const auto it = entries.find(ranks.begin()->key);
+    Entry& e = it->second;
+    ranks.erase(e.rank);
+    if (e.table != nullptr) e.table->retract(it->first.row, it->first.col);
+    residentBytes -= e.bytes;
+    fastHitsEvicted += e.res->block.fastHits.load(std::memory_order_relaxed);
+    if (e.table != nullptr) retired.push_back(std::move(e.res));
     entries.erase(it);
     ++counters.evictions;
   }
 
+  /// Frees the retired patches that no thread may be reading any more.
+  void reclaim() {
+    if (retired.empty() || !topo::hazard::barrier()) return;
+    std::erase_if(retired, [](const std::unique_ptr<Resident>& r) {
+      return !topo::hazard::isProtected(&r->block);
+    });
+  }
+
   /// Evicts until `incoming` more bytes fit (incoming <= capacity).
   void makeRoom(std::size_t incoming) {
-    while (residentBytes > capacity - incoming && !(lru.empty() && ranks.empty())) evictOne();
+    bool evicted = false;
+    while (residentBytes > capacity - incoming && !ranks.empty()) {
+      evictOne();
+      evicted = true;
+    }
+    if (evicted) reclaim();
+  }
+
+  /// Publishes a resident entry in `table` (which must be its grid level's).
+  static void publishIn(topo::BlockTable& table, const PatchKey& key, Entry& e) {
+    if (!table.hasBlock(key.row, key.col)) return;  // a key outside the registered level
+    topo::PublishedBlock& b = e.res->block;
+    const Patch& p = *e.res->patch;
+    b.data = p.samples.data();
+    b.row0 = std::size_t{key.row} * table.blockRows();
+    b.col0 = std::size_t{key.col} * table.blockCols();
+    b.rows = p.rows;
+    b.cols = p.cols;
+    b.stride = p.cols;
+    const auto d = [](std::size_t i) { return static_cast<double>(i); };
+    b.uLo = d(b.col0);
+    b.uHi = d(b.col0 + b.cols) - 1.0;
+    b.vLo = d(b.row0);
+    b.vHi = d(b.row0 + b.rows) - 1.0;
+    table.publish(key.row, key.col, &b);
+    e.table = &table;
   }
 
   /// Makes `patch` resident under `key`, unless it is larger than the whole budget or the key
@@ -227,23 +330,36 @@ struct PatchCache::Impl {
   void insertLocked(const PatchKey& key, PatchPtr patch) {
     const std::size_t bytes = patch->bytes();
     if (bytes > capacity) return;
-    const auto [it, inserted] = entries.try_emplace(key);
-    if (!inserted) return;
-    makeRoom(bytes);  // the new entry is not in the policy's index yet, so it stays
-    Entry& e = it->second;
-    e.patch = std::move(patch);
-    e.bytes = bytes;
+    if (entries.contains(key)) return;
+    makeRoom(bytes);
+    auto res = std::make_unique<Resident>();
+    res->patch = std::move(patch);
+    const std::uint64_t now = topo::hazard::tick(topo::hazard::acquire());
+    res->block.lastUse.store(now, std::memory_order_relaxed);
+    const auto rank = ranks.insert(Rank{0.0, now, key}).first;
+    Entry* e = nullptr;
     try {
-      if (policy == CachePolicy::Lru) {
-        e.lru = lru.insert(lru.end(), key);
-      } else {
-        e.rank = ranks.insert(Rank{0.0, ++clock, key}).first;
-      }
+      e = &entries.try_emplace(key).first->second;
     } catch (...) {
-      entries.erase(it);
+      ranks.erase(rank);
       throw;
     }
+    e->res = std::move(res);
+    e->bytes = bytes;
+    e->rank = rank;
     residentBytes += bytes;
+    if (publishes()) {
+      if (const auto t = tables.find(tableKey(key.grid, key.level)); t != tables.end()) {
+        publishIn(*t->second, key, *e);
+      }
+    }
+  }
+
+  /// Lock-free hits counted so far (resident and evicted patches).
+  [[nodiscard]] std::uint64_t fastHitsTotal() const {
+    std::uint64_t n = fastHitsEvicted;
+    for (const auto& [key, e] : entries) n += e.res->block.fastHits.load(std::memory_order_relaxed);
+    return n;
   }
 };
 
@@ -330,10 +446,41 @@ void PatchCache::insert(std::shared_ptr<const Patch> patch) {
   m.insertLocked(key, std::move(patch));
 }
 
+std::shared_ptr<const topo::BlockTable> PatchCache::blockTable(std::uint32_t grid,
+                                                               std::uint32_t level,
+                                                               std::size_t rows, std::size_t cols,
+                                                               std::size_t patchRows,
+                                                               std::size_t patchCols) {
+  Impl& m = *impl_;
+  const std::lock_guard lock(m.mutex);
+  auto& slot = m.tables[Impl::tableKey(grid, level)];
+  if (slot) {
+    if (slot->rows() != rows || slot->cols() != cols || slot->blockRows() != patchRows ||
+        slot->blockCols() != patchCols) {
+      throw InvalidArgument("store::PatchCache::blockTable(): grid " + std::to_string(grid) +
+                            " level " + std::to_string(level) + " was registered as " +
+                            std::to_string(slot->rows()) + "x" + std::to_string(slot->cols()) +
+                            " samples in " + std::to_string(slot->blockRows()) + "x" +
+                            std::to_string(slot->blockCols()) + " patches, now requested as " +
+                            std::to_string(rows) + "x" + std::to_string(cols) + " in " +
+                            std::to_string(patchRows) + "x" + std::to_string(patchCols));
+    }
+    return slot;
+  }
+  slot = std::make_shared<topo::BlockTable>(rows, cols, patchRows, patchCols);
+  if (m.publishes()) {
+    for (auto& [key, e] : m.entries) {
+      if (key.grid == grid && key.level == level) Impl::publishIn(*slot, key, e);
+    }
+  }
+  return slot;
+}
+
 CacheStats PatchCache::stats() const {
   const Impl& m = *impl_;
   const std::lock_guard lock(m.mutex);
   CacheStats s = m.counters;
+  s.hits += m.fastHitsTotal() - m.fastHitsBase;
   s.residentBytes = m.residentBytes;
   s.residentPatches = m.entries.size();
   s.capacityBytes = m.capacity;
@@ -341,8 +488,10 @@ CacheStats PatchCache::stats() const {
 }
 
 void PatchCache::resetStats() {
-  const std::lock_guard lock(impl_->mutex);
-  impl_->counters = CacheStats{};
+  Impl& m = *impl_;
+  const std::lock_guard lock(m.mutex);
+  m.counters = CacheStats{};
+  m.fastHitsBase = m.fastHitsTotal();
 }
 
 std::size_t PatchCache::capacityBytes() const {
@@ -362,11 +511,8 @@ CachePolicy PatchCache::policy() const noexcept { return impl_->policy; }
 void PatchCache::clear() {
   Impl& m = *impl_;
   const std::lock_guard lock(m.mutex);
-  m.counters.evictions += m.entries.size();
-  m.entries.clear();
-  m.ranks.clear();
-  m.lru.clear();
-  m.residentBytes = 0;
+  while (!m.ranks.empty()) m.evictOne();
+  m.reclaim();
 }
 
 }  // namespace regolith::store

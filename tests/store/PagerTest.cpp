@@ -185,3 +185,156 @@ TEST(Pager, GridsOutliveThePagerThatMadeThem) {
   }
   EXPECT_TRUE(dem->height(0.0, 0.0).valid());
 }
+
+// ---- Lock-free hits on resident patches (topo/BlockTable.hpp, PatchCache.cpp) ----------
+
+namespace {
+// A point inside patch (pr, pc) of the DEM (128×128 patches, sample (r, c) at x = −500 + c,
+// y = 400 − r), shifted by `d` samples so that successive points differ.
+std::pair<double, double> inPatch(int pr, int pc, double d = 0.0) {
+  return {-500.0 + pc * 128 + 40.0 + d, 400.0 - (pr * 128 + 40.0) - d};
+}
+double heightIn(const TopoDem& dem, int pr, int pc, double d = 0.0) {
+  const auto [x, y] = inPatch(pr, pc, d);
+  return dem.height(x, y).height;
+}
+PatchKey keyIn(const Pager& pager, int pr, int pc) {
+  return pager.keyOf("dem", 0, static_cast<std::size_t>(pr) * 128 + 40,
+                     static_cast<std::size_t>(pc) * 128 + 40);
+}
+std::size_t patchBytes() {
+  Patch p;
+  p.samples.resize(128 * 128);
+  return p.bytes();
+}
+TopoDem inMemoryDem() {
+  const GridInfo info = demInfo(700, 900);
+  return {topoGridOf(info), placementOf(info), fixture().demSamples};
+}
+}  // namespace
+
+TEST(Pager, QueriesJumpingBetweenResidentPatchesCountOneHitPerPatchEntered) {
+  Opened o = openFixture();
+  const TopoDem dem = o.pager.dem("dem");
+  const TopoDem mem = inMemoryDem();
+  for (int pr = 0; pr < 2; ++pr) {
+    for (int pc = 0; pc < 2; ++pc) (void)heightIn(dem, pr, pc);  // make them resident
+  }
+  (void)heightIn(dem, 1, 1, 1.0);  // the thread's block: patch (1, 1)
+  (void)heightIn(dem, 1, 1, 2.0);
+  o.cache->resetStats();
+  // Runs: A A | B B B | A | C | A  ->  5 patches entered.
+  const int seq[][2] = {{0, 0}, {0, 0}, {0, 1}, {0, 1}, {0, 1}, {0, 0}, {1, 0}, {0, 0}};
+  double d = 0.0;
+  for (const auto& p : seq) {
+    d += 0.37;
+    ASSERT_EQ(heightIn(dem, p[0], p[1], d), heightIn(mem, p[0], p[1], d));
+  }
+  const CacheStats s = o.cache->stats();
+  EXPECT_EQ(s.hits, 5u);
+  EXPECT_EQ(s.misses, 0u);
+  EXPECT_EQ(s.loads, 0u);
+}
+
+TEST(Pager, LruEvictsTheLeastRecentPatchWhenHitsTookTheLockFreePath) {
+  Opened o = openFixture(3 * patchBytes());
+  ASSERT_EQ(o.cache->policy(), CachePolicy::Lru);
+  const TopoDem dem = o.pager.dem("dem");
+  (void)heightIn(dem, 0, 0);  // loads P1, P2, P3
+  (void)heightIn(dem, 0, 1);
+  (void)heightIn(dem, 0, 2);
+  (void)heightIn(dem, 0, 0, 1.0);  // P1 is used again (a lock-free hit)
+  ASSERT_EQ(o.cache->stats().loads, 3u);
+  (void)heightIn(dem, 0, 3);  // P4: one patch must go, and P2 is the least recent
+  EXPECT_TRUE(o.cache->contains(keyIn(o.pager, 0, 0)));
+  EXPECT_FALSE(o.cache->contains(keyIn(o.pager, 0, 1)));
+  EXPECT_TRUE(o.cache->contains(keyIn(o.pager, 0, 2)));
+  EXPECT_TRUE(o.cache->contains(keyIn(o.pager, 0, 3)));
+}
+
+TEST(Pager, HitCountEvictsTheLeastHitPatchWhenHitsTookTheLockFreePath) {
+  auto store = std::make_shared<const Store>(Store::open(fixture().path));
+  auto cache = std::make_shared<PatchCache>(3 * patchBytes(), CachePolicy::HitCount);
+  const Pager pager(store, cache);
+  const TopoDem dem = pager.dem("dem");
+  (void)heightIn(dem, 0, 0);  // P1, P2, P3 loaded, no hits yet
+  (void)heightIn(dem, 0, 1);
+  (void)heightIn(dem, 0, 2);
+  double d = 0.0;
+  for (const int pc : {0, 2, 0, 2, 0}) (void)heightIn(dem, 0, pc, d += 0.5);  // P1 3, P3 2
+  EXPECT_EQ(cache->stats().hits, 5u);
+  (void)heightIn(dem, 0, 3);  // P4 loaded: P2 has the fewest hits (0)
+  EXPECT_FALSE(cache->contains(keyIn(pager, 0, 1)));
+  (void)heightIn(dem, 0, 4);  // P5 loaded: now P4 has the fewest (0), not P1 (3) or P3 (2)
+  EXPECT_TRUE(cache->contains(keyIn(pager, 0, 0)));
+  EXPECT_TRUE(cache->contains(keyIn(pager, 0, 2)));
+  EXPECT_FALSE(cache->contains(keyIn(pager, 0, 3)));
+  EXPECT_TRUE(cache->contains(keyIn(pager, 0, 4)));
+}
+
+TEST(Pager, AnEvictedPatchStaysReadableWhileAThreadIsInsideIt) {
+  Opened o = openFixture();
+  const TopoDem dem = o.pager.dem("dem");
+  const TopoDem mem = inMemoryDem();
+  (void)heightIn(dem, 2, 2);  // resident, so the reader enters it through the table
+  (void)heightIn(dem, 0, 0);  // this thread's own block is elsewhere
+  std::atomic<int> step{0};
+  std::size_t mismatches = 0;
+  std::thread reader([&] {
+    (void)heightIn(dem, 2, 2, 1.0);  // enters patch (2, 2) and holds it as its block
+    (void)heightIn(dem, 2, 2, 2.0);
+    step = 1;
+    while (step != 2) std::this_thread::yield();
+    for (int i = 0; i < 2000; ++i) {  // reads the evicted patch through its block
+      const double d = 0.03 * i;
+      const double a = heightIn(dem, 2, 2, d), b = heightIn(mem, 2, 2, d);
+      if (!(a == b || (std::isnan(a) && std::isnan(b)))) ++mismatches;  // (300, 301) is NaN
+    }
+    step = 3;
+    while (step != 4) std::this_thread::yield();
+  });
+  while (step != 1) std::this_thread::yield();
+  std::weak_ptr<const Patch> patch = o.cache->find(keyIn(o.pager, 2, 2));
+  ASSERT_FALSE(patch.expired());
+  o.cache->clear();  // evicts it while the reader is inside
+  EXPECT_EQ(o.cache->stats().residentPatches, 0u);
+  EXPECT_FALSE(patch.expired()) << "freed while a thread may read it";
+  step = 2;
+  while (step != 3) std::this_thread::yield();
+  EXPECT_EQ(mismatches, 0u);
+  EXPECT_FALSE(patch.expired());
+  step = 4;
+  reader.join();
+  o.cache->clear();  // the reader has ended: its patch is reclaimed now
+  EXPECT_TRUE(patch.expired());
+}
+
+TEST(Pager, EightThreadsJumpingBetweenPatchesUnderEvictionGetTheInMemoryAnswers) {
+  Opened o = openFixture(3 * patchBytes());
+  const TopoDem dem = o.pager.dem("dem");
+  const TopoDem mem = inMemoryDem();
+  std::vector<double> xs(1500), ys(1500), ref(1500);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> x(-500.0, 399.0), y(-299.0, 400.0);
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    xs[i] = x(rng);
+    ys[i] = y(rng);
+    ref[i] = mem.height(xs[i], ys[i]).height;
+  }
+  std::vector<std::size_t> wrong(8, 0);
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < 8; ++t) {
+    threads.emplace_back([&, t] {
+      for (std::size_t i = 0; i < xs.size(); ++i) {
+        const std::size_t j = (i * (t + 1) + 97 * t) % xs.size();
+        const double h = dem.height(xs[j], ys[j]).height;
+        if (!(h == ref[j] || (std::isnan(h) && std::isnan(ref[j])))) ++wrong[t];
+      }
+    });
+  }
+  for (auto& th : threads) th.join();
+  for (std::size_t t = 0; t < 8; ++t) EXPECT_EQ(wrong[t], 0u) << "thread " << t;
+  const CacheStats s = o.cache->stats();
+  EXPECT_LE(s.residentBytes, s.capacityBytes);
+  EXPECT_GT(s.evictions, 100u);
+}

@@ -68,6 +68,13 @@ inline thread_local std::shared_ptr<const void> tlBlockOwner;  // NOLINT
 inline const ThreadBlock& acquireBlock(const SampleSource& src, std::size_t r, std::size_t c) {
   ThreadBlock& tb = tlBlock;
   if (tb.source != src.id() || !tb.holds(r, c)) {
+    if (const BlockTable* table = src.blockTable(); table != nullptr) {
+      if (hazard::tlRecord == nullptr) hazard::acquire();  // once per thread
+      if (enterBlock(*table, src.id(), r, c, true) != nullptr) {
+        tlBlockOwner.reset();  // the hazard record protects the block now
+        return tb;
+      }
+    }
     SampleBlock fresh;
     if (src.block(r, c, fresh)) {
       const auto d = [](std::size_t i) { return static_cast<double>(i); };

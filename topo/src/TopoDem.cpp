@@ -103,6 +103,7 @@ TopoDem::TopoDem(TopoGrid grid, Placement placement, std::shared_ptr<const Sampl
   }
   resident_ = samples_->contiguous();
   sourceId_ = samples_->id();
+  table_ = samples_->blockTable();
   const double dx = grid_.spacingX(), dy = grid_.spacingY();
   index_ = {
       grid_.x0(), grid_.y0(), dx, dy, 1.0 / dx, 1.0 / dy, isPowerOfTwo(dx) && isPowerOfTwo(dy)};

@@ -11,6 +11,10 @@
 #include <utility>
 #include <vector>
 
+namespace regolith::topo {
+class BlockTable;
+}
+
 namespace regolith::store {
 
 /// Identifies one patch: an aligned block of one pyramid level of one grid.
@@ -86,7 +90,7 @@ struct CacheStats {
 };
 
 /// Holds patches up to a byte budget set at run time. Lookup is O(1) (hash map); eviction
-/// is O(log n) (HitCount, DecayingHitCount: an ordered index) or O(1) (Lru).
+/// is O(log n) (an ordered index, amortised over lock-free hits: see PatchCache.cpp).
 ///
 /// Invariant: residentBytes ≤ capacityBytes at every moment, under any concurrency. A
 /// patch larger than the whole budget is returned to the caller but not kept.
@@ -94,7 +98,8 @@ struct CacheStats {
 /// Thread-safety: every member may be called concurrently. Loads of different keys run in
 /// parallel outside the lock; concurrent requests for one key wait for a single load.
 /// Patches handed out stay valid (shared ownership) after eviction; they no longer count
-/// against the budget then.
+/// against the budget then. Hit counts taken without the lock (blockTable()) may miss a hit
+/// when two threads enter one patch at the same instant.
 class PatchCache {
  public:
   using Loader = std::function<std::shared_ptr<const Patch>(const PatchKey&)>;
@@ -117,6 +122,15 @@ class PatchCache {
   [[nodiscard]] bool contains(const PatchKey& key) const;
   /// Inserts a patch loaded elsewhere (prefetch); counts as a load, not a hit or miss.
   void insert(std::shared_ptr<const Patch> patch);
+
+  /// The lock-free table of one grid level's resident patches (topo/BlockTable.hpp), made
+  /// on first request and kept for the cache's life: with Lru and HitCount, every resident
+  /// patch of that level is published there, and queries entering it count their hit without
+  /// the lock (DecayingHitCount publishes nothing). Throws InvalidArgument if the level was
+  /// registered before with other sizes.
+  [[nodiscard]] std::shared_ptr<const topo::BlockTable> blockTable(
+      std::uint32_t grid, std::uint32_t level, std::size_t rows, std::size_t cols,
+      std::size_t patchRows, std::size_t patchCols);
 
   [[nodiscard]] CacheStats stats() const;
   void resetStats();

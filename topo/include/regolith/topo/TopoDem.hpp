@@ -2,6 +2,7 @@
 /// \file
 /// A local Cartesian DEM placed on a body.
 
+#include <regolith/topo/BlockTable.hpp>
 #include <regolith/topo/Placement.hpp>
 #include <regolith/topo/Query.hpp>
 #include <regolith/topo/TopoGrid.hpp>
@@ -78,9 +79,46 @@ struct ThreadBlock {
 inline thread_local ThreadBlock
     tlBlock;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
 
+/// Enters the block of `table` holding sample (r, c), if the table has one: protects it with
+/// the thread's hazard record (BlockTable.hpp: no lock, no fence) and counts a hit on it.
+/// Returns it, or null (the caller then takes the slow path, which also registers the
+/// thread's hazard record on first use). Requires r < rows and c < cols of the table.
+///
+/// A random query only announces the block (the hazard moves, so the thread's block is
+/// invalidated); the thread's block is set to it only when a second query in a row enters
+/// it, the start of a run. Writing the whole ThreadBlock on every switch made random
+/// queries three times slower: stores cannot leave the store buffer before the memory
+/// misses of earlier queries are served, so the buffer filled and stalled the processor.
+/// `promote` sets the thread's block at once (callers that read it next).
+inline const PublishedBlock* enterBlock(const BlockTable& table, std::uint64_t source,
+                                        std::size_t r, std::size_t c, bool promote) noexcept {
+  hazard::Record* rec = hazard::tlRecord;
+  if (rec == nullptr) return nullptr;
+  const BlockTable::Slot& slot = table.slot(r, c);
+  const PublishedBlock* b = slot.load(std::memory_order_acquire);
+  if (b == nullptr) return nullptr;
+  constexpr auto relaxed = std::memory_order_relaxed;
+  // Protected since the previous switch (so still alive, even if retracted meanwhile): a
+  // run of queries in b has begun, and it was counted when it was entered.
+  if (rec->ptr.load(relaxed) != b) {
+    tlBlock.source = 0;  // the hazard leaves the thread's block
+    hazard::protect(*rec, b);
+    // seq_cst: with a symmetric protect() this load must not pass the hazard store (on x86
+    // it is a plain load either way).
+    if (slot.load(std::memory_order_seq_cst) != b) return nullptr;  // retracted meanwhile
+    b->fastHits.store(b->fastHits.load(relaxed) + 1, relaxed);
+    b->lastUse.store(hazard::tick(*rec), relaxed);
+    if (!promote) return b;
+  }
+  tlBlock = {source,    b->data, b->row0, b->col0, b->rows, b->cols,
+             b->stride, b->uLo,  b->uHi,  b->vLo,  b->vHi};
+  return b;
+}
+
 /// Bilinear height from a block when the whole cell of (u, v) lies in it (false for NaN).
 /// False leaves the point to the generic kernel.
-inline bool blockBilinear(const ThreadBlock& b, double u, double v, double nodata, bool hasNodata,
+template <class Block>
+inline bool blockBilinear(const Block& b, double u, double v, double nodata, bool hasNodata,
                           double& h) noexcept {
   if (!(u >= b.uLo && u < b.uHi && v >= b.vLo && v < b.vHi)) return false;
   const auto c = static_cast<std::size_t>(u), r = static_cast<std::size_t>(v);
@@ -91,6 +129,11 @@ inline bool blockBilinear(const ThreadBlock& b, double u, double v, double nodat
   h = top + tv * (bottom - top);
   return h == h &&
          (!hasNodata || ((a != nodata) & (bb != nodata) & (cc != nodata) & (d != nodata)));
+}
+/// The same from a published block (BlockTable.hpp).
+inline bool publishedBilinear(const PublishedBlock& b, double u, double v, double nodata,
+                              bool hasNodata, double& h) noexcept {
+  return blockBilinear(b, u, v, nodata, hasNodata, h);
 }
 }  // namespace detail
 
@@ -150,7 +193,8 @@ class TopoDem {
   const float* resident_ = nullptr;  // samples_->contiguous(), cached
   detail::DemIndexer index_;
   detail::ResidentBilinear fast_;
-  std::uint64_t sourceId_ = 0;  // samples_->id()
+  std::uint64_t sourceId_ = 0;         // samples_->id()
+  const BlockTable* table_ = nullptr;  // samples_->blockTable(), cached
 
   [[nodiscard]] HeightSample heightGeneric(double x, double y, Interpolation interp) const;
 };
@@ -168,6 +212,14 @@ inline HeightSample TopoDem::height(double x, double y, Interpolation interp) co
       if (tb.source == sourceId_ &&
           detail::blockBilinear(tb, u, v, fast_.nodata, fast_.hasNodata, h)) [[likely]] {
         return {h, QueryStatus::Ok};
+      }
+      // Another resident block: a lock-free switch (random access), else the slow path.
+      if (table_ != nullptr && u >= 0.0 && v >= 0.0 && u < fast_.uMax && v < fast_.vMax) {
+        const PublishedBlock* b = detail::enterBlock(
+            *table_, sourceId_, static_cast<std::size_t>(v), static_cast<std::size_t>(u), false);
+        if (b != nullptr && detail::publishedBilinear(*b, u, v, fast_.nodata, fast_.hasNodata, h)) {
+          return {h, QueryStatus::Ok};
+        }
       }
     }
   }

@@ -1,0 +1,106 @@
+// BlockTable (lock-free lookup of published blocks) and the hazard records that let a
+// reclaimer know which retracted blocks a thread may still be reading.
+#include <regolith/topo/BlockTable.hpp>
+#include <regolith/topo/Error.hpp>
+
+#include <gtest/gtest.h>
+
+#include <thread>
+
+using namespace regolith;
+using namespace regolith::topo;
+
+namespace {
+// Every sample finds the block of its own (row / blockRows, col / blockCols).
+void expectLookupCoversTheGrid(std::size_t rows, std::size_t cols, std::size_t br, std::size_t bc) {
+  BlockTable t(rows, cols, br, bc);
+  const std::size_t nbr = (rows + br - 1) / br, nbc = (cols + bc - 1) / bc;
+  std::vector<PublishedBlock> blocks(nbr * nbc);
+  for (std::size_t i = 0; i < nbr; ++i) {
+    for (std::size_t j = 0; j < nbc; ++j) {
+      ASSERT_TRUE(t.hasBlock(i, j));
+      t.publish(i, j, &blocks[i * nbc + j]);
+    }
+  }
+  EXPECT_FALSE(t.hasBlock(nbr, 0));
+  EXPECT_FALSE(t.hasBlock(0, nbc));
+  for (std::size_t r = 0; r < rows; ++r) {
+    for (std::size_t c = 0; c < cols; ++c) {
+      ASSERT_EQ(t.find(r, c), &blocks[(r / br) * nbc + c / bc]) << r << ", " << c;
+    }
+  }
+}
+}  // namespace
+
+TEST(BlockTable, FindsTheBlockOfEverySampleWithPowerOfTwoBlocks) {
+  expectLookupCoversTheGrid(70, 90, 16, 32);  // partial blocks at both far edges
+}
+
+TEST(BlockTable, FindsTheBlockOfEverySampleWithOtherBlockSizes) {
+  expectLookupCoversTheGrid(70, 90, 12, 25);
+}
+
+TEST(BlockTable, RetractedBlocksAreNoLongerFound) {
+  BlockTable t(10, 10, 4, 4);
+  PublishedBlock a;
+  EXPECT_EQ(t.find(5, 5), nullptr);
+  t.publish(1, 1, &a);
+  EXPECT_EQ(t.find(5, 5), &a);
+  EXPECT_EQ(t.find(4, 7), &a);
+  EXPECT_EQ(t.find(3, 7), nullptr);
+  t.retract(1, 1);
+  EXPECT_EQ(t.find(5, 5), nullptr);
+}
+
+TEST(BlockTable, ZeroSizesAreRefusedClearly) {
+  EXPECT_THROW(BlockTable(0, 10, 4, 4), InvalidArgument);
+  EXPECT_THROW(BlockTable(10, 10, 4, 0), InvalidArgument);
+  try {
+    BlockTable(10, 10, 0, 4);
+    FAIL() << "no exception";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("blocks of 0 x 4"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Hazard, AThreadProtectsOneBlockUntilItMovesOnOrEnds) {
+  PublishedBlock a, b;
+  std::atomic<int> step{0};
+  std::thread reader([&] {
+    hazard::Record& rec = hazard::acquire();
+    EXPECT_EQ(&rec, hazard::tlRecord);
+    hazard::protect(rec, &a);
+    step = 1;
+    while (step != 2) std::this_thread::yield();
+    hazard::protect(rec, &b);  // moves on: a is free to go
+    step = 3;
+    while (step != 4) std::this_thread::yield();
+  });
+  while (step != 1) std::this_thread::yield();
+  ASSERT_TRUE(hazard::barrier());
+  EXPECT_TRUE(hazard::isProtected(&a));
+  EXPECT_FALSE(hazard::isProtected(&b));
+  step = 2;
+  while (step != 3) std::this_thread::yield();
+  ASSERT_TRUE(hazard::barrier());
+  EXPECT_FALSE(hazard::isProtected(&a));
+  EXPECT_TRUE(hazard::isProtected(&b));
+  step = 4;
+  reader.join();  // the ended thread's record protects nothing
+  ASSERT_TRUE(hazard::barrier());
+  EXPECT_FALSE(hazard::isProtected(&b));
+}
+
+TEST(Hazard, RecencyTicksIncreaseWithinAThreadAndDifferAcrossThreads) {
+  hazard::Record& rec = hazard::acquire();
+  std::uint64_t last = hazard::tick(rec);
+  for (int i = 0; i < 1000; ++i) {  // crosses several reserved runs of 64
+    const std::uint64_t t = hazard::tick(rec);
+    ASSERT_GT(t, last);
+    last = t;
+  }
+  std::uint64_t other = 0;
+  std::thread([&] { other = hazard::tick(hazard::acquire()); }).join();
+  EXPECT_GT(other, 0u);
+  EXPECT_NE(other, last);
+}

@@ -1,0 +1,131 @@
+#include <regolith/topo/BlockTable.hpp>
+#include <regolith/topo/Error.hpp>
+
+#include <linux/membarrier.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <bit>
+#include <mutex>
+#include <string>
+
+namespace regolith::topo {
+
+BlockTable::BlockTable(std::size_t rows, std::size_t cols, std::size_t blockRows,
+                       std::size_t blockCols)
+    : rows_(rows), cols_(cols), blockRows_(blockRows), blockCols_(blockCols), blocksPerRow_(0) {
+  if (rows == 0 || cols == 0 || blockRows == 0 || blockCols == 0) {
+    throw InvalidArgument("topo::BlockTable(): " + std::to_string(rows) + " x " +
+                          std::to_string(cols) + " samples in blocks of " +
+                          std::to_string(blockRows) + " x " + std::to_string(blockCols) +
+                          ", expected every size > 0");
+  }
+  blocksPerRow_ = (cols + blockCols - 1) / blockCols;
+  const auto shiftOf = [](std::size_t n) {
+    return std::has_single_bit(n) ? std::countr_zero(n) : -1;
+  };
+  rowShift_ = shiftOf(blockRows);
+  colShift_ = shiftOf(blockCols);
+  const std::size_t n = ((rows + blockRows - 1) / blockRows) * blocksPerRow_;
+  slots_ = std::make_unique<Slot[]>(n);
+  for (std::size_t i = 0; i < n; ++i) slots_[i].store(nullptr, std::memory_order_relaxed);
+}
+
+namespace hazard {
+namespace {
+
+std::atomic<Record*> gRecords{nullptr};  // NOLINT: the registry; records are never freed
+
+[[maybe_unused]] long membarrier(int cmd) { return syscall(__NR_membarrier, cmd, 0U, 0); }
+
+// Registers this process for expedited membarriers once. Failing that (an old kernel, a
+// seccomp filter), readers fence themselves.
+void initOnce() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+#if !defined(__SANITIZE_THREAD__)
+    const long cmds = membarrier(MEMBARRIER_CMD_QUERY);
+    if (cmds > 0 && (cmds & MEMBARRIER_CMD_PRIVATE_EXPEDITED) != 0 &&
+        membarrier(MEMBARRIER_CMD_REGISTER_PRIVATE_EXPEDITED) == 0) {
+      gAsymmetric.store(true, std::memory_order_seq_cst);
+    }
+#endif
+  });
+}
+
+// Gives the thread's record back when the thread ends.
+struct Releaser {
+  Record* rec = nullptr;
+  Releaser() = default;
+  Releaser(const Releaser&) = delete;
+  Releaser& operator=(const Releaser&) = delete;
+  ~Releaser() {
+    if (rec != nullptr) {
+      rec->ptr.store(nullptr, std::memory_order_release);
+      rec->inUse.store(false, std::memory_order_release);
+    }
+  }
+};
+thread_local Releaser tlReleaser;  // NOLINT
+
+}  // namespace
+
+Record& acquire() {
+  if (tlRecord != nullptr) return *tlRecord;
+  initOnce();
+  Record* rec = nullptr;
+  // Reuse a record of a thread that has ended, else add one.
+  for (Record* r = gRecords.load(std::memory_order_acquire); r != nullptr; r = r->next) {
+    bool expected = false;
+    if (!r->inUse.load(std::memory_order_relaxed) &&
+        r->inUse.compare_exchange_strong(expected, true, std::memory_order_acq_rel)) {
+      rec = r;
+      break;
+    }
+  }
+  if (rec == nullptr) {
+    rec = new Record;  // NOLINT(cppcoreguidelines-owning-memory): lives for the process
+    rec->inUse.store(true, std::memory_order_relaxed);
+    Record* head = gRecords.load(std::memory_order_relaxed);
+    do {
+      rec->next = head;
+    } while (!gRecords.compare_exchange_weak(head, rec, std::memory_order_release,
+                                             std::memory_order_relaxed));
+  }
+  rec->tickNext = rec->tickEnd = 0;
+  tlReleaser.rec = rec;
+  tlRecord = rec;
+  return *rec;
+}
+
+bool barrier() noexcept {
+#if defined(__SANITIZE_THREAD__)
+  // Readers store their hazards sequentially consistently and retract() is a seq_cst
+  // store, so the seq_cst loads of isProtected() need no fence (TSan cannot check fences).
+  return true;
+#else
+  if (gAsymmetric.load(std::memory_order_relaxed)) {
+    // Readers did not fence: without the process-wide barrier nothing may be freed now.
+    return membarrier(MEMBARRIER_CMD_PRIVATE_EXPEDITED) == 0;
+  }
+  std::atomic_thread_fence(std::memory_order_seq_cst);
+  return true;
+#endif
+}
+
+bool isProtected(const void* p) noexcept {
+  for (Record* r = gRecords.load(std::memory_order_acquire); r != nullptr; r = r->next) {
+    if (r->ptr.load(std::memory_order_seq_cst) == p) return true;
+  }
+  return false;
+}
+
+void forget(const void* p) noexcept {
+  for (Record* r = gRecords.load(std::memory_order_acquire); r != nullptr; r = r->next) {
+    const void* expected = p;
+    r->ptr.compare_exchange_strong(expected, nullptr, std::memory_order_acq_rel);
+  }
+}
+
+}  // namespace hazard
+}  // namespace regolith::topo
