@@ -7,8 +7,10 @@
 //   store/rover/gdal_rasterio   the same wheel points through GDAL RasterIO (2×2 window
 //       per query, bilinear in code) on the same data as a 256×256-tiled GeoTIFF, with
 //       GDAL's block cache set to the same 8 MiB
-//   store/resident/{paged,inmemory}/{rover,random}   queries on resident patches against
-//       the same samples held in one array
+//   store/resident/{paged,inmemory}/{rover,random}[_batch]   queries on resident patches
+//       against the same samples held in one array, one height() call per point or through
+//       heights() in batches of 4096; store/resident/patch_table/random is the floor: the same
+//       reads through a bare table of the resident patches
 //   store/patch/{cold_load,raw_hyperslab}   one 256×256 patch through the pager with an
 //       empty cache, against a bare H5Dread of the same window
 //   store/coarse/{pyramid,strided}   a 256×256 window at 1/8 resolution: read from pyramid
@@ -28,6 +30,7 @@
 #include <memory>
 #include <numbers>
 #include <random>
+#include <span>
 #include <unordered_set>
 #include <vector>
 
@@ -260,6 +263,29 @@ void residentQueries(benchmark::State& state, bool paged, bool rover) {
                          benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
+// The same points through the batch API, 4096 per call.
+void residentBatch(benchmark::State& state, bool paged, bool rover) {
+  Resident& r = resident();
+  const TopoDem& dem = paged ? *r.paged : *r.mem;
+  const auto& xs = rover ? r.rx : r.qx;
+  const auto& ys = rover ? r.ry : r.qy;
+  constexpr std::size_t kBatch = 4096;
+  std::vector<double> out(kBatch);
+  std::size_t i = 0;
+  double sink = 0.0;
+  for (auto _ : state) {
+    dem.heights(std::span(xs).subspan(i, kBatch), std::span(ys).subspan(i, kBatch), out, {});
+    sink += out[kBatch - 1];
+    i += kBatch;
+    if (i + kBatch > xs.size()) i = 0;
+  }
+  benchmark::DoNotOptimize(sink);
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(kBatch));
+  state.counters["per_query_ns"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * kBatch,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
 // The floor of any paged design: the same random bilinear reads through a plain table of
 // the cache's resident patches, with no cache lookup or bookkeeping at all.
 void residentPatchTable(benchmark::State& state) {
@@ -373,6 +399,11 @@ int main(int argc, char** argv) {
                                  residentQueries, true, rover);
     benchmark::RegisterBenchmark((std::string("store/resident/inmemory/") + where).c_str(),
                                  residentQueries, false, rover);
+    benchmark::RegisterBenchmark((std::string("store/resident/paged/") + where + "_batch").c_str(),
+                                 residentBatch, true, rover);
+    benchmark::RegisterBenchmark(
+        (std::string("store/resident/inmemory/") + where + "_batch").c_str(), residentBatch, false,
+        rover);
   }
   benchmark::RegisterBenchmark("store/resident/patch_table/random", residentPatchTable);
   benchmark::RegisterBenchmark("store/patch/cold_load", coldPatch)->Unit(benchmark::kMicrosecond);

@@ -196,8 +196,11 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
     return;
   }
   if (resident_ == nullptr) {  // paged: per point, each reusing the thread's block
+    // height(): its inline paths (the thread's block, then the lock-free block table) serve
+    // bilinear points; a group-wise variant that protected 8 blocks at once to overlap their
+    // memory misses measured no faster (docs/paging.md).
     for (std::size_t i = 0; i < n; ++i) {
-      const HeightSample s = heightGeneric(xs[i], ys[i], interp);
+      const HeightSample s = height(xs[i], ys[i], interp);
       out[i] = s.height;
       if (!status.empty()) status[i] = s.status;
     }
