@@ -713,3 +713,43 @@ TEST(ImportProgress, TerminalProgressIsQuietWhenNotATerminal) {
   EXPECT_FALSE(static_cast<bool>(terminalProgress(f)));
   std::fclose(f);
 }
+
+// ---- the pyramid is built by threads; the result does not depend on how many ---------------
+
+TEST(ImportThreads, OneThreadAndSeveralThreadsWriteTheSameStore) {
+  ImportOptions o = smallPatches();
+  o.deflate = 4;
+  o.threads = 1;
+  const ImportReport one = importRaster(fixture("S11E119.hgt"), scratch("threads1.h5"), o);
+  o.threads = 3;
+  const ImportReport three = importRaster(fixture("S11E119.hgt"), scratch("threads3.h5"), o);
+  EXPECT_GT(one.info.levels, 3U);
+  const Store a = Store::open(scratch("threads1.h5")), b = Store::open(scratch("threads3.h5"));
+  expectSameGrids(a, one.info.name, b, three.info.name);
+  // Level 1 is the 2×2 mean of GDAL's samples, ignoring missing ones (an outside check of
+  // the parallel pyramid, not only a comparison of two runs).
+  const Oracle g = readGdal(fixture("S11E119.hgt"));
+  const std::vector<float> l1 = readLevel(b, three.info.name, 1);
+  const std::size_t cols1 = (g.cols + 1) / 2;
+  std::size_t bad = 0;
+  for (std::size_t r = 0; r < (g.rows + 1) / 2; ++r) {
+    for (std::size_t c = 0; c < cols1; ++c) {
+      double sum = 0.0;
+      int n = 0;
+      for (std::size_t dr = 0; dr < 2; ++dr) {
+        for (std::size_t dc = 0; dc < 2; ++dc) {
+          const std::size_t rr = 2 * r + dr, cc = 2 * c + dc;
+          if (rr >= g.rows || cc >= g.cols) continue;
+          const double v = g.raw[rr * g.cols + cc];
+          if (v == -32768.0) continue;
+          sum += static_cast<double>(static_cast<float>(v));
+          ++n;
+        }
+      }
+      const float want = n > 0 ? static_cast<float>(sum / n) : std::nanf("");
+      const float got = l1[r * cols1 + c];
+      if (!((std::isnan(want) && std::isnan(got)) || want == got)) ++bad;
+    }
+  }
+  EXPECT_EQ(bad, 0U);
+}
