@@ -278,14 +278,11 @@ void Raster::analyse(const ImportOptions& options) {
   // planetodetic (geodetic) on an ellipsoid.
   const std::string label = lower(metadataText(ds, "json:ISIS3") + metadataText(ds, "json:PDS") +
                                   metadataText(ds, "xml:PDS4"));
-  if (label.find("planetographic") != std::string::npos ||
-      label.find("planetodetic") != std::string::npos) {
-    info.latitudeType = topo::LatitudeType::Planetodetic;
-  } else if (label.find("planetocentric") != std::string::npos || a == b) {
-    info.latitudeType = topo::LatitudeType::Planetocentric;
-  } else {
-    info.latitudeType = topo::LatitudeType::Planetodetic;
-  }
+  const bool detic = label.find("planetographic") != std::string::npos ||
+                     label.find("planetodetic") != std::string::npos;
+  const bool centric = !detic && (label.find("planetocentric") != std::string::npos || a == b);
+  info.latitudeType =
+      centric ? topo::LatitudeType::Planetocentric : topo::LatitudeType::Planetodetic;
 
   const double rows = static_cast<double>(info.rows), cols = static_cast<double>(info.cols);
   if (OSRIsGeographic(srs) != 0) {
@@ -365,8 +362,9 @@ void Raster::analyse(const ImportOptions& options) {
 }
 
 void Raster::detectRadii() {
-  // A decimated look (at most 64×64 samples, nearest) at the values after scale/offset.
-  const std::size_t nr = std::min<std::size_t>(64, rows()), nc = std::min<std::size_t>(64, cols());
+  // A decimated look (at most 16×16 samples, nearest: a few hundred blocks of a huge tiled
+  // file) at the values after scale/offset.
+  const std::size_t nr = std::min<std::size_t>(16, rows()), nc = std::min<std::size_t>(16, cols());
   std::vector<double> v(nr * nc);
   std::vector<unsigned char> m(nr * nc, 1);
   ErrorCapture errors;
@@ -389,7 +387,9 @@ void Raster::detectRadii() {
     lo = std::min(lo, layout_.offset + layout_.scale * raw);
   }
   const GridInfo& info = layout_.info;
-  if (std::isfinite(lo) && lo > 0.5 * info.equatorialRadius) {
+  // With no valid sample in that look, the offset decides (ISIS radii carry Base = radius).
+  if (!std::isfinite(lo)) lo = layout_.offset;
+  if (lo > 0.5 * info.equatorialRadius) {
     if (info.equatorialRadius != info.polarRadius) {
       throw ImportError(prefix_ + ": values (from " + number(lo) +
                         " m) are radii, but the CRS's body is an ellipsoid; radii are supported "
