@@ -407,39 +407,47 @@ float Raster::sample(std::size_t row, std::size_t col) const {
 
 void Raster::readWindow(std::size_t row0, std::size_t col0, std::size_t nrows, std::size_t ncols,
                         std::span<float> out) const {
-  const std::lock_guard lock(mutex_);
   const std::size_t n = nrows * ncols;
-  values_.resize(n);
-  ErrorCapture errors;
-  const auto x = static_cast<int>(col0), y = static_cast<int>(row0);
-  const auto w = static_cast<int>(ncols), h = static_cast<int>(nrows);
-  if (GDALRasterIO(band_, GF_Read, x, y, w, h, values_.data(), w, h, GDT_Float64, 0, 0) !=
-      CE_None) {
-    throw ImportError(prefix_ + ": cannot read rows " + std::to_string(row0) + "-" +
-                      std::to_string(row0 + nrows - 1) + ", cols " + std::to_string(col0) + "-" +
-                      std::to_string(col0 + ncols - 1) + " (GDAL: " + errors.messages() + ")");
-  }
-  if (layout_.readMask) {
-    mask_.resize(n);
-    if (GDALRasterIO(GDALGetMaskBand(band_), GF_Read, x, y, w, h, mask_.data(), w, h, GDT_Byte, 0,
-                     0) != CE_None) {
+  const Layout& l = layout_;
+  const double base = l.offset - l.radiusReference;
+  // Float32 heights in metres as they are: read straight into `out` (the same values as
+  // through double, without the conversion).
+  const bool direct = GDALGetRasterDataType(band_) == GDT_Float32 && l.scale == 1.0 && base == 0.0;
+  thread_local std::vector<double> values;
+  thread_local std::vector<unsigned char> mask;
+  if (!direct) values.resize(n);
+  if (l.readMask) mask.resize(n);
+  {
+    // Only GDAL's reads are serialised; the conversion below runs on the caller's thread.
+    const std::lock_guard lock(mutex_);
+    ErrorCapture errors;
+    const auto x = static_cast<int>(col0), y = static_cast<int>(row0);
+    const auto w = static_cast<int>(ncols), h = static_cast<int>(nrows);
+    const CPLErr rc =
+        direct ? GDALRasterIO(band_, GF_Read, x, y, w, h, out.data(), w, h, GDT_Float32, 0, 0)
+               : GDALRasterIO(band_, GF_Read, x, y, w, h, values.data(), w, h, GDT_Float64, 0, 0);
+    if (rc != CE_None) {
+      throw ImportError(prefix_ + ": cannot read rows " + std::to_string(row0) + "-" +
+                        std::to_string(row0 + nrows - 1) + ", cols " + std::to_string(col0) + "-" +
+                        std::to_string(col0 + ncols - 1) + " (GDAL: " + errors.messages() + ")");
+    }
+    if (l.readMask && GDALRasterIO(GDALGetMaskBand(band_), GF_Read, x, y, w, h, mask.data(), w, h,
+                                   GDT_Byte, 0, 0) != CE_None) {
       throw ImportError(prefix_ + ": cannot read the mask of rows " + std::to_string(row0) + "-" +
                         std::to_string(row0 + nrows - 1) + " (GDAL: " + errors.messages() + ")");
     }
   }
-  const Layout& l = layout_;
-  const double base = l.offset - l.radiusReference;
   std::size_t missing = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const double raw = values_[i];
+    const double raw = direct ? static_cast<double>(out[i]) : values[i];
     const bool isMissing =
-        std::isnan(raw) || raw < kIsisSpecialBelow || (l.readMask && mask_[i] == 0) ||
+        std::isnan(raw) || raw < kIsisSpecialBelow || (l.readMask && mask[i] == 0) ||
         (l.declaredNodata && raw == *l.declaredNodata) ||
         (l.extraNodata && raw == *l.extraNodata) || (l.voidMarker && raw == -32768.0);
     if (isMissing) {
       out[i] = kNan;
       ++missing;
-    } else {
+    } else if (!direct) {
       // Offset and radius first: a radius of 1737400 m and a height of 0.5 m meet in double.
       out[i] = static_cast<float>(base + l.scale * raw);
     }

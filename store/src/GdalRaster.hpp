@@ -93,8 +93,6 @@ class Raster final : public topo::SampleSource {
   Layout layout_;
   mutable std::mutex mutex_;
   mutable std::atomic<std::size_t> missing_{0};
-  mutable std::vector<double> values_;
-  mutable std::vector<unsigned char> mask_;
 
   void open(const ImportOptions& options, bool pdsShift);
   void analyse(const ImportOptions& options);
