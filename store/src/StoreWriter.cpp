@@ -566,11 +566,12 @@ void writeBandChunks(
     const LevelWriter& writer, const std::array<hsize_t, 2>& chunk, std::size_t r0, std::size_t nr,
     std::size_t cols, float fill, const WriteOptions& o,
     const std::function<void(std::size_t, std::size_t, std::vector<float>&)>& block,
-    Progress& progress, const std::string& what) {
+    Progress& progress, const std::string& what, const Context& ctx) {
   const std::size_t cc = chunk[1];
   const std::size_t n = (cols + cc - 1) / cc;
   std::vector<std::vector<unsigned char>> encoded(n);
   parallelFor(n, threadCount(o), [&](std::size_t k) {
+    checkCancel(o, ctx);  // before every chunk
     std::vector<float> b;
     const std::size_t c0 = k * cc, nc = std::min(cc, cols - c0);
     block(c0, nc, b);
@@ -624,7 +625,7 @@ class Pyramid {
     if (writers_[0]) {
       writeBandChunks(*writers_[0], format::chunkShape(info_, 0), r0, nr, cols,
                       Missing{info_.nodata}.stored(), o_, fill, progress_,
-                      "grid '" + info_.name + "' level 0");
+                      "grid '" + info_.name + "' level 0", ctx_);
     } else {
       // Tiled: level 0 lives in the tiles; the mosaic's band is only read for level 1.
       const std::size_t cc = info_.patchCols;
@@ -695,7 +696,7 @@ class Pyramid {
     };
     writeBandChunks(*writers_[level], format::chunkShape(info_, level), r0, nr, cols,
                     Missing{info_.nodata}.stored(), o_, fill, progress_,
-                    "grid '" + info_.name + "' level " + std::to_string(level));
+                    "grid '" + info_.name + "' level " + std::to_string(level), ctx_);
     push(level + 1, std::move(band));
   }
 
@@ -734,7 +735,7 @@ void writeTile(hid_t tilesGroup, std::size_t i, const Prepared& p, const WriteOp
           [&](std::size_t c0, std::size_t nc, std::vector<float>& out) {
             level0Block(*t.samples, info, r0, c0, nr, nc, out, ctx);
           },
-          progress, what);
+          progress, what, ctx);
     }
     writer.close();
   }
