@@ -27,6 +27,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -398,6 +399,25 @@ TEST(Import, HiriseDtmIsAnEquirectangularDemInMetres) {
   EXPECT_EQ(g.placement.projectionRadius, 3396190.0);
   EXPECT_EQ(g.placement.lonCentreDeg, 180.0);
   EXPECT_EQ(g.bodyName, "Mars");
+}
+
+TEST(Import, TheLabelsLatitudeTypeIsCarriedOver) {
+  // The HiRISE cube with its label's LatitudeType changed in place (same length, so the cube
+  // stays valid): Planetocentric -> Planetographic.
+  const fs::path src = fixture("Ares4_Marth_Crater_3557E_126N_ngate_03_lowres.cub");
+  std::ifstream in(src, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::size_t n = 0;
+  for (std::size_t at = bytes.find("Planetocentric"); at != std::string::npos;
+       at = bytes.find("Planetocentric", at)) {
+    bytes.replace(at, 14, "Planetographic");
+    ++n;
+  }
+  ASSERT_GT(n, 0U);
+  const fs::path copy = scratch("marth_planetographic.cub");
+  std::ofstream(copy, std::ios::binary) << bytes;
+  EXPECT_EQ(describeRaster(src).latitudeType, topo::LatitudeType::Planetocentric);
+  EXPECT_EQ(describeRaster(copy).latitudeType, topo::LatitudeType::Planetodetic);
 }
 
 TEST(Import, PolarStereographicIsis3LabelAllNullIsAnAllMissingDem) {
