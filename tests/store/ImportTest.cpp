@@ -6,6 +6,7 @@
 // with GDAL must import as one grid equal to the single import. Bad inputs made with GDAL in
 // the test must fail with messages naming the file and the reason.
 #include <regolith/store/Import.hpp>
+#include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/Placement.hpp>
 
@@ -471,6 +472,62 @@ TEST(Import, UtmIsAnUnsupportedProjectionNamingTheFile) {
             std::string::npos)
       << msg;
   EXPECT_FALSE(fs::exists(scratch("utm.h5")));
+}
+
+// ---- imported grids answer queries: the kind decides TopoPlanet or TopoDem -----------------
+
+TEST(Import, ImportedGridsAnswerTopoQueriesWithGdalsValuesAtGdalsPixelCentres) {
+  struct Case {
+    std::string file;
+    bool pdsShift;
+    double pixelsPerDegree;  // global projected grids: the label's resolution
+  };
+  for (const Case& k :
+       {Case{"megt90n000cb.lbl", true, 4.0}, Case{"ldem_4_reduced.cub", false, 4.0 / 3.0},
+        Case{"S11E119.hgt", false, 0.0}, Case{"Shoemaker_1k.tif", false, 0.0},
+        Case{"vest64_dtm_specialpixels_downsampled.cub", false, 0.0},
+        Case{"ulcn2005_lpo_npole.cub", false, 0.0}}) {
+    SCOPED_TRACE(k.file);
+    const fs::path store = scratch("query.h5");
+    const ImportReport rep = importRaster(fixture(k.file), store, smallPatches());
+    const Oracle o = readGdal(fixture(k.file), k.pdsShift);
+    const DatasetPtr ds = openGdal(fixture(k.file), k.pdsShift);
+    const bool geographic = OSRIsGeographic(GDALGetSpatialRef(ds.get())) != 0;
+    const double lon0 =
+        OSRGetProjParm(GDALGetSpatialRef(ds.get()), SRS_PP_CENTRAL_MERIDIAN, 0.0, nullptr);
+    auto pager = std::make_shared<Pager>(std::make_shared<const Store>(Store::open(store)),
+                                         std::make_shared<PatchCache>(std::size_t{8} << 20));
+    std::size_t checked = 0;
+    for (std::size_t r = 0; r < o.rows; r += o.rows / 7 + 1) {
+      for (std::size_t c = 0; c < o.cols; c += o.cols / 9 + 1) {
+        const double gx = o.gt[0] + (static_cast<double>(c) + 0.5) * o.gt[1];
+        const double gy = o.gt[3] + (static_cast<double>(r) + 0.5) * o.gt[5];
+        topo::HeightSample h;
+        if (rep.info.kind == GridKind::Dem) {
+          h = pager->dem(rep.info.name).height(gx, gy, topo::Interpolation::Nearest);
+        } else if (geographic) {
+          h = pager->planet(rep.info.name).height({gy, gx}, topo::Interpolation::Nearest);
+        } else {
+          const topo::LatLon ll{(gy / -o.gt[5]) / k.pixelsPerDegree,
+                                lon0 + (gx / o.gt[1]) / k.pixelsPerDegree};
+          h = pager->planet(rep.info.name).height(ll, topo::Interpolation::Nearest);
+        }
+        const double raw = o.raw[r * o.cols + c];
+        const bool missing = o.mask[r * o.cols + c] == 0 || std::isnan(raw) ||
+                             (o.nodata && raw == *o.nodata) || raw < -3.40282255e38;
+        if (missing) {
+          EXPECT_FALSE(h.valid()) << r << "," << c;
+        } else {
+          ASSERT_TRUE(h.valid()) << r << "," << c;
+          EXPECT_EQ(h.height, static_cast<double>(static_cast<float>(
+                                  (o.offset - rep.radiusReference) + o.scale * raw)))
+              << r << "," << c;
+          ++checked;
+        }
+      }
+    }
+    EXPECT_GT(checked, 5U);
+  }
 }
 
 // ---- bad input ---------------------------------------------------------------------------
