@@ -93,6 +93,11 @@ GridInfo describeRaster(const std::filesystem::path& raster, const ImportOptions
   return r.layout().info;
 }
 
+ImportReport inspectRaster(const std::filesystem::path& raster, const ImportOptions& options) {
+  const gdal::Raster r(raster, options, "store::inspectRaster()");
+  return reportOf(r);
+}
+
 ImportReport importRaster(const std::filesystem::path& raster, const std::filesystem::path& store,
                           const ImportOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();

@@ -356,6 +356,12 @@ TEST(Import, MolaMegdrPds3IsAGlobalPlanetGridCorrectedByOnePixelAndSnappedToQuar
   const ImportReport rep = importRaster(fixture("megt90n000cb.lbl"), scratch("mola2.h5"));
   EXPECT_EQ(rep.driver, "PDS");
   EXPECT_TRUE(rep.offsetCorrected);
+  const ImportReport seen = inspectRaster(fixture("megt90n000cb.lbl"));
+  EXPECT_EQ(seen.driver, "PDS");
+  EXPECT_TRUE(seen.offsetCorrected);
+  EXPECT_TRUE(seen.spacingSnapped);
+  EXPECT_EQ(seen.info.x0, rep.info.x0);
+  EXPECT_NE(seen.projection.find("Equirectangular"), std::string::npos) << seen.projection;
   EXPECT_TRUE(rep.spacingSnapped);
   // The README's placement: 0°…360°E, 90°S…90°N, centres at 0.125° + k·0.25°.
   EXPECT_EQ(rep.info.spacingX, 0.25);

@@ -75,6 +75,12 @@ struct ImportReport {
 [[nodiscard]] GridInfo describeRaster(const std::filesystem::path& raster,
                                       const ImportOptions& options = {});
 
+/// Everything importRaster() would report (driver, projection, radius reference,
+/// corrections), without writing: for `regolith info` on a raster. missingSamples and seconds
+/// stay 0. Throws ImportError.
+[[nodiscard]] ImportReport inspectRaster(const std::filesystem::path& raster,
+                                         const ImportOptions& options = {});
+
 /// Imports one raster as one grid of a new store at `store` (written crash-safely: no file
 /// appears under that name unless the import completes). Throws ImportError for input it
 /// cannot import, StoreError for a failed or cancelled write.
