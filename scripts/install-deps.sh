@@ -7,7 +7,7 @@ PACKAGES=(
   # toolchain
   build-essential cmake ninja-build pkg-config git clang-format clang-tidy
   # I/O: HDF5 stores, GDAL import, PROJ (also the projection oracle in tests)
-  libhdf5-dev hdf5-tools libgdal-dev gdal-bin libproj-dev proj-bin
+  libhdf5-dev hdf5-tools libgdal-dev gdal-bin libproj-dev proj-bin libdeflate-dev
   # maths and rendering: GLM, OpenGL/EGL through Mesa (llvmpipe), GLFW windows, PNG
   libglm-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev libpng-dev
   # tests, benchmarks, CLI, JSON

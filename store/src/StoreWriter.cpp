@@ -6,15 +6,20 @@
 #include "StoreFormat.hpp"
 
 #include <fcntl.h>
+#include <libdeflate.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <functional>
 #include <limits>
 #include <set>
+#include <thread>
 
 namespace regolith::store {
 
@@ -358,29 +363,14 @@ class LevelWriter {
 
   [[nodiscard]] hid_t id() const noexcept { return ds_.get(); }
 
-  /// Writes (or, with read = true, reads) a rows×cols block at (row0, col0).
-  void io(std::size_t row0, std::size_t col0, std::size_t rows, std::size_t cols, float* data,
-          bool read) const {
+  /// Writes one chunk, already encoded (encodeChunk()), at element offset (row0, col0).
+  void writeChunk(std::size_t row0, std::size_t col0,
+                  const std::vector<unsigned char>& bytes) const {
     const hdf5::Lock lock;
-    const std::string what = std::string(read ? "cannot read back" : "cannot write") + " grid '" +
-                             info_.name + "' dataset '" + name_ + "'";
-    const std::array<hsize_t, 2> start{row0, col0};
-    const std::array<hsize_t, 2> count{rows, cols};
-    const hdf5::Dataspace fileSpace(hdf5::check(H5Dget_space(ds_.get()), ctx_, what));
-    hdf5::check(H5Sselect_hyperslab(fileSpace.get(), H5S_SELECT_SET, start.data(), nullptr,
-                                    count.data(), nullptr),
-                ctx_, what);
-    const hdf5::Dataspace memSpace(
-        hdf5::check(H5Screate_simple(2, count.data(), nullptr), ctx_, what));
-    if (read) {
-      hdf5::check(
-          H5Dread(ds_.get(), H5T_NATIVE_FLOAT, memSpace.get(), fileSpace.get(), H5P_DEFAULT, data),
-          ctx_, what);
-    } else {
-      hdf5::check(
-          H5Dwrite(ds_.get(), H5T_NATIVE_FLOAT, memSpace.get(), fileSpace.get(), H5P_DEFAULT, data),
-          ctx_, what);
-    }
+    const std::array<hsize_t, 2> offset{row0, col0};
+    hdf5::check(
+        H5Dwrite_chunk(ds_.get(), H5P_DEFAULT, 0, offset.data(), bytes.size(), bytes.data()), ctx_,
+        "cannot write grid '" + info_.name + "' dataset '" + name_ + "'");
   }
 
   void close() {
@@ -478,6 +468,247 @@ void mosaicBlock(const Prepared& p, std::size_t r0, std::size_t c0, std::size_t 
   }
 }
 
+// ---- parallel chunk encoding ------------------------------------------------------------------
+// Chunks are computed (source reads, 2×2 means) and encoded (HDF5's shuffle then deflate
+// filters, applied here with libdeflate) by worker threads, then written in a fixed order with
+// H5Dwrite_chunk under the HDF5 lock. The file does not depend on the thread count.
+
+static_assert(std::endian::native == std::endian::little,
+              "chunks are written as raw little-endian float32 (H5T_IEEE_F32LE)");
+
+unsigned threadCount(const WriteOptions& o) {
+  if (o.threads > 0) return o.threads;
+  return std::max(1U, std::thread::hardware_concurrency());
+}
+
+/// Runs f(0) … f(n − 1) on up to `threads` threads (the caller's included); rethrows the first
+/// exception once all have stopped.
+void parallelFor(std::size_t n, unsigned threads, const std::function<void(std::size_t)>& f) {
+  const std::size_t workers = std::min<std::size_t>(threads, n);
+  if (workers <= 1) {
+    for (std::size_t i = 0; i < n; ++i) f(i);
+    return;
+  }
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> failed{false};
+  std::exception_ptr error;
+  std::mutex errorMutex;
+  const auto run = [&] {
+    for (;;) {
+      const std::size_t i = next.fetch_add(1);
+      if (i >= n || failed.load()) return;
+      try {
+        f(i);
+      } catch (...) {
+        const std::lock_guard lock(errorMutex);
+        if (!error) error = std::current_exception();
+        failed = true;
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  pool.reserve(workers - 1);
+  for (std::size_t t = 1; t < workers; ++t) pool.emplace_back(run);
+  run();
+  for (std::thread& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
+/// One chunk as HDF5 stores it: the block padded to the full chunk shape with `fill`, then,
+/// with deflate, byte-shuffled (H5Z_FILTER_SHUFFLE) and zlib-compressed (H5Z_FILTER_DEFLATE).
+std::vector<unsigned char> encodeChunk(const float* block, std::size_t nr, std::size_t nc,
+                                       const std::array<hsize_t, 2>& chunk, float fill,
+                                       int deflate) {
+  const std::size_t cr = chunk[0], cc = chunk[1], n = cr * cc;
+  std::vector<float> full(n, fill);
+  for (std::size_t r = 0; r < nr; ++r) {
+    std::copy_n(block + r * nc, nc, full.begin() + static_cast<std::ptrdiff_t>(r * cc));
+  }
+  std::vector<unsigned char> raw(n * sizeof(float));
+  std::memcpy(raw.data(), full.data(), raw.size());
+  if (deflate <= 0) return raw;
+  std::vector<unsigned char> shuffled(raw.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t b = 0; b < sizeof(float); ++b)
+      shuffled[b * n + i] = raw[i * sizeof(float) + b];
+  }
+  // One compressor per thread and level (libdeflate: zlib-format output, which is what
+  // HDF5's deflate filter reads, at several times zlib's speed).
+  struct Compressor {
+    int level = -1;
+    libdeflate_compressor* c = nullptr;
+    Compressor() = default;
+    Compressor(const Compressor&) = delete;
+    Compressor& operator=(const Compressor&) = delete;
+    Compressor(Compressor&&) = delete;
+    Compressor& operator=(Compressor&&) = delete;
+    ~Compressor() { libdeflate_free_compressor(c); }
+  };
+  thread_local Compressor comp;
+  if (comp.level != deflate) {
+    libdeflate_free_compressor(comp.c);
+    comp.c = libdeflate_alloc_compressor(deflate);
+    comp.level = comp.c != nullptr ? deflate : -1;
+  }
+  if (comp.c == nullptr) throw StoreError("store::writeStore(): cannot allocate a compressor");
+  std::vector<unsigned char> out(libdeflate_zlib_compress_bound(comp.c, shuffled.size()));
+  const std::size_t size =
+      libdeflate_zlib_compress(comp.c, shuffled.data(), shuffled.size(), out.data(), out.size());
+  if (size == 0) throw StoreError("store::writeStore(): cannot compress a chunk");
+  out.resize(size);
+  return out;
+}
+
+/// Writes rows [r0, r0 + nr) of a dataset whose chunks are `chunk`, chunk column by chunk
+/// column: block(c0, nc, out) fills the nr×nc block at column c0 (on a worker thread), the
+/// encoded chunks are then written in order.
+void writeBandChunks(
+    const LevelWriter& writer, const std::array<hsize_t, 2>& chunk, std::size_t r0, std::size_t nr,
+    std::size_t cols, float fill, const WriteOptions& o,
+    const std::function<void(std::size_t, std::size_t, std::vector<float>&)>& block,
+    Progress& progress, const std::string& what, const Context& ctx) {
+  const std::size_t cc = chunk[1];
+  const std::size_t n = (cols + cc - 1) / cc;
+  std::vector<std::vector<unsigned char>> encoded(n);
+  parallelFor(n, threadCount(o), [&](std::size_t k) {
+    checkCancel(o, ctx);  // before every chunk
+    std::vector<float> b;
+    const std::size_t c0 = k * cc, nc = std::min(cc, cols - c0);
+    block(c0, nc, b);
+    encoded[k] = encodeChunk(b.data(), nr, nc, chunk, fill, o.deflate);
+  });
+  for (std::size_t k = 0; k < n; ++k) {
+    writer.writeChunk(r0, k * cc, encoded[k]);
+    std::vector<unsigned char>().swap(encoded[k]);
+    progress.advance(static_cast<double>(nr * std::min(cc, cols - k * cc)), what);
+  }
+}
+
+/// Builds the pyramid band by band: a band of level k (up to patchRows rows, full width) is
+/// written, then kept until the band after it arrives, and the two make one band of level
+/// k + 1. Each level holds at most two bands in memory.
+class Pyramid {
+ public:
+  Pyramid(hid_t group, const Prepared& p, const WriteOptions& o, Progress& progress,
+          const Context& ctx)
+      : info_(p.info),
+        o_(o),
+        progress_(progress),
+        ctx_(ctx),
+        tiled_(!p.tiles.empty()),
+        pending_(p.info.levels) {
+    writers_.reserve(info_.levels);
+    for (std::size_t level = 0; level < info_.levels; ++level) {
+      if (level == 0 && tiled_) {
+        writers_.emplace_back(std::nullopt);
+      } else {
+        writers_.emplace_back(std::in_place, group, info_, level, o, ctx);
+      }
+    }
+  }
+
+  /// Level-0 rows [r0, r0 + nr), produced by block(r0, c0, nr, nc, out) per chunk column.
+  void level0Band(std::size_t r0, std::size_t nr,
+                  const std::function<void(std::size_t, std::size_t, std::size_t, std::size_t,
+                                           std::vector<float>&)>& block) {
+    checkCancel(o_, ctx_);
+    if (!writers_[0] && info_.levels == 1) return;  // tiled, no pyramid: nothing to build
+    const std::size_t cols = info_.cols;
+    Band band{r0, nr, std::vector<float>(nr * cols)};
+    const auto fill = [&](std::size_t c0, std::size_t nc, std::vector<float>& out) {
+      block(r0, c0, nr, nc, out);
+      for (std::size_t r = 0; r < nr; ++r) {
+        std::copy_n(out.begin() + static_cast<std::ptrdiff_t>(r * nc), nc,
+                    band.data.begin() + static_cast<std::ptrdiff_t>(r * cols + c0));
+      }
+    };
+    if (writers_[0]) {
+      writeBandChunks(*writers_[0], format::chunkShape(info_, 0), r0, nr, cols,
+                      Missing{info_.nodata}.stored(), o_, fill, progress_,
+                      "grid '" + info_.name + "' level 0", ctx_);
+    } else {
+      // Tiled: level 0 lives in the tiles; the mosaic's band is only read for level 1.
+      const std::size_t cc = info_.patchCols;
+      parallelFor((cols + cc - 1) / cc, threadCount(o_), [&](std::size_t k) {
+        std::vector<float> b;
+        fill(k * cc, std::min(cc, cols - k * cc), b);
+      });
+    }
+    push(1, std::move(band));
+  }
+
+  void close() {
+    for (auto& w : writers_) {
+      if (w) w->close();
+    }
+  }
+
+ private:
+  struct Band {
+    std::size_t row0 = 0, rows = 0;
+    std::vector<float> data;  // rows × levelCols, row-major
+  };
+
+  /// A band of level `level − 1` arrives for level `level`.
+  void push(std::size_t level, Band fine) {
+    if (level >= info_.levels) return;
+    std::optional<Band>& held = pending_[level];
+    const bool last = fine.row0 + fine.rows == info_.levelRows(level - 1);
+    const bool evenBand = (fine.row0 / info_.patchRows) % 2 == 0;
+    if (evenBand && !last) {
+      held = std::move(fine);
+      return;
+    }
+    Band pair;
+    if (held) {
+      pair = std::move(*held);
+      held.reset();
+      pair.rows += fine.rows;
+      pair.data.insert(pair.data.end(), fine.data.begin(), fine.data.end());
+    } else {
+      pair = std::move(fine);
+    }
+    coarseBand(level, pair);
+  }
+
+  /// Level `level`'s band made of fine rows [fine.row0, fine.row0 + fine.rows).
+  void coarseBand(std::size_t level, const Band& fine) {
+    checkCancel(o_, ctx_);
+    const std::size_t fineCols = info_.levelCols(level - 1);
+    const std::size_t cols = info_.levelCols(level);
+    const std::size_t r0 = fine.row0 / 2, nr = (fine.rows + 1) / 2;
+    Band band{r0, nr, std::vector<float>(nr * cols)};
+    const FineReader reader = [&](std::size_t fr0, std::size_t fc0, std::size_t fnr,
+                                  std::size_t fnc, float* data) {
+      for (std::size_t r = 0; r < fnr; ++r) {
+        std::copy_n(
+            fine.data.begin() + static_cast<std::ptrdiff_t>((fr0 - fine.row0 + r) * fineCols + fc0),
+            fnc, data + r * fnc);
+      }
+    };
+    const auto fill = [&](std::size_t c0, std::size_t nc, std::vector<float>& out) {
+      std::vector<float> scratch;
+      coarseBlock(reader, info_, level, r0, c0, nr, nc, scratch, out);
+      for (std::size_t r = 0; r < nr; ++r) {
+        std::copy_n(out.begin() + static_cast<std::ptrdiff_t>(r * nc), nc,
+                    band.data.begin() + static_cast<std::ptrdiff_t>(r * cols + c0));
+      }
+    };
+    writeBandChunks(*writers_[level], format::chunkShape(info_, level), r0, nr, cols,
+                    Missing{info_.nodata}.stored(), o_, fill, progress_,
+                    "grid '" + info_.name + "' level " + std::to_string(level), ctx_);
+    push(level + 1, std::move(band));
+  }
+
+  const GridInfo& info_;
+  const WriteOptions& o_;
+  Progress& progress_;
+  const Context& ctx_;
+  bool tiled_;
+  std::vector<std::optional<LevelWriter>> writers_;
+  std::vector<std::optional<Band>> pending_;
+};
+
 /// Writes tile i of a tiled grid: its group tiles/<i> with its bounds and either its level0
 /// dataset or the reference to its external grid.
 void writeTile(hid_t tilesGroup, std::size_t i, const Prepared& p, const WriteOptions& o,
@@ -494,18 +725,17 @@ void writeTile(hid_t tilesGroup, std::size_t i, const Prepared& p, const WriteOp
     hdf5::writeString(tg.get(), format::kExternalFile, t.file, ctx);
     hdf5::writeString(tg.get(), format::kExternalGrid, t.grid, ctx);
   } else {
-    LevelWriter writer(tg.get(), info, "level0", {t.rows, t.cols},
-                       format::tileChunkShape(info, t.rows, t.cols), o, ctx);
-    std::vector<float> block;
+    const std::array<hsize_t, 2> chunk = format::tileChunkShape(info, t.rows, t.cols);
+    LevelWriter writer(tg.get(), info, "level0", {t.rows, t.cols}, chunk, o, ctx);
     for (std::size_t r0 = 0; r0 < t.rows; r0 += info.patchRows) {
       const std::size_t nr = std::min(info.patchRows, t.rows - r0);
-      for (std::size_t c0 = 0; c0 < t.cols; c0 += info.patchCols) {
-        const std::size_t nc = std::min(info.patchCols, t.cols - c0);
-        checkCancel(o, ctx);
-        level0Block(*t.samples, info, r0, c0, nr, nc, block, ctx);
-        writer.io(r0, c0, nr, nc, block.data(), false);
-        progress.advance(static_cast<double>(nr * nc), what);
-      }
+      checkCancel(o, ctx);
+      writeBandChunks(
+          writer, chunk, r0, nr, t.cols, Missing{info.nodata}.stored(), o,
+          [&](std::size_t c0, std::size_t nc, std::vector<float>& out) {
+            level0Block(*t.samples, info, r0, c0, nr, nc, out, ctx);
+          },
+          progress, what, ctx);
     }
     writer.close();
   }
@@ -533,41 +763,26 @@ void writeGrid(hid_t grids, const GridSource& src, const Prepared& p, const Writ
   hdf5::Group group = createGroup(grids, info.name, ctx);
   writeAttributes(group.get(), info, tiled, ctx);
   if (tiled) writeTiles(group.get(), p, o, progress, ctx);
-  std::vector<float> block, fine;
-  std::optional<LevelWriter> below;
-  for (std::size_t level = tiled ? 1 : 0; level < info.levels; ++level) {
-    LevelWriter writer(group.get(), info, level, o, ctx);
-    const std::string what = "grid '" + info.name + "' level " + std::to_string(level);
-    const std::size_t rows = info.levelRows(level), cols = info.levelCols(level);
-    const FineReader readBelow = [&](std::size_t r0, std::size_t c0, std::size_t nr, std::size_t nc,
-                                     float* data) {
-      if (below) {
-        below->io(r0, c0, nr, nc, data, true);
-      } else {
-        mosaicBlock(p, r0, c0, nr, nc, data, ctx);  // level 1 of a tiled grid
-      }
-    };
-    // Chunk by chunk, row-major: each write covers exactly one chunk.
-    for (std::size_t r0 = 0; r0 < rows; r0 += info.patchRows) {
-      const std::size_t nr = std::min(info.patchRows, rows - r0);
-      for (std::size_t c0 = 0; c0 < cols; c0 += info.patchCols) {
-        const std::size_t nc = std::min(info.patchCols, cols - c0);
-        checkCancel(o, ctx);
-        // The source and the progress callback run without the HDF5 lock: the source may
-        // itself be a pager reading another store.
-        if (level == 0) {
-          level0Block(*src.samples, info, r0, c0, nr, nc, block, ctx);
-        } else {
-          coarseBlock(readBelow, info, level, r0, c0, nr, nc, fine, block);
-        }
-        writer.io(r0, c0, nr, nc, block.data(), false);
-        progress.advance(static_cast<double>(nr * nc), what);
-      }
+  {
+    Pyramid pyramid(group.get(), p, o, progress, ctx);
+    // Level 0 band by band; each band flows up the pyramid as soon as its pair is complete.
+    // The source and the progress callback run without the HDF5 lock: the source may itself
+    // be a pager reading another store.
+    for (std::size_t r0 = 0; r0 < info.rows; r0 += info.patchRows) {
+      const std::size_t nr = std::min(info.patchRows, info.rows - r0);
+      pyramid.level0Band(r0, nr,
+                         [&](std::size_t br0, std::size_t c0, std::size_t bnr, std::size_t nc,
+                             std::vector<float>& out) {
+                           if (tiled) {
+                             out.resize(bnr * nc);
+                             mosaicBlock(p, br0, c0, bnr, nc, out.data(), ctx);
+                           } else {
+                             level0Block(*src.samples, info, br0, c0, bnr, nc, out, ctx);
+                           }
+                         });
     }
-    if (below) below->close();
-    below.emplace(std::move(writer));
+    pyramid.close();
   }
-  if (below) below->close();
   const hdf5::Lock lock;
   hdf5::check(H5Gclose(group.release()), ctx, "cannot close group '/grids/" + info.name + "'");
 }

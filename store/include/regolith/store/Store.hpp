@@ -88,8 +88,11 @@ struct WriteOptions {
   std::size_t patchRows = 256, patchCols = 256;
   /// Pyramid levels to write, level 0 included; 0 means "until a level fits one patch".
   std::size_t levels = 0;
-  /// Deflate level 0–9 (0: uncompressed).
+  /// Deflate level 0–9 (0: uncompressed); with deflate, HDF5's shuffle filter runs first.
   int deflate = 0;
+  /// Threads that compute and compress pyramid chunks (0: hardware concurrency). The file's
+  /// content does not depend on it.
+  unsigned threads = 0;
   /// Called now and then during the write (may be empty).
   ProgressFn progress;
   /// If set and becomes true, the write stops, removes its temporary file and throws

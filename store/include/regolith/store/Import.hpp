@@ -1,0 +1,100 @@
+#pragma once
+/// \file
+/// GDAL import: any single-band raster GDAL reads as a DEM (GeoTIFF, PDS3, PDS4, ISIS3 cubes,
+/// SRTM .hgt, ...) becomes a grid of a store. The rules per format, and the errors, are
+/// written down in docs/import.md.
+
+#include <regolith/store/GridInfo.hpp>
+#include <regolith/store/Store.hpp>
+
+#include <atomic>
+#include <cstddef>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <span>
+#include <string>
+
+namespace regolith::store {
+
+/// A raster cannot be imported: GDAL cannot open it, it is not a single-band elevation
+/// raster, its projection is unsupported, its tiles do not fit together. The message starts
+/// with the operation, names the file and gives the reason.
+class ImportError : public StoreError {
+ public:
+  using StoreError::StoreError;
+};
+
+struct ImportOptions {
+  /// Name of the grid written; empty: the file's stem (of the first tile).
+  std::string gridName;
+  /// Patch (HDF5 chunk) size, pyramid levels (0: until a level fits one patch), deflate level.
+  std::size_t patchRows = 256, patchCols = 256;
+  std::size_t levels = 0;
+  int deflate = 0;
+  /// Threads building the pyramid (0: hardware concurrency).
+  unsigned threads = 0;
+  /// A source value (before scale/offset) that also means "missing", beside the ones the
+  /// file declares.
+  std::optional<double> nodata;
+  /// Called now and then with the fraction done (may be empty).
+  ProgressFn progress;
+  /// If set and becomes true, the import stops, leaves no file and throws StoreError.
+  const std::atomic<bool>* cancel = nullptr;
+};
+
+/// What an import found and did.
+struct ImportReport {
+  /// The grid as written (levels and patch size included).
+  GridInfo info;
+  /// GDAL's short driver name (of the first tile), e.g. "GTiff", "ISIS3", "PDS", "PDS4".
+  std::string driver;
+  /// The source CRS's name and projection method, e.g. "SimpleCylindrical Moon
+  /// (Equirectangular)".
+  std::string projection;
+  /// Subtracted from every value after scale/offset: the reference sphere's radius when the
+  /// source holds planetary radii (ISIS shape models, LOLA), 0 when it holds heights.
+  double radiusReference = 0.0;
+  /// Whether the georeferencing GDAL reports by default was corrected (a PDS3 label in the
+  /// other projection-offset convention, as the MOLA MEGDR) or snapped (a global grid's
+  /// spacing to 360°/cols, 180°/rows).
+  bool offsetCorrected = false, spacingSnapped = false;
+  /// Whether a source without a declared nodata value had its −32768 voids taken as missing.
+  bool voidMarkerAssumed = false;
+  /// Level-0 samples that are missing (nodata, special pixels, NaN); importRaster() only
+  /// (importTiles() leaves it 0).
+  std::size_t missingSamples = 0;
+  /// Number of source files.
+  std::size_t tiles = 1;
+  /// Wall time of the import.
+  double seconds = 0.0;
+};
+
+/// How GDAL's raster maps onto a grid, without writing anything (levels and patch size as
+/// the options ask; levels 0 left as 1). Throws ImportError.
+[[nodiscard]] GridInfo describeRaster(const std::filesystem::path& raster,
+                                      const ImportOptions& options = {});
+
+/// Everything importRaster() would report (driver, projection, radius reference,
+/// corrections), without writing: for `regolith info` on a raster. missingSamples and seconds
+/// stay 0. Throws ImportError.
+[[nodiscard]] ImportReport inspectRaster(const std::filesystem::path& raster,
+                                         const ImportOptions& options = {});
+
+/// Imports one raster as one grid of a new store at `store` (written crash-safely: no file
+/// appears under that name unless the import completes). Throws ImportError for input it
+/// cannot import, StoreError for a failed or cancelled write.
+ImportReport importRaster(const std::filesystem::path& raster, const std::filesystem::path& store,
+                          const ImportOptions& options = {});
+
+/// Imports several rasters that tile one grid (same CRS, spacing and sample alignment, no
+/// overlaps; gaps read as missing) as one tiled grid (docs/store-format.md, "Tiled grids").
+/// Throws ImportError naming the offending file for tiles that do not fit together.
+ImportReport importTiles(std::span<const std::filesystem::path> tiles,
+                         const std::filesystem::path& store, const ImportOptions& options = {});
+
+/// A progress callback drawing a one-line bar on `stream` if it is a terminal, and an empty
+/// callback (quiet) otherwise.
+[[nodiscard]] ProgressFn terminalProgress(std::FILE* stream = stderr);
+
+}  // namespace regolith::store

@@ -1,0 +1,458 @@
+// gdal::Raster: one GDAL raster analysed into a GridInfo (docs/import.md has the rules) and
+// read as heights in metres.
+#include "GdalRaster.hpp"
+
+#include <regolith/topo/Error.hpp>
+
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <cpl_string.h>
+#include <ogr_srs_api.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+namespace regolith::store::gdal {
+
+namespace {
+
+constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+/// ISIS's float special pixels (NULL, LRS, LIS, HIS, HRS: 0xFF7FFFFB…0xFF7FFFFF) lie below
+/// its VALID_MIN4 (0xFF7FFFFA, about −3.4028225e38); no height does.
+constexpr double kIsisSpecialBelow = -3.40282255e38;
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+std::string number(double v) {
+  std::ostringstream o;
+  o.precision(12);
+  o << v;
+  return o.str();
+}
+
+/// The first string of a metadata domain (a label as JSON or XML), or "".
+std::string metadataText(GDALDatasetH ds, const char* domain) {
+  char** md = GDALGetMetadata(ds, domain);
+  return md != nullptr && md[0] != nullptr ? std::string(md[0]) : std::string();
+}
+
+std::string colourName(GDALColorInterp c) { return lower(GDALGetColorInterpretationName(c)); }
+
+/// "Mars" from "GCS_Mars", "Earth" for a terrestrial ellipsoid, else the datum's name.
+std::string bodyName(OGRSpatialReferenceH srs, double semiMajor) {
+  if (semiMajor > 6.35e6 && semiMajor < 6.4e6) return "Earth";
+  const char* geogcs = OSRGetAttrValue(srs, "GEOGCS", 0);
+  std::string name = geogcs != nullptr ? geogcs : "";
+  if (name.rfind("GCS_", 0) == 0) name = name.substr(4);
+  if (name.empty() || lower(name) == "unknown") {
+    const char* datum = OSRGetAttrValue(srs, "DATUM", 0);
+    name = datum != nullptr ? datum : "";
+    if (name.rfind("D_", 0) == 0) name = name.substr(2);
+  }
+  if (name.empty() || lower(name) == "unknown") name = "unknown";
+  return name;
+}
+
+double projParm(OGRSpatialReferenceH srs, const char* name, double fallback) {
+  OGRErr err = OGRERR_NONE;
+  const double v = OSRGetProjParm(srs, name, fallback, &err);
+  return err == OGRERR_NONE ? v : fallback;
+}
+
+}  // namespace
+
+bool globalToPlanet(GridInfo& info) {
+  const PlacementInfo& pl = info.placement;
+  if (info.kind != GridKind::Dem || pl.kind != PlacementInfo::Kind::Equirectangular) return false;
+  const double a = pl.projectionRadius;
+  const double rows = static_cast<double>(info.rows), cols = static_cast<double>(info.cols);
+  const double dlon =
+      info.spacingX / (a * std::cos(pl.latTrueScaleDeg.value_or(0.0) / kRadToDeg)) * kRadToDeg;
+  const double dlat = info.spacingY / a * kRadToDeg;
+  if (std::abs(cols * dlon - 360.0) > 0.5 * dlon) return false;
+  // Global: a linear longitude/latitude grid at its exact resolution, placed by the samples'
+  // offsets from the projection's origin (the map scale in metres may be rounded).
+  const double sx = 360.0 / cols;
+  const double sy = std::abs(rows * dlat - 180.0) <= 0.5 * dlat ? 180.0 / rows : dlat;
+  info.x0 = pl.lonCentreDeg + info.x0 / info.spacingX * sx;
+  info.y0 = pl.latOriginDeg + info.y0 / info.spacingY * sy;
+  const bool snapped = sx != dlon || sy != dlat;
+  info.spacingX = sx;
+  info.spacingY = sy;
+  info.kind = GridKind::Planet;
+  info.placement = {};
+  return snapped;
+}
+
+void registerOnce() {
+  static std::once_flag once;
+  std::call_once(once, [] { GDALAllRegister(); });
+}
+
+// ---- ErrorCapture ----------------------------------------------------------------------------
+
+ErrorCapture::ErrorCapture() { CPLPushErrorHandlerEx(&ErrorCapture::handler, this); }
+
+ErrorCapture::~ErrorCapture() { CPLPopErrorHandler(); }
+
+std::string ErrorCapture::messages() const { return messages_; }
+
+void ErrorCapture::handler(CPLErr cls, CPLErrorNum /*num*/, const char* msg) {
+  if (cls != CE_Failure && cls != CE_Fatal) return;  // warnings and debug output are dropped
+  auto* self = static_cast<ErrorCapture*>(CPLGetErrorHandlerUserData());
+  if (self == nullptr || msg == nullptr) return;
+  if (!self->messages_.empty()) self->messages_ += "; ";
+  self->messages_ += msg;
+}
+
+// ---- Raster ----------------------------------------------------------------------------------
+
+Raster::Raster(const std::filesystem::path& path, const ImportOptions& options,
+               std::string operation)
+    : path_(path), prefix_(std::move(operation) + ": " + path.string()) {
+  registerOnce();
+  open(options, false);
+}
+
+Raster::~Raster() = default;
+
+void Raster::open(const ImportOptions& options, bool pdsShift) {
+  ErrorCapture errors;
+  // GDAL's PDS3 driver reads SAMPLE/LINE_PROJECTION_OFFSET in one of two conventions; its
+  // documented options select the other one (thread-local, restored after the open).
+  const char* keys[] = {"PDS_SampleProjOffset_Shift", "PDS_LineProjOffset_Shift"};
+  std::string saved[2];
+  bool had[2] = {false, false};
+  if (pdsShift) {
+    for (int i = 0; i < 2; ++i) {
+      const char* v = CPLGetThreadLocalConfigOption(keys[i], nullptr);
+      had[i] = v != nullptr;
+      if (had[i]) saved[i] = v;
+      CPLSetThreadLocalConfigOption(keys[i], "-0.5");
+    }
+  }
+  GDALDatasetH ds =
+      GDALOpenEx(path_.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR, nullptr,
+                 nullptr, nullptr);
+  if (pdsShift) {
+    for (int i = 0; i < 2; ++i) {
+      CPLSetThreadLocalConfigOption(keys[i], had[i] ? saved[i].c_str() : nullptr);
+    }
+  }
+  if (ds == nullptr) {
+    std::error_code ec;
+    const std::string why =
+        !std::filesystem::exists(path_, ec)
+            ? "no such file"
+            : "GDAL cannot open it as a raster" + (errors.messages().empty()
+                                                       ? std::string()
+                                                       : " (GDAL: " + errors.messages() + ")");
+    throw ImportError(prefix_ + ": " + why);
+  }
+  ds_.reset(ds);
+  analyse(options);
+  if (layout_.offsetCorrected) return;
+  // A global grid reaching beyond a pole: a PDS3 label in the other offset convention.
+  const GridInfo& i = layout_.info;
+  const bool beyondPole =
+      i.kind == GridKind::Planet &&
+      (i.y0 + 0.5 * i.spacingY > 90.0 + 0.01 * i.spacingY ||
+       i.y0 - (static_cast<double>(i.rows) - 0.5) * i.spacingY < -90.0 - 0.01 * i.spacingY);
+  if (beyondPole && layout_.driver == "PDS" && !pdsShift) {
+    ds_.reset();
+    open(options, true);
+    layout_.offsetCorrected = true;
+    return;
+  }
+  if (beyondPole) {
+    throw ImportError(prefix_ + ": georeferencing places the grid's edges at latitudes " +
+                      number(i.y0 + 0.5 * i.spacingY) + " to " +
+                      number(i.y0 - (static_cast<double>(i.rows) - 0.5) * i.spacingY) +
+                      " deg, beyond a pole; expected within -90 to 90");
+  }
+}
+
+void Raster::analyse(const ImportOptions& options) {
+  GDALDatasetH ds = ds_.get();
+  Layout l;
+  l.driver = GDALGetDriverShortName(GDALGetDatasetDriver(ds));
+  const std::string& p = prefix_;
+  const int bands = GDALGetRasterCount(ds);
+  if (bands != 1) {
+    std::string names;
+    for (int b = 1; b <= bands; ++b) {
+      names += (b > 1 ? ", " : "") +
+               colourName(GDALGetRasterColorInterpretation(GDALGetRasterBand(ds, b)));
+    }
+    throw ImportError(p + ": has " + std::to_string(bands) + " bands" +
+                      (bands > 0 ? " (" + names + ")" : std::string()) +
+                      ", expected one elevation band" +
+                      (bands >= 3 ? " (an RGB image is not a DEM)" : ""));
+  }
+  band_ = GDALGetRasterBand(ds, 1);
+  const GDALColorInterp ci = GDALGetRasterColorInterpretation(band_);
+  if (ci == GCI_PaletteIndex || GDALGetRasterColorTable(band_) != nullptr) {
+    throw ImportError(p + ": band 1 is a palette (colour-indexed) image, expected elevations");
+  }
+  const GDALDataType type = GDALGetRasterDataType(band_);
+  if (type == GDT_Unknown || GDALDataTypeIsComplex(type) != 0) {
+    throw ImportError(p + ": band 1 has data type " + GDALGetDataTypeName(type) +
+                      ", expected real numbers");
+  }
+  GridInfo& info = l.info;
+  info.rows = static_cast<std::size_t>(GDALGetRasterYSize(ds));
+  info.cols = static_cast<std::size_t>(GDALGetRasterXSize(ds));
+  info.patchRows = options.patchRows;
+  info.patchCols = options.patchCols;
+  info.name = options.gridName.empty() ? path_.stem().string() : options.gridName;
+
+  // Heights: unit, scale/offset, nodata, mask.
+  const std::string unit = lower(GDALGetRasterUnitType(band_));
+  double unitFactor = 1.0;
+  if (unit == "km" || unit == "kilometer" || unit == "kilometers" || unit == "kilometre" ||
+      unit == "kilometres") {
+    unitFactor = 1000.0;
+  } else if (!(unit.empty() || unit == "m" || unit == "meter" || unit == "meters" ||
+               unit == "metre" || unit == "metres")) {
+    throw ImportError(p + ": band 1 has unit '" + unit + "', expected metres (m) or km");
+  }
+  int ok = 0;
+  const double scale = GDALGetRasterScale(band_, &ok);
+  l.scale = (ok != 0 ? scale : 1.0) * unitFactor;
+  const double offset = GDALGetRasterOffset(band_, &ok);
+  l.offset = (ok != 0 ? offset : 0.0) * unitFactor;
+  if (!(std::isfinite(l.scale) && l.scale != 0.0 && std::isfinite(l.offset))) {
+    throw ImportError(p + ": band 1 has scale " + number(l.scale) + " and offset " +
+                      number(l.offset) + ", expected a finite non-zero scale and finite offset");
+  }
+  int hasNodata = 0;
+  const double nd = GDALGetRasterNoDataValue(band_, &hasNodata);
+  if (hasNodata != 0) l.declaredNodata = nd;
+  l.extraNodata = options.nodata;
+  const int maskFlags = GDALGetMaskFlags(band_);
+  l.readMask = (maskFlags & GMF_ALL_VALID) == 0 && maskFlags != GMF_NODATA;
+  // The int16 void marker of SRTM-style DEMs, when the file declares no nodata at all.
+  l.voidMarker = hasNodata == 0 && !l.readMask && !options.nodata;
+
+  // Georeferencing.
+  std::array<double, 6> gt{};
+  if (GDALGetGeoTransform(ds, gt.data()) != CE_None) {
+    throw ImportError(p + ": has no geotransform, expected a georeferenced raster");
+  }
+  if (gt[2] != 0.0 || gt[4] != 0.0) {
+    throw ImportError(p + ": geotransform is rotated (terms " + number(gt[2]) + ", " +
+                      number(gt[4]) + "), expected north-up");
+  }
+  if (!(gt[1] > 0.0 && gt[5] < 0.0)) {
+    throw ImportError(p + ": geotransform has pixel size " + number(gt[1]) + " x " + number(gt[5]) +
+                      ", expected north-up (dx > 0, dy < 0)");
+  }
+  OGRSpatialReferenceH srs = GDALGetSpatialRef(ds);
+  if (srs == nullptr) {
+    throw ImportError(p + ": has no coordinate reference system");
+  }
+  l.srs = srs;
+  OGRErr err = OGRERR_NONE;
+  const double a = OSRGetSemiMajor(srs, &err);
+  const double b = OSRGetSemiMinor(srs, &err);
+  if (!(a > 0.0 && b > 0.0)) {
+    throw ImportError(p + ": CRS has ellipsoid radii " + number(a) + " / " + number(b) +
+                      " m, expected > 0");
+  }
+  info.equatorialRadius = a;
+  info.polarRadius = b;
+  info.bodyName = bodyName(srs, a);
+  const char* crsName = OSRGetName(srs);
+  const std::string crs = crsName != nullptr ? crsName : "unnamed CRS";
+
+  // Latitude type: as the label declares it, else planetocentric on a sphere and
+  // planetodetic (geodetic) on an ellipsoid.
+  const std::string label = lower(metadataText(ds, "json:ISIS3") + metadataText(ds, "json:PDS") +
+                                  metadataText(ds, "xml:PDS4"));
+  const bool detic = label.find("planetographic") != std::string::npos ||
+                     label.find("planetodetic") != std::string::npos;
+  const bool centric = !detic && (label.find("planetocentric") != std::string::npos || a == b);
+  info.latitudeType =
+      centric ? topo::LatitudeType::Planetocentric : topo::LatitudeType::Planetodetic;
+
+  const double rows = static_cast<double>(info.rows), cols = static_cast<double>(info.cols);
+  if (OSRIsGeographic(srs) != 0) {
+    const double f = OSRGetAngularUnits(srs, nullptr) * kRadToDeg;  // degrees per unit
+    const double pm = OSRGetPrimeMeridian(srs, nullptr);
+    double dx = gt[1] * f, dy = -gt[5] * f;
+    if (std::abs(cols * dx - 360.0) <= 0.5 * dx && cols * dx != 360.0) {
+      dx = 360.0 / cols;
+      l.spacingSnapped = true;
+    }
+    if (std::abs(rows * dy - 180.0) <= 0.5 * dy && rows * dy != 180.0) {
+      dy = 180.0 / rows;
+      l.spacingSnapped = true;
+    }
+    info.kind = GridKind::Planet;
+    info.spacingX = dx;
+    info.spacingY = dy;
+    info.x0 = pm + (gt[0] / gt[1] + 0.5) * dx;
+    info.y0 = (gt[3] / -gt[5] - 0.5) * dy;
+    l.projection = crs + " (geographic)";
+  } else if (OSRIsProjected(srs) != 0) {
+    const char* m = OSRGetAttrValue(srs, "PROJECTION", 0);
+    const std::string method = m != nullptr ? m : "unknown";
+    l.projection = crs + " (" + method + ")";
+    const double lf = OSRGetLinearUnits(srs, nullptr);  // metres per unit
+    const double dxM = gt[1] * lf, dyM = -gt[5] * lf;
+    const double fe = projParm(srs, SRS_PP_FALSE_EASTING, 0.0) * lf;
+    const double fn = projParm(srs, SRS_PP_FALSE_NORTHING, 0.0) * lf;
+    const double lon0 = projParm(srs, SRS_PP_CENTRAL_MERIDIAN, 0.0);
+    const double lat0 = projParm(srs, SRS_PP_LATITUDE_OF_ORIGIN, 0.0);
+    PlacementInfo& pl = info.placement;
+    if (method == SRS_PT_EQUIRECTANGULAR) {
+      if (a != b) {
+        throw ImportError(p + ": projection " + l.projection + " is on an ellipsoid (" + number(a) +
+                          " / " + number(b) + " m); equirectangular is supported on a sphere only");
+      }
+      const double latTs = projParm(srs, SRS_PP_STANDARD_PARALLEL_1, 0.0);
+      info.kind = GridKind::Dem;
+      pl.kind = PlacementInfo::Kind::Equirectangular;
+      pl.projectionRadius = a;
+      pl.latTrueScaleDeg = latTs;
+      pl.lonCentreDeg = lon0;
+      pl.latOriginDeg = lat0;
+      info.spacingX = dxM;
+      info.spacingY = dyM;
+      info.x0 = gt[0] * lf + 0.5 * dxM - fe;
+      info.y0 = gt[3] * lf - 0.5 * dyM - fn;
+      l.spacingSnapped = globalToPlanet(info);
+    } else if (method == SRS_PT_POLAR_STEREOGRAPHIC ||
+               ((method == SRS_PT_STEREOGRAPHIC || method == SRS_PT_OBLIQUE_STEREOGRAPHIC) &&
+                std::abs(lat0) == 90.0)) {
+      info.kind = GridKind::Dem;
+      pl.kind = PlacementInfo::Kind::PolarStereographic;
+      pl.pole = lat0 >= 0.0 ? 1 : -1;
+      if (std::abs(lat0) == 90.0) {
+        pl.scaleFactor = projParm(srs, SRS_PP_SCALE_FACTOR, 1.0);
+      } else {
+        pl.latTrueScaleDeg = lat0;  // variant B: latitude_of_origin is the true-scale latitude
+      }
+      pl.lonCentreDeg = lon0;
+      pl.falseEasting = fe;
+      pl.falseNorthing = fn;
+      info.spacingX = dxM;
+      info.spacingY = dyM;
+      info.x0 = gt[0] * lf + 0.5 * dxM;
+      info.y0 = gt[3] * lf - 0.5 * dyM;
+    } else {
+      throw ImportError(p + ": unsupported projection " + l.projection +
+                        "; supported: geographic, equirectangular (simple cylindrical) on a "
+                        "sphere, polar stereographic");
+    }
+  } else {
+    throw ImportError(p + ": CRS '" + crs + "' is neither geographic nor projected");
+  }
+  layout_ = std::move(l);
+  detectRadii();
+}
+
+void Raster::detectRadii() {
+  // A decimated look (at most 16×16 samples, nearest: a few hundred blocks of a huge tiled
+  // file) at the values after scale/offset.
+  const std::size_t nr = std::min<std::size_t>(16, rows()), nc = std::min<std::size_t>(16, cols());
+  std::vector<double> v(nr * nc);
+  std::vector<unsigned char> m(nr * nc, 1);
+  ErrorCapture errors;
+  const int w = static_cast<int>(cols()), h = static_cast<int>(rows());
+  const int bw = static_cast<int>(nc), bh = static_cast<int>(nr);
+  if (GDALRasterIO(band_, GF_Read, 0, 0, w, h, v.data(), bw, bh, GDT_Float64, 0, 0) != CE_None ||
+      (layout_.readMask && GDALRasterIO(GDALGetMaskBand(band_), GF_Read, 0, 0, w, h, m.data(), bw,
+                                        bh, GDT_Byte, 0, 0) != CE_None)) {
+    throw ImportError(prefix_ + ": cannot read band 1 (GDAL: " + errors.messages() + ")");
+  }
+  double lo = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const double raw = v[i];
+    if (m[i] == 0 || std::isnan(raw) || raw < kIsisSpecialBelow ||
+        (layout_.declaredNodata && raw == *layout_.declaredNodata) ||
+        (layout_.extraNodata && raw == *layout_.extraNodata) ||
+        (layout_.voidMarker && raw == -32768.0)) {
+      continue;
+    }
+    lo = std::min(lo, layout_.offset + layout_.scale * raw);
+  }
+  const GridInfo& info = layout_.info;
+  // With no valid sample in that look, the offset decides (ISIS radii carry Base = radius).
+  if (!std::isfinite(lo)) lo = layout_.offset;
+  if (lo > 0.5 * info.equatorialRadius) {
+    if (info.equatorialRadius != info.polarRadius) {
+      throw ImportError(prefix_ + ": values (from " + number(lo) +
+                        " m) are radii, but the CRS's body is an ellipsoid; radii are supported "
+                        "on a sphere only");
+    }
+    layout_.radiusReference = info.equatorialRadius;
+  }
+}
+
+float Raster::sample(std::size_t row, std::size_t col) const {
+  float v = 0.0F;
+  readWindow(row, col, 1, 1, {&v, 1});
+  return v;
+}
+
+void Raster::readWindow(std::size_t row0, std::size_t col0, std::size_t nrows, std::size_t ncols,
+                        std::span<float> out) const {
+  const std::size_t n = nrows * ncols;
+  const Layout& l = layout_;
+  const double base = l.offset - l.radiusReference;
+  // Float32 heights in metres as they are: read straight into `out` (the same values as
+  // through double, without the conversion).
+  const bool direct = GDALGetRasterDataType(band_) == GDT_Float32 && l.scale == 1.0 && base == 0.0;
+  thread_local std::vector<double> values;
+  thread_local std::vector<unsigned char> mask;
+  if (!direct) values.resize(n);
+  if (l.readMask) mask.resize(n);
+  {
+    // Only GDAL's reads are serialised; the conversion below runs on the caller's thread.
+    const std::lock_guard lock(mutex_);
+    ErrorCapture errors;
+    const auto x = static_cast<int>(col0), y = static_cast<int>(row0);
+    const auto w = static_cast<int>(ncols), h = static_cast<int>(nrows);
+    const CPLErr rc =
+        direct ? GDALRasterIO(band_, GF_Read, x, y, w, h, out.data(), w, h, GDT_Float32, 0, 0)
+               : GDALRasterIO(band_, GF_Read, x, y, w, h, values.data(), w, h, GDT_Float64, 0, 0);
+    if (rc != CE_None) {
+      throw ImportError(prefix_ + ": cannot read rows " + std::to_string(row0) + "-" +
+                        std::to_string(row0 + nrows - 1) + ", cols " + std::to_string(col0) + "-" +
+                        std::to_string(col0 + ncols - 1) + " (GDAL: " + errors.messages() + ")");
+    }
+    if (l.readMask && GDALRasterIO(GDALGetMaskBand(band_), GF_Read, x, y, w, h, mask.data(), w, h,
+                                   GDT_Byte, 0, 0) != CE_None) {
+      throw ImportError(prefix_ + ": cannot read the mask of rows " + std::to_string(row0) + "-" +
+                        std::to_string(row0 + nrows - 1) + " (GDAL: " + errors.messages() + ")");
+    }
+  }
+  std::size_t missing = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double raw = direct ? static_cast<double>(out[i]) : values[i];
+    const bool isMissing =
+        std::isnan(raw) || raw < kIsisSpecialBelow || (l.readMask && mask[i] == 0) ||
+        (l.declaredNodata && raw == *l.declaredNodata) ||
+        (l.extraNodata && raw == *l.extraNodata) || (l.voidMarker && raw == -32768.0);
+    if (isMissing) {
+      out[i] = kNan;
+      ++missing;
+    } else if (!direct) {
+      // Offset and radius first: a radius of 1737400 m and a height of 0.5 m meet in double.
+      out[i] = static_cast<float>(base + l.scale * raw);
+    }
+  }
+  missing_ += missing;
+}
+
+}  // namespace regolith::store::gdal

@@ -1,0 +1,102 @@
+#pragma once
+/// \file
+/// Private GDAL plumbing of the import: one opened single-band raster, analysed into a
+/// GridInfo, and read as heights in metres. No GDAL handle leaves store/src.
+
+#include <regolith/store/GridInfo.hpp>
+#include <regolith/store/Import.hpp>
+#include <regolith/topo/TopoGrid.hpp>
+
+#include <gdal.h>
+#include <ogr_srs_api.h>
+
+#include <atomic>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+namespace regolith::store::gdal {
+
+/// An equirectangular DEM (x, y in metres from the projection's origin) that covers all
+/// longitudes becomes a planet grid at its exact resolution (360°/cols, and 180°/rows if it
+/// covers all latitudes). Returns whether the spacing was snapped; leaves other grids alone.
+bool globalToPlanet(GridInfo& info);
+
+/// Runs GDALAllRegister() once.
+void registerOnce();
+
+/// Collects GDAL's error messages on this thread for its lifetime (instead of printing them).
+class ErrorCapture {
+ public:
+  ErrorCapture();
+  ~ErrorCapture();
+  ErrorCapture(const ErrorCapture&) = delete;
+  ErrorCapture& operator=(const ErrorCapture&) = delete;
+  ErrorCapture(ErrorCapture&&) = delete;
+  ErrorCapture& operator=(ErrorCapture&&) = delete;
+  /// The messages so far, joined by "; " (empty if none).
+  [[nodiscard]] std::string messages() const;
+
+ private:
+  std::string messages_;
+  static void handler(CPLErr cls, CPLErrorNum num, const char* msg);
+};
+
+struct DatasetCloser {
+  void operator()(GDALDatasetH ds) const noexcept { GDALClose(ds); }
+};
+using Dataset = std::unique_ptr<void, DatasetCloser>;
+
+/// How an opened raster becomes a grid.
+struct Layout {
+  GridInfo info;
+  std::string driver, projection;
+  double scale = 1.0, offset = 0.0, radiusReference = 0.0;
+  std::optional<double> declaredNodata, extraNodata;
+  bool readMask = false;  // GDAL's mask band has more to say than the nodata value
+  bool voidMarker = false, offsetCorrected = false, spacingSnapped = false;
+  OGRSpatialReferenceH srs = nullptr;  // owned by the dataset
+};
+
+/// One raster opened with GDAL, read as heights in metres (offset + scale · value − radius
+/// reference; missing samples NaN). Thread-safety: reads are serialised by a mutex (a GDAL
+/// dataset handle is not thread-safe).
+class Raster final : public topo::SampleSource {
+ public:
+  /// Opens and analyses; throws ImportError naming the file and the reason.
+  Raster(const std::filesystem::path& path, const ImportOptions& options, std::string operation);
+  ~Raster() override;
+  Raster(const Raster&) = delete;
+  Raster& operator=(const Raster&) = delete;
+  Raster(Raster&&) = delete;
+  Raster& operator=(Raster&&) = delete;
+
+  [[nodiscard]] const Layout& layout() const noexcept { return layout_; }
+  [[nodiscard]] const std::filesystem::path& path() const noexcept { return path_; }
+  [[nodiscard]] std::size_t rows() const noexcept override { return layout_.info.rows; }
+  [[nodiscard]] std::size_t cols() const noexcept override { return layout_.info.cols; }
+  [[nodiscard]] float sample(std::size_t row, std::size_t col) const override;
+  void readWindow(std::size_t row0, std::size_t col0, std::size_t nrows, std::size_t ncols,
+                  std::span<float> out) const override;
+  /// Missing samples delivered by readWindow() so far.
+  [[nodiscard]] std::size_t missingRead() const noexcept { return missing_.load(); }
+  /// "<operation>: <file>"
+  [[nodiscard]] const std::string& prefix() const noexcept { return prefix_; }
+
+ private:
+  std::filesystem::path path_;
+  std::string prefix_;
+  Dataset ds_;
+  GDALRasterBandH band_ = nullptr;
+  Layout layout_;
+  mutable std::mutex mutex_;
+  mutable std::atomic<std::size_t> missing_{0};
+
+  void open(const ImportOptions& options, bool pdsShift);
+  void analyse(const ImportOptions& options);
+  void detectRadii();
+};
+
+}  // namespace regolith::store::gdal

@@ -1,0 +1,212 @@
+// GDAL import (docs/import.md): describeRaster(), importRaster(), importTiles().
+#include <regolith/store/Import.hpp>
+
+#include "GdalRaster.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <vector>
+
+namespace regolith::store {
+
+namespace {
+
+WriteOptions writeOptionsOf(const ImportOptions& o) {
+  WriteOptions w;
+  w.patchRows = o.patchRows;
+  w.patchCols = o.patchCols;
+  w.levels = o.levels;
+  w.deflate = o.deflate;
+  w.threads = o.threads;
+  w.progress = o.progress;
+  w.cancel = o.cancel;
+  return w;
+}
+
+std::string number(double v) {
+  std::ostringstream o;
+  o.precision(12);
+  o << v;
+  return o.str();
+}
+
+ImportReport reportOf(const gdal::Raster& r) {
+  ImportReport rep;
+  const gdal::Layout& l = r.layout();
+  rep.info = l.info;
+  rep.driver = l.driver;
+  rep.projection = l.projection;
+  rep.radiusReference = l.radiusReference;
+  rep.offsetCorrected = l.offsetCorrected;
+  rep.spacingSnapped = l.spacingSnapped;
+  rep.voidMarkerAssumed = l.voidMarker;
+  return rep;
+}
+
+/// The grid as written: what the store reports back (levels, patch size).
+GridInfo writtenInfo(const std::filesystem::path& store, const std::string& name) {
+  return Store::open(store).grid(name);
+}
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// Whether two grid descriptions agree on everything but their extent.
+std::string mismatch(const GridInfo& a, const GridInfo& b) {
+  const auto differ = [](double x, double y) {
+    return std::abs(x - y) > 1e-9 * std::max(std::abs(x), std::abs(y));
+  };
+  if (a.kind != b.kind) return "grid kind (planet vs DEM)";
+  if (differ(a.spacingX, b.spacingX) || differ(a.spacingY, b.spacingY)) {
+    return "spacing " + number(b.spacingX) + " x " + number(b.spacingY) +
+           " (first tile: " + number(a.spacingX) + " x " + number(a.spacingY) + ")";
+  }
+  if (differ(a.equatorialRadius, b.equatorialRadius) || differ(a.polarRadius, b.polarRadius)) {
+    return "body radii " + number(b.equatorialRadius) + " / " + number(b.polarRadius) +
+           " m (first tile: " + number(a.equatorialRadius) + " / " + number(a.polarRadius) + ")";
+  }
+  if (a.latitudeType != b.latitudeType) return "latitude type";
+  if (a.kind == GridKind::Dem) {
+    const PlacementInfo &p = a.placement, &q = b.placement;
+    if (p.kind != q.kind || p.pole != q.pole || p.latTrueScaleDeg != q.latTrueScaleDeg ||
+        p.scaleFactor != q.scaleFactor || p.lonCentreDeg != q.lonCentreDeg ||
+        p.falseEasting != q.falseEasting || p.falseNorthing != q.falseNorthing ||
+        p.projectionRadius != q.projectionRadius || p.latOriginDeg != q.latOriginDeg) {
+      return "projection parameters";
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+GridInfo describeRaster(const std::filesystem::path& raster, const ImportOptions& options) {
+  const gdal::Raster r(raster, options, "store::describeRaster()");
+  return r.layout().info;
+}
+
+ImportReport inspectRaster(const std::filesystem::path& raster, const ImportOptions& options) {
+  const gdal::Raster r(raster, options, "store::inspectRaster()");
+  return reportOf(r);
+}
+
+ImportReport importRaster(const std::filesystem::path& raster, const std::filesystem::path& store,
+                          const ImportOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto r = std::make_shared<gdal::Raster>(raster, options, "store::importRaster()");
+  ImportReport rep = reportOf(*r);
+  const std::vector<GridSource> grids{GridSource{rep.info, r, {}}};
+  writeStore(store, grids, writeOptionsOf(options));
+  rep.missingSamples = r->missingRead();
+  rep.info = writtenInfo(store, rep.info.name);
+  rep.seconds = secondsSince(t0);
+  return rep;
+}
+
+ImportReport importTiles(std::span<const std::filesystem::path> tiles,
+                         const std::filesystem::path& store, const ImportOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::string op = "store::importTiles()";
+  if (tiles.empty()) throw ImportError(op + ": " + store.string() + ": no tiles given");
+  std::vector<std::shared_ptr<gdal::Raster>> rasters;
+  for (const auto& t : tiles) rasters.push_back(std::make_shared<gdal::Raster>(t, options, op));
+  const GridInfo& first = rasters.front()->layout().info;
+  const gdal::Layout& firstLayout = rasters.front()->layout();
+  // The mosaic's extent, in samples of the first tile's lattice.
+  double west = first.x0, north = first.y0;
+  std::vector<std::pair<long long, long long>> offsets;  // (row, col) from the first tile
+  for (const auto& r : rasters) {
+    const GridInfo& g = r->layout().info;
+    const std::string why = mismatch(first, g);
+    if (!why.empty()) {
+      throw ImportError(r->prefix() + ": tile does not fit " + tiles.front().string() +
+                        ": different " + why);
+    }
+    if (OSRIsSame(firstLayout.srs, r->layout().srs) == 0) {
+      throw ImportError(r->prefix() + ": tile does not fit " + tiles.front().string() +
+                        ": different CRS (" + r->layout().projection + " vs " +
+                        firstLayout.projection + ")");
+    }
+    if (r->layout().radiusReference != firstLayout.radiusReference) {
+      throw ImportError(r->prefix() + ": tile does not fit " + tiles.front().string() +
+                        ": it holds " + (r->layout().radiusReference > 0 ? "radii" : "heights") +
+                        ", the first tile " +
+                        (firstLayout.radiusReference > 0 ? "radii" : "heights"));
+    }
+    const double dc = (g.x0 - first.x0) / first.spacingX;
+    const double dr = (first.y0 - g.y0) / first.spacingY;
+    if (std::abs(dc - std::round(dc)) > 1e-6 || std::abs(dr - std::round(dr)) > 1e-6) {
+      throw ImportError(r->prefix() + ": tile does not fit " + tiles.front().string() +
+                        ": its samples are offset by " + number(dr) + " rows, " + number(dc) +
+                        " columns, expected whole samples");
+    }
+    offsets.emplace_back(std::llround(dr), std::llround(dc));
+    west = std::min(west, g.x0);
+    north = std::max(north, g.y0);
+  }
+  const long long minRow = std::llround((first.y0 - north) / first.spacingY);
+  const long long minCol = std::llround((west - first.x0) / first.spacingX);
+  GridSource src;
+  src.info = first;
+  src.info.x0 = first.x0 + static_cast<double>(minCol) * first.spacingX;
+  src.info.y0 = first.y0 - static_cast<double>(minRow) * first.spacingY;
+  std::size_t rows = 0, cols = 0;
+  for (std::size_t i = 0; i < rasters.size(); ++i) {
+    TileSource t;
+    t.row0 = static_cast<std::size_t>(offsets[i].first - minRow);
+    t.col0 = static_cast<std::size_t>(offsets[i].second - minCol);
+    t.samples = rasters[i];
+    rows = std::max(rows, t.row0 + rasters[i]->rows());
+    cols = std::max(cols, t.col0 + rasters[i]->cols());
+    for (std::size_t j = 0; j < src.tiles.size(); ++j) {
+      const TileSource& o = src.tiles[j];
+      if (t.row0 < o.row0 + rasters[j]->rows() && o.row0 < t.row0 + rasters[i]->rows() &&
+          t.col0 < o.col0 + rasters[j]->cols() && o.col0 < t.col0 + rasters[i]->cols()) {
+        throw ImportError(rasters[i]->prefix() + ": tile overlaps " + tiles[j].string());
+      }
+    }
+    src.tiles.push_back(std::move(t));
+  }
+  src.info.rows = rows;
+  src.info.cols = cols;
+  ImportReport rep = reportOf(*rasters.front());
+  // Tiles of a global equirectangular grid: the mosaic is a planet grid.
+  rep.spacingSnapped = gdal::globalToPlanet(src.info) || rep.spacingSnapped;
+  rep.info = src.info;
+  rep.tiles = rasters.size();
+  const std::vector<GridSource> grids{src};
+  writeStore(store, grids, writeOptionsOf(options));
+  rep.info = writtenInfo(store, src.info.name);
+  rep.seconds = secondsSince(t0);
+  return rep;
+}
+
+ProgressFn terminalProgress(std::FILE* stream) {
+  if (stream == nullptr || ::isatty(::fileno(stream)) == 0) return {};
+  auto last = std::make_shared<int>(-1);
+  auto mutex = std::make_shared<std::mutex>();
+  return [stream, last, mutex](double fraction, std::string_view what) {
+    const std::lock_guard lock(*mutex);
+    const int permille = static_cast<int>(std::lround(std::clamp(fraction, 0.0, 1.0) * 1000.0));
+    if (permille == *last) return;
+    *last = permille;
+    constexpr int kWidth = 40;
+    const int filled = permille * kWidth / 1000;
+    std::string bar(static_cast<std::size_t>(filled), '#');
+    bar.resize(kWidth, '.');
+    std::fprintf(stream, "\r[%s] %5.1f%% %-40.40s", bar.c_str(), permille / 10.0,
+                 std::string(what).c_str());
+    if (permille == 1000) std::fputc('\n', stream);
+    std::fflush(stream);
+  };
+}
+
+}  // namespace regolith::store

@@ -1,0 +1,863 @@
+// GDAL import (importRaster, importTiles, describeRaster), with GDAL itself as the oracle:
+// every real fixture (../shared/fixtures/dem) and a PDS4 copy of it is imported, read back
+// with Store::readWindow and compared sample by sample with GDAL's pixel reads after
+// scale/offset, nodata and special pixels; sample centres are compared with GDAL's
+// geotransform and, through the placement, with PROJ (OGR) inverse projections. Tiles cut
+// with GDAL must import as one grid equal to the single import. Bad inputs made with GDAL in
+// the test must fail with messages naming the file and the reason.
+#include <regolith/store/Import.hpp>
+#include <regolith/store/Pager.hpp>
+#include <regolith/store/Store.hpp>
+#include <regolith/topo/Placement.hpp>
+
+#include "support/Fixtures.hpp"
+
+#include <cpl_conv.h>
+#include <gdal.h>
+#include <gdal_utils.h>
+#include <gtest/gtest.h>
+#include <ogr_srs_api.h>
+#include <pty.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+using namespace regolith;
+using namespace regolith::store;
+namespace fs = std::filesystem;
+using regolith::test::fixture;
+
+namespace {
+
+/// A scratch folder for this test process, removed when the process exits normally.
+fs::path scratch(const std::string& name) {
+  struct Dir {
+    fs::path path = fs::temp_directory_path() / ("regolith-import-" + std::to_string(::getpid()));
+    Dir() { fs::create_directories(path); }
+    Dir(const Dir&) = delete;
+    Dir& operator=(const Dir&) = delete;
+    ~Dir() {
+      std::error_code ec;
+      fs::remove_all(path, ec);
+    }
+  };
+  static const Dir dir;
+  return dir.path / name;
+}
+
+struct DatasetCloser {
+  void operator()(void* ds) const noexcept {
+    if (ds != nullptr) GDALClose(ds);
+  }
+};
+using DatasetPtr = std::unique_ptr<void, DatasetCloser>;
+
+/// Sets a thread-local GDAL config option for a scope.
+class ScopedConfig {
+ public:
+  ScopedConfig(const char* key, const char* value) : key_(key) {
+    CPLSetThreadLocalConfigOption(key, value);
+  }
+  ~ScopedConfig() { CPLSetThreadLocalConfigOption(key_, nullptr); }
+  ScopedConfig(const ScopedConfig&) = delete;
+  ScopedConfig& operator=(const ScopedConfig&) = delete;
+
+ private:
+  const char* key_;
+};
+
+DatasetPtr openGdal(const fs::path& p, bool pdsShift = false) {
+  GDALAllRegister();
+  std::optional<ScopedConfig> s1, s2;
+  if (pdsShift) {
+    // GDAL's documented correction for PDS3 labels in the other offset convention (MOLA).
+    s1.emplace("PDS_SampleProjOffset_Shift", "-0.5");
+    s2.emplace("PDS_LineProjOffset_Shift", "-0.5");
+  }
+  DatasetPtr ds(GDALOpen(p.c_str(), GA_ReadOnly));
+  if (!ds) throw std::runtime_error("GDAL cannot open " + p.string());
+  return ds;
+}
+
+/// GDAL's view of a raster: raw values, mask, nodata, scale/offset, geotransform.
+struct Oracle {
+  std::size_t rows = 0, cols = 0;
+  std::vector<double> raw;
+  std::vector<unsigned char> mask;
+  std::optional<double> nodata;
+  double scale = 1.0, offset = 0.0;
+  std::array<double, 6> gt{};
+  bool declaresNothing = false;  // no nodata value, every sample valid per GDAL's mask
+};
+
+Oracle readGdal(const fs::path& p, bool pdsShift = false) {
+  const DatasetPtr ds = openGdal(p, pdsShift);
+  GDALRasterBandH b = GDALGetRasterBand(ds.get(), 1);
+  Oracle o;
+  o.cols = static_cast<std::size_t>(GDALGetRasterXSize(ds.get()));
+  o.rows = static_cast<std::size_t>(GDALGetRasterYSize(ds.get()));
+  o.raw.resize(o.rows * o.cols);
+  o.mask.resize(o.rows * o.cols);
+  const int w = static_cast<int>(o.cols), h = static_cast<int>(o.rows);
+  EXPECT_EQ(GDALRasterIO(b, GF_Read, 0, 0, w, h, o.raw.data(), w, h, GDT_Float64, 0, 0), CE_None);
+  EXPECT_EQ(
+      GDALRasterIO(GDALGetMaskBand(b), GF_Read, 0, 0, w, h, o.mask.data(), w, h, GDT_Byte, 0, 0),
+      CE_None);
+  int has = 0;
+  const double nd = GDALGetRasterNoDataValue(b, &has);
+  if (has != 0) o.nodata = nd;
+  o.declaresNothing = has == 0 && (GDALGetMaskFlags(b) & GMF_ALL_VALID) != 0;
+  int ok = 0;
+  const double s = GDALGetRasterScale(b, &ok);
+  if (ok != 0) o.scale = s;
+  const double off = GDALGetRasterOffset(b, &ok);
+  if (ok != 0) o.offset = off;
+  EXPECT_EQ(GDALGetGeoTransform(ds.get(), o.gt.data()), CE_None);
+  return o;
+}
+
+/// What an import of a fixture must give, decided from the fixture's documentation.
+struct Expect {
+  GridKind kind;
+  std::optional<PlacementInfo::Kind> placement;
+  double radiusReference = 0.0;  // the values are radii of this sphere
+  bool pdsShift = false;         // GDAL's default georeferencing is known off (MOLA)
+  double pixelsPerDegree = 0.0;  // global grids: the label's exact resolution
+  bool someMissing = true;
+};
+
+std::vector<float> readLevel(const Store& s, const std::string& grid, std::size_t level = 0) {
+  const GridInfo& g = s.grid(grid);
+  std::vector<float> v(g.levelRows(level) * g.levelCols(level));
+  s.readWindow(grid, level, 0, 0, g.levelRows(level), g.levelCols(level), v);
+  return v;
+}
+
+/// Stored samples equal GDAL's values after scale/offset (minus the radius reference), and
+/// are missing exactly where GDAL's mask, nodata or NaN, ISIS's special pixels below
+/// VALID_MIN4, or the −32768 void marker of a file declaring no nodata say so.
+std::size_t expectSamplesMatch(const Store& s, const std::string& grid, const Oracle& o,
+                               double radiusReference, const std::string& what) {
+  const std::vector<float> got = readLevel(s, grid);
+  EXPECT_EQ(got.size(), o.raw.size()) << what;
+  std::size_t missing = 0, bad = 0;
+  for (std::size_t i = 0; i < got.size() && i < o.raw.size(); ++i) {
+    const double raw = o.raw[i];
+    const bool isMissing = o.mask[i] == 0 || std::isnan(raw) || (o.nodata && raw == *o.nodata) ||
+                           raw < -3.40282255e38 || (o.declaresNothing && raw == -32768.0);
+    if (isMissing) {
+      ++missing;
+      if (!std::isnan(got[i]) && ++bad <= 5) {
+        ADD_FAILURE() << what << ": sample " << i / o.cols << "," << i % o.cols << " is " << got[i]
+                      << ", GDAL says missing (" << raw << ")";
+      }
+    } else {
+      const auto want = static_cast<float>((o.offset - radiusReference) + o.scale * raw);
+      if (!(got[i] == want) && ++bad <= 5) {
+        ADD_FAILURE() << what << ": sample " << i / o.cols << "," << i % o.cols << " is " << got[i]
+                      << ", GDAL gives " << want << " (raw " << raw << ")";
+      }
+    }
+  }
+  EXPECT_EQ(bad, 0U) << what;
+  return missing;
+}
+
+/// lon/lat (degrees) of projected point (x, y) by OGR/PROJ, in the CRS's own geographic CRS.
+std::array<double, 2> projInverse(OGRSpatialReferenceH srs, double x, double y) {
+  OGRSpatialReferenceH geo = OSRCloneGeogCS(srs);
+  OSRSetAxisMappingStrategy(geo, OAMS_TRADITIONAL_GIS_ORDER);
+  OGRSpatialReferenceH src = OSRClone(srs);
+  OSRSetAxisMappingStrategy(src, OAMS_TRADITIONAL_GIS_ORDER);
+  OGRCoordinateTransformationH ct = OCTNewCoordinateTransformation(src, geo);
+  double px = x, py = y;
+  EXPECT_TRUE(ct != nullptr && OCTTransform(ct, 1, &px, &py, nullptr) != 0);
+  OCTDestroyCoordinateTransformation(ct);
+  OSRDestroySpatialReference(src);
+  OSRDestroySpatialReference(geo);
+  return {px, py};
+}
+
+double lonDiff(double a, double b) { return std::remainder(a - b, 360.0); }
+
+/// Sample centres: against GDAL's geotransform (metres or degrees), against the label's exact
+/// resolution for a global grid, and through the placement against PROJ's inverse.
+void expectGeoreferencing(const GridInfo& g, const fs::path& p, const Oracle& o, const Expect& e,
+                          const std::string& what) {
+  const DatasetPtr ds = openGdal(p, e.pdsShift);
+  OGRSpatialReferenceH srs = GDALGetSpatialRef(ds.get());
+  ASSERT_NE(srs, nullptr);
+  OGRErr err = OGRERR_NONE;
+  EXPECT_EQ(g.equatorialRadius, OSRGetSemiMajor(srs, &err)) << what;
+  EXPECT_EQ(g.polarRadius, OSRGetSemiMinor(srs, &err)) << what;
+  const std::vector<std::size_t> rows{0, o.rows / 2, o.rows - 1}, cols{0, o.cols / 3, o.cols - 1};
+  for (const std::size_t r : rows) {
+    for (const std::size_t c : cols) {
+      const double gx = o.gt[0] + (static_cast<double>(c) + 0.5) * o.gt[1];
+      const double gy = o.gt[3] + (static_cast<double>(r) + 0.5) * o.gt[5];
+      const double x = g.x0 + static_cast<double>(c) * g.spacingX;
+      const double y = g.y0 - static_cast<double>(r) * g.spacingY;
+      const std::string at = what + " sample " + std::to_string(r) + "," + std::to_string(c);
+      if (g.kind == GridKind::Dem) {
+        EXPECT_NEAR(x, gx, 1e-3) << at;  // 1 mm
+        EXPECT_NEAR(y, gy, 1e-3) << at;
+        const auto ll = projInverse(srs, gx, gy);
+        const topo::Geodetic geo = placementOf(g).toGeodetic(x, y, 0.0);
+        EXPECT_NEAR(lonDiff(geo.lonDeg, ll[0]), 0.0, 1e-9) << at;
+        EXPECT_NEAR(geo.latDeg, ll[1], 1e-9) << at;
+      } else if (OSRIsGeographic(srs) != 0) {
+        EXPECT_NEAR(x, gx, 1e-9) << at;
+        EXPECT_NEAR(y, gy, 1e-9) << at;
+      } else {
+        // A global projected grid: GDAL's pixel offsets from the projection origin at the
+        // label's exact resolution (the label's map scale in metres is rounded).
+        ASSERT_GT(e.pixelsPerDegree, 0.0) << at;
+        const double lon0 = OSRGetProjParm(srs, SRS_PP_CENTRAL_MERIDIAN, 0.0, nullptr);
+        const double wantLon = lon0 + (gx / o.gt[1]) / e.pixelsPerDegree;
+        const double wantLat = (gy / -o.gt[5]) / e.pixelsPerDegree;
+        EXPECT_NEAR(x, wantLon, 1e-9) << at;
+        EXPECT_NEAR(y, wantLat, 1e-9) << at;
+        // PROJ on the rounded metres agrees within the rounding's drift (< 0.01°).
+        const auto ll = projInverse(srs, gx, gy);
+        EXPECT_NEAR(lonDiff(x, ll[0]), 0.0, 0.01) << at;
+        EXPECT_NEAR(y, ll[1], 0.01) << at;
+      }
+    }
+  }
+}
+
+ImportOptions smallPatches() {
+  ImportOptions o;
+  o.patchRows = 64;
+  o.patchCols = 48;  // not square, not a divisor of any fixture's size
+  o.threads = 2;
+  return o;
+}
+
+/// Imports `raster` and checks it against GDAL; returns the report.
+ImportReport checkImport(const fs::path& raster, const Expect& e, const std::string& storeName,
+                         bool pdsShiftOracle) {
+  const fs::path store = scratch(storeName);
+  const ImportReport rep = importRaster(raster, store, smallPatches());
+  const std::string what = raster.filename().string();
+  const GridInfo& g = rep.info;
+  EXPECT_EQ(g.kind, e.kind) << what;
+  if (e.placement) {
+    EXPECT_EQ(g.placement.kind, *e.placement) << what;
+  }
+  EXPECT_EQ(rep.radiusReference, e.radiusReference) << what;
+  const Oracle o = readGdal(raster, pdsShiftOracle);
+  EXPECT_EQ(g.rows, o.rows) << what;
+  EXPECT_EQ(g.cols, o.cols) << what;
+  const Store s = Store::open(store);
+  const std::size_t missing = expectSamplesMatch(s, g.name, o, e.radiusReference, what);
+  EXPECT_EQ(rep.missingSamples, missing) << what;
+  EXPECT_EQ(missing > 0, e.someMissing) << what << ": " << missing << " missing";
+  Expect e2 = e;
+  e2.pdsShift = pdsShiftOracle;
+  expectGeoreferencing(g, raster, o, e2, what);
+  // describeRaster() agrees with the import, levels aside.
+  const GridInfo d = describeRaster(raster, smallPatches());
+  EXPECT_EQ(d.kind, g.kind);
+  EXPECT_EQ(d.x0, g.x0);
+  EXPECT_EQ(d.y0, g.y0);
+  EXPECT_EQ(d.spacingX, g.spacingX);
+  EXPECT_EQ(d.rows, g.rows);
+  return rep;
+}
+
+void translate(const fs::path& src, const fs::path& dst, std::vector<std::string> args,
+               bool pdsShift = false) {
+  const DatasetPtr in = openGdal(src, pdsShift);
+  CPLPushErrorHandler(CPLQuietErrorHandler);  // the PDS4 template's warnings
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  GDALTranslateOptions* opts = GDALTranslateOptionsNew(argv.data(), nullptr);
+  if (opts == nullptr) CPLPopErrorHandler();
+  ASSERT_NE(opts, nullptr);
+  int usageError = 0;
+  const DatasetPtr out(GDALTranslate(dst.c_str(), in.get(), opts, &usageError));
+  GDALTranslateOptionsFree(opts);
+  CPLPopErrorHandler();
+  ASSERT_TRUE(out) << "gdal_translate " << src << " -> " << dst;
+}
+
+/// The fixture, imported, and its PDS4 copy made with GDAL's PDS4 driver, imported too: same
+/// grid, and the copy's samples equal GDAL's reads of the copy.
+void checkFixture(const std::string& name, const Expect& e) {
+  const fs::path src = fixture(name);
+  const ImportReport rep = checkImport(src, e, fs::path(name).stem().string() + ".h5", e.pdsShift);
+  const fs::path copy = scratch(fs::path(name).stem().string() + "_pds4.xml");
+  translate(src, copy, {"-of", "PDS4"}, e.pdsShift);
+  Expect e4 = e;
+  if (OSRIsGeographic(GDALGetSpatialRef(openGdal(src).get())) != 0) {
+    e4.kind = GridKind::Dem;  // see below
+    e4.placement = PlacementInfo::Kind::Equirectangular;
+  }
+  const ImportReport rep4 =
+      checkImport(copy, e4, fs::path(name).stem().string() + "_pds4.h5", false);
+  EXPECT_EQ(rep4.driver, "PDS4");
+  const GridInfo &a = rep.info, &b = rep4.info;
+  if (a.kind == GridKind::Planet && b.kind == GridKind::Dem) {
+    // A geographic source: GDAL's PDS4 writer has no geographic CRS and writes equirectangular
+    // metres on a sphere of the semi-major radius instead. The copy then is an equirectangular
+    // DEM whose samples still sit at the original's longitudes and latitudes.
+    EXPECT_EQ(b.placement.kind, PlacementInfo::Kind::Equirectangular) << name;
+    for (const std::size_t r : {std::size_t{0}, a.rows - 1}) {
+      for (const std::size_t c : {std::size_t{0}, a.cols / 2, a.cols - 1}) {
+        const double rr = static_cast<double>(r), cc = static_cast<double>(c);
+        const topo::Geodetic g =
+            placementOf(b).toGeodetic(b.x0 + cc * b.spacingX, b.y0 - rr * b.spacingY, 0.0);
+        EXPECT_NEAR(lonDiff(g.lonDeg, a.x0 + cc * a.spacingX), 0.0, 1e-9) << name;
+        EXPECT_NEAR(g.latDeg, a.y0 - rr * a.spacingY, 1e-9) << name;
+      }
+    }
+    return;
+  }
+  EXPECT_EQ(a.kind, b.kind) << name;
+  EXPECT_NEAR(a.x0, b.x0, 1e-9 * std::max(1.0, std::abs(a.x0))) << name;
+  EXPECT_NEAR(a.y0, b.y0, 1e-9 * std::max(1.0, std::abs(a.y0))) << name;
+  EXPECT_NEAR(a.spacingX, b.spacingX, 1e-12 * a.spacingX) << name;
+  EXPECT_NEAR(a.spacingY, b.spacingY, 1e-12 * a.spacingY) << name;
+  EXPECT_EQ(a.latitudeType, b.latitudeType) << name;
+}
+
+template <class F>
+std::string errorOf(F&& f) {
+  try {
+    f();
+  } catch (const ImportError& e) {
+    return e.what();
+  }
+  return "(no ImportError)";
+}
+
+}  // namespace
+
+// ---- every fixture, and its PDS4 copy ------------------------------------------------------
+
+TEST(Import, MolaMegdrPds3IsAGlobalPlanetGridCorrectedByOnePixelAndSnappedToQuarterDegrees) {
+  Expect e{GridKind::Planet, std::nullopt, 0.0, true, 4.0, false};
+  checkFixture("megt90n000cb.lbl", e);
+  const ImportReport rep = importRaster(fixture("megt90n000cb.lbl"), scratch("mola2.h5"));
+  EXPECT_EQ(rep.driver, "PDS");
+  EXPECT_TRUE(rep.offsetCorrected);
+  const ImportReport seen = inspectRaster(fixture("megt90n000cb.lbl"));
+  EXPECT_EQ(seen.driver, "PDS");
+  EXPECT_TRUE(seen.offsetCorrected);
+  EXPECT_TRUE(seen.spacingSnapped);
+  EXPECT_EQ(seen.info.x0, rep.info.x0);
+  EXPECT_NE(seen.projection.find("Equirectangular"), std::string::npos) << seen.projection;
+  EXPECT_TRUE(rep.spacingSnapped);
+  // The README's placement: 0°…360°E, 90°S…90°N, centres at 0.125° + k·0.25°.
+  EXPECT_EQ(rep.info.spacingX, 0.25);
+  EXPECT_EQ(rep.info.spacingY, 0.25);
+  EXPECT_NEAR(rep.info.x0, 0.125, 1e-12);
+  EXPECT_NEAR(rep.info.y0, 89.875, 1e-12);
+  EXPECT_EQ(rep.info.equatorialRadius, 3396000.0);  // the label's sphere
+  EXPECT_EQ(rep.info.latitudeType, topo::LatitudeType::Planetocentric);
+  // The trap itself: GDAL's default reading is one pixel west and north of that.
+  const Oracle o = readGdal(fixture("megt90n000cb.lbl"), false);
+  EXPECT_DOUBLE_EQ(o.gt[0], -721.0 * 14818.0);
+  EXPECT_DOUBLE_EQ(o.gt[3], 361.0 * 14818.0);
+}
+
+TEST(Import, LolaIsis3ScaledRadiiBecomeHeightsOnAGlobalMoonGrid) {
+  Expect e{GridKind::Planet, std::nullopt, 1737400.0, false, 4.0 / 3.0, false};
+  checkFixture("ldem_4_reduced.cub", e);
+  const GridInfo g = describeRaster(fixture("ldem_4_reduced.cub"));
+  EXPECT_EQ(g.spacingX, 0.75);
+  EXPECT_EQ(g.bodyName, "Moon");
+}
+
+TEST(Import, Ulcn2005PartialTilesRegionalSimpleCylindricalBecomesAnEquirectangularDem) {
+  Expect e{GridKind::Dem, PlacementInfo::Kind::Equirectangular, 1737400.0, false, 0.0, false};
+  checkFixture("ulcn2005_lpo_npole.cub", e);
+}
+
+TEST(Import, VestaSpecialPixelsAreMissingAndRadiiBecomeHeights) {
+  Expect e{GridKind::Dem, PlacementInfo::Kind::Equirectangular, 289000.0, false, 0.0, true};
+  checkFixture("vest64_dtm_specialpixels_downsampled.cub", e);
+  // The special pixels that are not GDAL's nodata value (HRS, 0xFF7FFFFF) are missing too.
+  const Oracle o = readGdal(fixture("vest64_dtm_specialpixels_downsampled.cub"));
+  std::size_t hrs = 0;
+  for (const double v : o.raw) hrs += v < -3.40282255e38 && v != *o.nodata ? 1U : 0U;
+  EXPECT_GT(hrs, 0U);
+}
+
+TEST(Import, HiriseDtmIsAnEquirectangularDemInMetres) {
+  Expect e{GridKind::Dem, PlacementInfo::Kind::Equirectangular, 0.0, false, 0.0, true};
+  checkFixture("Ares4_Marth_Crater_3557E_126N_ngate_03_lowres.cub", e);
+  const GridInfo g = describeRaster(fixture("Ares4_Marth_Crater_3557E_126N_ngate_03_lowres.cub"));
+  EXPECT_EQ(g.placement.projectionRadius, 3396190.0);
+  EXPECT_EQ(g.placement.lonCentreDeg, 180.0);
+  EXPECT_EQ(g.bodyName, "Mars");
+}
+
+TEST(Import, TheLabelsLatitudeTypeIsCarriedOver) {
+  // The HiRISE cube with its label's LatitudeType changed in place (same length, so the cube
+  // stays valid): Planetocentric -> Planetographic.
+  const fs::path src = fixture("Ares4_Marth_Crater_3557E_126N_ngate_03_lowres.cub");
+  std::ifstream in(src, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::size_t n = 0;
+  for (std::size_t at = bytes.find("Planetocentric"); at != std::string::npos;
+       at = bytes.find("Planetocentric", at)) {
+    bytes.replace(at, 14, "Planetographic");
+    ++n;
+  }
+  ASSERT_GT(n, 0U);
+  const fs::path copy = scratch("marth_planetographic.cub");
+  std::ofstream(copy, std::ios::binary) << bytes;
+  EXPECT_EQ(describeRaster(src).latitudeType, topo::LatitudeType::Planetocentric);
+  EXPECT_EQ(describeRaster(copy).latitudeType, topo::LatitudeType::Planetodetic);
+}
+
+TEST(Import, PolarStereographicIsis3LabelAllNullIsAnAllMissingDem) {
+  Expect e{GridKind::Dem, PlacementInfo::Kind::PolarStereographic, 0.0, false, 0.0, true};
+  checkFixture("Polar_Crater_1_1m_ngate_edited2_forPDS_lowres.cub", e);
+  const ImportReport rep = importRaster(
+      fixture("Polar_Crater_1_1m_ngate_edited2_forPDS_lowres.cub"), scratch("polar2.h5"));
+  EXPECT_EQ(rep.missingSamples, rep.info.rows * rep.info.cols);
+  EXPECT_EQ(rep.info.placement.pole, 1);
+  ASSERT_TRUE(rep.info.placement.scaleFactor.has_value());
+  EXPECT_EQ(*rep.info.placement.scaleFactor, 1.0);
+}
+
+TEST(Import, LolaSouthPolarGeotiffIsAPolarStereographicDemWithNanNodata) {
+  Expect e{GridKind::Dem, PlacementInfo::Kind::PolarStereographic, 0.0, false, 0.0, false};
+  checkFixture("Shoemaker_1k.tif", e);
+  EXPECT_EQ(describeRaster(fixture("Shoemaker_1k.tif")).placement.pole, -1);
+}
+
+TEST(Import, SrtmHgtIsAGeographicPlanetGridOnWgs84) {
+  Expect e{GridKind::Planet, std::nullopt, 0.0, false, 0.0, false};
+  checkFixture("S11E119.hgt", e);
+  const GridInfo g = describeRaster(fixture("S11E119.hgt"));
+  EXPECT_NEAR(g.x0, 119.0, 1e-12);  // SRTM samples sit on whole arc-seconds
+  EXPECT_NEAR(g.y0, -10.0, 1e-12);
+  EXPECT_EQ(g.bodyName, "Earth");
+  EXPECT_EQ(g.latitudeType, topo::LatitudeType::Planetodetic);
+  EXPECT_NE(g.equatorialRadius, g.polarRadius);
+}
+
+TEST(Import, VoidsOfAFileDeclaringNoNodataAreMissingNotHeights) {
+  const fs::path src = fixture("dem_unfinished.tif");
+  const ImportReport rep = importRaster(src, scratch("unfinished.h5"), smallPatches());
+  EXPECT_TRUE(rep.voidMarkerAssumed);
+  const Oracle o = readGdal(src);
+  ASSERT_TRUE(o.declaresNothing);
+  std::size_t voids = 0;
+  for (const double v : o.raw) voids += v == -32768.0 ? 1 : 0;
+  EXPECT_GT(voids, 0U);
+  EXPECT_EQ(rep.missingSamples, voids);
+  Expect e{GridKind::Planet, std::nullopt, 0.0, false, 0.0, true};
+  checkFixture("dem_unfinished.tif", e);
+}
+
+TEST(Import, UtmIsAnUnsupportedProjectionNamingTheFile) {
+  const std::string msg =
+      errorOf([] { (void)importRaster(fixture("dem_nodata.dem"), scratch("utm.h5")); });
+  EXPECT_NE(msg.find("store::importRaster(): " + fixture("dem_nodata.dem")), std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("unsupported projection NAD27 / UTM zone 10N (Transverse_Mercator)"),
+            std::string::npos)
+      << msg;
+  EXPECT_FALSE(fs::exists(scratch("utm.h5")));
+}
+
+// ---- imported grids answer queries: the kind decides TopoPlanet or TopoDem -----------------
+
+TEST(Import, ImportedGridsAnswerTopoQueriesWithGdalsValuesAtGdalsPixelCentres) {
+  struct Case {
+    std::string file;
+    bool pdsShift;
+    double pixelsPerDegree;  // global projected grids: the label's resolution
+  };
+  for (const Case& k :
+       {Case{"megt90n000cb.lbl", true, 4.0}, Case{"ldem_4_reduced.cub", false, 4.0 / 3.0},
+        Case{"S11E119.hgt", false, 0.0}, Case{"Shoemaker_1k.tif", false, 0.0},
+        Case{"vest64_dtm_specialpixels_downsampled.cub", false, 0.0},
+        Case{"ulcn2005_lpo_npole.cub", false, 0.0}}) {
+    SCOPED_TRACE(k.file);
+    const fs::path store = scratch("query.h5");
+    const ImportReport rep = importRaster(fixture(k.file), store, smallPatches());
+    const Oracle o = readGdal(fixture(k.file), k.pdsShift);
+    const DatasetPtr ds = openGdal(fixture(k.file), k.pdsShift);
+    const bool geographic = OSRIsGeographic(GDALGetSpatialRef(ds.get())) != 0;
+    const double lon0 =
+        OSRGetProjParm(GDALGetSpatialRef(ds.get()), SRS_PP_CENTRAL_MERIDIAN, 0.0, nullptr);
+    auto pager = std::make_shared<Pager>(std::make_shared<const Store>(Store::open(store)),
+                                         std::make_shared<PatchCache>(std::size_t{8} << 20));
+    std::size_t checked = 0;
+    for (std::size_t r = 0; r < o.rows; r += o.rows / 7 + 1) {
+      for (std::size_t c = 0; c < o.cols; c += o.cols / 9 + 1) {
+        const double gx = o.gt[0] + (static_cast<double>(c) + 0.5) * o.gt[1];
+        const double gy = o.gt[3] + (static_cast<double>(r) + 0.5) * o.gt[5];
+        topo::HeightSample h;
+        if (rep.info.kind == GridKind::Dem) {
+          h = pager->dem(rep.info.name).height(gx, gy, topo::Interpolation::Nearest);
+        } else if (geographic) {
+          h = pager->planet(rep.info.name).height({gy, gx}, topo::Interpolation::Nearest);
+        } else {
+          const topo::LatLon ll{(gy / -o.gt[5]) / k.pixelsPerDegree,
+                                lon0 + (gx / o.gt[1]) / k.pixelsPerDegree};
+          h = pager->planet(rep.info.name).height(ll, topo::Interpolation::Nearest);
+        }
+        const double raw = o.raw[r * o.cols + c];
+        const bool missing = o.mask[r * o.cols + c] == 0 || std::isnan(raw) ||
+                             (o.nodata && raw == *o.nodata) || raw < -3.40282255e38;
+        if (missing) {
+          EXPECT_FALSE(h.valid()) << r << "," << c;
+        } else {
+          ASSERT_TRUE(h.valid()) << r << "," << c;
+          EXPECT_EQ(h.height, static_cast<double>(static_cast<float>(
+                                  (o.offset - rep.radiusReference) + o.scale * raw)))
+              << r << "," << c;
+          ++checked;
+        }
+      }
+    }
+    EXPECT_GT(checked, 5U);
+  }
+}
+
+// ---- bad input ---------------------------------------------------------------------------
+
+namespace {
+
+/// A GeoTIFF made with GDAL: `bands` bands of `type`, a geotransform and a CRS from `crs`.
+fs::path makeGeotiff(const std::string& name, int bands, GDALDataType type, const char* crs,
+                     const std::array<double, 6>& gt) {
+  GDALAllRegister();
+  const fs::path p = scratch(name);
+  GDALDriverH drv = GDALGetDriverByName("GTiff");
+  char* opts[] = {const_cast<char*>("PHOTOMETRIC=RGB"), nullptr};
+  DatasetPtr ds(GDALCreate(drv, p.c_str(), 16, 12, bands, type, bands == 3 ? opts : nullptr));
+  if (!ds) throw std::runtime_error("cannot create " + p.string());
+  std::vector<float> v(16 * 12);
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = static_cast<float>(i % 200);
+  for (int b = 1; b <= bands; ++b) {
+    EXPECT_EQ(GDALRasterIO(GDALGetRasterBand(ds.get(), b), GF_Write, 0, 0, 16, 12, v.data(), 16, 12,
+                           GDT_Float32, 0, 0),
+              CE_None);
+  }
+  std::array<double, 6> g = gt;
+  GDALSetGeoTransform(ds.get(), g.data());
+  OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+  EXPECT_EQ(OSRSetFromUserInput(srs, crs), OGRERR_NONE);
+  GDALSetSpatialRef(ds.get(), srs);
+  OSRDestroySpatialReference(srs);
+  return p;
+}
+
+}  // namespace
+
+TEST(ImportErrors, SinusoidalIsAnUnsupportedProjection) {
+  const fs::path p = makeGeotiff("sinu.tif", 1, GDT_Float32, "+proj=sinu +R=3396190 +units=m",
+                                 {1000.0, 100.0, 0.0, 5000.0, 0.0, -100.0});
+  const std::string msg = errorOf([&] { (void)importRaster(p, scratch("sinu.h5")); });
+  EXPECT_NE(msg.find(p.string() + ": unsupported projection"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("Sinusoidal"), std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists(scratch("sinu.h5")));
+}
+
+TEST(ImportErrors, AnRgbImageIsNotADem) {
+  const fs::path p =
+      makeGeotiff("rgb.tif", 3, GDT_Byte, "EPSG:4326", {10.0, 0.1, 0.0, 50.0, 0.0, -0.1});
+  const std::string msg = errorOf([&] { (void)importRaster(p, scratch("rgb.h5")); });
+  EXPECT_EQ(msg, "store::importRaster(): " + p.string() +
+                     ": has 3 bands (red, green, blue), expected one elevation band (an RGB "
+                     "image is not a DEM)");
+  EXPECT_FALSE(fs::exists(scratch("rgb.h5")));
+}
+
+TEST(ImportErrors, AFileGdalCannotOpenOrThatDoesNotExist) {
+  const fs::path p = scratch("garbage.tif");
+  std::ofstream(p) << "this is not a raster\n";
+  std::string msg = errorOf([&] { (void)importRaster(p, scratch("garbage.h5")); });
+  EXPECT_NE(msg.find("store::importRaster(): " + p.string() + ": GDAL cannot open it as a raster"),
+            std::string::npos)
+      << msg;
+  msg = errorOf([&] { (void)describeRaster(scratch("nowhere.tif")); });
+  EXPECT_EQ(msg, "store::describeRaster(): " + scratch("nowhere.tif").string() + ": no such file");
+  EXPECT_FALSE(fs::exists(scratch("garbage.h5")));
+}
+
+TEST(ImportErrors, ARasterWithoutGeoreferencing) {
+  GDALAllRegister();
+  const fs::path p = scratch("plain.tif");
+  {
+    DatasetPtr ds(
+        GDALCreate(GDALGetDriverByName("GTiff"), p.c_str(), 8, 8, 1, GDT_Float32, nullptr));
+    ASSERT_TRUE(ds);
+  }
+  const std::string msg = errorOf([&] { (void)describeRaster(p); });
+  EXPECT_EQ(msg, "store::describeRaster(): " + p.string() +
+                     ": has no geotransform, expected a georeferenced raster");
+}
+
+// ---- tiles -----------------------------------------------------------------------------------
+
+namespace {
+
+/// Cuts `src` into a 2×2 set of tiles with gdal_translate -srcwin; returns their paths.
+std::vector<fs::path> cutTiles(const fs::path& src, const std::string& stem, std::size_t rows,
+                               std::size_t cols, const std::string& format = "GTiff") {
+  const std::size_t r1 = rows / 2 + 3, c1 = cols / 2 - 5;  // unequal pieces
+  std::vector<fs::path> out;
+  const std::array<std::array<std::size_t, 4>, 4> wins{{{0, 0, r1, c1},
+                                                        {0, c1, r1, cols - c1},
+                                                        {r1, 0, rows - r1, c1},
+                                                        {r1, c1, rows - r1, cols - c1}}};
+  for (std::size_t i = 0; i < wins.size(); ++i) {
+    const auto& w = wins[i];
+    const fs::path t =
+        scratch(stem + "_tile" + std::to_string(i) + (format == "GTiff" ? ".tif" : ".xml"));
+    translate(src, t,
+              {"-of", format, "-srcwin", std::to_string(w[1]), std::to_string(w[0]),
+               std::to_string(w[3]), std::to_string(w[2])});
+    out.push_back(t);
+  }
+  return out;
+}
+
+void expectSameGrids(const Store& a, const std::string& ga, const Store& b, const std::string& gb) {
+  const GridInfo &x = a.grid(ga), &y = b.grid(gb);
+  ASSERT_EQ(x.rows, y.rows);
+  ASSERT_EQ(x.cols, y.cols);
+  EXPECT_NEAR(x.x0, y.x0, 1e-9 * std::max(1.0, std::abs(x.x0)));
+  EXPECT_NEAR(x.y0, y.y0, 1e-9 * std::max(1.0, std::abs(x.y0)));
+  EXPECT_EQ(x.spacingX, y.spacingX);
+  EXPECT_EQ(x.kind, y.kind);
+  ASSERT_EQ(x.levels, y.levels);
+  for (std::size_t k = 0; k < x.levels; ++k) {
+    const std::vector<float> u = readLevel(a, ga, k), v = readLevel(b, gb, k);
+    std::size_t bad = 0;
+    for (std::size_t i = 0; i < u.size(); ++i) {
+      if (!((std::isnan(u[i]) && std::isnan(v[i])) || u[i] == v[i])) ++bad;
+    }
+    EXPECT_EQ(bad, 0U) << "level " << k;
+  }
+}
+
+}  // namespace
+
+TEST(ImportTiles, TilesCutWithGdalImportAsOneGridEqualToTheSingleImport) {
+  for (const std::string name : {"S11E119.hgt", "Shoemaker_1k.tif", "ldem_4_reduced.cub"}) {
+    SCOPED_TRACE(name);
+    const fs::path src = fixture(name);
+    const GridInfo whole = describeRaster(src);
+    const std::vector<fs::path> tiles =
+        cutTiles(src, fs::path(name).stem().string(), whole.rows, whole.cols);
+    const ImportOptions o = smallPatches();
+    const ImportReport single = importRaster(src, scratch("single.h5"), o);
+    ImportOptions ot = o;
+    ot.gridName = single.info.name;
+    // Given in a shuffled order: placement comes from the georeferencing, not the order.
+    const std::vector<fs::path> shuffled{tiles[3], tiles[0], tiles[2], tiles[1]};
+    const ImportReport tiled = importTiles(shuffled, scratch("tiled.h5"), ot);
+    EXPECT_EQ(tiled.tiles, 4U);
+    const Store a = Store::open(scratch("single.h5")), b = Store::open(scratch("tiled.h5"));
+    EXPECT_TRUE(b.tiled(single.info.name));
+    expectSameGrids(a, single.info.name, b, single.info.name);
+  }
+}
+
+TEST(ImportTiles, TilesWithDifferentSpacingCrsOrAlignmentAreRefusedNamingTheTile) {
+  const fs::path src = fixture("Shoemaker_1k.tif");
+  const std::vector<fs::path> tiles = cutTiles(src, "shoe", 256, 256);
+  // Different spacing: the same window at half resolution.
+  const fs::path coarse = scratch("shoe_coarse.tif");
+  translate(src, coarse, {"-srcwin", "0", "0", "128", "128", "-outsize", "64", "64"});
+  std::vector<fs::path> set{tiles[0], coarse};
+  std::string msg = errorOf([&] { (void)importTiles(set, scratch("bad.h5")); });
+  EXPECT_NE(msg.find("store::importTiles(): " + coarse.string() + ": tile does not fit " +
+                     tiles[0].string() + ": different spacing 10 x 10 (first tile: 5 x 5)"),
+            std::string::npos)
+      << msg;
+  // Different CRS: tile 1 relabelled as north polar.
+  const fs::path north = scratch("shoe_north.tif");
+  translate(tiles[1], north,
+            {"-a_srs", "+proj=stere +lat_0=90 +lat_ts=90 +lon_0=0 +R=1737400 +units=m"});
+  set = {tiles[0], north};
+  msg = errorOf([&] { (void)importTiles(set, scratch("bad.h5")); });
+  EXPECT_NE(msg.find(north.string() + ": tile does not fit " + tiles[0].string() + ": different"),
+            std::string::npos)
+      << msg;
+  // Misaligned by a third of a sample.
+  const fs::path shifted = scratch("shoe_shifted.tif");
+  const Oracle o = readGdal(tiles[1]);
+  translate(tiles[1], shifted,
+            {"-a_ullr", std::to_string(o.gt[0] + 5.0 / 3.0), std::to_string(o.gt[3]),
+             std::to_string(o.gt[0] + 5.0 / 3.0 + 5.0 * static_cast<double>(o.cols)),
+             std::to_string(o.gt[3] - 5.0 * static_cast<double>(o.rows))});
+  set = {tiles[0], shifted};
+  msg = errorOf([&] { (void)importTiles(set, scratch("bad.h5")); });
+  EXPECT_NE(msg.find(shifted.string() + ": tile does not fit " + tiles[0].string() +
+                     ": its samples are offset by"),
+            std::string::npos)
+      << msg;
+  // Overlapping: the same tile twice.
+  set = {tiles[0], tiles[1], tiles[1]};
+  msg = errorOf([&] { (void)importTiles(set, scratch("bad.h5")); });
+  EXPECT_NE(msg.find(tiles[1].string() + ": tile overlaps " + tiles[1].string()), std::string::npos)
+      << msg;
+  EXPECT_FALSE(fs::exists(scratch("bad.h5")));
+}
+
+// ---- interruption and progress -------------------------------------------------------------
+
+TEST(ImportProgress, ProgressIsMonotonicAndEndsAtOne) {
+  std::vector<double> seen;
+  ImportOptions o = smallPatches();
+  o.progress = [&](double f, std::string_view) { seen.push_back(f); };
+  (void)importRaster(fixture("S11E119.hgt"), scratch("progress.h5"), o);
+  ASSERT_GT(seen.size(), 10U);
+  for (std::size_t i = 1; i < seen.size(); ++i) EXPECT_GE(seen[i], seen[i - 1]) << i;
+  EXPECT_EQ(seen.back(), 1.0);
+  EXPECT_GE(seen.front(), 0.0);
+}
+
+TEST(ImportProgress, ACancelledImportLeavesNoFile) {
+  std::atomic<bool> cancel{false};
+  ImportOptions o = smallPatches();
+  o.cancel = &cancel;
+  o.progress = [&](double f, std::string_view) {
+    if (f > 0.3) cancel = true;
+  };
+  const fs::path p = scratch("cancelled.h5");
+  try {
+    (void)importRaster(fixture("S11E119.hgt"), p, o);
+    ADD_FAILURE() << "no exception";
+  } catch (const StoreError& e) {
+    EXPECT_NE(std::string(e.what()).find("cancelled"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(p));
+  for (const auto& entry : fs::directory_iterator(p.parent_path())) {
+    EXPECT_EQ(entry.path().filename().string().find("cancelled.h5.tmp"), std::string::npos)
+        << entry.path();
+  }
+}
+
+TEST(ImportProgress, AKilledImportLeavesNoStoreUnderTheFinalName) {
+  const fs::path p = scratch("killed.h5");
+  int fds[2];
+  ASSERT_EQ(::pipe(fds), 0);
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::close(fds[0]);
+    ImportOptions o = smallPatches();
+    bool told = false;
+    o.progress = [&](double f, std::string_view) {
+      if (!told && f >= 0.5) {
+        told = true;
+        const char c = 'k';
+        (void)!::write(fds[1], &c, 1);
+        for (;;) ::pause();  // mid-import, temporary file open, until SIGKILL
+      }
+    };
+    try {
+      (void)importRaster(fixture("S11E119.hgt"), p, o);
+    } catch (...) {
+      ::_exit(3);
+    }
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  char c = 0;
+  EXPECT_EQ(::read(fds[0], &c, 1), 1) << "the import ended before half way";
+  ::close(fds[0]);
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  EXPECT_TRUE(WIFSIGNALED(status));
+  EXPECT_FALSE(fs::exists(p));
+  EXPECT_THROW((void)Store::open(p), StoreError);
+}
+
+TEST(ImportProgress, TerminalProgressDrawsABarOnATerminal) {
+  int master = -1, slave = -1;
+  ASSERT_EQ(::openpty(&master, &slave, nullptr, nullptr, nullptr), 0);
+  std::FILE* f = ::fdopen(slave, "w");
+  ASSERT_NE(f, nullptr);
+  const ProgressFn bar = terminalProgress(f);
+  ASSERT_TRUE(static_cast<bool>(bar));
+  bar(0.5, "grid 'x' level 0");
+  bar(1.0, "done");
+  std::fclose(f);
+  std::string out;
+  char buf[512];
+  for (ssize_t n; (n = ::read(master, buf, sizeof buf)) > 0;) {
+    out.append(buf, static_cast<std::size_t>(n));
+    if (out.find("100.0%") != std::string::npos) break;
+  }
+  ::close(master);
+  EXPECT_NE(out.find("[####################....................]  50.0% grid 'x' level 0"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("[########################################] 100.0% done"), std::string::npos)
+      << out;
+}
+
+TEST(ImportProgress, TerminalProgressIsQuietWhenNotATerminal) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  EXPECT_FALSE(static_cast<bool>(terminalProgress(f)));
+  std::fclose(f);
+}
+
+// ---- the pyramid is built by threads; the result does not depend on how many ---------------
+
+TEST(ImportThreads, OneThreadAndSeveralThreadsWriteTheSameStore) {
+  ImportOptions o = smallPatches();
+  o.deflate = 4;
+  o.threads = 1;
+  const ImportReport one = importRaster(fixture("S11E119.hgt"), scratch("threads1.h5"), o);
+  o.threads = 3;
+  const ImportReport three = importRaster(fixture("S11E119.hgt"), scratch("threads3.h5"), o);
+  EXPECT_GT(one.info.levels, 3U);
+  const Store a = Store::open(scratch("threads1.h5")), b = Store::open(scratch("threads3.h5"));
+  expectSameGrids(a, one.info.name, b, three.info.name);
+  // Level 1 is the 2×2 mean of GDAL's samples, ignoring missing ones (an outside check of
+  // the parallel pyramid, not only a comparison of two runs).
+  const Oracle g = readGdal(fixture("S11E119.hgt"));
+  const std::vector<float> l1 = readLevel(b, three.info.name, 1);
+  const std::size_t cols1 = (g.cols + 1) / 2;
+  std::size_t bad = 0;
+  for (std::size_t r = 0; r < (g.rows + 1) / 2; ++r) {
+    for (std::size_t c = 0; c < cols1; ++c) {
+      double sum = 0.0;
+      int n = 0;
+      for (std::size_t dr = 0; dr < 2; ++dr) {
+        for (std::size_t dc = 0; dc < 2; ++dc) {
+          const std::size_t rr = 2 * r + dr, cc = 2 * c + dc;
+          if (rr >= g.rows || cc >= g.cols) continue;
+          const double v = g.raw[rr * g.cols + cc];
+          if (v == -32768.0) continue;
+          sum += static_cast<double>(static_cast<float>(v));
+          ++n;
+        }
+      }
+      const float want = n > 0 ? static_cast<float>(sum / n) : std::nanf("");
+      const float got = l1[r * cols1 + c];
+      if (!((std::isnan(want) && std::isnan(got)) || want == got)) ++bad;
+    }
+  }
+  EXPECT_EQ(bad, 0U);
+}
