@@ -36,7 +36,7 @@ constexpr double kRadToDeg = 180.0 / kPi;
 
 constexpr double kMaxDiameterKm = 1200.0;  // band 0: 600–1200 km
 constexpr double kEjectaExtent = 2.5;      // ejecta reach this many crater radii
-constexpr double kCratersPerCell = 3.0 / 8.0;
+constexpr double kCratersPerCell = 3.0 / 4.0;
 constexpr std::size_t kMaxBands = 20;
 constexpr std::size_t kMaxOctaves = 24;
 
@@ -50,6 +50,7 @@ struct Crater {
   double depth = 0.0, rim = 0.0;  // m
   double floorFraction = 0.0;     // flat floor radius / rim radius (complex craters)
   double peak = 0.0;              // central peak height, m
+  double survival = 0.0;          // uniform in [0, 1): kept on young plains if below a rate
 };
 
 /// Height added by a crater at r = distance / radius.
@@ -110,6 +111,7 @@ void cellCraters(const Band& b, std::uint64_t seed, std::uint64_t i, std::uint64
     c.centre = {rxy * std::cos(c.lonDeg * kDegToRad), rxy * std::sin(c.lonDeg * kDegToRad), z};
     const double diameterKm = 1.0 / std::sqrt(lo2 - rng.uniform() * (lo2 - hi2));
     const double degradation = rng.uniform(0.3, 1.0);
+    c.survival = rng.uniform();
     c.radius = 0.5 * diameterKm / radiusKm;
     c.influence = kEjectaExtent * c.radius;
     const double chord = 2.0 * std::sin(0.5 * c.influence);
@@ -206,6 +208,8 @@ struct MarsPlanetGenerator::Impl {
 
   explicit Impl(MarsPlanetOptions o);
   [[nodiscard]] double base(const glm::dvec3& u) const noexcept;
+  [[nodiscard]] double dichotomy(const glm::dvec3& u) const noexcept;
+  [[nodiscard]] bool kept(const Crater& c) const noexcept;
   void addCraters(const Band& band, const Lattice& l, const Trig& t, double* out) const;
   void evaluate(const Lattice& l, double* out) const;
   void evaluateParallel(const Lattice& l, double* out) const;
@@ -277,11 +281,20 @@ MarsPlanetGenerator::Impl::Impl(MarsPlanetOptions o) : options(std::move(o)) {
   }
 }
 
+double MarsPlanetGenerator::Impl::dichotomy(const glm::dvec3& u) const noexcept {
+  return glm::dot(u, dichotomyAxis) + 0.12 * gen::fbm(u * 2.5, 3, 0.5, boundarySeed);
+}
+
+bool MarsPlanetGenerator::Impl::kept(const Crater& c) const noexcept {
+  // The lowlands are younger: a third of the craters survive there (in every size band
+  // alike, so the size distribution keeps its slope).
+  return c.survival < 1.0 / 3.0 || dichotomy(c.centre) < 0.33;
+}
+
 double MarsPlanetGenerator::Impl::base(const glm::dvec3& u) const noexcept {
   // Dichotomy: northern lowlands about 5 km below the southern highlands, along a wavy
   // boundary that leaves about a third of the planet low.
-  const double s = glm::dot(u, dichotomyAxis) + 0.12 * gen::fbm(u * 2.5, 3, 0.5, boundarySeed);
-  double h = -2500.0 * std::tanh((s - 0.33) / 0.15);
+  double h = -2500.0 * std::tanh((dichotomy(u) - 0.33) / 0.15);
   // Tharsis: a 4 km bulge about 1000 km in radius; shields with summit calderas.
   const double dt = angleBetween(u, tharsis) / 0.3;
   h += 4000.0 * std::exp(-dt * dt);
@@ -347,6 +360,7 @@ void MarsPlanetGenerator::Impl::addCraters(const Band& band, const Lattice& l, c
     for (const std::uint64_t j : js) {
       cellCraters(band, craterSeed, i, j, radiusKm, craters);
       for (const Crater& c : craters) {
+        if (!kept(c)) continue;
         const double reachDeg = (c.influence + kMargin) * kRadToDeg;
         // Rows whose latitude lies within the crater's reach.
         const double rFirst = std::ceil((l.y0 - (c.latDeg + reachDeg)) / l.dy);
@@ -467,6 +481,7 @@ std::vector<GeneratedCrater> MarsPlanetGenerator::craters() const {
       for (std::uint64_t j = 0; j < b.nlon; ++j) {
         cellCraters(b, impl_->craterSeed, i, j, impl_->radiusKm, cell);
         for (const Crater& c : cell) {
+          if (!impl_->kept(c)) continue;
           all.push_back(
               {b.index, c.latDeg, c.lonDeg, 2.0 * c.radius * impl_->radiusKm, c.depth, c.rim});
         }

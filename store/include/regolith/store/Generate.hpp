@@ -141,8 +141,9 @@ struct GeneratedCrater {
 /// A global Mars-like planet: a crustal dichotomy (low northern plains, high southern
 /// highlands, along a seeded tilted boundary), a Tharsis-like bulge with three shield
 /// volcanoes, fractal relief (3D gradient noise, fBm) and craters with a power-law size
-/// distribution (cumulative N(>D) ∝ D⁻², diameters from 1200 km down to about 3 samples)
-/// that have a bowl (flat floor and central peak when large), a raised rim and ejecta.
+/// distribution (cumulative N(>D) ∝ D⁻², diameters from 1200 km down to about 3 samples;
+/// a third as many on the younger northern lowlands) that have a bowl (flat floor and
+/// central peak when large), a raised rim and ejecta.
 ///
 /// Heights are a function of the body-fixed unit vector of each point, so they are
 /// continuous across the ±180° seam and at both poles. Octaves and crater bands finer than
