@@ -43,8 +43,11 @@ double lerp(double a, double b, double t) noexcept { return a + t * (b - a); }
 
 double corner(std::int64_t ix, std::int64_t iy, std::int64_t iz, double fx, double fy, double fz,
               std::uint64_t seed) noexcept {
-  const std::uint64_t h = hashOf(seed, static_cast<std::uint64_t>(ix),
-                                 static_cast<std::uint64_t>(iy), static_cast<std::uint64_t>(iz));
+  // One mix of the lattice point's coordinates times large odd constants: enough for a
+  // gradient choice, and a quarter of hashOf()'s cost on the hottest path.
+  const std::uint64_t h = mix64(seed ^ (static_cast<std::uint64_t>(ix) * 0x9E3779B97F4A7C15ULL) ^
+                                (static_cast<std::uint64_t>(iy) * 0xC2B2AE3D27D4EB4FULL) ^
+                                (static_cast<std::uint64_t>(iz) * 0x165667B19E3779F9ULL));
   const glm::dvec3& g = kGradients[(h >> 32U) % kGradients.size()];
   return g.x * fx + g.y * fy + g.z * fz;
 }
