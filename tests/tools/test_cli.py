@@ -214,6 +214,25 @@ def test_generate_progress_only_on_a_terminal(work):
     assert "100%" in text and "[" in text and "\r" in text
 
 
+def test_generate_interrupted_leaves_no_file(work):
+    import signal
+    import time
+    out = work / "interrupted.h5"
+    p = subprocess.Popen([BIN, "generate", "mars-planet", "--out", str(out), "--size", "4096",
+                          "--threads", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True)
+    tmp = work / f"interrupted.h5.tmp-{p.pid}"
+    deadline = time.monotonic() + 120
+    while not tmp.exists() and p.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert tmp.exists(), "the write never started"
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode != 0
+    assert err.startswith("regolith: error: ") and "cancelled" in err, err
+    assert not out.exists() and not tmp.exists()
+
+
 # ---- info -----------------------------------------------------------------------------------
 
 def check_info_against_h5py(path, info):
