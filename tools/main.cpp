@@ -13,8 +13,14 @@ int main(int argc, char** argv) try {
   app.name("regolith");
   app.require_subcommand(1);
   app.failure_message([](const CLI::App* failed, const CLI::Error& e) {
-    return "regolith: error: " + std::string(e.what()) + "\nRun '" +
-           (failed->get_parent() != nullptr ? "regolith " + failed->get_name() : "regolith") +
+    // The (sub)command that was being parsed: "regolith generate victoria". CLI11 reports
+    // errors on the root app, so follow the subcommands that were given.
+    std::string command = "regolith";
+    for (const CLI::App* a = failed; !a->get_subcommands().empty();) {
+      a = a->get_subcommands().front();
+      command += " " + a->get_name();
+    }
+    return "regolith: error: " + std::string(e.what()) + "\nRun '" + command +
            " --help' for more information.\n";
   });
 

@@ -153,6 +153,9 @@ def test_usage_errors(args, needle):
     assert p.stderr.startswith("regolith: error: "), p.stderr
     assert needle in p.stderr
     assert p.stdout == ""
+    # The hint names the subcommand that failed.
+    words = [a for a in args if a in ("generate", "victoria", "query")]
+    assert f"Run '{' '.join(['regolith', *words])} --help'" in p.stderr, p.stderr
 
 
 # ---- generate -------------------------------------------------------------------------------
