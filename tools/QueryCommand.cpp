@@ -316,7 +316,7 @@ void addQueryCommand(CLI::App& app) {
       "Heights and unit normals at points, as CSV on stdout: a header line, then one row per "
       "input point in input order with its two coordinates, height, nx, ny, nz and valid (1, "
       "or 0 with nan values over nodata or outside the grid). Points come as arguments "
-      "'a,b' (use -- before the first if it starts with '-.') or, with none given, as CSV "
+      "'a,b' (if one starts with '-.', put -- before the first point) or, with none given, as CSV "
       "lines on stdin (an optional header line naming the columns; blank lines and lines "
       "starting with # are skipped)");
   cmd->add_option("store", a->store, "Store file (HDF5)")->required();
@@ -345,7 +345,8 @@ void addQueryCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->footer(
       "Examples:\n"
-      "  regolith query mars.h5 137.4,-4.6 -- -5.5,-2.05\n"
+      "  regolith query mars.h5 137.4,-4.6 -5.5,-2.05\n"
+      "  regolith query mars.h5 -- -.5,10 20,30\n"
       "  regolith query victoria.h5 --coords xy --interp bicubic 0,0 120.5,-40\n"
       "  printf 'lon,lat\\n-5.5,-2.05\\n' | regolith query victoria.h5 --frame body\n"
       "Exit status: 0 on success; non-zero, with 'regolith: error: ...' on stderr and nothing "

@@ -388,6 +388,15 @@ def test_query_stdin_equals_arguments(victoria, planet):
             assert len(by_args.strip().split("\n")) == len(pts) + 1
 
 
+def test_query_negative_points_as_arguments(planet):
+    # As docs/cli.md says: '-5.5,...' is a point; '-.5,...' needs -- before the first point.
+    a = run("query", planet, "137.4,-4.6", "-5.5,-2.05").stdout
+    assert a == run("query", planet, stdin="137.4,-4.6\n-5.5,-2.05\n").stdout
+    c = run("query", planet, "--", "-.5,10", "20,30").stdout
+    assert c == run("query", planet, stdin="-.5,10\n20,30\n").stdout
+    assert "\n-0.5,10," in c
+
+
 def test_query_nodata_and_outside_rows(h5py_store):
     path, data = h5py_store
     # Sample (r, c) is at x = 100 + 2c, y = 200 - 3r.
