@@ -11,6 +11,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -68,6 +69,17 @@ void addWriteOptions(CLI::App& cmd, WriteArgs& w) {
   cmd.add_option("--deflate", w.deflate, "Deflate level 0-9 (0: uncompressed)")
       ->check(CLI::Range(0, 9))
       ->capture_default_str();
+}
+
+/// Refuses an output whose folder does not exist, before any work is done.
+void checkOut(const std::string& command, const std::string& out) {
+  std::filesystem::path dir = std::filesystem::path(out).parent_path();
+  if (dir.empty()) dir = ".";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec)) {
+    throw InvalidArgument(command + ": --out " + out + ": folder " + dir.string() +
+                          " does not exist");
+  }
 }
 
 store::WriteOptions writeOptions(const WriteArgs& w, TerminalProgress& progress) {
@@ -133,6 +145,7 @@ void addPlanet(CLI::App& generate) {
       }
       o.rows = static_cast<std::size_t>(std::round(rows));
     }
+    checkOut("generate mars-planet", a->w.out);
     o.seed = a->w.seed;
     o.ellipsoid = a->ellipsoid;
     o.gridName = a->w.grid;
@@ -169,6 +182,7 @@ void addVictoria(CLI::App& generate) {
       ->capture_default_str();
   cmd->add_option("--grid", a->w.grid, "Name of the grid in the store")->capture_default_str();
   cmd->callback([a] {
+    checkOut("generate victoria", a->w.out);
     store::VictoriaOptions o;
     o.size = a->size;
     o.spacing = a->resolution;

@@ -187,6 +187,13 @@ def test_generate_planet_options(work):
     assert not (work / "bad.h5").exists()
 
 
+def test_generate_into_a_missing_folder(work):
+    p = run("generate", "victoria", "--out", work / "no" / "such" / "v.h5", check=False)
+    assert p.returncode != 0
+    assert p.stderr == (f"regolith: error: generate victoria: --out {work / 'no' / 'such' / 'v.h5'}:"
+                        f" folder {work / 'no' / 'such'} does not exist\n")
+
+
 def test_generate_progress_only_on_a_terminal(work):
     master, slave = pty.openpty()
     try:
