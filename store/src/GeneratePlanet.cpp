@@ -310,24 +310,16 @@ double MarsPlanetGenerator::Impl::base(const glm::dvec3& u) const noexcept {
   return h;
 }
 
-void MarsPlanetGenerator::Impl::addCraters(const Band& band, const Lattice& l, const Trig& t,
-                                           double* out) const {
-  constexpr double kMargin = 1e-6;  // radians: candidate filters stay conservative
+namespace {
+
+constexpr double kMargin = 1e-6;  // radians: candidate filters stay conservative
+
+/// The longitude cells of a band whose craters may reach a lattice, in ascending order (the
+/// sum's order must not depend on the window). A cap of radius ρ around a point at latitude
+/// φ spans asin(sin ρ / cos φ) of longitude, unless it holds a pole.
+std::vector<std::uint64_t> longitudeCells(const Band& band, const Lattice& l) {
   const double rho = band.maxInfluence + kMargin;
-  const double latTop = l.lat(l.r0), latBottom = l.lat(l.r0 + l.nr - 1);
-  // z-bands whose craters may reach the lattice.
-  const double latLo = std::max(-90.0, latBottom - rho * kRadToDeg);
-  const double latHi = std::min(90.0, latTop + rho * kRadToDeg);
-  const double dz = 2.0 / static_cast<double>(band.nz);
-  const auto zCell = [&](double latDeg) {
-    const double z = std::sin(latDeg * kDegToRad);
-    const double f = std::floor((z + 1.0) / dz);
-    return static_cast<std::uint64_t>(std::clamp(f, 0.0, static_cast<double>(band.nz - 1)));
-  };
-  const std::uint64_t iLo = zCell(latLo), iHi = zCell(latHi);
-  // Longitude cells: a cap of radius ρ around a point at latitude φ spans
-  // asin(sin ρ / cos φ) of longitude, unless it holds a pole.
-  const double absLat = std::max(std::abs(latTop), std::abs(latBottom));
+  const double absLat = std::max(std::abs(l.lat(l.r0)), std::abs(l.lat(l.r0 + l.nr - 1)));
   std::vector<std::uint64_t> js;
   bool allLon = absLat * kDegToRad + rho >= 0.5 * kPi;
   double lonLo = 0.0, lonHi = 0.0;
@@ -339,67 +331,91 @@ void MarsPlanetGenerator::Impl::addCraters(const Band& band, const Lattice& l, c
     lonHi = l.lon(l.c0 + l.nc - 1) + spread;
     allLon = lonHi - lonLo >= 360.0;
   }
-  const double dlon = 360.0 / static_cast<double>(band.nlon);
   if (allLon) {
     js.resize(band.nlon);
     for (std::uint64_t j = 0; j < band.nlon; ++j) js[j] = j;
-  } else {
-    const auto first = static_cast<std::int64_t>(std::floor((lonLo + 180.0) / dlon));
-    const auto last = static_cast<std::int64_t>(std::floor((lonHi + 180.0) / dlon));
-    const auto n = static_cast<std::int64_t>(band.nlon);
-    for (std::int64_t j = first; j <= last; ++j) {
-      js.push_back(static_cast<std::uint64_t>(((j % n) + n) % n));
-    }
-    // Canonical order (the sum's order must not depend on the window).
-    std::sort(js.begin(), js.end());
-    js.erase(std::unique(js.begin(), js.end()), js.end());
+    return js;
   }
+  const double dlon = 360.0 / static_cast<double>(band.nlon);
+  const auto first = static_cast<std::int64_t>(std::floor((lonLo + 180.0) / dlon));
+  const auto last = static_cast<std::int64_t>(std::floor((lonHi + 180.0) / dlon));
+  const auto n = static_cast<std::int64_t>(band.nlon);
+  for (std::int64_t j = first; j <= last; ++j) {
+    js.push_back(static_cast<std::uint64_t>(((j % n) + n) % n));
+  }
+  std::sort(js.begin(), js.end());
+  js.erase(std::unique(js.begin(), js.end()), js.end());
+  return js;
+}
 
+/// The z-band cells [first, last] of a band whose craters may reach a lattice.
+std::pair<std::uint64_t, std::uint64_t> latitudeCells(const Band& band, const Lattice& l) {
+  const double rhoDeg = (band.maxInfluence + kMargin) * kRadToDeg;
+  const double latLo = std::max(-90.0, l.lat(l.r0 + l.nr - 1) - rhoDeg);
+  const double latHi = std::min(90.0, l.lat(l.r0) + rhoDeg);
+  const double dz = 2.0 / static_cast<double>(band.nz);
+  const auto zCell = [&](double latDeg) {
+    const double f = std::floor((std::sin(latDeg * kDegToRad) + 1.0) / dz);
+    return static_cast<std::uint64_t>(std::clamp(f, 0.0, static_cast<double>(band.nz - 1)));
+  };
+  return {zCell(latLo), zCell(latHi)};
+}
+
+/// Adds one crater's profile to the lattice samples it reaches. Row and column ranges are
+/// conservative pre-filters; the chord test decides, the same way for every window.
+void splat(const Crater& c, const Lattice& l, const Trig& t, double* out) {
+  const double reachDeg = (c.influence + kMargin) * kRadToDeg;
+  // Rows whose latitude lies within the crater's reach.
+  const double rFirst = std::ceil((l.y0 - (c.latDeg + reachDeg)) / l.dy);
+  const double rLast = std::floor((l.y0 - (c.latDeg - reachDeg)) / l.dy);
+  const double lo = std::max(rFirst, static_cast<double>(l.r0));
+  const double hi = std::min(rLast, static_cast<double>(l.r0 + l.nr - 1));
+  if (lo > hi) return;
+  const double sinC = std::sin(c.latDeg * kDegToRad), cosC = std::cos(c.latDeg * kDegToRad);
+  const double cosReach = std::cos(c.influence + kMargin);
+  for (auto r = static_cast<std::size_t>(lo); r <= static_cast<std::size_t>(hi); ++r) {
+    const std::size_t rr = r - l.r0;
+    // Longitude half-width of the cap on this row.
+    const double denom = t.cosLat[rr] * cosC;
+    double halfDeg = 180.0;
+    if (denom > 1e-12) {
+      const double q = (cosReach - t.sinLat[rr] * sinC) / denom;
+      if (q > 1.0 + 1e-9) continue;
+      if (q > -1.0) halfDeg = std::acos(std::min(1.0, q)) * kRadToDeg + kMargin * kRadToDeg;
+    }
+    const auto visit = [&](std::size_t cc) {
+      const glm::dvec3 d = t.unit(rr, cc) - c.centre;
+      const double chord2 = glm::dot(d, d);
+      if (chord2 >= c.influenceChord2) return;
+      const double angle = 2.0 * std::asin(std::min(1.0, 0.5 * std::sqrt(chord2)));
+      out[rr * l.nc + cc] += craterProfile(c, angle / c.radius);
+    };
+    if (halfDeg >= 180.0) {
+      for (std::size_t cc = 0; cc < l.nc; ++cc) visit(cc);
+      continue;
+    }
+    for (const double shift : {-360.0, 0.0, 360.0}) {
+      const double cFirst = std::ceil((c.lonDeg - halfDeg + shift - l.x0) / l.dx);
+      const double cLast = std::floor((c.lonDeg + halfDeg + shift - l.x0) / l.dx);
+      const double a = std::max(cFirst, static_cast<double>(l.c0));
+      const double b = std::min(cLast, static_cast<double>(l.c0 + l.nc - 1));
+      for (double cd = a; cd <= b; cd += 1.0) visit(static_cast<std::size_t>(cd) - l.c0);
+    }
+  }
+}
+
+}  // namespace
+
+void MarsPlanetGenerator::Impl::addCraters(const Band& band, const Lattice& l, const Trig& t,
+                                           double* out) const {
+  const auto [iLo, iHi] = latitudeCells(band, l);
+  const std::vector<std::uint64_t> js = longitudeCells(band, l);
   std::vector<Crater> craters;
   for (std::uint64_t i = iLo; i <= iHi; ++i) {
     for (const std::uint64_t j : js) {
       cellCraters(band, craterSeed, i, j, radiusKm, craters);
       for (const Crater& c : craters) {
-        if (!kept(c)) continue;
-        const double reachDeg = (c.influence + kMargin) * kRadToDeg;
-        // Rows whose latitude lies within the crater's reach.
-        const double rFirst = std::ceil((l.y0 - (c.latDeg + reachDeg)) / l.dy);
-        const double rLast = std::floor((l.y0 - (c.latDeg - reachDeg)) / l.dy);
-        const double lo = std::max(rFirst, static_cast<double>(l.r0));
-        const double hi = std::min(rLast, static_cast<double>(l.r0 + l.nr - 1));
-        if (lo > hi) continue;
-        const double sinC = std::sin(c.latDeg * kDegToRad), cosC = std::cos(c.latDeg * kDegToRad);
-        const double cosReach = std::cos(c.influence + kMargin);
-        for (auto r = static_cast<std::size_t>(lo); r <= static_cast<std::size_t>(hi); ++r) {
-          const std::size_t rr = r - l.r0;
-          // Longitude half-width of the cap on this row.
-          const double denom = t.cosLat[rr] * cosC;
-          double halfDeg = 180.0;
-          if (denom > 1e-12) {
-            const double q = (cosReach - t.sinLat[rr] * sinC) / denom;
-            if (q > 1.0 + 1e-9) continue;
-            if (q > -1.0) halfDeg = std::acos(std::min(1.0, q)) * kRadToDeg + kMargin * kRadToDeg;
-          }
-          const auto visit = [&](std::size_t cc) {
-            const glm::dvec3 u = t.unit(rr, cc);
-            const glm::dvec3 d = u - c.centre;
-            const double chord2 = glm::dot(d, d);
-            if (chord2 >= c.influenceChord2) return;
-            const double angle = 2.0 * std::asin(std::min(1.0, 0.5 * std::sqrt(chord2)));
-            out[rr * l.nc + cc] += craterProfile(c, angle / c.radius);
-          };
-          if (halfDeg >= 180.0) {
-            for (std::size_t cc = 0; cc < l.nc; ++cc) visit(cc);
-            continue;
-          }
-          for (const double shift : {-360.0, 0.0, 360.0}) {
-            const double cFirst = std::ceil((c.lonDeg - halfDeg + shift - l.x0) / l.dx);
-            const double cLast = std::floor((c.lonDeg + halfDeg + shift - l.x0) / l.dx);
-            const double a = std::max(cFirst, static_cast<double>(l.c0));
-            const double b = std::min(cLast, static_cast<double>(l.c0 + l.nc - 1));
-            for (double cd = a; cd <= b; cd += 1.0) visit(static_cast<std::size_t>(cd) - l.c0);
-          }
-        }
+        if (kept(c)) splat(c, l, t, out);
       }
     }
   }
