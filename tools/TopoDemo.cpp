@@ -1,5 +1,6 @@
 #include "TopoDemo.hpp"
 
+#include <regolith/store/Generate.hpp>
 #include <regolith/topo/Mesh.hpp>
 #include <regolith/topo/TopoDem.hpp>
 
@@ -23,21 +24,11 @@ using namespace regolith::topo;
 using Clock = std::chrono::steady_clock;
 constexpr double kPi = std::numbers::pi;
 
-// An analytic Victoria-like crater (≈750 m across, ≈75 m deep, a scalloped raised rim, dunes
-// on the floor, ejecta falling off outside). Stand-in until the procedural generator of the
-// Import issue exists; being analytic it also serves as the truth for the accuracy table.
+// The analytic Victoria-like crater of `regolith generate victoria` (store::VictoriaShape,
+// seed 1): being analytic it also serves as the truth for the accuracy table.
 double craterHeight(double x, double y) {
-  const double r = std::hypot(x, y);
-  const double th = std::atan2(y, x);
-  const double rim = 375.0 * (1.0 + 0.035 * std::sin(7.0 * th) + 0.02 * std::sin(13.0 * th + 1.0));
-  const double rimHeight = 8.0, depth = 70.0;
-  const double regional = 0.002 * x + 1.5 * std::sin(x / 310.0) * std::cos(y / 270.0);
-  if (r >= rim) return regional + rimHeight * std::pow(rim / r, 3.0);
-  const double q = r / rim;
-  const double bowl = rimHeight - (depth + rimHeight) * std::pow(1.0 - q * q * q * q, 2.0);
-  const double floorWeight = std::clamp((0.6 - q) / 0.3, 0.0, 1.0);
-  const double dunes = 2.5 * std::pow(std::sin(x / 12.0 + 0.3 * std::sin(y / 40.0)), 2.0);
-  return regional + bowl + floorWeight * dunes;
+  static const store::VictoriaShape shape = store::VictoriaShape::fromSeed(1);
+  return shape.height(x, y);
 }
 
 std::string fmt(const char* f, double a) {
@@ -66,7 +57,10 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
 
   // ---- 1. Build the DEM and place it on Mars ------------------------------------------
   const Body mars = Body::marsEllipsoid();
-  const Geodetic origin{-2.05, -5.5, -1400.0};  // near Victoria crater, Meridiani Planum
+  // Where `regolith generate victoria` puts it: near Victoria crater, Meridiani Planum.
+  const Geodetic origin{store::VictoriaGenerator::kOriginLatDeg,
+                        store::VictoriaGenerator::kOriginLonDeg,
+                        store::VictoriaOptions{}.originHeight};
   const LocalTangentPlane plane(mars, origin, 0.0);
   const double half = 0.5 * static_cast<double>(o.size - 1) * o.spacing;
   const TopoGrid grid(o.size, o.size, -half, half, o.spacing, o.spacing);

@@ -1,44 +1,46 @@
-// The `regolith` command. Subcommands grow with the issues; today: `demo`.
+// The `regolith` command: one subcommand per file (*Command.cpp), registered here.
 #include <regolith/topo/Error.hpp>
 
-#include "TopoDemo.hpp"
+#include "Commands.hpp"
 
 #include <CLI/CLI.hpp>
 
 #include <iostream>
+#include <string>
 
 int main(int argc, char** argv) try {
   CLI::App app{"Regolith: planetary terrain for simulation and visualization"};
+  app.name("regolith");
   app.require_subcommand(1);
+  app.failure_message([](const CLI::App* failed, const CLI::Error& e) {
+    // The (sub)command that was being parsed: "regolith generate victoria". CLI11 reports
+    // errors on the root app, so follow the subcommands that were given.
+    std::string command = "regolith";
+    for (const CLI::App* a = failed; !a->get_subcommands().empty();) {
+      a = a->get_subcommands().front();
+      command += " " + a->get_name();
+    }
+    return "regolith: error: " + std::string(e.what()) + "\nRun '" + command +
+           " --help' for more information.\n";
+  });
 
-  regolith::tools::TopoDemoOptions demo;
-  std::string outDir = demo.outDir.string();
-  auto* demoCmd = app.add_subcommand(
-      "demo",
-      "Topo walkthrough: builds a Victoria-like crater DEM on Mars in memory, queries "
-      "heights and normals along a rover path, reports accuracy and speed per kernel, and "
-      "exports the crater's west rim as a PLY mesh");
-  demoCmd->add_option("--size", demo.size, "Samples per side of the square DEM")
-      ->check(CLI::Range(16, 20001))
-      ->capture_default_str();
-  demoCmd->add_option("--spacing", demo.spacing, "Sample spacing in metres")
-      ->check(CLI::Range(0.01, 100.0))
-      ->capture_default_str();
-  demoCmd->add_option("--queries", demo.queries, "Queries for the throughput measurement")
-      ->check(CLI::Range(1000, 100000000))
-      ->capture_default_str();
-  demoCmd->add_option("--out", outDir, "Folder for output files")->capture_default_str();
+  regolith::tools::addDemoCommand(app);
+  regolith::tools::addGenerateCommand(app);
+  regolith::tools::addInfoCommand(app);
+  regolith::tools::addQueryCommand(app);
 
-  CLI11_PARSE(app, argc, argv);
-  if (*demoCmd) {
-    demo.outDir = outDir;
-    return regolith::tools::runTopoDemo(demo, std::cout);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Error& e) {
+    // Usage errors print the failure message above; --help prints help and returns 0;
+    // CLI::RuntimeError carries a subcommand's own exit code.
+    return app.exit(e);
   }
   return 0;
 } catch (const regolith::Error& e) {
   std::cerr << "regolith: error: " << e.what() << '\n';
   return 1;
 } catch (const std::exception& e) {
-  std::cerr << "regolith: unexpected error: " << e.what() << '\n';
-  return 2;
+  std::cerr << "regolith: error: " << e.what() << '\n';
+  return 1;
 }

@@ -527,6 +527,7 @@ struct Store::Impl {
   std::filesystem::path path;
   hdf5::File file;  // declared before the grids: closed after their datasets
   std::map<std::string, GridEntry, std::less<>> grids;
+  std::array<int, 2> formatVersion{0, 0};
   mutable std::atomic<std::uint64_t> reads{0};
   mutable std::atomic<std::uint64_t> bytesRead{0};
 
@@ -583,8 +584,10 @@ Store Store::open(const std::filesystem::path& path) {
   if (!hdf5::hasAttribute(root.get(), format::kMarker, ctx)) {
     fail(ctx, "is not a Regolith store (the root group has no attribute 'regolith_store')");
   }
-  checkVersion(hdf5::readIntegers(root.get(), format::kFormatVersion, 2, ctx, rootOwner), ctx,
-               rootOwner);
+  const std::vector<long long> version =
+      hdf5::readIntegers(root.get(), format::kFormatVersion, 2, ctx, rootOwner);
+  checkVersion(version, ctx, rootOwner);
+  impl->formatVersion = {static_cast<int>(version[0]), static_cast<int>(version[1])};
   const htri_t hasGrids = H5Lexists(root.get(), format::kGrids, H5P_DEFAULT);
   if (hasGrids < 0) failHdf5(ctx, "cannot look up '/grids'");
   if (hasGrids == 0) fail(ctx, "has no group '/grids'");
@@ -598,6 +601,8 @@ Store Store::open(const std::filesystem::path& path) {
 }
 
 const std::filesystem::path& Store::path() const noexcept { return impl_->path; }
+
+std::array<int, 2> Store::formatVersion() const noexcept { return impl_->formatVersion; }
 
 std::vector<std::string> Store::gridNames() const {
   std::vector<std::string> names;

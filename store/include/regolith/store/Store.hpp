@@ -6,6 +6,7 @@
 #include <regolith/topo/Error.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <filesystem>
@@ -54,6 +55,8 @@ class Store {
   ~Store();
 
   [[nodiscard]] const std::filesystem::path& path() const noexcept;
+  /// The file's [major, minor] format version (the root group's `format_version`).
+  [[nodiscard]] std::array<int, 2> formatVersion() const noexcept;
   [[nodiscard]] std::vector<std::string> gridNames() const;
   [[nodiscard]] bool hasGrid(std::string_view name) const noexcept;
   /// Throws StoreError naming the file and the grid if there is no such grid.

@@ -1,0 +1,219 @@
+// `regolith generate mars-planet|victoria`: procedural stores (store/Generate.hpp).
+#include <regolith/store/Generate.hpp>
+#include <regolith/topo/Error.hpp>
+
+#include "Commands.hpp"
+#include "TerminalProgress.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+
+namespace regolith::tools {
+
+namespace {
+
+// Set by SIGINT/SIGTERM during a write: the writer then stops and removes its temporary file.
+std::atomic<bool> gCancel{false};  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
+static_assert(std::atomic<bool>::is_always_lock_free);
+
+extern "C" void onSignal(int /*signal*/) { gCancel.store(true); }
+
+/// Installs the cancelling handlers for the lifetime of a write, then restores the defaults.
+class CancelOnSignal {
+ public:
+  CancelOnSignal() {
+    gCancel.store(false);
+    std::signal(SIGINT, onSignal);
+    std::signal(SIGTERM, onSignal);
+  }
+  ~CancelOnSignal() {
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
+  }
+  CancelOnSignal(const CancelOnSignal&) = delete;
+  CancelOnSignal& operator=(const CancelOnSignal&) = delete;
+  CancelOnSignal(CancelOnSignal&&) = delete;
+  CancelOnSignal& operator=(CancelOnSignal&&) = delete;
+};
+
+/// Options every generator shares: the output and how it is written.
+struct WriteArgs {
+  std::string out;
+  std::uint64_t seed = 1;
+  std::size_t patch = 256;
+  std::size_t levels = 0;
+  int deflate = 0;
+  std::string grid;
+};
+
+void addWriteOptions(CLI::App& cmd, WriteArgs& w) {
+  cmd.add_option("-o,--out", w.out, "Store file to write (replaced atomically if it exists)")
+      ->required();
+  cmd.add_option("--seed", w.seed, "Random seed: the same seed gives bit-identical samples")
+      ->capture_default_str();
+  cmd.add_option("--patch", w.patch, "Patch (HDF5 chunk) size in samples, square")
+      ->check(CLI::Range(std::size_t{8}, std::size_t{8192}))
+      ->capture_default_str();
+  cmd.add_option("--levels", w.levels,
+                 "Pyramid levels including level 0 (0: until a level fits in one patch)")
+      ->check(CLI::Range(0, 40))
+      ->capture_default_str();
+  cmd.add_option("--deflate", w.deflate, "Deflate level 0-9 (0: uncompressed)")
+      ->check(CLI::Range(0, 9))
+      ->capture_default_str();
+}
+
+/// Refuses an output whose folder does not exist, before any work is done.
+void checkOut(const std::string& command, const std::string& out) {
+  std::filesystem::path dir = std::filesystem::path(out).parent_path();
+  if (dir.empty()) dir = ".";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec)) {
+    throw InvalidArgument(command + ": --out " + out + ": folder " + dir.string() +
+                          " does not exist");
+  }
+}
+
+store::WriteOptions writeOptions(const WriteArgs& w, TerminalProgress& progress) {
+  store::WriteOptions o;
+  o.patchRows = o.patchCols = w.patch;
+  o.levels = w.levels;
+  o.deflate = w.deflate;
+  o.progress = progress.callback();
+  o.cancel = &gCancel;
+  return o;
+}
+
+void report(const std::string& out, const store::GridInfo& info, const char* what) {
+  std::cout << "Wrote " << out << ": " << what << " grid '" << info.name << "', " << info.rows
+            << " x " << info.cols << " samples\n";
+}
+
+void addPlanet(CLI::App& generate) {
+  struct Args {
+    WriteArgs w;
+    std::size_t rows = 720;
+    double resolution = 0.0;
+    bool ellipsoid = false;
+    double craters = 1.0;
+    std::size_t threads = 0;
+  };
+  auto a = std::make_shared<Args>();
+  a->w.grid = "mars";
+  auto* cmd = generate.add_subcommand(
+      "mars-planet",
+      "A global Mars-like planet (lat/lon grid, both poles, planetocentric): crustal "
+      "dichotomy, a Tharsis-like bulge with shield volcanoes, fractal relief and craters "
+      "with a power-law size distribution");
+  addWriteOptions(*cmd, a->w);
+  auto* size = cmd->add_option("--size", a->rows,
+                               "Latitude samples pole to pole; the grid has twice as many "
+                               "longitude samples")
+                   ->check(CLI::Range(std::size_t{2}, std::size_t{1} << 20U))
+                   ->capture_default_str();
+  cmd->add_option("--resolution", a->resolution,
+                  "Sample spacing in degrees (instead of --size; 180/spacing must be a whole "
+                  "number)")
+      ->check(CLI::PositiveNumber)
+      ->excludes(size);
+  cmd->add_flag("--ellipsoid", a->ellipsoid,
+                "Use the IAU Mars ellipsoid (3396190/3376200 m) instead of the sphere");
+  cmd->add_option("--craters", a->craters, "Crater density multiplier (0: no craters)")
+      ->check(CLI::Range(0.0, 100.0))
+      ->capture_default_str();
+  cmd->add_option("--threads", a->threads, "Threads computing samples (0: all cores)")
+      ->capture_default_str();
+  cmd->add_option("--grid", a->w.grid, "Name of the grid in the store")->capture_default_str();
+  cmd->callback([a] {
+    store::MarsPlanetOptions o;
+    o.rows = a->rows;
+    if (a->resolution > 0.0) {
+      const double rows = 180.0 / a->resolution;
+      if (std::abs(rows - std::round(rows)) > 1e-9 * rows || std::round(rows) < 2.0) {
+        throw InvalidArgument("generate mars-planet: --resolution " +
+                              std::to_string(a->resolution) +
+                              " degrees does not divide 180 degrees into a whole number (>= 2) "
+                              "of rows");
+      }
+      o.rows = static_cast<std::size_t>(std::round(rows));
+    }
+    checkOut("generate mars-planet", a->w.out);
+    o.seed = a->w.seed;
+    o.ellipsoid = a->ellipsoid;
+    o.gridName = a->w.grid;
+    o.craterDensity = a->craters;
+    o.threads = a->threads;
+    TerminalProgress progress = TerminalProgress::forStderr();
+    o.write = writeOptions(a->w, progress);
+    const store::MarsPlanetGenerator g(o);
+    const CancelOnSignal cancel;
+    g.write(a->w.out);
+    report(a->w.out, g.gridInfo(), "planet");
+  });
+}
+
+void addVictoria(CLI::App& generate) {
+  struct Args {
+    WriteArgs w;
+    std::size_t size = 1201;
+    double resolution = 1.0;
+  };
+  auto a = std::make_shared<Args>();
+  a->w.grid = "victoria";
+  auto* cmd = generate.add_subcommand(
+      "victoria",
+      "A Victoria-crater-like local DEM on Mars (local tangent plane at 2.05S 5.5W on the "
+      "IAU ellipsoid): a crater about 750 m across with a raised, scalloped rim and dunes on "
+      "its floor, centred in the grid");
+  addWriteOptions(*cmd, a->w);
+  cmd->add_option("--size", a->size, "Samples per side of the square grid")
+      ->check(CLI::Range(std::size_t{2}, std::size_t{1} << 20U))
+      ->capture_default_str();
+  cmd->add_option("--resolution", a->resolution, "Sample spacing in metres")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--grid", a->w.grid, "Name of the grid in the store")->capture_default_str();
+  cmd->callback([a] {
+    checkOut("generate victoria", a->w.out);
+    store::VictoriaOptions o;
+    o.size = a->size;
+    o.spacing = a->resolution;
+    o.seed = a->w.seed;
+    o.gridName = a->w.grid;
+    TerminalProgress progress = TerminalProgress::forStderr();
+    o.write = writeOptions(a->w, progress);
+    const store::VictoriaGenerator g(o);
+    const CancelOnSignal cancel;
+    g.write(a->w.out);
+    report(a->w.out, g.gridInfo(), "DEM");
+  });
+}
+
+}  // namespace
+
+void addGenerateCommand(CLI::App& app) {
+  auto* generate = app.add_subcommand(
+      "generate",
+      "Write a procedural terrain store: deterministic for a seed, at any resolution, "
+      "computed patch by patch (outputs larger than RAM are fine)");
+  generate->require_subcommand(1);
+  generate->footer(
+      "Examples:\n"
+      "  regolith generate victoria --out victoria.h5\n"
+      "  regolith generate victoria --out v2m.h5 --size 601 --resolution 2 --seed 7\n"
+      "  regolith generate mars-planet --out mars.h5 --resolution 0.25 --deflate 4\n"
+      "A progress bar is drawn on stderr when it is a terminal; Ctrl-C cancels cleanly "
+      "(no partial file).");
+  addPlanet(*generate);
+  addVictoria(*generate);
+}
+
+}  // namespace regolith::tools

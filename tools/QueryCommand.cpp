@@ -1,0 +1,357 @@
+// `regolith query STORE [points...]`: heights and normals at points, as CSV (docs/cli.md).
+#include <regolith/store/Pager.hpp>
+#include <regolith/store/Store.hpp>
+#include <regolith/topo/Error.hpp>
+
+#include "Commands.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace regolith::tools {
+
+namespace {
+
+enum class Coords { LonLat, Grid, Xy };
+
+/// Column names of the two input coordinates, in input order.
+std::pair<const char*, const char*> coordNames(Coords c) {
+  switch (c) {
+    case Coords::LonLat: return {"lon", "lat"};
+    case Coords::Grid: return {"row", "col"};
+    case Coords::Xy: return {"x", "y"};
+  }
+  return {"a", "b"};
+}
+
+/// One input point: its two coordinates as given, and where it came from (for errors).
+struct Point {
+  double a = 0.0, b = 0.0;
+};
+
+std::string_view trim(std::string_view s) {
+  const auto first = s.find_first_not_of(" \t\r");
+  if (first == std::string_view::npos) return {};
+  const auto last = s.find_last_not_of(" \t\r");
+  return s.substr(first, last - first + 1);
+}
+
+std::vector<std::string_view> splitFields(std::string_view line) {
+  std::vector<std::string_view> fields;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    fields.push_back(trim(line.substr(start, comma - start)));
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  return fields;
+}
+
+/// Parses "a,b" into a point, or throws InvalidArgument("query: <where>: ...").
+Point parsePoint(std::string_view text, const std::string& where, Coords coords) {
+  const auto [nameA, nameB] = coordNames(coords);
+  const std::vector<std::string_view> f = splitFields(text);
+  if (f.size() != 2) {
+    throw InvalidArgument("query: " + where + ": '" + std::string(trim(text)) + "' has " +
+                          std::to_string(f.size()) + " field" + (f.size() == 1 ? "" : "s") +
+                          ", expected 2 (" + nameA + "," + nameB + ")");
+  }
+  double v[2] = {0.0, 0.0};
+  for (std::size_t i = 0; i < 2; ++i) {
+    const std::string_view s = f[i];
+    const char* name = i == 0 ? nameA : nameB;
+    // from_chars takes no leading '+'; accept it as people write it.
+    const std::string_view digits = !s.empty() && s[0] == '+' ? s.substr(1) : s;
+    const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), v[i]);
+    if (s.empty() || r.ec != std::errc() || r.ptr != digits.data() + digits.size()) {
+      throw InvalidArgument("query: " + where + ": " + name + " '" + std::string(s) +
+                            "' is not a number");
+    }
+    if (!std::isfinite(v[i])) {
+      throw InvalidArgument("query: " + where + ": " + name + " '" + std::string(s) +
+                            "' is not a finite number");
+    }
+  }
+  if (coords == Coords::LonLat && std::abs(v[1]) > 90.0) {
+    throw InvalidArgument("query: " + where + ": lat " + std::string(f[1]) +
+                          " is outside -90 to 90 degrees");
+  }
+  return {v[0], v[1]};
+}
+
+std::vector<Point> readStdin(Coords coords) {
+  const auto [nameA, nameB] = coordNames(coords);
+  const std::string header = std::string(nameA) + "," + nameB;
+  std::vector<Point> points;
+  std::string line;
+  std::size_t lineNo = 0;
+  bool first = true;
+  while (std::getline(std::cin, line)) {
+    ++lineNo;
+    const std::string_view t = trim(line);
+    if (t.empty() || t[0] == '#') continue;
+    if (first) {
+      first = false;
+      // An optional header naming the columns, in the order they are expected.
+      const std::vector<std::string_view> f = splitFields(t);
+      if (f.size() == 2 && f[0] == nameA && f[1] == nameB) continue;
+      if (!f.empty() && (f[0] == nameB || (f.size() > 1 && f[1] == nameA))) {
+        throw InvalidArgument("query: stdin line " + std::to_string(lineNo) + ": header '" +
+                              std::string(t) + "' does not match the expected '" + header +
+                              "' (--coords decides the columns and their order)");
+      }
+    }
+    points.push_back(parsePoint(t, "stdin line " + std::to_string(lineNo), coords));
+  }
+  if (std::cin.bad()) throw InvalidArgument("query: cannot read stdin");
+  return points;
+}
+
+/// Shortest text that reads back as the same double; "nan" for NaN.
+void appendNumber(std::string& out, double v) {
+  if (std::isnan(v)) {
+    out += "nan";
+    return;
+  }
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, r.ptr);
+}
+
+struct Result {
+  std::vector<double> height;
+  std::vector<glm::dvec3> normal;
+  std::vector<topo::QueryStatus> status;
+  explicit Result(std::size_t n)
+      : height(n), normal(n), status(n, topo::QueryStatus::OutsideGrid) {}
+};
+
+void queryDem(const topo::TopoDem& dem, Coords coords, std::span<const Point> pts,
+              topo::Interpolation interp, topo::NormalFrame frame, Result& res) {
+  const std::size_t n = pts.size();
+  std::vector<double> xs(n), ys(n);
+  const topo::TopoGrid& grid = dem.grid();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (coords == Coords::Grid) {
+      const glm::dvec2 p = grid.sampleCentre(pts[i].a, pts[i].b);
+      xs[i] = p.x;
+      ys[i] = p.y;
+    } else {
+      xs[i] = pts[i].a;
+      ys[i] = pts[i].b;
+    }
+  }
+  if (coords == Coords::LonLat) {
+    // The point where the vertical through (lat, lon) meets the terrain: project at an
+    // ellipsoid height, read the terrain there, and repeat with the terrain's ellipsoid
+    // height (the plane's normal and the ellipsoid's differ away from its origin).
+    const topo::Placement& placement = dem.placement();
+    std::vector<double> he(n, placement.toGeodetic(0.0, 0.0, 0.0).height), h(n);
+    std::vector<topo::QueryStatus> st(n);
+    for (int iter = 0; iter < 5; ++iter) {
+      for (std::size_t i = 0; i < n; ++i) {
+        const glm::dvec3 g = placement.fromGeodetic({pts[i].b, pts[i].a, he[i]});
+        xs[i] = g.x;
+        ys[i] = g.y;
+      }
+      if (iter == 4) break;
+      dem.heights(xs, ys, h, st, interp);
+      for (std::size_t i = 0; i < n; ++i) {
+        if (st[i] == topo::QueryStatus::Ok) he[i] = placement.toGeodetic(xs[i], ys[i], h[i]).height;
+      }
+    }
+  }
+  dem.surfaces(xs, ys, res.height, res.normal, res.status, interp, frame);
+}
+
+void queryPlanet(const topo::TopoPlanet& planet, Coords coords, std::span<const Point> pts,
+                 topo::Interpolation interp, topo::NormalFrame frame, Result& res) {
+  const std::size_t n = pts.size();
+  std::vector<double> lats, lons;
+  std::vector<std::size_t> index;  // points inside −90…90 (others stay OutsideGrid)
+  lats.reserve(n);
+  lons.reserve(n);
+  index.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    double lon = pts[i].a, lat = pts[i].b;
+    if (coords == Coords::Grid) {
+      const glm::dvec2 p = planet.grid().sampleCentre(pts[i].a, pts[i].b);
+      lon = p.x;
+      lat = p.y;
+    }
+    if (std::abs(lat) > 90.0) {
+      res.height[i] = std::nan("");
+      res.normal[i] = glm::dvec3(std::nan(""));
+      continue;
+    }
+    lats.push_back(lat);
+    lons.push_back(lon);
+    index.push_back(i);
+  }
+  std::vector<double> h(index.size());
+  std::vector<glm::dvec3> nrm(index.size());
+  std::vector<topo::QueryStatus> st(index.size());
+  planet.surfaces(lats, lons, h, nrm, st, interp, frame);
+  for (std::size_t k = 0; k < index.size(); ++k) {
+    res.height[index[k]] = h[k];
+    res.normal[index[k]] = nrm[k];
+    res.status[index[k]] = st[k];
+  }
+}
+
+struct Args {
+  std::string store;
+  std::string grid;
+  std::string interp = "bilinear";
+  std::string coords = "lonlat";
+  std::string frame = "grid";
+  std::vector<std::string> points;
+  std::size_t cacheMb = 256;
+  std::size_t level = 0;
+};
+
+std::string chooseGrid(const store::Store& s, const std::string& requested) {
+  if (!requested.empty()) return requested;  // Store::grid() names the grids if missing
+  std::vector<std::string> names = s.gridNames();
+  if (names.size() == 1) return names[0];
+  std::sort(names.begin(), names.end());
+  std::string list;
+  for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+  throw InvalidArgument("query: " + s.path().string() + " has " + std::to_string(names.size()) +
+                        " grids (" + list + "); choose one with --grid");
+}
+
+void runQuery(const Args& a) {
+  static const std::map<std::string, Coords> kCoords{
+      {"lonlat", Coords::LonLat}, {"grid", Coords::Grid}, {"xy", Coords::Xy}};
+  static const std::map<std::string, topo::Interpolation> kInterp{
+      {"nearest", topo::Interpolation::Nearest},
+      {"bilinear", topo::Interpolation::Bilinear},
+      {"bicubic", topo::Interpolation::Bicubic}};
+  const Coords coords = kCoords.at(a.coords);
+  const topo::Interpolation interp = kInterp.at(a.interp);
+  const topo::NormalFrame frame =
+      a.frame == "body" ? topo::NormalFrame::BodyFixed : topo::NormalFrame::Grid;
+
+  // All input is read and checked before anything is printed: a bad line gives an error
+  // and no partial output.
+  std::vector<Point> points;
+  if (a.points.empty()) {
+    points = readStdin(coords);
+  } else {
+    for (std::size_t i = 0; i < a.points.size(); ++i) {
+      points.push_back(parsePoint(a.points[i], "point " + std::to_string(i + 1), coords));
+    }
+  }
+
+  auto store = std::make_shared<const store::Store>(store::Store::open(a.store));
+  const std::string gridName = chooseGrid(*store, a.grid);
+  const store::GridInfo& info = store->grid(gridName);
+  if (a.level >= info.levels) {
+    throw InvalidArgument("query: grid '" + gridName + "' has " + std::to_string(info.levels) +
+                          " levels (0 to " + std::to_string(info.levels - 1) + "), not level " +
+                          std::to_string(a.level));
+  }
+  auto cache = std::make_shared<store::PatchCache>(a.cacheMb << 20U);
+  const store::Pager pager(store, cache);
+  std::optional<topo::TopoDem> dem;
+  std::optional<topo::TopoPlanet> planet;
+  if (info.kind == store::GridKind::Dem) {
+    dem.emplace(pager.dem(gridName, a.level));
+  } else {
+    planet.emplace(pager.planet(gridName, a.level));
+  }
+
+  const auto [nameA, nameB] = coordNames(coords);
+  std::string out = std::string(nameA) + "," + nameB + ",height,nx,ny,nz,valid\n";
+  constexpr std::size_t kBatch = 1U << 16U;
+  for (std::size_t first = 0; first < points.size() || first == 0; first += kBatch) {
+    const std::size_t n = std::min(kBatch, points.size() - first);
+    const std::span<const Point> batch(points.data() + first, n);
+    Result res(n);
+    if (dem) {
+      queryDem(*dem, coords, batch, interp, frame, res);
+    } else {
+      queryPlanet(*planet, coords, batch, interp, frame, res);
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const bool valid = res.status[i] == topo::QueryStatus::Ok;
+      const double nan = std::nan("");
+      appendNumber(out, batch[i].a);
+      out += ',';
+      appendNumber(out, batch[i].b);
+      out += ',';
+      appendNumber(out, valid ? res.height[i] : nan);
+      for (int k = 0; k < 3; ++k) {
+        out += ',';
+        appendNumber(out, valid ? res.normal[i][k] : nan);
+      }
+      out += valid ? ",1\n" : ",0\n";
+    }
+    std::fwrite(out.data(), 1, out.size(), stdout);
+    out.clear();
+    if (n == 0) break;
+  }
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+void addQueryCommand(CLI::App& app) {
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "query",
+      "Heights and unit normals at points, as CSV on stdout: a header line, then one row per "
+      "input point in input order with its two coordinates, height, nx, ny, nz and valid (1, "
+      "or 0 with nan values over nodata or outside the grid). Points come as arguments "
+      "'a,b' (if one starts with '-.', put -- before the first point) or, with none given, as CSV "
+      "lines on stdin (an optional header line naming the columns; blank lines and lines "
+      "starting with # are skipped)");
+  cmd->add_option("store", a->store, "Store file (HDF5)")->required();
+  cmd->add_option("points", a->points, "Points 'a,b' in the --coords order");
+  cmd->add_option("--grid", a->grid, "Grid to query (default: the store's only grid)");
+  cmd->add_option("--interp", a->interp, "Interpolation kernel")
+      ->check(CLI::IsMember({"nearest", "bilinear", "bicubic"}))
+      ->capture_default_str();
+  cmd->add_option("--coords", a->coords,
+                  "Input coordinates: lonlat = 'lon,lat' in degrees (east longitude; "
+                  "latitude as the grid declares it, planetodetic for DEMs); grid = "
+                  "'row,col' fractional sample indices (row 0 north, integers at sample "
+                  "centres); xy = 'x,y' grid coordinates (metres for a DEM, lon/lat degrees "
+                  "for a planet)")
+      ->check(CLI::IsMember({"lonlat", "grid", "xy"}))
+      ->capture_default_str();
+  cmd->add_option("--frame", a->frame,
+                  "Frame of the normal: grid (a DEM's x, y, up axes; a planet's local "
+                  "east, north, up) or body (body-fixed Cartesian)")
+      ->check(CLI::IsMember({"grid", "body"}))
+      ->capture_default_str();
+  cmd->add_option("--level", a->level, "Pyramid level to query (grid coordinates then index it)")
+      ->capture_default_str();
+  cmd->add_option("--cache-mb", a->cacheMb, "Patch cache budget in MiB")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 20U))
+      ->capture_default_str();
+  cmd->footer(
+      "Examples:\n"
+      "  regolith query mars.h5 137.4,-4.6 -5.5,-2.05\n"
+      "  regolith query mars.h5 -- -.5,10 20,30\n"
+      "  regolith query victoria.h5 --coords xy --interp bicubic 0,0 120.5,-40\n"
+      "  printf 'lon,lat\\n-5.5,-2.05\\n' | regolith query victoria.h5 --frame body\n"
+      "Exit status: 0 on success; non-zero, with 'regolith: error: ...' on stderr and nothing "
+      "on stdout, for malformed input (the message names the argument or stdin line).");
+  cmd->callback([a] { runQuery(*a); });
+}
+
+}  // namespace regolith::tools
