@@ -195,12 +195,30 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
     }
     return;
   }
-  if (resident_ == nullptr) {  // paged: per point, each reusing the thread's block
-    // height(): its inline paths (the thread's block, then the lock-free block table) serve
-    // bilinear points; a group-wise variant that protected 8 blocks at once to overlap their
-    // memory misses measured no faster (docs/paging.md).
+  if (resident_ == nullptr && interp == Interpolation::Bilinear) {
+    // Paged: height()'s inline paths (the thread's block, then the lock-free block table) on
+    // local copies, since stores to out[] could alias the members. A variant that protected
+    // 8 blocks at once to overlap their memory misses measured no faster (docs/paging.md).
+    const detail::DemIndexer m = index_;
+    const detail::ResidentBilinear f = fast_;
+    const BlockTable* table = table_;
+    const std::uint64_t id = sourceId_;
     for (std::size_t i = 0; i < n; ++i) {
-      const HeightSample s = height(xs[i], ys[i], interp);
+      double h = 0.0;
+      if (detail::pagedBilinear(f, table, id, m.u(xs[i]), m.v(ys[i]), h)) [[likely]] {
+        out[i] = h;
+        if (!status.empty()) status[i] = QueryStatus::Ok;
+        continue;
+      }
+      const HeightSample s = heightGeneric(xs[i], ys[i], interp);
+      out[i] = s.height;
+      if (!status.empty()) status[i] = s.status;
+    }
+    return;
+  }
+  if (resident_ == nullptr) {  // paged, other kernels: per point, reusing the thread's block
+    for (std::size_t i = 0; i < n; ++i) {
+      const HeightSample s = heightGeneric(xs[i], ys[i], interp);
       out[i] = s.height;
       if (!status.empty()) status[i] = s.status;
     }

@@ -135,6 +135,21 @@ inline bool publishedBilinear(const PublishedBlock& b, double u, double v, doubl
                               bool hasNodata, double& h) noexcept {
   return blockBilinear(b, u, v, nodata, hasNodata, h);
 }
+/// Bilinear height on a paged source: from the thread's last block if it holds the cell,
+/// else from the block table (a lock-free switch, the random-access case). False leaves the
+/// point to the generic path (not resident, a cell across a block edge, missing samples,
+/// outside the sample centres).
+inline bool pagedBilinear(const ResidentBilinear& f, const BlockTable* table, std::uint64_t source,
+                          double u, double v, double& h) noexcept {
+  const ThreadBlock& tb = tlBlock;
+  if (tb.source == source && blockBilinear(tb, u, v, f.nodata, f.hasNodata, h)) [[likely]] {
+    return true;
+  }
+  if (table == nullptr || !(u >= 0.0 && v >= 0.0 && u < f.uMax && v < f.vMax)) return false;
+  const PublishedBlock* b =
+      enterBlock(*table, source, static_cast<std::size_t>(v), static_cast<std::size_t>(u), false);
+  return b != nullptr && publishedBilinear(*b, u, v, f.nodata, f.hasNodata, h);
+}
 }  // namespace detail
 
 /// A planar grid of heights in metres (grid x, y in metres, row 0 north/top), placed on a
@@ -207,19 +222,8 @@ inline HeightSample TopoDem::height(double x, double y, Interpolation interp) co
       if (fast_.evalResident(u, v, h)) [[likely]]
         return {h, QueryStatus::Ok};
     } else {
-      // Paged: the thread's last block, if it holds this cell.
-      const detail::ThreadBlock& tb = detail::tlBlock;
-      if (tb.source == sourceId_ &&
-          detail::blockBilinear(tb, u, v, fast_.nodata, fast_.hasNodata, h)) [[likely]] {
+      if (detail::pagedBilinear(fast_, table_, sourceId_, u, v, h)) [[likely]] {
         return {h, QueryStatus::Ok};
-      }
-      // Another resident block: a lock-free switch (random access), else the slow path.
-      if (table_ != nullptr && u >= 0.0 && v >= 0.0 && u < fast_.uMax && v < fast_.vMax) {
-        const PublishedBlock* b = detail::enterBlock(
-            *table_, sourceId_, static_cast<std::size_t>(v), static_cast<std::size_t>(u), false);
-        if (b != nullptr && detail::publishedBilinear(*b, u, v, fast_.nodata, fast_.hasNodata, h)) {
-          return {h, QueryStatus::Ok};
-        }
       }
     }
   }
