@@ -40,8 +40,6 @@ std::string placementName(PlacementInfo::Kind k) {
   return "unknown";
 }
 
-std::string num(double v) { return shortestNumber(v); }
-
 ordered_json placementJson(const GridInfo& g) {
   if (g.kind != GridKind::Dem) return nullptr;
   const PlacementInfo& p = g.placement;
@@ -72,8 +70,8 @@ ordered_json placementJson(const GridInfo& g) {
   return j;
 }
 
-/// The grid's keys; `stored` (a grid of a store, not a raster's would-be grid) adds levels,
-/// patch shape and tiling.
+/// The grid's keys. `tiled` is set for a grid of a store (whether level 0 is tiled), and adds
+/// levels, patch shape and tiling; unset for the grid a raster would become.
 ordered_json gridJson(const GridInfo& g, std::optional<bool> tiled) {
   const topo::TopoGrid tg = store::topoGridOf(g);
   ordered_json j;
@@ -131,21 +129,24 @@ void printPlacement(const GridInfo& g, std::ostream& out) {
   out << "  placement:      " << placementName(p.kind);
   switch (p.kind) {
     case PlacementInfo::Kind::LocalTangentPlane:
-      out << ", origin lat " << num(p.originLatDeg) << " deg, lon " << num(p.originLonDeg)
-          << " deg, height " << num(p.originHeight) << " m, heading " << num(p.headingDeg)
-          << " deg\n";
+      out << ", origin lat " << shortestNumber(p.originLatDeg) << " deg, lon "
+          << shortestNumber(p.originLonDeg) << " deg, height " << shortestNumber(p.originHeight)
+          << " m, heading " << shortestNumber(p.headingDeg) << " deg\n";
       break;
     case PlacementInfo::Kind::PolarStereographic:
       out << ", " << (p.pole >= 0 ? "north" : "south") << " pole";
-      if (p.latTrueScaleDeg) out << ", true scale at " << num(*p.latTrueScaleDeg) << " deg";
-      if (p.scaleFactor) out << ", scale factor " << num(*p.scaleFactor);
-      out << ", centre lon " << num(p.lonCentreDeg) << " deg, false easting " << num(p.falseEasting)
-          << " m, false northing " << num(p.falseNorthing) << " m\n";
+      if (p.latTrueScaleDeg)
+        out << ", true scale at " << shortestNumber(*p.latTrueScaleDeg) << " deg";
+      if (p.scaleFactor) out << ", scale factor " << shortestNumber(*p.scaleFactor);
+      out << ", centre lon " << shortestNumber(p.lonCentreDeg) << " deg, false easting "
+          << shortestNumber(p.falseEasting) << " m, false northing "
+          << shortestNumber(p.falseNorthing) << " m\n";
       break;
     case PlacementInfo::Kind::Equirectangular:
-      out << ", radius " << num(p.projectionRadius) << " m, true scale at "
-          << num(p.latTrueScaleDeg.value_or(0.0)) << " deg, centre lon " << num(p.lonCentreDeg)
-          << " deg, origin lat " << num(p.latOriginDeg) << " deg\n";
+      out << ", radius " << shortestNumber(p.projectionRadius) << " m, true scale at "
+          << shortestNumber(p.latTrueScaleDeg.value_or(0.0)) << " deg, centre lon "
+          << shortestNumber(p.lonCentreDeg) << " deg, origin lat " << shortestNumber(p.latOriginDeg)
+          << " deg\n";
       break;
   }
 }
@@ -160,14 +161,16 @@ void printGrid(const GridInfo& g, std::optional<bool> tiled, std::ostream& out) 
       << (dem ? "dem (planar grid placed on the body)" : "planet (latitude/longitude grid)")
       << "\n";
   out << "  size:           " << g.rows << " rows x " << g.cols << " cols\n";
-  out << "  spacing:        " << num(g.spacingX) << " x " << num(g.spacingY) << unit << "\n";
-  out << "  sample (0, 0):  " << (dem ? "x " : "lon ") << num(g.x0) << ", " << (dem ? "y " : "lat ")
-      << num(g.y0) << unit << "\n";
-  out << "  extent:         " << (dem ? "x " : "lon ") << num(tg.west()) << " to " << num(tg.east())
-      << ", " << (dem ? "y " : "lat ") << num(tg.south()) << " to " << num(tg.north()) << unit
-      << " (pixel edges)\n";
-  out << "  body:           " << g.bodyName << ", equatorial radius " << num(g.equatorialRadius)
-      << " m, polar radius " << num(g.polarRadius) << " m\n";
+  out << "  spacing:        " << shortestNumber(g.spacingX) << " x " << shortestNumber(g.spacingY)
+      << unit << "\n";
+  out << "  sample (0, 0):  " << (dem ? "x " : "lon ") << shortestNumber(g.x0) << ", "
+      << (dem ? "y " : "lat ") << shortestNumber(g.y0) << unit << "\n";
+  out << "  extent:         " << (dem ? "x " : "lon ") << shortestNumber(tg.west()) << " to "
+      << shortestNumber(tg.east()) << ", " << (dem ? "y " : "lat ") << shortestNumber(tg.south())
+      << " to " << shortestNumber(tg.north()) << unit << " (pixel edges)\n";
+  out << "  body:           " << g.bodyName << ", equatorial radius "
+      << shortestNumber(g.equatorialRadius) << " m, polar radius " << shortestNumber(g.polarRadius)
+      << " m\n";
   out << "  latitude type:  " << latitudeTypeName(g.latitudeType) << "\n";
   if (dem) printPlacement(g, out);
   if (tiled) {
@@ -179,9 +182,11 @@ void printGrid(const GridInfo& g, std::optional<bool> tiled, std::ostream& out) 
     out << "  patch:          " << g.patchRows << " x " << g.patchCols << " samples\n";
   }
   out << "  nodata:         "
-      << (g.nodata ? num(static_cast<double>(*g.nodata)) : std::string("none (NaN only)")) << "\n";
-  out << "  height:         " << num(g.offset) << " + " << num(g.scale) << " x stored value, in "
-      << g.units << "\n";
+      << (g.nodata ? shortestNumber(static_cast<double>(*g.nodata))
+                   : std::string("none (NaN only)"))
+      << "\n";
+  out << "  height:         " << shortestNumber(g.offset) << " + " << shortestNumber(g.scale)
+      << " x stored value, in " << g.units << "\n";
   if (tiled) out << "  tiled:          " << (*tiled ? "yes" : "no") << "\n";
 }
 
