@@ -12,6 +12,7 @@ namespace regolith::tools {
 
 void addDemoCommand(CLI::App& app);
 void addGenerateCommand(CLI::App& app);
+void addImportCommand(CLI::App& app);
 void addInfoCommand(CLI::App& app);
 void addQueryCommand(CLI::App& app);
 

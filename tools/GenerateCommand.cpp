@@ -2,16 +2,15 @@
 #include <regolith/store/Generate.hpp>
 #include <regolith/topo/Error.hpp>
 
+#include "CancelOnSignal.hpp"
 #include "Commands.hpp"
+#include "OutputFolder.hpp"
 #include "TerminalProgress.hpp"
 
 #include <CLI/CLI.hpp>
 
-#include <atomic>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
-#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -19,30 +18,6 @@
 namespace regolith::tools {
 
 namespace {
-
-// Set by SIGINT/SIGTERM during a write: the writer then stops and removes its temporary file.
-std::atomic<bool> gCancel{false};  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
-static_assert(std::atomic<bool>::is_always_lock_free);
-
-extern "C" void onSignal(int /*signal*/) { gCancel.store(true); }
-
-/// Installs the cancelling handlers for the lifetime of a write, then restores the defaults.
-class CancelOnSignal {
- public:
-  CancelOnSignal() {
-    gCancel.store(false);
-    std::signal(SIGINT, onSignal);
-    std::signal(SIGTERM, onSignal);
-  }
-  ~CancelOnSignal() {
-    std::signal(SIGINT, SIG_DFL);
-    std::signal(SIGTERM, SIG_DFL);
-  }
-  CancelOnSignal(const CancelOnSignal&) = delete;
-  CancelOnSignal& operator=(const CancelOnSignal&) = delete;
-  CancelOnSignal(CancelOnSignal&&) = delete;
-  CancelOnSignal& operator=(CancelOnSignal&&) = delete;
-};
 
 /// Options every generator shares: the output and how it is written.
 struct WriteArgs {
@@ -71,24 +46,13 @@ void addWriteOptions(CLI::App& cmd, WriteArgs& w) {
       ->capture_default_str();
 }
 
-/// Refuses an output whose folder does not exist, before any work is done.
-void checkOut(const std::string& command, const std::string& out) {
-  std::filesystem::path dir = std::filesystem::path(out).parent_path();
-  if (dir.empty()) dir = ".";
-  std::error_code ec;
-  if (!std::filesystem::is_directory(dir, ec)) {
-    throw InvalidArgument(command + ": --out " + out + ": folder " + dir.string() +
-                          " does not exist");
-  }
-}
-
 store::WriteOptions writeOptions(const WriteArgs& w, TerminalProgress& progress) {
   store::WriteOptions o;
   o.patchRows = o.patchCols = w.patch;
   o.levels = w.levels;
   o.deflate = w.deflate;
   o.progress = progress.callback();
-  o.cancel = &gCancel;
+  o.cancel = CancelOnSignal::flag();
   return o;
 }
 
@@ -145,7 +109,7 @@ void addPlanet(CLI::App& generate) {
       }
       o.rows = static_cast<std::size_t>(std::round(rows));
     }
-    checkOut("generate mars-planet", a->w.out);
+    requireOutputFolder("generate mars-planet", a->w.out);
     o.seed = a->w.seed;
     o.ellipsoid = a->ellipsoid;
     o.gridName = a->w.grid;
@@ -182,7 +146,7 @@ void addVictoria(CLI::App& generate) {
       ->capture_default_str();
   cmd->add_option("--grid", a->w.grid, "Name of the grid in the store")->capture_default_str();
   cmd->callback([a] {
-    checkOut("generate victoria", a->w.out);
+    requireOutputFolder("generate victoria", a->w.out);
     store::VictoriaOptions o;
     o.size = a->size;
     o.spacing = a->resolution;

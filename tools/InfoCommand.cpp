@@ -1,17 +1,19 @@
-// `regolith info STORE [--json]`: what a store holds.
+// `regolith info FILE [--json]`: what a store holds, or what an import would make of a raster.
 #include <regolith/store/GridInfo.hpp>
+#include <regolith/store/Import.hpp>
 #include <regolith/store/Store.hpp>
 
 #include "Commands.hpp"
+#include "ReportText.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <charconv>
-#include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace regolith::tools {
@@ -36,14 +38,6 @@ std::string placementName(PlacementInfo::Kind k) {
     case PlacementInfo::Kind::Equirectangular: return "equirectangular";
   }
   return "unknown";
-}
-
-/// Shortest text that reads back as the same double.
-std::string num(double v) {
-  if (std::isnan(v)) return "nan";
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return {buf, r.ptr};
 }
 
 ordered_json placementJson(const GridInfo& g) {
@@ -76,8 +70,9 @@ ordered_json placementJson(const GridInfo& g) {
   return j;
 }
 
-ordered_json gridJson(const store::Store& s, const std::string& name) {
-  const GridInfo& g = s.grid(name);
+/// The grid's keys. `tiled` is set for a grid of a store (whether level 0 is tiled), and adds
+/// levels, patch shape and tiling; unset for the grid a raster would become.
+ordered_json gridJson(const GridInfo& g, std::optional<bool> tiled) {
   const topo::TopoGrid tg = store::topoGridOf(g);
   ordered_json j;
   j["name"] = g.name;
@@ -95,15 +90,19 @@ ordered_json gridJson(const store::Store& s, const std::string& name) {
                {"polar_radius", g.polarRadius}};
   j["latitude_type"] = latitudeTypeName(g.latitudeType);
   j["placement"] = placementJson(g);
-  j["levels"] = g.levels;
-  ordered_json shapes = ordered_json::array();
-  for (std::size_t k = 0; k < g.levels; ++k) shapes.push_back({g.levelRows(k), g.levelCols(k)});
-  j["level_shapes"] = shapes;
-  j["patch_shape"] = {g.patchRows, g.patchCols};
+  if (tiled) {
+    j["levels"] = g.levels;
+    ordered_json shapes = ordered_json::array();
+    for (std::size_t k = 0; k < g.levels; ++k) {
+      shapes.push_back({g.levelRows(k), g.levelCols(k)});
+    }
+    j["level_shapes"] = shapes;
+    j["patch_shape"] = {g.patchRows, g.patchCols};
+  }
   j["nodata"] = g.nodata ? ordered_json(static_cast<double>(*g.nodata)) : nullptr;
   j["scale"] = g.scale;
   j["offset"] = g.offset;
-  j["tiled"] = s.tiled(name);
+  if (tiled) j["tiled"] = *tiled;
   return j;
 }
 
@@ -118,7 +117,9 @@ void printJson(const store::Store& s, std::ostream& out) {
   j["path"] = s.path().string();
   j["format_version"] = {s.formatVersion()[0], s.formatVersion()[1]};
   ordered_json grids = ordered_json::array();
-  for (const std::string& name : sortedGrids(s)) grids.push_back(gridJson(s, name));
+  for (const std::string& name : sortedGrids(s)) {
+    grids.push_back(gridJson(s.grid(name), s.tiled(name)));
+  }
   j["grids"] = grids;
   out << j.dump(2) << '\n';
 }
@@ -128,23 +129,65 @@ void printPlacement(const GridInfo& g, std::ostream& out) {
   out << "  placement:      " << placementName(p.kind);
   switch (p.kind) {
     case PlacementInfo::Kind::LocalTangentPlane:
-      out << ", origin lat " << num(p.originLatDeg) << " deg, lon " << num(p.originLonDeg)
-          << " deg, height " << num(p.originHeight) << " m, heading " << num(p.headingDeg)
-          << " deg\n";
+      out << ", origin lat " << shortestNumber(p.originLatDeg) << " deg, lon "
+          << shortestNumber(p.originLonDeg) << " deg, height " << shortestNumber(p.originHeight)
+          << " m, heading " << shortestNumber(p.headingDeg) << " deg\n";
       break;
     case PlacementInfo::Kind::PolarStereographic:
       out << ", " << (p.pole >= 0 ? "north" : "south") << " pole";
-      if (p.latTrueScaleDeg) out << ", true scale at " << num(*p.latTrueScaleDeg) << " deg";
-      if (p.scaleFactor) out << ", scale factor " << num(*p.scaleFactor);
-      out << ", centre lon " << num(p.lonCentreDeg) << " deg, false easting " << num(p.falseEasting)
-          << " m, false northing " << num(p.falseNorthing) << " m\n";
+      if (p.latTrueScaleDeg)
+        out << ", true scale at " << shortestNumber(*p.latTrueScaleDeg) << " deg";
+      if (p.scaleFactor) out << ", scale factor " << shortestNumber(*p.scaleFactor);
+      out << ", centre lon " << shortestNumber(p.lonCentreDeg) << " deg, false easting "
+          << shortestNumber(p.falseEasting) << " m, false northing "
+          << shortestNumber(p.falseNorthing) << " m\n";
       break;
     case PlacementInfo::Kind::Equirectangular:
-      out << ", radius " << num(p.projectionRadius) << " m, true scale at "
-          << num(p.latTrueScaleDeg.value_or(0.0)) << " deg, centre lon " << num(p.lonCentreDeg)
-          << " deg, origin lat " << num(p.latOriginDeg) << " deg\n";
+      out << ", radius " << shortestNumber(p.projectionRadius) << " m, true scale at "
+          << shortestNumber(p.latTrueScaleDeg.value_or(0.0)) << " deg, centre lon "
+          << shortestNumber(p.lonCentreDeg) << " deg, origin lat " << shortestNumber(p.latOriginDeg)
+          << " deg\n";
       break;
   }
+}
+
+/// One grid as text; `tiled` as in gridJson().
+void printGrid(const GridInfo& g, std::optional<bool> tiled, std::ostream& out) {
+  const topo::TopoGrid tg = store::topoGridOf(g);
+  const bool dem = g.kind == GridKind::Dem;
+  const char* unit = dem ? " m" : " deg";
+  out << "\ngrid '" << g.name << "'\n";
+  out << "  kind:           "
+      << (dem ? "dem (planar grid placed on the body)" : "planet (latitude/longitude grid)")
+      << "\n";
+  out << "  size:           " << g.rows << " rows x " << g.cols << " cols\n";
+  out << "  spacing:        " << shortestNumber(g.spacingX) << " x " << shortestNumber(g.spacingY)
+      << unit << "\n";
+  out << "  sample (0, 0):  " << (dem ? "x " : "lon ") << shortestNumber(g.x0) << ", "
+      << (dem ? "y " : "lat ") << shortestNumber(g.y0) << unit << "\n";
+  out << "  extent:         " << (dem ? "x " : "lon ") << shortestNumber(tg.west()) << " to "
+      << shortestNumber(tg.east()) << ", " << (dem ? "y " : "lat ") << shortestNumber(tg.south())
+      << " to " << shortestNumber(tg.north()) << unit << " (pixel edges)\n";
+  out << "  body:           " << g.bodyName << ", equatorial radius "
+      << shortestNumber(g.equatorialRadius) << " m, polar radius " << shortestNumber(g.polarRadius)
+      << " m\n";
+  out << "  latitude type:  " << latitudeTypeName(g.latitudeType) << "\n";
+  if (dem) printPlacement(g, out);
+  if (tiled) {
+    out << "  levels:         " << g.levels << " (";
+    for (std::size_t k = 0; k < g.levels; ++k) {
+      out << (k > 0 ? ", " : "") << g.levelRows(k) << "x" << g.levelCols(k);
+    }
+    out << ")\n";
+    out << "  patch:          " << g.patchRows << " x " << g.patchCols << " samples\n";
+  }
+  out << "  nodata:         "
+      << (g.nodata ? shortestNumber(static_cast<double>(*g.nodata))
+                   : std::string("none (NaN only)"))
+      << "\n";
+  out << "  height:         " << shortestNumber(g.offset) << " + " << shortestNumber(g.scale)
+      << " x stored value, in " << g.units << "\n";
+  if (tiled) out << "  tiled:          " << (*tiled ? "yes" : "no") << "\n";
 }
 
 void printText(const store::Store& s, std::ostream& out) {
@@ -152,39 +195,50 @@ void printText(const store::Store& s, std::ostream& out) {
   out << "format version: " << s.formatVersion()[0] << "." << s.formatVersion()[1] << "\n";
   const std::vector<std::string> names = sortedGrids(s);
   out << "grids:          " << names.size() << "\n";
-  for (const std::string& name : names) {
-    const GridInfo& g = s.grid(name);
-    const topo::TopoGrid tg = store::topoGridOf(g);
-    const bool dem = g.kind == GridKind::Dem;
-    const char* unit = dem ? " m" : " deg";
-    out << "\ngrid '" << name << "'\n";
-    out << "  kind:           "
-        << (dem ? "dem (planar grid placed on the body)" : "planet (latitude/longitude grid)")
-        << "\n";
-    out << "  size:           " << g.rows << " rows x " << g.cols << " cols\n";
-    out << "  spacing:        " << num(g.spacingX) << " x " << num(g.spacingY) << unit << "\n";
-    out << "  sample (0, 0):  " << (dem ? "x " : "lon ") << num(g.x0) << ", "
-        << (dem ? "y " : "lat ") << num(g.y0) << unit << "\n";
-    out << "  extent:         " << (dem ? "x " : "lon ") << num(tg.west()) << " to "
-        << num(tg.east()) << ", " << (dem ? "y " : "lat ") << num(tg.south()) << " to "
-        << num(tg.north()) << unit << " (pixel edges)\n";
-    out << "  body:           " << g.bodyName << ", equatorial radius " << num(g.equatorialRadius)
-        << " m, polar radius " << num(g.polarRadius) << " m\n";
-    out << "  latitude type:  " << latitudeTypeName(g.latitudeType) << "\n";
-    if (dem) printPlacement(g, out);
-    out << "  levels:         " << g.levels << " (";
-    for (std::size_t k = 0; k < g.levels; ++k) {
-      out << (k > 0 ? ", " : "") << g.levelRows(k) << "x" << g.levelCols(k);
-    }
-    out << ")\n";
-    out << "  patch:          " << g.patchRows << " x " << g.patchCols << " samples\n";
-    out << "  nodata:         "
-        << (g.nodata ? num(static_cast<double>(*g.nodata)) : std::string("none (NaN only)"))
-        << "\n";
-    out << "  height:         " << num(g.offset) << " + " << num(g.scale) << " x stored value, in "
-        << g.units << "\n";
-    out << "  tiled:          " << (s.tiled(name) ? "yes" : "no") << "\n";
+  for (const std::string& name : names) printGrid(s.grid(name), s.tiled(name), out);
+}
+
+/// The raster section (what importRaster() would report) as JSON.
+ordered_json rasterJson(const store::ImportReport& r) {
+  ordered_json j;
+  j["driver"] = r.driver;
+  j["projection"] = r.projection;
+  j["radius_reference"] = r.radiusReference;
+  j["offset_corrected"] = r.offsetCorrected;
+  j["spacing_snapped"] = r.spacingSnapped;
+  j["void_marker_assumed"] = r.voidMarkerAssumed;
+  j["corrections"] = appliedCorrections(r);
+  return j;
+}
+
+/// `info` on a file that is not HDF5: GDAL's view of it, and the grid an import would write.
+void printRaster(const std::filesystem::path& path, bool json, std::ostream& out) {
+  store::ImportReport r;
+  try {
+    r = store::inspectRaster(path);
+  } catch (const store::ImportError& e) {
+    throw store::ImportError(
+        "info: " + path.string() +
+        " is not an HDF5 file (not a Regolith store), and as a raster: " + e.what());
   }
+  if (json) {
+    ordered_json j;
+    j["path"] = path.string();
+    j["raster"] = rasterJson(r);
+    j["grid"] = gridJson(r.info, std::nullopt);
+    out << j.dump(2) << '\n';
+    return;
+  }
+  out << "raster:         " << path.string() << " (not a store; what `regolith import` would "
+      << "write)\n";
+  out << "driver:         " << r.driver << "\n";
+  out << "projection:     " << r.projection << "\n";
+  const std::vector<std::string> corrections = appliedCorrections(r);
+  out << "corrections:    " << (corrections.empty() ? "none" : corrections.front()) << "\n";
+  for (std::size_t i = 1; i < corrections.size(); ++i) {
+    out << "                " << corrections[i] << "\n";
+  }
+  printGrid(r.info, std::nullopt, out);
 }
 
 }  // namespace
@@ -198,15 +252,26 @@ void addInfoCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "info",
       "Describe a store: its grids with kind, size, spacing, extent, body, latitude type, "
-      "placement, pyramid levels, patch size, nodata, scale/offset and tiling");
-  cmd->add_option("store", a->store, "Store file (HDF5)")->required();
+      "placement, pyramid levels, patch size, nodata, scale/offset and tiling. Given a "
+      "raster that is not HDF5, describe what an import would make of it: GDAL driver, "
+      "projection, corrections and the grid, without writing anything");
+  cmd->add_option("file", a->store,
+                  "Store file (HDF5), or a raster GDAL reads (GeoTIFF, PDS3, PDS4, ISIS3, "
+                  ".hgt, ...): then what `regolith import` would make of it")
+      ->required();
   cmd->add_flag("--json", a->json, "Print JSON (keys documented in docs/cli.md)");
   cmd->footer(
       "Examples:\n"
       "  regolith info victoria.h5\n"
+      "  regolith info dtm.cub --json\n"
       "  regolith info mars.h5 --json | python3 -c 'import json,sys; "
       "print(json.load(sys.stdin)[\"grids\"][0][\"rows\"])'");
   cmd->callback([a] {
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(a->store, ec) && !store::Store::isHdf5(a->store)) {
+      printRaster(a->store, a->json, std::cout);
+      return;
+    }
     const store::Store s = store::Store::open(a->store);
     if (a->json) {
       printJson(s, std::cout);

@@ -26,6 +26,7 @@ int main(int argc, char** argv) try {
 
   regolith::tools::addDemoCommand(app);
   regolith::tools::addGenerateCommand(app);
+  regolith::tools::addImportCommand(app);
   regolith::tools::addInfoCommand(app);
   regolith::tools::addQueryCommand(app);
 

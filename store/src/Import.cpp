@@ -3,14 +3,10 @@
 
 #include "GdalRaster.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <memory>
-#include <mutex>
 #include <sstream>
 #include <vector>
 
@@ -187,26 +183,6 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   rep.info = writtenInfo(store, src.info.name);
   rep.seconds = secondsSince(t0);
   return rep;
-}
-
-ProgressFn terminalProgress(std::FILE* stream) {
-  if (stream == nullptr || ::isatty(::fileno(stream)) == 0) return {};
-  auto last = std::make_shared<int>(-1);
-  auto mutex = std::make_shared<std::mutex>();
-  return [stream, last, mutex](double fraction, std::string_view what) {
-    const std::lock_guard lock(*mutex);
-    const int permille = static_cast<int>(std::lround(std::clamp(fraction, 0.0, 1.0) * 1000.0));
-    if (permille == *last) return;
-    *last = permille;
-    constexpr int kWidth = 40;
-    const int filled = permille * kWidth / 1000;
-    std::string bar(static_cast<std::size_t>(filled), '#');
-    bar.resize(kWidth, '.');
-    std::fprintf(stream, "\r[%s] %5.1f%% %-40.40s", bar.c_str(), permille / 10.0,
-                 std::string(what).c_str());
-    if (permille == 1000) std::fputc('\n', stream);
-    std::fflush(stream);
-  };
 }
 
 }  // namespace regolith::store

@@ -600,6 +600,13 @@ Store Store::open(const std::filesystem::path& path) {
   return Store(std::move(impl));
 }
 
+bool Store::isHdf5(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
+  const hdf5::Lock lock;
+  return H5Fis_hdf5(path.c_str()) > 0;
+}
+
 const std::filesystem::path& Store::path() const noexcept { return impl_->path; }
 
 std::array<int, 2> Store::formatVersion() const noexcept { return impl_->formatVersion; }

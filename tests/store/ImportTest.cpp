@@ -17,7 +17,6 @@
 #include <gdal_utils.h>
 #include <gtest/gtest.h>
 #include <ogr_srs_api.h>
-#include <pty.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -789,37 +788,6 @@ TEST(ImportProgress, AKilledImportLeavesNoStoreUnderTheFinalName) {
   EXPECT_TRUE(WIFSIGNALED(status));
   EXPECT_FALSE(fs::exists(p));
   EXPECT_THROW((void)Store::open(p), StoreError);
-}
-
-TEST(ImportProgress, TerminalProgressDrawsABarOnATerminal) {
-  int master = -1, slave = -1;
-  ASSERT_EQ(::openpty(&master, &slave, nullptr, nullptr, nullptr), 0);
-  std::FILE* f = ::fdopen(slave, "w");
-  ASSERT_NE(f, nullptr);
-  const ProgressFn bar = terminalProgress(f);
-  ASSERT_TRUE(static_cast<bool>(bar));
-  bar(0.5, "grid 'x' level 0");
-  bar(1.0, "done");
-  std::fclose(f);
-  std::string out;
-  char buf[512];
-  for (ssize_t n; (n = ::read(master, buf, sizeof buf)) > 0;) {
-    out.append(buf, static_cast<std::size_t>(n));
-    if (out.find("100.0%") != std::string::npos) break;
-  }
-  ::close(master);
-  EXPECT_NE(out.find("[####################....................]  50.0% grid 'x' level 0"),
-            std::string::npos)
-      << out;
-  EXPECT_NE(out.find("[########################################] 100.0% done"), std::string::npos)
-      << out;
-}
-
-TEST(ImportProgress, TerminalProgressIsQuietWhenNotATerminal) {
-  std::FILE* f = std::tmpfile();
-  ASSERT_NE(f, nullptr);
-  EXPECT_FALSE(static_cast<bool>(terminalProgress(f)));
-  std::fclose(f);
 }
 
 // ---- the pyramid is built by threads; the result does not depend on how many ---------------

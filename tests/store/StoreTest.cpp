@@ -885,6 +885,21 @@ TEST(Store, RejectsATruncatedFile) {
   EXPECT_NE(msg.find("truncated file"), std::string::npos) << msg;  // HDF5's own diagnosis
 }
 
+TEST(Store, IsHdf5TellsAStoreAndATruncatedOneFromOtherFiles) {
+  const fs::path good = writeStandardStore("whole-ishdf5.h5");
+  EXPECT_TRUE(Store::isHdf5(good));
+  const std::string bytes = fileBytes(good);
+  const fs::path truncated = scratch("truncated-ishdf5.h5");
+  std::ofstream(truncated, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size() / 2));
+  EXPECT_TRUE(Store::isHdf5(truncated));  // the signature is there; open() explains the rest
+  const fs::path text = scratch("not-hdf5.txt");
+  std::ofstream(text) << "ncols 2\nnrows 2\n";
+  EXPECT_FALSE(Store::isHdf5(text));
+  EXPECT_FALSE(Store::isHdf5(scratch("no-such-file.h5")));
+  EXPECT_FALSE(Store::isHdf5(scratch("")));  // a folder
+}
+
 namespace {
 
 void writeBytes(const fs::path& p, const std::string& bytes) {

@@ -4,10 +4,13 @@ The real binary writes and reads real stores. Oracles from outside the library:
 - h5py + numpy read the same stores (docs/store-format.md) for `info --json` and for
   `query` (samples at centres, bilinear heights and normals computed in numpy);
 - a store written by h5py itself (not by Regolith) with nodata, for the nodata rows;
-- PROJ's `cct` for the geodesy of `--coords lonlat` on a tangent-plane DEM.
+- PROJ's `cct` for the geodesy of `--coords lonlat` on a tangent-plane DEM;
+- GDAL (osgeo.gdal) reads the rasters that `import` converts and `info` describes: the
+  imported samples must equal GDAL's ReadAsArray, missing exactly where GDAL says.
 
 Environment: REGOLITH_BIN (the regolith binary), REGOLITH_FIXTURE_WRITER (tests/store's
-write_fixture_store, which writes multi-grid and tiled stores).
+write_fixture_store, which writes multi-grid and tiled stores), REGOLITH_FIXTURES_DIR (the
+real DEM fixtures, /work/shared/fixtures/dem by default).
 """
 
 import json
@@ -21,9 +24,19 @@ import sys
 import h5py
 import numpy as np
 import pytest
+from osgeo import gdal, osr
+
+gdal.UseExceptions()
 
 BIN = os.environ.get("REGOLITH_BIN", "regolith")
 FIXTURE_WRITER = os.environ.get("REGOLITH_FIXTURE_WRITER", "")
+DEM_FIXTURES = os.environ.get("REGOLITH_FIXTURES_DIR", "/work/shared/fixtures/dem")
+
+
+def dem_fixture(name):
+    path = os.path.join(DEM_FIXTURES, name)
+    assert os.path.exists(path), f"missing fixture {path} (set REGOLITH_FIXTURES_DIR)"
+    return path
 
 
 def run(*args, stdin=None, check=True):
@@ -120,13 +133,15 @@ def attrs(path, grid):
 # ---- --help ---------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("cmd,expect", [
-    ([], ["generate", "info", "query", "demo"]),
+    ([], ["generate", "import", "info", "query", "demo"]),
     (["generate"], ["mars-planet", "victoria"]),
     (["generate", "mars-planet"], ["--seed", "--size", "--resolution", "--out", "--patch",
                                    "--deflate", "--levels", "--ellipsoid", "--craters"]),
     (["generate", "victoria"], ["--seed", "--size", "--resolution", "--out", "--patch",
                                 "--deflate"]),
-    (["info"], ["--json", "store", "Example"]),
+    (["info"], ["--json", "file", "raster", "Example"]),
+    (["import"], ["source", "--out", "--grid", "--patch", "--levels", "--deflate", "--threads",
+                  "--nodata", "tiles", "Example"]),
     (["query"], ["--grid", "--interp", "--coords", "--cache-mb", "--frame", "nan", "valid",
                 "Example"]),
     (["demo"], ["--size", "--spacing", "--queries", "--out"]),
@@ -146,6 +161,9 @@ def test_help(cmd, expect):
     (["query", "x.h5", "--interp", "cubic"], "cubic"),
     (["generate", "victoria"], "--out"),
     (["generate", "victoria", "--out", "x.h5", "--deflate", "12"], "deflate"),
+    (["import", "x.tif"], "--out"),
+    (["import", "--out", "x.h5"], "source"),
+    (["import", "x.tif", "--out", "x.h5", "--patch", "4"], "patch"),
 ])
 def test_usage_errors(args, needle):
     p = run(*args, check=False)
@@ -154,7 +172,7 @@ def test_usage_errors(args, needle):
     assert needle in p.stderr
     assert p.stdout == ""
     # The hint names the subcommand that failed.
-    words = [a for a in args if a in ("generate", "victoria", "query")]
+    words = [a for a in args if a in ("generate", "victoria", "query", "import")]
     assert f"Run '{' '.join(['regolith', *words])} --help'" in p.stderr, p.stderr
 
 
@@ -327,6 +345,333 @@ def test_info_errors(work):
     p = run("info", junk, "--json", check=False)
     assert p.returncode != 0 and "junk.h5" in p.stderr and "not an HDF5 file" in p.stderr
     assert p.stdout == ""
+
+
+# ---- import and info on rasters --------------------------------------------------------------
+
+def store_heights(path, grid, level=0):
+    """Heights of a level as docs/store-format.md says to read them (NaN where missing), with
+    tiled level 0 assembled from its internal tiles."""
+    with h5py.File(path, "r") as f:
+        g = f[f"grids/{grid}"]
+        a = g.attrs
+        nodata = float(a.get("nodata", np.nan))
+
+        def decode(x):
+            x = x.astype(np.float64)
+            x[np.isnan(x) | (x == nodata)] = np.nan
+            return float(a["offset"]) + float(a["scale"]) * x
+
+        if level > 0 or "tile_count" not in a:
+            return decode(g[f"level{level}"][...])
+        out = np.full((int(a["rows"]), int(a["cols"])), np.nan)
+        for i in range(int(a["tile_count"])):
+            t = g[f"tiles/{i}"]
+            assert "external_file" not in t.attrs  # an import copies its tiles
+            r0, c0 = int(t.attrs["row0"]), int(t.attrs["col0"])
+            tile = decode(t["level0"][...])
+            out[r0:r0 + tile.shape[0], c0:c0 + tile.shape[1]] = tile
+        return out
+
+
+def gdal_heights(path, void_marker=False):
+    """GDAL's samples after scale/offset, NaN where GDAL's nodata (or -32768 in a file that
+    declares no nodata, docs/import.md) says missing."""
+    ds = gdal.Open(str(path))
+    band = ds.GetRasterBand(1)
+    v = band.ReadAsArray().astype(np.float64)
+    missing = np.isnan(v)
+    nodata = band.GetNoDataValue()
+    if nodata is not None:
+        missing |= v == nodata
+    elif void_marker:
+        missing |= v == -32768
+    v = (band.GetOffset() or 0.0) + (band.GetScale() or 1.0) * v
+    v[missing] = np.nan
+    return v
+
+
+def short(v):
+    """Python's shortest round-trip text of a double, as the command prints it."""
+    text = repr(float(v))
+    return text[:-2] if text.endswith(".0") else text
+
+
+def summary_field(stdout, name):
+    for line in stdout.splitlines():
+        if line.strip().startswith(name + ":"):
+            return line.split(":", 1)[1].strip()
+    raise AssertionError(f"no '{name}:' line in\n{stdout}")
+
+
+@pytest.mark.parametrize("name,grid,kind,void_marker", [
+    ("Shoemaker_1k.tif", "Shoemaker_1k", "dem", False),
+    ("S11E119.hgt", "S11E119", "planet", False),
+    ("dem_unfinished.tif", "dem_unfinished", "planet", True),
+])
+def test_import_matches_gdal(work, name, grid, kind, void_marker):
+    src = dem_fixture(name)
+    out = work / f"imported-{grid}.h5"
+    p = run("import", src, "--out", out, "--patch", 64, "--deflate", 3)
+    assert p.stderr == ""  # no progress bar: stderr is not a terminal
+    expected = gdal_heights(src, void_marker)
+    got = store_heights(out, grid)
+    assert got.shape == expected.shape
+    assert np.array_equal(np.isnan(got), np.isnan(expected))
+    # Stored as float32: the source values (int16 or float32 here) survive exactly.
+    ok = ~np.isnan(expected)
+    assert np.array_equal(got[ok], expected[ok].astype(np.float32).astype(np.float64))
+    # The summary agrees with GDAL and with the file.
+    ds = gdal.Open(src)
+    out_text = p.stdout
+    assert out_text.startswith(f"Wrote {out} from 1 file\n")
+    assert summary_field(out_text, "grid").startswith(f"'{grid}', {kind}")
+    assert summary_field(out_text, "size") == f"{ds.RasterYSize} rows x {ds.RasterXSize} cols"
+    assert summary_field(out_text, "driver") == ds.GetDriver().ShortName
+    assert summary_field(out_text, "missing").startswith(f"{int(np.isnan(expected).sum())} "
+                                                         "samples")
+    assert summary_field(out_text, "tiles") == "1"
+    float(summary_field(out_text, "seconds"))
+    a = attrs(out, grid)
+    assert a["kind"] == kind
+    srs = ds.GetSpatialRef()
+    assert float(a["equatorial_radius"]) == pytest.approx(srs.GetSemiMajor(), abs=1e-6)
+    assert summary_field(out_text, "body") == (
+        f"{a['body']}, equatorial radius {short(a['equatorial_radius'])} m, polar radius "
+        f"{short(a['polar_radius'])} m")
+    assert summary_field(out_text, "latitude type") == str(a["latitude_type"])
+    corrections = summary_field(out_text, "corrections")
+    assert ("-32768 taken as missing" in corrections) == void_marker
+    if not void_marker:
+        assert corrections == "none"
+
+
+def test_import_options_and_corrections(work):
+    out = work / "mola.h5"
+    p = run("import", dem_fixture("megt90n000cb.lbl"), "--out", out, "--grid", "mola",
+            "--levels", 2, "--patch", 128, "--threads", 1)
+    a = attrs(out, "mola")
+    assert int(a["levels"]) == 2 and [int(v) for v in a["patch_shape"]] == [128, 128]
+    assert summary_field(p.stdout, "levels") == "2, patch 128 x 128"
+    # The MOLA label's two known traps (fixtures README): both corrections are reported.
+    assert "PDS3 projection offsets" in p.stdout and "snapped" in p.stdout
+    assert float(a["x0"]) == 0.125 and float(a["y0"]) == 89.875
+    # --nodata: a further source value taken as missing.
+    out2 = work / "mola-nodata.h5"
+    src = gdal_heights(dem_fixture("megt90n000cb.lbl"))
+    value = float(np.nanmin(src))
+    p = run("import", dem_fixture("megt90n000cb.lbl"), "--out", out2, "--nodata", value)
+    got = store_heights(out2, "megt90n000cb")
+    assert np.array_equal(np.isnan(got), src == value)
+    assert summary_field(p.stdout, "missing").startswith(f"{int((src == value).sum())} samples")
+    # Radii become heights (LOLA): the radius reference is reported.
+    p = run("import", dem_fixture("ldem_4_reduced.cub"), "--out", work / "lola.h5")
+    assert "1737400 m subtracted" in p.stdout
+    lola = gdal_heights(dem_fixture("ldem_4_reduced.cub")) - 1737400.0
+    assert np.allclose(store_heights(work / "lola.h5", "ldem_4_reduced"), lola, rtol=0,
+                       atol=1e-3)
+
+
+def cut_tiles(src, folder, row_cuts, col_cuts):
+    """Cuts src into GeoTIFF tiles at the given row/col boundaries with gdal.Translate."""
+    ds = gdal.Open(str(src))
+    rows = [0, *row_cuts, ds.RasterYSize]
+    cols = [0, *col_cuts, ds.RasterXSize]
+    tiles = []
+    for i in range(len(rows) - 1):
+        for j in range(len(cols) - 1):
+            path = folder / f"tile-{i}-{j}.tif"
+            gdal.Translate(str(path), ds, srcWin=[cols[j], rows[i], cols[j + 1] - cols[j],
+                                                  rows[i + 1] - rows[i]])
+            tiles.append(path)
+    return tiles
+
+
+def test_import_tiles_equals_the_single_import(work):
+    folder = work / "tiles"
+    folder.mkdir()
+    src = dem_fixture("Shoemaker_1k.tif")
+    tiles = cut_tiles(src, folder, [100], [37, 200])
+    single = work / "shoemaker-single.h5"
+    mosaic = work / "shoemaker-tiles.h5"
+    run("import", src, "--out", single, "--patch", 32, "--grid", "s")
+    p = run("import", *reversed(tiles), "--out", mosaic, "--patch", 32, "--grid", "s")
+    assert p.stdout.startswith(f"Wrote {mosaic} from 6 files\n")
+    assert summary_field(p.stdout, "tiles") == "6"
+    assert "tiled" in summary_field(p.stdout, "grid")
+    a, b = attrs(single, "s"), attrs(mosaic, "s")
+    assert int(b["tile_count"]) == 6
+    for key in ["rows", "cols", "x0", "y0", "spacing", "levels", "kind", "placement"]:
+        assert np.array_equal(a[key], b[key]), key
+    one, many = store_heights(single, "s"), store_heights(mosaic, "s")
+    assert np.array_equal(one, many, equal_nan=True)
+    assert np.array_equal(one, gdal_heights(src), equal_nan=True)
+    # The pyramid levels are built across tile borders, as for the whole file.
+    for k in range(1, int(a["levels"])):
+        assert np.array_equal(store_heights(single, "s", k), store_heights(mosaic, "s", k),
+                              equal_nan=True), k
+    # Overlapping tiles are refused, naming the tile.
+    overlap = folder / "overlap.tif"
+    gdal.Translate(str(overlap), gdal.Open(src), srcWin=[30, 90, 20, 20])
+    bad = work / "overlap.h5"
+    p = run("import", tiles[0], overlap, "--out", bad, check=False)
+    assert p.returncode != 0 and p.stdout == "" and not bad.exists()
+    assert str(overlap) in p.stderr and "overlaps" in p.stderr
+
+
+def test_info_on_a_raster(work):
+    src = dem_fixture("Shoemaker_1k.tif")
+    ds = gdal.Open(src)
+    srs = ds.GetSpatialRef()
+    gt = ds.GetGeoTransform()
+    info = json.loads(run("info", src, "--json").stdout)
+    assert info["path"] == src
+    r = info["raster"]
+    assert r["driver"] == "GTiff"
+    assert srs.GetAttrValue("PROJECTION") in r["projection"]
+    assert r["radius_reference"] == 0.0 and r["corrections"] == []
+    assert not (r["offset_corrected"] or r["spacing_snapped"] or r["void_marker_assumed"])
+    g = info["grid"]
+    assert g["kind"] == "dem" and g["name"] == "Shoemaker_1k"
+    assert (g["rows"], g["cols"]) == (ds.RasterYSize, ds.RasterXSize)
+    assert g["spacing"] == [gt[1], -gt[5]]
+    # Sample (0, 0) is the pixel centre (docs/grid-convention.md).
+    assert g["x0"] == pytest.approx(gt[0] + gt[1] / 2, abs=1e-9)
+    assert g["y0"] == pytest.approx(gt[3] + gt[5] / 2, abs=1e-9)
+    assert g["body"]["equatorial_radius"] == srs.GetSemiMajor()
+    assert g["placement"]["kind"] == "polar_stereographic" and g["placement"]["pole"] == -1
+    assert "levels" not in g and "tiled" not in g  # nothing is stored yet
+    # The store an import writes has the same grid.
+    out = work / "info-raster.h5"
+    run("import", src, "--out", out)
+    stored = json.loads(run("info", out, "--json").stdout)["grids"][0]
+    for key, value in g.items():
+        assert stored[key] == value, key
+    # Human-readable, with the corrections of a global ISIS cube.
+    text = run("info", src).stdout
+    assert text.startswith(f"raster:         {src} (not a store")
+    assert "driver:         GTiff" in text and "Polar_Stereographic" in text
+    assert "grid 'Shoemaker_1k'" in text and "256 rows x 256 cols" in text
+    text = run("info", dem_fixture("ldem_4_reduced.cub")).stdout
+    assert "driver:         ISIS3" in text and "1737400 m subtracted" in text
+    info = json.loads(run("info", dem_fixture("ldem_4_reduced.cub"), "--json").stdout)
+    assert info["raster"]["radius_reference"] == 1737400.0
+    assert info["raster"]["spacing_snapped"] is True
+    assert info["grid"]["kind"] == "planet"
+
+
+def sinusoidal_tif(path):
+    ds = gdal.GetDriverByName("GTiff").Create(str(path), 20, 10, 1, gdal.GDT_Float32)
+    srs = osr.SpatialReference()
+    srs.ImportFromProj4("+proj=sinu +lon_0=0 +R=3396190 +units=m +no_defs")
+    ds.SetProjection(srs.ExportToWkt())
+    ds.SetGeoTransform([0.0, 100.0, 0.0, 5000.0, 0.0, -100.0])
+    ds.GetRasterBand(1).WriteArray(np.ones((10, 20), dtype=np.float32))
+    ds = None
+
+
+def test_import_errors(work):
+    junk = work / "junk.tif"
+    junk.write_bytes(b"II*\0 this is not really a TIFF")
+    sinu = work / "sinusoidal.tif"
+    sinusoidal_tif(sinu)
+    cases = [
+        (junk, "GDAL cannot open it as a raster"),
+        (sinu, "unsupported projection"),
+        (dem_fixture("dem_nodata.dem"), "unsupported projection NAD27 / UTM zone 10N"),
+        (work / "no-such.tif", "no such file"),
+    ]
+    for src, needle in cases:
+        out = work / "failed.h5"
+        p = run("import", src, "--out", out, check=False)
+        assert p.returncode != 0, src
+        assert p.stdout == ""
+        assert p.stderr.startswith("regolith: error: store::importRaster(): ") and \
+            str(src) in p.stderr and needle in p.stderr, p.stderr
+        assert not out.exists() and list(work.glob("failed.h5*")) == []
+        if needle.startswith("unsupported projection"):
+            # info on the same raster: the same reason, non-zero, nothing on stdout.
+            p = run("info", src, check=False)
+            assert p.returncode != 0 and p.stdout == "" and needle in p.stderr
+            assert str(src) in p.stderr
+    p = run("info", junk, check=False)
+    assert p.returncode != 0 and p.stdout == ""
+    assert "not an HDF5 file" in p.stderr and "GDAL cannot open" in p.stderr
+    p = run("import", dem_fixture("Shoemaker_1k.tif"), "--out", work / "no" / "such" / "x.h5",
+            check=False)
+    assert p.returncode != 0
+    assert p.stderr == (f"regolith: error: import: --out {work / 'no' / 'such' / 'x.h5'}:"
+                        f" folder {work / 'no' / 'such'} does not exist\n")
+
+
+def read_pty(master, timeout=60):
+    seen = b""
+    while True:
+        ready, _, _ = select.select([master], [], [], timeout)
+        if not ready:
+            break
+        try:
+            chunk = os.read(master, 4096)
+        except OSError:
+            break
+        if not chunk:
+            break
+        seen += chunk
+    return seen.decode()
+
+
+def test_import_progress_only_on_a_terminal(work):
+    src = dem_fixture("S11E119.hgt")
+    master, slave = pty.openpty()
+    try:
+        p = subprocess.Popen([BIN, "import", src, "--out", work / "tty-import.h5", "--patch",
+                              "64"], stdout=subprocess.PIPE, stderr=slave)
+        os.close(slave)
+        slave = -1
+        text = read_pty(master)
+        out, _ = p.communicate(timeout=60)
+        assert p.returncode == 0
+    finally:
+        os.close(master)
+        if slave >= 0:
+            os.close(slave)
+    assert "100%" in text and "[" in text and "\r" in text
+    assert out.decode().startswith("Wrote ")  # the summary stays on stdout
+    p = run("import", src, "--out", work / "pipe-import.h5", "--patch", 64)
+    assert p.stderr == ""
+
+
+def test_import_interrupted_leaves_no_file(work):
+    import signal
+    import time
+    src = work / "big.tif"
+    rows, cols = 3000, 6000
+    ds = gdal.GetDriverByName("GTiff").Create(str(src), cols, rows, 1, gdal.GDT_Float32)
+    ds.SetGeoTransform([-180.0, 360.0 / cols, 0.0, 90.0, 0.0, -180.0 / rows])
+    srs = osr.SpatialReference()
+    srs.ImportFromProj4("+proj=longlat +R=3396190 +no_defs")
+    ds.SetProjection(srs.ExportToWkt())
+    rng = np.random.default_rng(1)
+    ds.GetRasterBand(1).WriteArray(rng.standard_normal((rows, cols)).astype(np.float32))
+    ds = None
+    out = work / "interrupted-import.h5"
+    try:
+        p = subprocess.Popen([BIN, "import", str(src), "--out", str(out), "--deflate", "9",
+                              "--threads", "1"], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+        tmp = work / f"interrupted-import.h5.tmp-{p.pid}"
+        deadline = time.monotonic() + 120
+        while not tmp.exists() and p.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert tmp.exists(), "the write never started"
+        p.send_signal(signal.SIGINT)
+        stdout, err = p.communicate(timeout=120)
+    finally:
+        src.unlink()
+    assert p.returncode != 0
+    assert err.startswith("regolith: error: ") and "cancelled" in err, err
+    assert stdout == ""
+    assert not out.exists() and not tmp.exists()
 
 
 # ---- query ----------------------------------------------------------------------------------

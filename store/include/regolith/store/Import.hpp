@@ -9,7 +9,6 @@
 
 #include <atomic>
 #include <cstddef>
-#include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <span>
@@ -92,9 +91,5 @@ ImportReport importRaster(const std::filesystem::path& raster, const std::filesy
 /// Throws ImportError naming the offending file for tiles that do not fit together.
 ImportReport importTiles(std::span<const std::filesystem::path> tiles,
                          const std::filesystem::path& store, const ImportOptions& options = {});
-
-/// A progress callback drawing a one-line bar on `stream` if it is a terminal, and an empty
-/// callback (quiet) otherwise.
-[[nodiscard]] ProgressFn terminalProgress(std::FILE* stream = stderr);
 
 }  // namespace regolith::store

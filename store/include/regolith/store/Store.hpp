@@ -49,6 +49,10 @@ class Store {
  public:
   /// Throws StoreError naming the file and the reason.
   static Store open(const std::filesystem::path& path);
+  /// Whether `path` is a readable file that starts with the HDF5 signature (H5Fis_hdf5):
+  /// false for a missing, unreadable or non-HDF5 file. Lets a caller tell a store (or a
+  /// broken one, which open() then explains) from a file of another format.
+  [[nodiscard]] static bool isHdf5(const std::filesystem::path& path);
 
   Store(Store&&) noexcept;
   Store& operator=(Store&&) noexcept;

@@ -1,0 +1,136 @@
+// `regolith import SOURCE... --out STORE`: GDAL rasters into a store (store/Import.hpp,
+// docs/import.md).
+#include <regolith/store/GridInfo.hpp>
+#include <regolith/store/Import.hpp>
+
+#include "CancelOnSignal.hpp"
+#include "Commands.hpp"
+#include "OutputFolder.hpp"
+#include "ReportText.hpp"
+#include "TerminalProgress.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstddef>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace regolith::tools {
+
+namespace {
+
+struct Args {
+  std::vector<std::string> sources;
+  std::string out;
+  std::string grid;
+  std::size_t patch = 256;
+  std::size_t levels = 0;
+  int deflate = 0;
+  unsigned threads = 0;
+  double nodata = 0.0;
+};
+
+void printSummary(const std::string& out, const store::ImportReport& r, std::ostream& os) {
+  const store::GridInfo& g = r.info;
+  const bool dem = g.kind == store::GridKind::Dem;
+  os << "Wrote " << out << " from " << r.tiles << (r.tiles == 1 ? " file" : " files") << "\n";
+  os << "  grid:           '" << g.name << "', "
+     << (dem ? "dem (planar grid placed on the body)" : "planet (latitude/longitude grid)")
+     << (r.tiles > 1 ? ", tiled" : "") << "\n";
+  os << "  size:           " << g.rows << " rows x " << g.cols << " cols\n";
+  os << "  spacing:        " << shortestNumber(g.spacingX) << " x " << shortestNumber(g.spacingY)
+     << (dem ? " m" : " deg") << "\n";
+  os << "  body:           " << g.bodyName << ", equatorial radius "
+     << shortestNumber(g.equatorialRadius) << " m, polar radius " << shortestNumber(g.polarRadius)
+     << " m\n";
+  os << "  latitude type:  "
+     << (g.latitudeType == topo::LatitudeType::Planetocentric ? "planetocentric" : "planetodetic")
+     << "\n";
+  os << "  driver:         " << r.driver << "\n";
+  os << "  projection:     " << r.projection << "\n";
+  const std::vector<std::string> corrections = appliedCorrections(r);
+  os << "  corrections:    " << (corrections.empty() ? "none" : corrections.front()) << "\n";
+  for (std::size_t i = 1; i < corrections.size(); ++i) {
+    os << "                  " << corrections[i] << "\n";
+  }
+  if (r.tiles == 1) {
+    const double total = static_cast<double>(g.rows) * static_cast<double>(g.cols);
+    os << "  missing:        " << r.missingSamples << " samples ("
+       << shortestNumber(std::round(1000.0 * static_cast<double>(r.missingSamples) / total) / 10.0)
+       << "%)\n";
+  } else {
+    os << "  missing:        not counted for tiles (gaps between tiles read as missing)\n";
+  }
+  os << "  levels:         " << g.levels << ", patch " << g.patchRows << " x " << g.patchCols
+     << "\n";
+  os << "  tiles:          " << r.tiles << "\n";
+  os << "  seconds:        " << shortestNumber(std::round(r.seconds * 100.0) / 100.0) << "\n";
+}
+
+}  // namespace
+
+void addImportCommand(CLI::App& app) {
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "import",
+      "Import GDAL rasters (GeoTIFF, PDS3, PDS4, ISIS3 cubes, SRTM .hgt, ...) as one grid of a "
+      "new store: one file becomes a grid, several files that tile one grid become a tiled "
+      "grid. Rules, corrections and errors: docs/import.md");
+  cmd->add_option("source", a->sources,
+                  "Raster file(s), single band; several: tiles of one grid (same CRS, spacing "
+                  "and sample lattice, no overlaps)")
+      ->required();
+  cmd->add_option("-o,--out", a->out, "Store file to write (replaced atomically if it exists)")
+      ->required();
+  cmd->add_option("--grid", a->grid, "Name of the grid (default: the first source's file stem)");
+  cmd->add_option("--patch", a->patch, "Patch (HDF5 chunk) size in samples, square")
+      ->check(CLI::Range(std::size_t{8}, std::size_t{8192}))
+      ->capture_default_str();
+  cmd->add_option("--levels", a->levels,
+                  "Pyramid levels including level 0 (0: until a level fits in one patch)")
+      ->check(CLI::Range(0, 40))
+      ->capture_default_str();
+  cmd->add_option("--deflate", a->deflate, "Deflate level 0-9 (0: uncompressed)")
+      ->check(CLI::Range(0, 9))
+      ->capture_default_str();
+  cmd->add_option("--threads", a->threads, "Threads building the pyramid (0: all cores)")
+      ->capture_default_str();
+  cmd->add_option("--nodata", a->nodata,
+                  "A further source value (before scale/offset) that means missing, beside "
+                  "the ones the file declares");
+  cmd->footer(
+      "Examples:\n"
+      "  regolith import dtm.cub --out dtm.h5 --deflate 4\n"
+      "  regolith import N00E010.hgt N00E011.hgt N01E010.hgt --out tiles.h5 --grid srtm\n"
+      "  regolith info dtm.cub      (what an import would make of a raster)\n"
+      "A summary goes to stdout. A progress bar is drawn on stderr when it is a terminal; "
+      "Ctrl-C cancels cleanly (no partial file).");
+  cmd->callback([a, cmd] {
+    requireOutputFolder("import", a->out);
+    store::ImportOptions o;
+    o.gridName = a->grid;
+    o.patchRows = o.patchCols = a->patch;
+    o.levels = a->levels;
+    o.deflate = a->deflate;
+    o.threads = a->threads;
+    if (cmd->count("--nodata") > 0) o.nodata = a->nodata;
+    TerminalProgress progress = TerminalProgress::forStderr();
+    o.progress = progress.callback();
+    o.cancel = CancelOnSignal::flag();
+    const CancelOnSignal cancel;
+    store::ImportReport report;
+    if (a->sources.size() == 1) {
+      report = store::importRaster(a->sources.front(), a->out, o);
+    } else {
+      const std::vector<std::filesystem::path> tiles(a->sources.begin(), a->sources.end());
+      report = store::importTiles(tiles, a->out, o);
+    }
+    printSummary(a->out, report, std::cout);
+  });
+}
+
+}  // namespace regolith::tools

@@ -1,0 +1,31 @@
+#include "ReportText.hpp"
+
+#include <charconv>
+#include <cmath>
+
+namespace regolith::tools {
+
+std::string shortestNumber(double v) {
+  if (std::isnan(v)) return "nan";
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return {buf, r.ptr};
+}
+
+std::vector<std::string> appliedCorrections(const store::ImportReport& r) {
+  std::vector<std::string> c;
+  if (r.offsetCorrected) {
+    c.emplace_back(
+        "PDS3 projection offsets read in the other convention (GDAL's default "
+        "put the grid beyond a pole)");
+  }
+  if (r.spacingSnapped) c.emplace_back("global spacing snapped to 360/cols, 180/rows degrees");
+  if (r.voidMarkerAssumed) c.emplace_back("-32768 taken as missing (no nodata declared)");
+  if (r.radiusReference != 0.0) {
+    c.emplace_back("values are radii: " + shortestNumber(r.radiusReference) +
+                   " m subtracted to give heights");
+  }
+  return c;
+}
+
+}  // namespace regolith::tools
