@@ -1,0 +1,226 @@
+#include "ClipmapLevel.hpp"
+
+#include <regolith/clod/GlError.hpp>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace regolith::clod {
+
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+std::int64_t floorMod(std::int64_t a, std::int64_t n) {
+  const std::int64_t m = a % n;
+  return m < 0 ? m + n : m;
+}
+
+}  // namespace
+
+ClipmapLevel::ClipmapLevel(const HeightPyramid& pyramid, std::size_t level, int n)
+    : pyramid_(pyramid), level_(level), n_(n) {
+  const auto& g = grid();
+  if (pyramid.kind() == SurfaceKind::Planet) {
+    const double span = static_cast<double>(g.cols()) * g.spacingX();
+    wrapLon_ = std::abs(span - 360.0) <= 1e-9 * 360.0;
+    const bool north = std::abs(g.north() - 90.0) <= 1e-9 * 90.0;
+    const bool south = std::abs(g.south() + 90.0) <= 1e-9 * 90.0;
+    crossPoles_ = wrapLon_ && north && south && g.cols() % 2 == 0;
+  }
+  glTextureStorage2D(texture_.id(), 1, GL_RGBA32F, n, n);
+  glTextureParameteri(texture_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTextureParameteri(texture_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  heights_.assign(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), kNaN);
+  checkGl("ClipmapLevel()");
+}
+
+const topo::TopoGrid& ClipmapLevel::grid() const noexcept { return pyramid_.level(level_).grid; }
+
+int ClipmapLevel::texelX(std::int64_t i) const noexcept {
+  return static_cast<int>(floorMod(col0_ + i, n_));
+}
+int ClipmapLevel::texelY(std::int64_t j) const noexcept {
+  return static_cast<int>(floorMod(row0_ + j, n_));
+}
+
+bool ClipmapLevel::realIndex(std::int64_t vr, std::int64_t vc, std::size_t& r,
+                             std::size_t& c) const {
+  const auto rows = static_cast<std::int64_t>(grid().rows());
+  const auto cols = static_cast<std::int64_t>(grid().cols());
+  if (crossPoles_) {
+    // Period 2·rows in virtual rows; the second half is the far side of a pole, half a
+    // turn of longitude away.
+    std::int64_t m = floorMod(vr, 2 * rows);
+    if (m >= rows) {
+      m = 2 * rows - 1 - m;
+      vc += cols / 2;
+    }
+    vr = m;
+  }
+  if (vr < 0 || vr >= rows) return false;
+  if (wrapLon_) vc = floorMod(vc, cols);
+  if (vc < 0 || vc >= cols) return false;
+  r = static_cast<std::size_t>(vr);
+  c = static_cast<std::size_t>(vc);
+  return true;
+}
+
+glm::dvec3 ClipmapLevel::centre() const {
+  const auto& g = grid();
+  const glm::dvec2 p = g.sampleCentre(static_cast<double>(row0_ + (n_ - 1) / 2),
+                                      static_cast<double>(col0_ + (n_ - 1) / 2));
+  return pyramid_.position(p.x, p.y, 0.0);
+}
+
+double ClipmapLevel::cellMetres() const {
+  const auto& g = grid();
+  const double r = static_cast<double>(row0_ + (n_ - 1) / 2);
+  const double c = static_cast<double>(col0_ + (n_ - 1) / 2);
+  const auto at = [&](double rr, double cc) {
+    const glm::dvec2 p = g.sampleCentre(rr, cc);
+    return pyramid_.position(p.x, p.y, 0.0);
+  };
+  const glm::dvec3 o = at(r, c);
+  return std::max(glm::length(at(r, c + 1) - o), glm::length(at(r + 1, c) - o));
+}
+
+std::size_t ClipmapLevel::moveTo(double gx, double gy) {
+  const auto& g = grid();
+  const glm::dvec2 f = g.fractionalIndex(gx, gy);
+  const std::int64_t half = (n_ - 1) / 2;
+  const auto newCol0 = static_cast<std::int64_t>(std::llround(f.x)) - half;
+  const auto newRow0 = static_cast<std::int64_t>(std::llround(f.y)) - half;
+  const std::int64_t n = n_;
+  const std::int64_t dr = newRow0 - row0_, dc = newCol0 - col0_;
+  const bool farFromAnchor =
+      std::llabs(newRow0 + half - anchorRow_) > n || std::llabs(newCol0 + half - anchorCol_) > n;
+  if (!valid_ || std::llabs(dr) >= n || std::llabs(dc) >= n || farFromAnchor) {
+    row0_ = newRow0;
+    col0_ = newCol0;
+    anchorRow_ = row0_ + half;
+    anchorCol_ = col0_ + half;
+    const glm::dvec2 a =
+        g.sampleCentre(static_cast<double>(anchorRow_), static_cast<double>(anchorCol_));
+    anchor_ = pyramid_.position(a.x, a.y, 0.0);
+    valid_ = true;
+    const std::size_t count = upload(row0_, row0_ + n, col0_, col0_ + n);
+    updateRange();
+    return count;
+  }
+  if (dr == 0 && dc == 0) return 0;
+  const std::int64_t oldRow0 = row0_;
+  row0_ = newRow0;
+  col0_ = newCol0;
+  std::size_t count = 0;
+  // New rows, full width of the new window.
+  std::int64_t keepR0 = row0_, keepR1 = row0_ + n;  // rows already resident
+  if (dr > 0) {
+    count += upload(oldRow0 + n, row0_ + n, col0_, col0_ + n);
+    keepR1 = oldRow0 + n;
+  } else if (dr < 0) {
+    count += upload(row0_, oldRow0, col0_, col0_ + n);
+    keepR0 = oldRow0;
+  }
+  // New columns, only over the rows that were resident before.
+  if (dc > 0) {
+    count += upload(keepR0, keepR1, col0_ + n - dc, col0_ + n);
+  } else if (dc < 0) {
+    count += upload(keepR0, keepR1, col0_, col0_ - dc);
+  }
+  updateRange();
+  return count;
+}
+
+std::size_t ClipmapLevel::upload(std::int64_t r0, std::int64_t r1, std::int64_t c0,
+                                 std::int64_t c1) {
+  if (r1 <= r0 || c1 <= c0) return 0;
+  const auto& lvl = pyramid_.level(level_);
+  const auto& g = lvl.grid;
+  const auto w = static_cast<std::size_t>(c1 - c0);
+  const auto h = static_cast<std::size_t>(r1 - r0);
+  std::vector<float> texels(w * h * 4);
+  std::vector<float> row(w);
+  for (std::size_t j = 0; j < h; ++j) {
+    const std::int64_t vr = r0 + static_cast<std::int64_t>(j);
+    // Read the row's samples as runs of consecutive real columns.
+    std::size_t i = 0;
+    while (i < w) {
+      std::size_t rr = 0, cc = 0;
+      if (!realIndex(vr, c0 + static_cast<std::int64_t>(i), rr, cc)) {
+        row[i++] = kNaN;
+        continue;
+      }
+      std::size_t len = 1;
+      std::size_t r2 = 0, c2 = 0;
+      while (i + len < w && realIndex(vr, c0 + static_cast<std::int64_t>(i + len), r2, c2) &&
+             r2 == rr && c2 == cc + len)
+        ++len;
+      lvl.source->readWindow(rr, cc, 1, len, std::span<float>(row.data() + i, len));
+      i += len;
+    }
+    for (std::size_t k = 0; k < w; ++k) {
+      const std::int64_t vc = c0 + static_cast<std::int64_t>(k);
+      float hgt = row[k];
+      if (g.isNodata(hgt)) hgt = kNaN;
+      // Position of the real sample (so a wrapped or reflected sample lands on its own
+      // point), else of the virtual one.
+      std::size_t rr = 0, cc = 0;
+      glm::dvec2 gp;
+      if (realIndex(vr, vc, rr, cc)) {
+        gp = g.sampleCentre(static_cast<double>(rr), static_cast<double>(cc));
+      } else {
+        gp = g.sampleCentre(static_cast<double>(vr), static_cast<double>(vc));
+        if (pyramid_.kind() == SurfaceKind::Planet) gp.y = std::clamp(gp.y, -90.0, 90.0);
+      }
+      const double hd = std::isnan(hgt) ? 0.0 : static_cast<double>(hgt);
+      const glm::dvec3 p = pyramid_.position(gp.x, gp.y, hd) - anchor_;
+      float* t = texels.data() + (j * w + k) * 4;
+      t[0] = static_cast<float>(p.x);
+      t[1] = static_cast<float>(p.y);
+      t[2] = static_cast<float>(p.z);
+      t[3] = hgt;
+      heights_[static_cast<std::size_t>(floorMod(vr, n_)) * static_cast<std::size_t>(n_) +
+               static_cast<std::size_t>(floorMod(vc, n_))] = hgt;
+    }
+  }
+  // Upload in up to four pieces where the region wraps around the texture's edges.
+  const std::int64_t n = n_;
+  std::int64_t y = 0;
+  while (y < static_cast<std::int64_t>(h)) {
+    const std::int64_t ty = floorMod(r0 + y, n);
+    const std::int64_t hy = std::min<std::int64_t>(static_cast<std::int64_t>(h) - y, n - ty);
+    std::int64_t x = 0;
+    while (x < static_cast<std::int64_t>(w)) {
+      const std::int64_t tx = floorMod(c0 + x, n);
+      const std::int64_t wx = std::min<std::int64_t>(static_cast<std::int64_t>(w) - x, n - tx);
+      glPixelStorei(GL_UNPACK_ROW_LENGTH, static_cast<GLint>(w));
+      glTextureSubImage2D(
+          texture_.id(), 0, static_cast<GLint>(tx), static_cast<GLint>(ty),
+          static_cast<GLsizei>(wx), static_cast<GLsizei>(hy), GL_RGBA, GL_FLOAT,
+          texels.data() + (static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x)) * 4);
+      x += wx;
+    }
+    y += hy;
+  }
+  glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+  checkGl("ClipmapLevel::upload()");
+  return w * h;
+}
+
+void ClipmapLevel::updateRange() {
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  for (float v : heights_)
+    if (!std::isnan(v)) {
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+  if (lo > hi) lo = hi = 0.0F;
+  minH_ = lo;
+  maxH_ = hi;
+}
+
+}  // namespace regolith::clod

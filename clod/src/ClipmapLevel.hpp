@@ -1,0 +1,70 @@
+#pragma once
+// One clipmap level: an n × n window of one pyramid level around the focus, held in a
+// toroidally addressed RGBA32F texture (xyz: scene position relative to the level's double
+// anchor, w: height or NaN for nodata). Private to clod.
+
+#include <regolith/clod/GlObjects.hpp>
+#include <regolith/clod/HeightPyramid.hpp>
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace regolith::clod {
+
+class ClipmapLevel {
+ public:
+  /// n: vertices per side (odd). `level` indexes the pyramid.
+  ClipmapLevel(const HeightPyramid& pyramid, std::size_t level, int n);
+
+  /// Moves the window so that its centre sample is the one nearest to grid point (gx, gy),
+  /// uploading only rows and columns that enter the window (all of it on the first call, or
+  /// when the window jumps by n or more, or drifts n samples from the anchor). Returns the
+  /// number of texels uploaded.
+  std::size_t moveTo(double gx, double gy);
+
+  /// Window origin: virtual (row, col) of its top-left sample; may lie outside the grid.
+  [[nodiscard]] std::int64_t row0() const noexcept { return row0_; }
+  [[nodiscard]] std::int64_t col0() const noexcept { return col0_; }
+  [[nodiscard]] bool valid() const noexcept { return valid_; }
+  [[nodiscard]] const glm::dvec3& anchor() const noexcept { return anchor_; }
+  [[nodiscard]] GLuint texture() const noexcept { return texture_.id(); }
+  /// Scene position of the window's centre sample at height 0.
+  [[nodiscard]] glm::dvec3 centre() const;
+  /// Sample spacing in grid units (x, y).
+  [[nodiscard]] double spacingX() const noexcept { return grid().spacingX(); }
+  [[nodiscard]] double spacingY() const noexcept { return grid().spacingY(); }
+  /// Largest distance in metres between neighbouring samples near the window centre.
+  [[nodiscard]] double cellMetres() const;
+  /// Lowest and highest valid height in the window (0, 0 if none is valid).
+  [[nodiscard]] float minHeight() const noexcept { return minH_; }
+  [[nodiscard]] float maxHeight() const noexcept { return maxH_; }
+  /// Texel (x, y) in the texture of window sample (row0 + j, col0 + i).
+  [[nodiscard]] int texelX(std::int64_t i) const noexcept;
+  [[nodiscard]] int texelY(std::int64_t j) const noexcept;
+
+ private:
+  [[nodiscard]] const topo::TopoGrid& grid() const noexcept;
+  /// Maps a virtual (row, col) to a real sample, wrapping longitude and reflecting over a
+  /// pole on global planet grids. False if outside the data.
+  bool realIndex(std::int64_t vr, std::int64_t vc, std::size_t& r, std::size_t& c) const;
+  /// Fills and uploads virtual rows [r0, r1) × cols [c0, c1) (inside the current window).
+  std::size_t upload(std::int64_t r0, std::int64_t r1, std::int64_t c0, std::int64_t c1);
+  void updateRange();
+
+  const HeightPyramid& pyramid_;
+  std::size_t level_;
+  int n_;
+  bool wrapLon_ = false, crossPoles_ = false;
+  bool valid_ = false;
+  std::int64_t row0_ = 0, col0_ = 0;
+  std::int64_t anchorRow_ = 0, anchorCol_ = 0;
+  glm::dvec3 anchor_{0.0};
+  std::vector<float> heights_;  // CPU mirror of w, toroidal like the texture
+  float minH_ = 0.0F, maxH_ = 0.0F;
+  Texture texture_;
+};
+
+}  // namespace regolith::clod

@@ -1,0 +1,187 @@
+#include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/clod/GlError.hpp>
+#include <regolith/topo/Error.hpp>
+
+#include "ClipmapLevel.hpp"
+#include "Shaders.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+namespace regolith::clod {
+
+namespace {
+
+Program makeProgram() {
+  return Program("clipmap", ShaderSources{shaders::kClipmapVertex, shaders::kDropNodataGeometry,
+                                          shaders::kLitFragment});
+}
+
+}  // namespace
+
+ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, ClipmapOptions options)
+    : pyramid_(std::move(pyramid)), options_(options), program_(makeProgram()) {
+  if (!pyramid_) throw InvalidArgument("ClipmapTerrain(): pyramid is null");
+  const int n = options_.size;
+  if (n < 15 || n > 2047 || n % 2 == 0)
+    throw InvalidArgument("ClipmapTerrain(): size " + std::to_string(n) +
+                          ", expected an odd number of vertices in 15..2047");
+  std::size_t count = options_.levels == 0 ? pyramid_->levelCount() : options_.levels;
+  if (count > pyramid_->levelCount())
+    throw InvalidArgument("ClipmapTerrain(): " + std::to_string(count) +
+                          " levels asked for, the pyramid has " +
+                          std::to_string(pyramid_->levelCount()));
+  for (std::size_t k = 0; k < count; ++k)
+    levels_.push_back(std::make_unique<ClipmapLevel>(*pyramid_, k, n));
+  // The finer level spans (n−1)/4 of this level's cells each side of its centre, which may
+  // sit up to 0.75 cell off this level's centre; one more cell of overlap for safety.
+  hole_ = static_cast<int>(std::floor((n - 1) / 4.0 - 0.75)) - 1;
+  buildMesh();
+}
+
+ClipmapTerrain::~ClipmapTerrain() = default;
+
+void ClipmapTerrain::setOptions(const ClipmapOptions& options) {
+  if (options.size != options_.size || options.levels != options_.levels)
+    throw InvalidArgument(
+        "ClipmapTerrain::setOptions(): size and levels are fixed at "
+        "construction");
+  options_ = options;
+}
+
+void ClipmapTerrain::buildMesh() {
+  const int n = options_.size;
+  std::vector<std::int32_t> verts;
+  verts.reserve(static_cast<std::size_t>(n * n + 4 * (n - 1)) * 3);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) verts.insert(verts.end(), {i, j, 0});
+  // Perimeter loop: top row →, right column ↓, bottom row ←, left column ↑.
+  std::vector<std::array<int, 2>> perimeter;
+  for (int i = 0; i < n - 1; ++i) perimeter.push_back({i, 0});
+  for (int j = 0; j < n - 1; ++j) perimeter.push_back({n - 1, j});
+  for (int i = n - 1; i > 0; --i) perimeter.push_back({i, n - 1});
+  for (int j = n - 1; j > 0; --j) perimeter.push_back({0, j});
+  for (const auto& p : perimeter) verts.insert(verts.end(), {p[0], p[1], 1});
+
+  const auto at = [n](int i, int j) { return static_cast<std::uint32_t>(j * n + i); };
+  const int m = (n - 1) / 2;
+  const auto inHole = [&](int i, int j) {
+    return i >= m - hole_ && i < m + hole_ && j >= m - hole_ && j < m + hole_;
+  };
+  std::vector<std::uint32_t> hole, ring, skirt;
+  for (int j = 0; j < n - 1; ++j)
+    for (int i = 0; i < n - 1; ++i) {
+      auto& out = inHole(i, j) ? hole : ring;
+      // Same diagonal as the brute-force strips: (i, j+1)–(i+1, j).
+      out.insert(out.end(), {at(i, j), at(i, j + 1), at(i + 1, j)});
+      out.insert(out.end(), {at(i, j + 1), at(i + 1, j + 1), at(i + 1, j)});
+    }
+  const auto base = static_cast<std::uint32_t>(n * n);
+  const auto np = static_cast<std::uint32_t>(perimeter.size());
+  for (std::uint32_t k = 0; k < np; ++k) {
+    const std::uint32_t k1 = (k + 1) % np;
+    const std::uint32_t t0 = at(perimeter[k][0], perimeter[k][1]);
+    const std::uint32_t t1 = at(perimeter[k1][0], perimeter[k1][1]);
+    skirt.insert(skirt.end(), {t0, t1, base + k, t1, base + k1, base + k});
+  }
+  holeIndices_ = hole.size();
+  ringIndices_ = ring.size();
+  skirtIndices_ = skirt.size();
+  std::vector<std::uint32_t> all;
+  all.reserve(hole.size() + ring.size() + skirt.size());
+  all.insert(all.end(), hole.begin(), hole.end());
+  all.insert(all.end(), ring.begin(), ring.end());
+  all.insert(all.end(), skirt.begin(), skirt.end());
+
+  glNamedBufferStorage(vertices_.id(), static_cast<GLsizeiptr>(verts.size() * sizeof(std::int32_t)),
+                       verts.data(), 0);
+  glNamedBufferStorage(indices_.id(), static_cast<GLsizeiptr>(all.size() * sizeof(std::uint32_t)),
+                       all.data(), 0);
+  glVertexArrayVertexBuffer(vao_.id(), 0, vertices_.id(), 0, 3 * sizeof(std::int32_t));
+  glVertexArrayElementBuffer(vao_.id(), indices_.id());
+  glEnableVertexArrayAttrib(vao_.id(), 0);
+  glVertexArrayAttribIFormat(vao_.id(), 0, 3, GL_INT, 0);
+  glVertexArrayAttribBinding(vao_.id(), 0, 0);
+  checkGl("ClipmapTerrain::buildMesh()");
+}
+
+std::size_t ClipmapTerrain::setFocus(const glm::dvec3& focus) {
+  const glm::dvec2 g = pyramid_->gridPoint(focus);
+  std::size_t count = 0;
+  for (auto& level : levels_) count += level->moveTo(g.x, g.y);
+  uploaded_ += count;
+  return count;
+}
+
+std::pair<long long, long long> ClipmapTerrain::windowOrigin(std::size_t level) const {
+  const auto& l = *levels_.at(level);
+  return {l.row0(), l.col0()};
+}
+
+std::pair<std::size_t, std::size_t> ClipmapTerrain::activeLevels(const Camera& camera) const {
+  const std::size_t count = levels_.size();
+  std::size_t first = count - 1;
+  const double focal = camera.focalPixels();
+  const double half = 0.5 * (options_.size - 1);
+  for (std::size_t k = 0; k + 1 < count; ++k) {
+    const auto& l = *levels_[k];
+    if (!l.valid()) continue;
+    const double cell = l.cellMetres();
+    const double mid = 0.5 * static_cast<double>(l.minHeight() + l.maxHeight());
+    const glm::dvec3 c = l.centre() + pyramid_->up(l.centre()) * mid;
+    const double radius = half * cell * std::sqrt(2.0);
+    const double d = std::max(glm::length(camera.position - c) - radius, 0.0);
+    if (d == 0.0 || cell * focal / d >= options_.minCellPixels) {
+      first = k;
+      break;
+    }
+  }
+  return {first, count - first};
+}
+
+ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
+  ClipmapFrame frame;
+  const auto [first, count] = activeLevels(camera);
+  frame.firstLevel = first;
+  program_.use();
+  program_.set("uViewProj", camera.viewProjection());
+  program_.set("uN", options_.size);
+  program_.set("uPlanet", pyramid_->kind() == SurfaceKind::Planet ? 1 : 0);
+  program_.set("uLight", glm::normalize(options_.lightDirection));
+  program_.set("uAlbedo", options_.albedo);
+  program_.set("uAmbient", options_.ambient);
+  glBindVertexArray(vao_.id());
+  glDisable(GL_CULL_FACE);
+  for (std::size_t k = first; k < first + count; ++k) {
+    const auto& l = *levels_[k];
+    if (!l.valid()) continue;
+    // Skirts reach below the lowest sample of this level and the next coarser one.
+    float lo = l.minHeight(), hi = l.maxHeight();
+    if (k + 1 < levels_.size()) {
+      lo = std::min(lo, levels_[k + 1]->minHeight());
+      hi = std::max(hi, levels_[k + 1]->maxHeight());
+    }
+    const double skirt = static_cast<double>(hi - lo) + 2.0 * l.cellMetres();
+    program_.set("uOrigin", glm::ivec2(l.texelX(0), l.texelY(0)));
+    program_.set("uAnchorRel", glm::vec3(l.anchor() - camera.position));
+    program_.set("uAnchorFromCentre", glm::vec3(l.anchor()));
+    program_.set("uSkirtDepth", static_cast<float>(skirt));
+    glBindTextureUnit(0, l.texture());
+    const std::size_t start = k == first ? 0 : holeIndices_;
+    const std::size_t n = holeIndices_ + ringIndices_ + skirtIndices_ - start;
+    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(n), GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(start * sizeof(std::uint32_t)));
+    frame.vertices += n;
+    ++frame.levelsDrawn;
+  }
+  glBindVertexArray(0);
+  checkGl("ClipmapTerrain::draw()");
+  return frame;
+}
+
+}  // namespace regolith::clod

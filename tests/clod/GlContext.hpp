@@ -1,0 +1,28 @@
+#pragma once
+// The one headless GL context the clod GL tests share, and PNG output for people to look at.
+
+#include <regolith/clod/HeadlessContext.hpp>
+#include <regolith/clod/Image.hpp>
+
+#include <cstdlib>
+#include <memory>
+#include <string>
+
+namespace regolith::test {
+
+/// Creates the shared EGL surfaceless context on first use and keeps it current.
+inline clod::HeadlessContext& glContext() {
+  static const std::unique_ptr<clod::HeadlessContext> context =
+      std::make_unique<clod::HeadlessContext>();
+  context->makeCurrent();
+  return *context;
+}
+
+/// Writes `image` to $REGOLITH_TEST_PNG_DIR/<name>.png if that variable is set.
+inline void savePng(const std::string& name, const clod::RgbaImage& image) {
+  const char* dir = std::getenv("REGOLITH_TEST_PNG_DIR");
+  if (dir == nullptr || *dir == '\0') return;
+  clod::writePng(std::string(dir) + "/" + name + ".png", image);
+}
+
+}  // namespace regolith::test
