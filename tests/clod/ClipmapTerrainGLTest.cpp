@@ -1,0 +1,280 @@
+#include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/clod/MeshRenderer.hpp>
+#include <regolith/clod/RenderTarget.hpp>
+
+#include "GlContext.hpp"
+#include "TerrainFixtures.hpp"
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <vector>
+
+namespace regolith::clod {
+namespace {
+
+const glm::vec4 kMagenta{1.0F, 0.0F, 1.0F, 1.0F};
+
+struct Shot {
+  RgbaImage color;
+  DepthImage depth;
+};
+
+Shot render(const Camera& cam, const std::function<void()>& draw) {
+  RenderTarget target(cam.width, cam.height);
+  target.clear(kMagenta);
+  draw();
+  return {target.readColor(), target.readDepth()};
+}
+
+Shot renderClipmap(ClipmapTerrain& terrain, const Camera& cam) {
+  return render(cam, [&] { terrain.draw(cam); });
+}
+
+bool magenta(const RgbaImage& img, int x, int y) { return img.is(x, y, 255, 0, 255); }
+
+/// Pixels where `reference` drew terrain and so did every pixel within `r` of them, and
+/// whose reference surface point lies at least `margin` metres inside the DEM's square
+/// extent of half-width `halfWidth` (at the DEM's own edge, coarse levels legitimately end
+/// up to a coarse cell short of the full-resolution mesh).
+std::vector<bool> interior(const DepthImage& reference, int r, const Camera& cam = {},
+                           double halfWidth = 0.0, double margin = 0.0) {
+  const int w = reference.width, h = reference.height;
+  std::vector<bool> in(static_cast<std::size_t>(w * h), false);
+  for (int y = r; y < h - r; ++y)
+    for (int x = r; x < w - r; ++x) {
+      bool all = true;
+      for (int dy = -r; dy <= r && all; ++dy)
+        for (int dx = -r; dx <= r && all; ++dx) all = reference.at(x + dx, y + dy) > 0.0F;
+      if (all && halfWidth > 0.0) {
+        const glm::dvec3 d = cam.ray(x + 0.5, y + 0.5);
+        const double dist = cam.viewDistance(reference.at(x, y)) / glm::dot(d, cam.forward());
+        const glm::dvec3 p = cam.position + dist * d;
+        all = std::max(std::abs(p.x), std::abs(p.y)) < halfWidth - margin;
+      }
+      in[static_cast<std::size_t>(y * w + x)] = all;
+    }
+  return in;
+}
+
+int countMagentaInside(const RgbaImage& img, const std::vector<bool>& inside) {
+  int count = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if (inside[static_cast<std::size_t>(y * img.width + x)] && magenta(img, x, y)) ++count;
+  return count;
+}
+
+Camera obliqueCamera() {
+  Camera cam;
+  cam.position = {-150.0, -420.0, -1400.0 + 220.0};
+  cam.target = {0.0, 0.0, -1400.0};
+  cam.fovYDegrees = 50.0;
+  cam.width = 480;
+  cam.height = 320;
+  cam.near = 1.0;
+  return cam;
+}
+
+TEST(ClipmapTerrainGLTest, UploadsOnlyTheRowsAndColumnsThatEnterTheWindow) {
+  test::glContext();
+  const auto grid = test::centredGrid(1025, 1025, 1.0);
+  const auto pyramid = test::planePyramid(grid, test::hills);
+  ClipmapOptions opt;
+  opt.size = 63;
+  opt.levels = 4;
+  ClipmapTerrain terrain(pyramid, opt);
+  const std::size_t n = 63;
+  EXPECT_EQ(terrain.setFocus({0.0, 0.0, 0.0}), 4 * n * n);  // first fill: everything
+  EXPECT_EQ(terrain.setFocus({0.2, -0.3, 0.0}), 0U);        // same centre samples: nothing
+
+  // Moves in x, in y, diagonal and back: each level uploads |dr|·n + |dc|·(n − |dr|).
+  const glm::dvec3 path[] = {
+      {3.0, 0.0, 0.0}, {3.0, -5.0, 0.0}, {-4.0, 6.0, 0.0}, {-40.0, 30.0, 0.0}, {10.0, 10.0, 0.0}};
+  for (const auto& p : path) {
+    std::vector<std::pair<long long, long long>> before;
+    for (std::size_t k = 0; k < 4; ++k) before.push_back(terrain.windowOrigin(k));
+    std::size_t expected = 0;
+    const std::size_t got = terrain.setFocus(p);
+    for (std::size_t k = 0; k < 4; ++k) {
+      const auto after = terrain.windowOrigin(k);
+      const auto dr = static_cast<std::size_t>(std::llabs(after.first - before[k].first));
+      const auto dc = static_cast<std::size_t>(std::llabs(after.second - before[k].second));
+      expected += dr * n + dc * (n - dr);
+    }
+    EXPECT_EQ(got, expected) << "focus " << p.x << ", " << p.y;
+    EXPECT_GT(got, 0U);
+    EXPECT_LT(got, 4 * n * n / 2);
+  }
+  // Level 0 moved with the focus: its window is centred on the nearest sample.
+  const auto o = terrain.windowOrigin(0);
+  EXPECT_EQ(o.second, 512 + 10 - 31);
+  EXPECT_EQ(o.first, 512 - 10 - 31);
+
+  // What the toroidal updates left resident renders exactly like a fresh fill there.
+  Camera cam = obliqueCamera();
+  cam.target = {10.0, 10.0, -1400.0};
+  cam.position = cam.target + glm::dvec3(-40.0, -90.0, 60.0);
+  const Shot moved = renderClipmap(terrain, cam);
+  ClipmapTerrain fresh(pyramid, opt);
+  fresh.setFocus({10.0, 10.0, 0.0});
+  const Shot direct = renderClipmap(fresh, cam);
+  EXPECT_EQ(moved.depth.depth, direct.depth.depth);
+  EXPECT_EQ(moved.color.rgba, direct.color.rgba);
+  test::savePng("clipmap_after_moves", moved.color);
+}
+
+TEST(ClipmapTerrainGLTest, FlatDemDepthMatchesTheAnalyticPlane) {
+  test::glContext();
+  const double h0 = -1400.0;
+  const auto grid = test::centredGrid(2049, 2049, 1.0);
+  const auto pyramid = test::planePyramid(grid, [&](double, double) { return h0; });
+  ClipmapTerrain terrain(pyramid, ClipmapOptions{});
+  Camera cam = obliqueCamera();
+  terrain.setFocus(cam.target);
+  const Shot shot = renderClipmap(terrain, cam);
+  test::savePng("clipmap_flat", shot.color);
+  const glm::dvec3 f = cam.forward();
+  int hits = 0, covered = 0;
+  double worst = 0.0;
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x) {
+      const glm::dvec3 d = cam.ray(x + 0.5, y + 0.5);
+      const double t = (h0 - cam.position.z) / d.z;
+      const glm::dvec3 hit = cam.position + t * d;
+      const bool onDem = t > 0 && std::abs(hit.x) < 1000.0 && std::abs(hit.y) < 1000.0;
+      const float depth = shot.depth.at(x, y);
+      if (!onDem) continue;
+      ++hits;
+      if (depth <= 0.0F) continue;
+      ++covered;
+      const double expected = glm::dot(hit - cam.position, f);
+      const double rel = std::abs(cam.viewDistance(depth) - expected) / expected;
+      worst = std::max(worst, rel);
+    }
+  EXPECT_GT(hits, cam.width * cam.height / 3);
+  EXPECT_EQ(covered, hits);  // every pixel over the DEM is drawn
+  EXPECT_LT(worst, 2e-5) << "largest relative depth error";
+}
+
+TEST(ClipmapTerrainGLTest, NoGapsBetweenLevelsStaticAndWhileTheFocusMoves) {
+  test::glContext();
+  const auto grid = test::centredGrid(2049, 2049, 1.0);
+  const auto pyramid = test::planePyramid(grid, test::hills);
+  ClipmapOptions opt;
+  opt.size = 63;  // small levels: many level borders inside the picture
+  ClipmapTerrain terrain(pyramid, opt);
+  MeshRenderer reference(grid, *pyramid->level(0).source);
+  int worst = 0;
+  for (int step = 0; step < 12; ++step) {
+    Camera cam = obliqueCamera();
+    cam.target = {-60.0 + 11.3 * step, -30.0 + 7.1 * step, -1400.0};
+    cam.position = cam.target + glm::dvec3(-120.0, -200.0, 200.0 - 8.0 * step);
+    terrain.setFocus(cam.target);
+    const Shot shot = renderClipmap(terrain, cam);
+    const Shot ref = render(cam, [&] { reference.draw(cam); });
+    const auto inside = interior(ref.depth, 2, cam, 1024.5, 80.0);
+    const int holes = countMagentaInside(shot.color, inside);
+    worst = std::max(worst, holes);
+    EXPECT_EQ(holes, 0) << "step " << step;
+    if (holes > 0) {
+      RgbaImage marked = shot.color;
+      for (int y = 0; y < marked.height; ++y)
+        for (int x = 0; x < marked.width; ++x)
+          if (inside[static_cast<std::size_t>(y * marked.width + x)] && magenta(marked, x, y)) {
+            auto* px = marked.rgba.data() + 4 * (y * marked.width + x);
+            px[0] = 0;
+            px[1] = 255;
+            px[2] = 0;
+          }
+      test::savePng("clipmap_hills_holes" + std::to_string(step), marked);
+    }
+    if (step == 0 || step == 11) {
+      test::savePng("clipmap_hills_step" + std::to_string(step), shot.color);
+      test::savePng("mesh_hills_step" + std::to_string(step), ref.color);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace regolith::clod
+
+namespace regolith::clod {
+namespace {
+
+struct DepthStats {
+  int compared = 0;
+  double p99 = 0.0, max = 0.0;
+};
+
+/// Relative view-distance differences between two renders, over pixels both drew where the
+/// reference has no depth discontinuity (its 4 neighbours within 2 % of it).
+/// `within` (optional) selects pixels by the reference's surface point.
+DepthStats compareDepth(const Camera& cam, const DepthImage& a, const DepthImage& ref,
+                        const std::function<bool(const glm::dvec3&)>& within = {}) {
+  std::vector<double> diffs;
+  for (int y = 1; y + 1 < ref.height; ++y)
+    for (int x = 1; x + 1 < ref.width; ++x) {
+      const float r = ref.at(x, y), c = a.at(x, y);
+      if (r <= 0.0F || c <= 0.0F) continue;
+      const double dr = cam.viewDistance(r);
+      bool smooth = true;
+      for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+        const float n = ref.at(x + dx, y + dy);
+        smooth = smooth && n > 0.0F && std::abs(cam.viewDistance(n) - dr) < 0.02 * dr;
+      }
+      if (!smooth) continue;
+      if (within) {
+        const glm::dvec3 d = cam.ray(x + 0.5, y + 0.5);
+        if (!within(cam.position + dr / glm::dot(d, cam.forward()) * d)) continue;
+      }
+      diffs.push_back(std::abs(cam.viewDistance(c) - dr) / dr);
+    }
+  DepthStats s;
+  s.compared = static_cast<int>(diffs.size());
+  if (diffs.empty()) return s;
+  std::sort(diffs.begin(), diffs.end());
+  s.p99 = diffs[diffs.size() * 99 / 100];
+  s.max = diffs.back();
+  return s;
+}
+
+TEST(ClipmapTerrainGLTest, MatchesTheFullResolutionMeshNearTheFocus) {
+  test::glContext();
+  const auto grid = test::centredGrid(1025, 1025, 1.0);
+  const auto pyramid = test::planePyramid(grid, test::hills);
+  MeshRenderer reference(grid, *pyramid->level(0).source);
+  ClipmapTerrain terrain(pyramid, ClipmapOptions{});
+  Camera cam = obliqueCamera();
+  cam.target = {20.0, 10.0, -1400.0};
+  cam.position = cam.target + glm::dvec3(-30.0, -50.0, 45.0);
+  terrain.setFocus(cam.target);
+  const Shot clip = renderClipmap(terrain, cam);
+  const Shot ref = render(cam, [&] { reference.draw(cam); });
+  test::savePng("clipmap_near", clip.color);
+  test::savePng("mesh_near", ref.color);
+  // Inside level 0 (255 samples of 1 m around the focus, less the cells level 1 overlaps) the
+  // clipmap draws the same triangles as the full mesh: depths agree to float rounding.
+  const auto o = terrain.windowOrigin(0);
+  const glm::dvec2 c0 =
+      grid.sampleCentre(static_cast<double>(o.first + 127), static_cast<double>(o.second + 127));
+  const DepthStats fine = compareDepth(cam, clip.depth, ref.depth, [&](const glm::dvec3& p) {
+    return std::max(std::abs(p.x - c0.x), std::abs(p.y - c0.y)) < 120.0;
+  });
+  const DepthStats all = compareDepth(cam, clip.depth, ref.depth);
+  std::printf("level 0: %d pixels, max %.3g; all: %d pixels, p99 %.3g, max %.3g\n", fine.compared,
+              fine.max, all.compared, all.p99, all.max);
+  EXPECT_GT(fine.compared, cam.width * cam.height / 2);
+  EXPECT_LT(fine.max, 1e-5);
+  // Beyond it, level 1 (2 m means of the 1 m samples) stands in: bounded by the terrain's
+  // roughness at 2 m (the 10 m ripple of test::hills), stated as a relative depth bound.
+  EXPECT_LT(all.p99, 5e-3);
+  EXPECT_LT(all.max, 2e-2);
+}
+
+}  // namespace
+}  // namespace regolith::clod
