@@ -278,3 +278,174 @@ TEST(ClipmapTerrainGLTest, MatchesTheFullResolutionMeshNearTheFocus) {
 
 }  // namespace
 }  // namespace regolith::clod
+
+namespace regolith::clod {
+namespace {
+
+TEST(ClipmapTerrainGLTest, CraterRimSeenFromAboveIsWhereTheFormulaPutsIt) {
+  test::glContext();
+  const test::Crater crater;
+  const auto grid = test::centredGrid(1025, 1025, 1.0);
+  const auto pyramid = test::planePyramid(grid, crater);
+  // Level 0 (511 samples of 1 m) holds the whole rim: the crest is drawn from the samples
+  // themselves, not from 2 × 2 means, which would pull the max of this lopsided crest
+  // (steep inside, gentle outside) outward by metres.
+  ClipmapOptions opt;
+  opt.size = 511;
+  ClipmapTerrain terrain(pyramid, opt);
+  Camera cam;
+  cam.target = {0.0, 0.0, crater.base};
+  cam.position = {0.0, 0.0, crater.base + 900.0};
+  cam.up = {0.0, 1.0, 0.0};
+  cam.fovYDegrees = 40.0;
+  cam.width = cam.height = 400;
+  cam.near = 10.0;
+  terrain.setFocus(cam.target);
+  const Shot shot = renderClipmap(terrain, cam);
+  test::savePng("clipmap_crater_top", shot.color);
+  // The surface point under a pixel, from its depth.
+  const auto surfaceAt = [&](int x, int y) {
+    const glm::dvec3 d = cam.ray(x + 0.5, y + 0.5);
+    return cam.position + cam.viewDistance(shot.depth.at(x, y)) / glm::dot(d, cam.forward()) * d;
+  };
+  for (int a = 0; a < 16; ++a) {
+    const double phi = a * 2.0 * M_PI / 16.0;
+    // Walk outward through the pixels along this azimuth: the highest point is the crest;
+    // where the inner wall crosses 5 m below the crest locates the rim (the crest itself is
+    // flat to 1 cm over 3 m outward, so its position is ill-conditioned).
+    const double level = crater.base + crater.rimHeight - 5.0;
+    const double expectedCross = crater.radius * std::sqrt(1.0 - 5.0 / crater.depth);
+    double crest = -1e9, cross = 0.0, prevR = 0.0, prevZ = 0.0;
+    for (double r = 150.0; r < 250.0; r += 0.25) {
+      const glm::dvec3 px = cam.project({r * std::cos(phi), r * std::sin(phi), level});
+      const glm::dvec3 p = surfaceAt(static_cast<int>(px.x), static_cast<int>(px.y));
+      const double pr = std::hypot(p.x, p.y);
+      crest = std::max(crest, p.z);
+      if (cross == 0.0 && r > 150.0 && prevZ < level && p.z >= level)
+        cross = prevR + (level - prevZ) / (p.z - prevZ) * (pr - prevR);
+      prevR = pr;
+      prevZ = p.z;
+    }
+    // One pixel is 0.81 m at the rim.
+    EXPECT_NEAR(cross, expectedCross, 0.5) << "azimuth " << a;
+    EXPECT_NEAR(crest, crater.base + crater.rimHeight, 0.05) << "azimuth " << a;
+  }
+  // The floor's centre: the bowl's lowest point.
+  EXPECT_NEAR(surfaceAt(200, 200).z, crater.base + crater.rimHeight - crater.depth, 0.05);
+}
+
+TEST(ClipmapTerrainGLTest, CraterSilhouetteOnTheSkylineIsWhereTheFormulaPutsIt) {
+  test::glContext();
+  const test::Crater crater;
+  const auto grid = test::centredGrid(2049, 2049, 1.0);
+  const auto pyramid = test::planePyramid(grid, crater);
+  ClipmapTerrain terrain(pyramid, ClipmapOptions{});
+  // Eye 5 m above the plain, 600 m south of the centre, looking north horizontally: the
+  // near rim is the skyline over the crater.
+  Camera cam;
+  cam.position = {0.0, -600.0, crater.base + 5.0};
+  cam.target = {0.0, 0.0, crater.base + 5.0};
+  cam.fovYDegrees = 10.0;
+  cam.width = 480;
+  cam.height = 240;
+  cam.near = 1.0;
+  terrain.setFocus({0.0, 0.0, crater.base});
+  const Shot shot = renderClipmap(terrain, cam);
+  test::savePng("clipmap_crater_skyline", shot.color);
+  const double f = cam.focalPixels();
+  for (int x = 40; x < cam.width; x += 40) {
+    // Analytic skyline in this column: the highest elevation angle of the surface along the
+    // column's vertical plane, marched at 0.1 m.
+    const double sx = (x + 0.5 - 0.5 * cam.width) / f;  // x / forward distance
+    double best = -1e9;
+    for (double d = 50.0; d < 1500.0; d += 0.1) {
+      const double h = crater(sx * d, cam.position.y + d) - cam.position.z;
+      best = std::max(best, h / d);
+    }
+    const double expectedRow = 0.5 * cam.height - f * best;  // top edge of the terrain
+    int row = 0;
+    while (row < cam.height && shot.depth.at(x, row) == 0.0F) ++row;
+    EXPECT_NEAR(row, expectedRow, 1.0) << "column " << x;
+  }
+}
+
+TEST(ClipmapTerrainGLTest, NodataCutsAHole) {
+  test::glContext();
+  const auto grid = test::centredGrid(1025, 1025, 1.0);
+  auto samples = topo::InMemorySamples::fromFunction(
+      grid.rows(), grid.cols(), [&](std::size_t r, std::size_t c) {
+        const auto p = grid.sampleCentre(static_cast<double>(r), static_cast<double>(c));
+        return std::hypot(p.x - 40.0, p.y) < 30.0 ? std::numeric_limits<float>::quiet_NaN()
+                                                  : static_cast<float>(test::hills(p.x, p.y));
+      });
+  const auto pyramid = std::make_shared<const HeightPyramid>(
+      HeightPyramid::fromSamples(grid, samples, SurfaceKind::Plane));
+  ClipmapTerrain terrain(pyramid, ClipmapOptions{});
+  Camera cam;
+  cam.target = {0.0, 0.0, -1400.0};
+  cam.position = {0.0, -1.0, -1400.0 + 400.0};
+  cam.width = cam.height = 300;
+  cam.near = 1.0;
+  terrain.setFocus(cam.target);
+  const Shot shot = renderClipmap(terrain, cam);
+  test::savePng("clipmap_nodata_hole", shot.color);
+  int inHole = 0, holeMagenta = 0, outside = 0, outsideMagenta = 0;
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x) {
+      // Where the pixel's ray meets the plain's mean height.
+      const glm::dvec3 d = cam.ray(x + 0.5, y + 0.5);
+      const glm::dvec3 p = cam.position + (-1400.0 - cam.position.z) / d.z * d;
+      const double r = std::hypot(p.x - 40.0, p.y);
+      if (r < 24.0) {
+        ++inHole;
+        holeMagenta += magenta(shot.color, x, y) ? 1 : 0;
+      } else if (r > 40.0) {
+        ++outside;
+        outsideMagenta += magenta(shot.color, x, y) ? 1 : 0;
+      }
+    }
+  EXPECT_GT(inHole, 500);
+  EXPECT_EQ(holeMagenta, inHole);  // nothing drawn over nodata, no skirt inside the hole
+  EXPECT_EQ(outsideMagenta, 0);
+  EXPECT_GT(outside, 50000);
+}
+
+TEST(ClipmapTerrainGLTest, InnerLevelsSwitchOffFarAwayAndVerticesDoNotGrowWithTheDem) {
+  test::glContext();
+  ClipmapOptions opt;
+  opt.size = 127;
+  opt.levels = 6;
+  Camera cam;
+  cam.target = {0.0, 0.0, 0.0};
+  cam.width = 640;
+  cam.height = 360;
+  std::vector<std::size_t> vertices;
+  for (std::size_t side : {513U, 2049U, 4097U}) {
+    const auto grid = test::centredGrid(side, side, 1.0);
+    const auto pyramid = test::planePyramid(
+        grid, [](double x, double y) { return 5.0 * std::sin(x / 30.0) * std::cos(y / 40.0); });
+    ClipmapTerrain terrain(pyramid, opt);
+    terrain.setFocus(cam.target);
+    cam.position = {0.0, -40.0, 60.0};
+    RenderTarget target(cam.width, cam.height);
+    target.clear(kMagenta);
+    const ClipmapFrame near = terrain.draw(cam);
+    EXPECT_EQ(near.firstLevel, 0U);
+    EXPECT_EQ(near.levelsDrawn, 6U);
+    vertices.push_back(near.vertices);
+    // From far above, the finest levels' cells are below half a pixel: they switch off and
+    // the innermost drawn level draws its centre.
+    cam.position = {0.0, -400.0, 6000.0};
+    const ClipmapFrame far = terrain.draw(cam);
+    EXPECT_GE(far.firstLevel, 2U);
+    EXPECT_EQ(far.firstLevel + far.levelsDrawn, 6U);
+    EXPECT_LT(far.vertices, near.vertices);
+    const RgbaImage img = target.readColor();
+    EXPECT_FALSE(magenta(img, cam.width / 2, cam.height / 2));  // the centre is drawn
+  }
+  EXPECT_EQ(vertices[0], vertices[1]);
+  EXPECT_EQ(vertices[1], vertices[2]);
+}
+
+}  // namespace
+}  // namespace regolith::clod
