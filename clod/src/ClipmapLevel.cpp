@@ -69,29 +69,73 @@ bool ClipmapLevel::realIndex(std::int64_t vr, std::int64_t vc, std::size_t& r,
   return true;
 }
 
+glm::dvec2 ClipmapLevel::lattice(double vr, double vc) const {
+  if (polar_ == 0) return grid().sampleCentre(vr, vc);
+  // Spherical stereographic map of radius a about the pole: only the lattice, positions
+  // still come from the body through pyramid_.position().
+  const double a = pyramid_.body()->equatorialRadius();
+  const double x = vc * polarStep_, y = -vr * polarStep_;
+  const double rho = std::hypot(x, y);
+  const double colat = 2.0 * std::atan(rho / (2.0 * a)) * 180.0 / M_PI;
+  if (polar_ > 0) return {std::atan2(x, -y) * 180.0 / M_PI, 90.0 - colat};
+  return {std::atan2(x, y) * 180.0 / M_PI, -90.0 + colat};
+}
+
 glm::dvec3 ClipmapLevel::centre() const {
-  const auto& g = grid();
-  const glm::dvec2 p = g.sampleCentre(static_cast<double>(row0_ + (n_ - 1) / 2),
-                                      static_cast<double>(col0_ + (n_ - 1) / 2));
+  const glm::dvec2 p =
+      lattice(static_cast<double>(row0_ + (n_ - 1) / 2), static_cast<double>(col0_ + (n_ - 1) / 2));
   return pyramid_.position(p.x, p.y, 0.0);
 }
 
 double ClipmapLevel::cellMetres() const {
-  const auto& g = grid();
   const double r = static_cast<double>(row0_ + (n_ - 1) / 2);
   const double c = static_cast<double>(col0_ + (n_ - 1) / 2);
   const auto at = [&](double rr, double cc) {
-    const glm::dvec2 p = g.sampleCentre(rr, cc);
+    const glm::dvec2 p = lattice(rr, cc);
     return pyramid_.position(p.x, p.y, 0.0);
   };
   const glm::dvec3 o = at(r, c);
   return std::max(glm::length(at(r, c + 1) - o), glm::length(at(r + 1, c) - o));
 }
 
-std::size_t ClipmapLevel::moveTo(double gx, double gy) {
+float ClipmapLevel::sampleAt(std::int64_t vr, std::int64_t vc) const {
+  std::size_t r = 0, c = 0;
+  if (!realIndex(vr, vc, r, c)) return kNaN;
+  const float v = pyramid_.level(level_).source->sample(r, c);
+  return grid().isNodata(v) ? kNaN : v;
+}
+
+float ClipmapLevel::interpolate(const glm::dvec2& g) const {
+  const glm::dvec2 f = grid().fractionalIndex(g.x, g.y);
+  const double fr = std::floor(f.y), fc = std::floor(f.x);
+  const double tr = f.y - fr, tc = f.x - fc;
+  const auto r = static_cast<std::int64_t>(fr), c = static_cast<std::int64_t>(fc);
+  const double v00 = static_cast<double>(sampleAt(r, c));
+  const double v01 = static_cast<double>(sampleAt(r, c + 1));
+  const double v10 = static_cast<double>(sampleAt(r + 1, c));
+  const double v11 = static_cast<double>(sampleAt(r + 1, c + 1));
+  const double top = v00 + (v01 - v00) * tc, bottom = v10 + (v11 - v10) * tc;
+  return static_cast<float>(top + (bottom - top) * tr);  // NaN if any is NaN
+}
+
+std::size_t ClipmapLevel::moveTo(double gx, double gy, int polar) {
   const auto& g = grid();
-  const glm::dvec2 f = g.fractionalIndex(gx, gy);
   const std::int64_t half = (n_ - 1) / 2;
+  if (!crossPoles_) polar = 0;
+  if (polar != polar_) {
+    polar_ = polar;
+    valid_ = false;  // a new lattice: everything is uploaded again
+    polarStep_ = pyramid_.body()->equatorialRadius() * g.spacingY() * M_PI / 180.0;
+  }
+  glm::dvec2 f = g.fractionalIndex(gx, gy);
+  if (polar_ != 0) {
+    const double a = pyramid_.body()->equatorialRadius();
+    const double colat = (polar_ > 0 ? 90.0 - gy : 90.0 + gy) * M_PI / 180.0;
+    const double rho = 2.0 * a * std::tan(0.5 * colat);
+    const double lon = gx * M_PI / 180.0;
+    const double x = rho * std::sin(lon), y = (polar_ > 0 ? -rho : rho) * std::cos(lon);
+    f = {x / polarStep_, -y / polarStep_};
+  }
   const auto newCol0 = static_cast<std::int64_t>(std::llround(f.x)) - half;
   const auto newRow0 = static_cast<std::int64_t>(std::llround(f.y)) - half;
   const std::int64_t n = n_;
@@ -103,8 +147,7 @@ std::size_t ClipmapLevel::moveTo(double gx, double gy) {
     col0_ = newCol0;
     anchorRow_ = row0_ + half;
     anchorCol_ = col0_ + half;
-    const glm::dvec2 a =
-        g.sampleCentre(static_cast<double>(anchorRow_), static_cast<double>(anchorCol_));
+    const glm::dvec2 a = lattice(static_cast<double>(anchorRow_), static_cast<double>(anchorCol_));
     anchor_ = pyramid_.position(a.x, a.y, 0.0);
     valid_ = true;
     const std::size_t count = upload(row0_, row0_ + n, col0_, col0_ + n);
@@ -144,7 +187,24 @@ std::size_t ClipmapLevel::upload(std::int64_t r0, std::int64_t r1, std::int64_t 
   const auto h = static_cast<std::size_t>(r1 - r0);
   std::vector<float> texels(w * h * 4);
   std::vector<float> row(w);
-  for (std::size_t j = 0; j < h; ++j) {
+  for (std::size_t j = 0; j < h && polar_ != 0; ++j) {
+    const std::int64_t vr = r0 + static_cast<std::int64_t>(j);
+    for (std::size_t k = 0; k < w; ++k) {
+      const std::int64_t vc = c0 + static_cast<std::int64_t>(k);
+      const glm::dvec2 gp = lattice(static_cast<double>(vr), static_cast<double>(vc));
+      const float hgt = interpolate(gp);
+      const double hd = std::isnan(hgt) ? 0.0 : static_cast<double>(hgt);
+      const glm::dvec3 p = pyramid_.position(gp.x, gp.y, hd) - anchor_;
+      float* t = texels.data() + (j * w + k) * 4;
+      t[0] = static_cast<float>(p.x);
+      t[1] = static_cast<float>(p.y);
+      t[2] = static_cast<float>(p.z);
+      t[3] = hgt;
+      heights_[static_cast<std::size_t>(floorMod(vr, n_)) * static_cast<std::size_t>(n_) +
+               static_cast<std::size_t>(floorMod(vc, n_))] = hgt;
+    }
+  }
+  for (std::size_t j = 0; j < h && polar_ == 0; ++j) {
     const std::int64_t vr = r0 + static_cast<std::int64_t>(j);
     // Read the row's samples as runs of consecutive real columns.
     std::size_t i = 0;

@@ -22,8 +22,10 @@ class ClipmapLevel {
   /// Moves the window so that its centre sample is the one nearest to grid point (gx, gy),
   /// uploading only rows and columns that enter the window (all of it on the first call, or
   /// when the window jumps by n or more, or drifts n samples from the anchor). Returns the
-  /// number of texels uploaded.
-  std::size_t moveTo(double gx, double gy);
+  /// number of texels uploaded. `polar` (planets on global grids) selects the lattice: 0
+  /// latitude/longitude rows and columns, +1/−1 a polar stereographic lattice about the
+  /// north/south pole; a change re-uploads the level.
+  std::size_t moveTo(double gx, double gy, int polar = 0);
 
   /// Window origin: virtual (row, col) of its top-left sample; may lie outside the grid.
   [[nodiscard]] std::int64_t row0() const noexcept { return row0_; }
@@ -47,6 +49,11 @@ class ClipmapLevel {
 
  private:
   [[nodiscard]] const topo::TopoGrid& grid() const noexcept;
+  /// Grid point (longitude/x, latitude/y) of window lattice point (vr, vc).
+  [[nodiscard]] glm::dvec2 lattice(double vr, double vc) const;
+  /// Height at a grid point by bilinear interpolation (polar frames), NaN near nodata.
+  [[nodiscard]] float interpolate(const glm::dvec2& g) const;
+  [[nodiscard]] float sampleAt(std::int64_t vr, std::int64_t vc) const;
   /// Maps a virtual (row, col) to a real sample, wrapping longitude and reflecting over a
   /// pole on global planet grids. False if outside the data.
   bool realIndex(std::int64_t vr, std::int64_t vc, std::size_t& r, std::size_t& c) const;
@@ -58,6 +65,10 @@ class ClipmapLevel {
   std::size_t level_;
   int n_;
   bool wrapLon_ = false, crossPoles_ = false;
+  // Lattice: 0 latitude/longitude rows and columns; +1/−1 polar stereographic about the
+  // north/south pole, where lat/lon cells collapse. Heights are then interpolated.
+  int polar_ = 0;
+  double polarStep_ = 0.0;  // lattice step in projected metres
   bool valid_ = false;
   std::int64_t row0_ = 0, col0_ = 0;
   std::int64_t anchorRow_ = 0, anchorCol_ = 0;

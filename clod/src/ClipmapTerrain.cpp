@@ -31,11 +31,27 @@ ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, Cli
   if (n < 15 || n > 2047 || n % 2 == 0)
     throw InvalidArgument("ClipmapTerrain(): size " + std::to_string(n) +
                           ", expected an odd number of vertices in 15..2047");
-  std::size_t count = options_.levels == 0 ? pyramid_->levelCount() : options_.levels;
-  if (count > pyramid_->levelCount())
+  // On a planet a level's triangles are chords: past ~3° a cell sags a kilometre or more
+  // below a Mars-sized surface, and a window wider than a full meridian circle folds back over
+  // itself.
+  std::size_t usable = pyramid_->levelCount();
+  if (pyramid_->kind() == SurfaceKind::Planet) {
+    usable = 0;
+    while (usable < pyramid_->levelCount()) {
+      const double dy = pyramid_->level(usable).grid.spacingY();
+      if (dy > 3.0 || (n - 1) * dy > 360.0) break;
+      ++usable;
+    }
+    if (usable == 0)
+      throw InvalidArgument("ClipmapTerrain(): the planet's finest level has spacing " +
+                            std::to_string(pyramid_->level(0).grid.spacingY()) +
+                            "°, expected at most 3° and a window of at most 360°");
+  }
+  const std::size_t count = options_.levels == 0 ? usable : options_.levels;
+  if (count > usable)
     throw InvalidArgument("ClipmapTerrain(): " + std::to_string(count) +
-                          " levels asked for, the pyramid has " +
-                          std::to_string(pyramid_->levelCount()));
+                          " levels asked for, the pyramid has " + std::to_string(usable) +
+                          " usable (" + std::to_string(pyramid_->levelCount()) + " in all)");
   for (std::size_t k = 0; k < count; ++k)
     levels_.push_back(std::make_unique<ClipmapLevel>(*pyramid_, k, n));
   // The finer level spans (n−1)/4 of this level's cells each side of its centre, which may
@@ -112,8 +128,13 @@ void ClipmapTerrain::buildMesh() {
 
 std::size_t ClipmapTerrain::setFocus(const glm::dvec3& focus) {
   const glm::dvec2 g = pyramid_->gridPoint(focus);
+  // Planets: within 40° of a pole every level uses a polar stereographic lattice about it,
+  // elsewhere latitude/longitude rows and columns. All levels switch together, so a finer
+  // level's window always covers the hole of the next coarser one in the same lattice.
+  int polar = 0;
+  if (pyramid_->kind() == SurfaceKind::Planet && std::abs(g.y) > 50.0) polar = g.y > 0 ? 1 : -1;
   std::size_t count = 0;
-  for (auto& level : levels_) count += level->moveTo(g.x, g.y);
+  for (auto& level : levels_) count += level->moveTo(g.x, g.y, polar);
   uploaded_ += count;
   return count;
 }
@@ -160,13 +181,21 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
   for (std::size_t k = first; k < first + count; ++k) {
     const auto& l = *levels_[k];
     if (!l.valid()) continue;
-    // Skirts reach below the lowest sample of this level and the next coarser one.
+    // Skirts reach below the lowest sample of this level and of the next coarser one.
     float lo = l.minHeight(), hi = l.maxHeight();
     if (k + 1 < levels_.size()) {
       lo = std::min(lo, levels_[k + 1]->minHeight());
       hi = std::max(hi, levels_[k + 1]->maxHeight());
     }
-    const double skirt = static_cast<double>(hi - lo) + 2.0 * l.cellMetres();
+    // On a planet add the sag of a chord across a coarse cell (c²/8R), so the skirt also
+    // reaches below the next level's flat triangles.
+    const double cell = l.cellMetres();
+    double sag = 0.0;
+    if (pyramid_->kind() == SurfaceKind::Planet) {
+      const double c2 = 2.0 * cell;
+      sag = c2 * c2 / (8.0 * pyramid_->body()->polarRadius());
+    }
+    const double skirt = static_cast<double>(hi - lo) + sag + 0.1 * cell;
     program_.set("uOrigin", glm::ivec2(l.texelX(0), l.texelY(0)));
     program_.set("uAnchorRel", glm::vec3(l.anchor() - camera.position));
     program_.set("uAnchorFromCentre", glm::vec3(l.anchor()));

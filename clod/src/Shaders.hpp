@@ -63,7 +63,8 @@ void main() {
   vec3 east = around(fetch(i + 1, j), p) - around(fetch(i - 1, j), p);
   vec3 north = around(fetch(i, j - 1), p) - around(fetch(i, j + 1), p);
   vec3 n = cross(east, north);
-  vsOut.normal = dot(n, n) > 0.0 ? normalize(n) : up;
+  n = dot(n, n) > 0.0 ? normalize(n) : up;
+  vsOut.normal = dot(n, up) < 0.0 ? -n : n;  // lattices mirrored over a pole stay upright
   if (aVertex.z != 0) p -= up * uSkirtDepth;
   vsOut.valid = isnan(c.w) ? 0.0 : 1.0;
   gl_Position = uViewProj * vec4(p + uAnchorRel, 1.0);
