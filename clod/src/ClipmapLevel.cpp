@@ -148,7 +148,10 @@ std::size_t ClipmapLevel::moveTo(double gx, double gy, int polar) {
     anchorRow_ = row0_ + half;
     anchorCol_ = col0_ + half;
     const glm::dvec2 a = lattice(static_cast<double>(anchorRow_), static_cast<double>(anchorCol_));
-    anchor_ = pyramid_.position(a.x, a.y, 0.0);
+    // The anchor sits on the terrain (its centre sample's height), so both the offsets in
+    // the texture and anchor − camera stay small near the surface.
+    const float ah = polar_ != 0 ? interpolate(a) : sampleAt(anchorRow_, anchorCol_);
+    anchor_ = pyramid_.position(a.x, a.y, std::isnan(ah) ? 0.0 : static_cast<double>(ah));
     valid_ = true;
     const std::size_t count = upload(row0_, row0_ + n, col0_, col0_ + n);
     updateRange();
