@@ -5,6 +5,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -70,14 +71,18 @@ bool ClipmapLevel::realIndex(std::int64_t vr, std::int64_t vc, std::size_t& r,
 }
 
 glm::dvec2 ClipmapLevel::lattice(double vr, double vc) const {
-  if (polar_ == 0) return grid().sampleCentre(vr, vc);
+  return lattice(vr, vc, polar_, polarStep_);
+}
+
+glm::dvec2 ClipmapLevel::lattice(double vr, double vc, int polar, double step) const {
+  if (polar == 0) return grid().sampleCentre(vr, vc);
   // Spherical stereographic map of radius a about the pole: only the lattice, positions
   // still come from the body through pyramid_.position().
   const double a = pyramid_.body()->equatorialRadius();
-  const double x = vc * polarStep_, y = -vr * polarStep_;
+  const double x = vc * step, y = -vr * step;
   const double rho = std::hypot(x, y);
   const double colat = 2.0 * std::atan(rho / (2.0 * a)) * 180.0 / M_PI;
-  if (polar_ > 0) return {std::atan2(x, -y) * 180.0 / M_PI, 90.0 - colat};
+  if (polar > 0) return {std::atan2(x, -y) * 180.0 / M_PI, 90.0 - colat};
   return {std::atan2(x, y) * 180.0 / M_PI, -90.0 + colat};
 }
 
@@ -118,117 +123,125 @@ float ClipmapLevel::interpolate(const glm::dvec2& g) const {
   return static_cast<float>(top + (bottom - top) * tr);  // NaN if any is NaN
 }
 
-std::size_t ClipmapLevel::moveTo(double gx, double gy, int polar) {
+ClipmapLevel::Plan ClipmapLevel::plan(double gx, double gy, int polar) const {
   const auto& g = grid();
   const std::int64_t half = (n_ - 1) / 2;
-  if (!crossPoles_) polar = 0;
-  if (polar != polar_) {
-    polar_ = polar;
-    valid_ = false;  // a new lattice: everything is uploaded again
-    polarStep_ = pyramid_.body()->equatorialRadius() * g.spacingY() * M_PI / 180.0;
-  }
+  Plan p;
+  p.polar = crossPoles_ ? polar : 0;
+  p.polarStep =
+      p.polar == 0 ? 0.0 : pyramid_.body()->equatorialRadius() * g.spacingY() * M_PI / 180.0;
   glm::dvec2 f = g.fractionalIndex(gx, gy);
-  if (polar_ != 0) {
+  if (p.polar != 0) {
     const double a = pyramid_.body()->equatorialRadius();
-    const double colat = (polar_ > 0 ? 90.0 - gy : 90.0 + gy) * M_PI / 180.0;
+    const double colat = (p.polar > 0 ? 90.0 - gy : 90.0 + gy) * M_PI / 180.0;
     const double rho = 2.0 * a * std::tan(0.5 * colat);
     const double lon = gx * M_PI / 180.0;
-    const double x = rho * std::sin(lon), y = (polar_ > 0 ? -rho : rho) * std::cos(lon);
-    f = {x / polarStep_, -y / polarStep_};
+    const double x = rho * std::sin(lon), y = (p.polar > 0 ? -rho : rho) * std::cos(lon);
+    f = {x / p.polarStep, -y / p.polarStep};
   }
-  const auto newCol0 = static_cast<std::int64_t>(std::llround(f.x)) - half;
-  const auto newRow0 = static_cast<std::int64_t>(std::llround(f.y)) - half;
+  p.col0 = static_cast<std::int64_t>(std::llround(f.x)) - half;
+  p.row0 = static_cast<std::int64_t>(std::llround(f.y)) - half;
   const std::int64_t n = n_;
-  const std::int64_t dr = newRow0 - row0_, dc = newCol0 - col0_;
+  const std::int64_t dr = p.row0 - row0_, dc = p.col0 - col0_;
   const bool farFromAnchor =
-      std::llabs(newRow0 + half - anchorRow_) > n || std::llabs(newCol0 + half - anchorCol_) > n;
-  if (!valid_ || std::llabs(dr) >= n || std::llabs(dc) >= n || farFromAnchor) {
-    row0_ = newRow0;
-    col0_ = newCol0;
-    anchorRow_ = row0_ + half;
-    anchorCol_ = col0_ + half;
-    const glm::dvec2 a = lattice(static_cast<double>(anchorRow_), static_cast<double>(anchorCol_));
-    // The anchor sits on the terrain (its centre sample's height), so both the offsets in
-    // the texture and anchor − camera stay small near the surface.
-    const float ah = polar_ != 0 ? interpolate(a) : sampleAt(anchorRow_, anchorCol_);
-    anchor_ = pyramid_.position(a.x, a.y, std::isnan(ah) ? 0.0 : static_cast<double>(ah));
-    valid_ = true;
-    const std::size_t count = upload(row0_, row0_ + n, col0_, col0_ + n);
-    updateRange();
-    return count;
+      std::llabs(p.row0 + half - anchorRow_) > n || std::llabs(p.col0 + half - anchorCol_) > n;
+  p.full =
+      !valid_ || p.polar != polar_ || std::llabs(dr) >= n || std::llabs(dc) >= n || farFromAnchor;
+  if (p.full) {
+    p.anchorRow = p.row0 + half;
+    p.anchorCol = p.col0 + half;
+    p.regions.push_back({p.row0, p.row0 + n, p.col0, p.col0 + n, {}});
+    return p;
   }
-  if (dr == 0 && dc == 0) return 0;
-  const std::int64_t oldRow0 = row0_;
-  row0_ = newRow0;
-  col0_ = newCol0;
-  std::size_t count = 0;
-  // New rows, full width of the new window.
-  std::int64_t keepR0 = row0_, keepR1 = row0_ + n;  // rows already resident
+  p.anchorRow = anchorRow_;
+  p.anchorCol = anchorCol_;
+  p.anchor = anchor_;
+  // New rows over the full width of the new window; new columns only over the rows that
+  // were resident before.
+  std::int64_t keepR0 = p.row0, keepR1 = p.row0 + n;
   if (dr > 0) {
-    count += upload(oldRow0 + n, row0_ + n, col0_, col0_ + n);
-    keepR1 = oldRow0 + n;
+    p.regions.push_back({row0_ + n, p.row0 + n, p.col0, p.col0 + n, {}});
+    keepR1 = row0_ + n;
   } else if (dr < 0) {
-    count += upload(row0_, oldRow0, col0_, col0_ + n);
-    keepR0 = oldRow0;
+    p.regions.push_back({p.row0, row0_, p.col0, p.col0 + n, {}});
+    keepR0 = row0_;
   }
-  // New columns, only over the rows that were resident before.
   if (dc > 0) {
-    count += upload(keepR0, keepR1, col0_ + n - dc, col0_ + n);
+    p.regions.push_back({keepR0, keepR1, p.col0 + n - dc, p.col0 + n, {}});
   } else if (dc < 0) {
-    count += upload(keepR0, keepR1, col0_, col0_ - dc);
+    p.regions.push_back({keepR0, keepR1, p.col0, p.col0 - dc, {}});
   }
-  updateRange();
-  return count;
+  return p;
 }
 
-std::size_t ClipmapLevel::upload(std::int64_t r0, std::int64_t r1, std::int64_t c0,
-                                 std::int64_t c1) {
-  if (r1 <= r0 || c1 <= c0) return 0;
+bool ClipmapLevel::Plan::empty() const noexcept { return !full && regions.empty(); }
+
+std::size_t ClipmapLevel::Plan::texels() const noexcept {
+  std::size_t t = 0;
+  for (const auto& r : regions)
+    t += static_cast<std::size_t>(r.r1 - r.r0) * static_cast<std::size_t>(r.c1 - r.c0);
+  return t;
+}
+
+void ClipmapLevel::fetch(Plan& p) const {
+  if (p.full) {
+    // The anchor sits on the terrain (its centre sample's height), so both the offsets in
+    // the texture and anchor − camera stay small near the surface.
+    const glm::dvec2 a = lattice(static_cast<double>(p.anchorRow), static_cast<double>(p.anchorCol),
+                                 p.polar, p.polarStep);
+    const float ah = p.polar != 0 ? interpolate(a) : sampleAt(p.anchorRow, p.anchorCol);
+    p.anchor = pyramid_.position(a.x, a.y, std::isnan(ah) ? 0.0 : static_cast<double>(ah));
+  }
+  for (auto& region : p.regions) fill(p, region);
+}
+
+void ClipmapLevel::fill(const Plan& p, Plan::Region& region) const {
   const auto& lvl = pyramid_.level(level_);
   const auto& g = lvl.grid;
-  const auto w = static_cast<std::size_t>(c1 - c0);
-  const auto h = static_cast<std::size_t>(r1 - r0);
-  std::vector<float> texels(w * h * 4);
-  std::vector<float> row(w);
-  for (std::size_t j = 0; j < h && polar_ != 0; ++j) {
-    const std::int64_t vr = r0 + static_cast<std::int64_t>(j);
-    for (std::size_t k = 0; k < w; ++k) {
-      const std::int64_t vc = c0 + static_cast<std::int64_t>(k);
-      const glm::dvec2 gp = lattice(static_cast<double>(vr), static_cast<double>(vc));
-      const float hgt = interpolate(gp);
-      const double hd = std::isnan(hgt) ? 0.0 : static_cast<double>(hgt);
-      const glm::dvec3 p = pyramid_.position(gp.x, gp.y, hd) - anchor_;
-      float* t = texels.data() + (j * w + k) * 4;
-      t[0] = static_cast<float>(p.x);
-      t[1] = static_cast<float>(p.y);
-      t[2] = static_cast<float>(p.z);
-      t[3] = hgt;
-      heights_[static_cast<std::size_t>(floorMod(vr, n_)) * static_cast<std::size_t>(n_) +
-               static_cast<std::size_t>(floorMod(vc, n_))] = hgt;
-    }
+  const auto w = static_cast<std::size_t>(region.c1 - region.c0);
+  const auto h = static_cast<std::size_t>(region.r1 - region.r0);
+  region.texels.assign(w * h * 4, 0.0F);
+  const auto put = [&](std::size_t j, std::size_t k, const glm::dvec2& gp, float hgt) {
+    const double hd = std::isnan(hgt) ? 0.0 : static_cast<double>(hgt);
+    const glm::dvec3 q = pyramid_.position(gp.x, gp.y, hd) - p.anchor;
+    float* t = region.texels.data() + (j * w + k) * 4;
+    t[0] = static_cast<float>(q.x);
+    t[1] = static_cast<float>(q.y);
+    t[2] = static_cast<float>(q.z);
+    t[3] = hgt;
+  };
+  if (p.polar != 0) {
+    for (std::size_t j = 0; j < h; ++j)
+      for (std::size_t k = 0; k < w; ++k) {
+        const glm::dvec2 gp = lattice(static_cast<double>(region.r0 + static_cast<std::int64_t>(j)),
+                                      static_cast<double>(region.c0 + static_cast<std::int64_t>(k)),
+                                      p.polar, p.polarStep);
+        put(j, k, gp, interpolate(gp));
+      }
+    return;
   }
-  for (std::size_t j = 0; j < h && polar_ == 0; ++j) {
-    const std::int64_t vr = r0 + static_cast<std::int64_t>(j);
+  std::vector<float> row(w);
+  for (std::size_t j = 0; j < h; ++j) {
+    const std::int64_t vr = region.r0 + static_cast<std::int64_t>(j);
     // Read the row's samples as runs of consecutive real columns.
     std::size_t i = 0;
     while (i < w) {
       std::size_t rr = 0, cc = 0;
-      if (!realIndex(vr, c0 + static_cast<std::int64_t>(i), rr, cc)) {
+      if (!realIndex(vr, region.c0 + static_cast<std::int64_t>(i), rr, cc)) {
         row[i++] = kNaN;
         continue;
       }
       std::size_t len = 1;
       std::size_t r2 = 0, c2 = 0;
-      while (i + len < w && realIndex(vr, c0 + static_cast<std::int64_t>(i + len), r2, c2) &&
+      while (i + len < w && realIndex(vr, region.c0 + static_cast<std::int64_t>(i + len), r2, c2) &&
              r2 == rr && c2 == cc + len)
         ++len;
       lvl.source->readWindow(rr, cc, 1, len, std::span<float>(row.data() + i, len));
       i += len;
     }
     for (std::size_t k = 0; k < w; ++k) {
-      const std::int64_t vc = c0 + static_cast<std::int64_t>(k);
-      float hgt = row[k];
-      if (g.isNodata(hgt)) hgt = kNaN;
+      const std::int64_t vc = region.c0 + static_cast<std::int64_t>(k);
+      const float hgt = g.isNodata(row[k]) ? kNaN : row[k];
       // Position of the real sample (so a wrapped or reflected sample lands on its own
       // point), else of the virtual one.
       std::size_t rr = 0, cc = 0;
@@ -239,39 +252,112 @@ std::size_t ClipmapLevel::upload(std::int64_t r0, std::int64_t r1, std::int64_t 
         gp = g.sampleCentre(static_cast<double>(vr), static_cast<double>(vc));
         if (pyramid_.kind() == SurfaceKind::Planet) gp.y = std::clamp(gp.y, -90.0, 90.0);
       }
-      const double hd = std::isnan(hgt) ? 0.0 : static_cast<double>(hgt);
-      const glm::dvec3 p = pyramid_.position(gp.x, gp.y, hd) - anchor_;
-      float* t = texels.data() + (j * w + k) * 4;
-      t[0] = static_cast<float>(p.x);
-      t[1] = static_cast<float>(p.y);
-      t[2] = static_cast<float>(p.z);
-      t[3] = hgt;
-      heights_[static_cast<std::size_t>(floorMod(vr, n_)) * static_cast<std::size_t>(n_) +
-               static_cast<std::size_t>(floorMod(vc, n_))] = hgt;
+      put(j, k, gp, hgt);
     }
   }
-  // Upload in up to four pieces where the region wraps around the texture's edges.
+}
+
+std::size_t ClipmapLevel::apply(const Plan& p) {
+  if (p.empty()) {
+    row0_ = p.row0;  // (unchanged)
+    col0_ = p.col0;
+    return 0;
+  }
+  row0_ = p.row0;
+  col0_ = p.col0;
+  polar_ = p.polar;
+  polarStep_ = p.polarStep;
+  anchorRow_ = p.anchorRow;
+  anchorCol_ = p.anchorCol;
+  anchor_ = p.anchor;
+  valid_ = true;
   const std::int64_t n = n_;
-  std::int64_t y = 0;
-  while (y < static_cast<std::int64_t>(h)) {
-    const std::int64_t ty = floorMod(r0 + y, n);
-    const std::int64_t hy = std::min<std::int64_t>(static_cast<std::int64_t>(h) - y, n - ty);
-    std::int64_t x = 0;
-    while (x < static_cast<std::int64_t>(w)) {
-      const std::int64_t tx = floorMod(c0 + x, n);
-      const std::int64_t wx = std::min<std::int64_t>(static_cast<std::int64_t>(w) - x, n - tx);
-      glPixelStorei(GL_UNPACK_ROW_LENGTH, static_cast<GLint>(w));
-      glTextureSubImage2D(
-          texture_.id(), 0, static_cast<GLint>(tx), static_cast<GLint>(ty),
-          static_cast<GLsizei>(wx), static_cast<GLsizei>(hy), GL_RGBA, GL_FLOAT,
-          texels.data() + (static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x)) * 4);
-      x += wx;
+  std::size_t count = 0;
+  for (const auto& region : p.regions) {
+    const auto w = static_cast<std::size_t>(region.c1 - region.c0);
+    const auto h = static_cast<std::size_t>(region.r1 - region.r0);
+    for (std::size_t j = 0; j < h; ++j)
+      for (std::size_t k = 0; k < w; ++k)
+        heights_[static_cast<std::size_t>(floorMod(region.r0 + static_cast<std::int64_t>(j), n)) *
+                     static_cast<std::size_t>(n) +
+                 static_cast<std::size_t>(floorMod(region.c0 + static_cast<std::int64_t>(k), n))] =
+            region.texels[(j * w + k) * 4 + 3];
+    // Upload in up to four pieces where the region wraps around the texture's edges.
+    std::int64_t y = 0;
+    while (y < static_cast<std::int64_t>(h)) {
+      const std::int64_t ty = floorMod(region.r0 + y, n);
+      const std::int64_t hy = std::min<std::int64_t>(static_cast<std::int64_t>(h) - y, n - ty);
+      std::int64_t x = 0;
+      while (x < static_cast<std::int64_t>(w)) {
+        const std::int64_t tx = floorMod(region.c0 + x, n);
+        const std::int64_t wx = std::min<std::int64_t>(static_cast<std::int64_t>(w) - x, n - tx);
+        glPixelStorei(GL_UNPACK_ROW_LENGTH, static_cast<GLint>(w));
+        glTextureSubImage2D(
+            texture_.id(), 0, static_cast<GLint>(tx), static_cast<GLint>(ty),
+            static_cast<GLsizei>(wx), static_cast<GLsizei>(hy), GL_RGBA, GL_FLOAT,
+            region.texels.data() +
+                (static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x)) * 4);
+        x += wx;
+      }
+      y += hy;
     }
-    y += hy;
+    count += w * h;
   }
   glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
-  checkGl("ClipmapLevel::upload()");
-  return w * h;
+  checkGl("ClipmapLevel::apply()");
+  updateRange();
+  return count;
+}
+
+void ClipmapLevel::prefetch(const Plan& p, int margin) const {
+  if (p.polar != 0 || margin <= 0) return;
+  const auto& lvl = pyramid_.level(level_);
+  const auto rows = static_cast<std::int64_t>(lvl.grid.rows());
+  const auto cols = static_cast<std::int64_t>(lvl.grid.cols());
+  const std::int64_t n = n_, m = margin;
+  const std::int64_t R0 = p.row0 - m, R1 = p.row0 + n + m, C0 = p.col0 - m, C1 = p.col0 + n + m;
+  const std::array<std::array<std::int64_t, 4>, 4> ring = {{{R0, p.row0, C0, C1},
+                                                            {p.row0 + n, R1, C0, C1},
+                                                            {p.row0, p.row0 + n, C0, p.col0},
+                                                            {p.row0, p.row0 + n, p.col0 + n, C1}}};
+  std::vector<float> scratch;
+  for (const auto& r : ring) {
+    const std::int64_t r0 = std::max<std::int64_t>(r[0], 0), r1 = std::min(r[1], rows);
+    const std::int64_t c0 = std::max<std::int64_t>(r[2], 0), c1 = std::min(r[3], cols);
+    if (r1 <= r0 || c1 <= c0) continue;
+    scratch.resize(static_cast<std::size_t>((r1 - r0) * (c1 - c0)));
+    lvl.source->readWindow(static_cast<std::size_t>(r0), static_cast<std::size_t>(c0),
+                           static_cast<std::size_t>(r1 - r0), static_cast<std::size_t>(c1 - c0),
+                           scratch);
+  }
+}
+
+std::size_t ClipmapLevel::moveTo(double gx, double gy, int polar) {
+  Plan p = plan(gx, gy, polar);
+  fetch(p);
+  return apply(p);
+}
+
+glm::dvec2 ClipmapLevel::centreIndexIn(const ClipmapLevel& coarser) const {
+  const std::int64_t half = (n_ - 1) / 2;
+  const double r = static_cast<double>(row0_ + half), c = static_cast<double>(col0_ + half);
+  if (polar_ != 0) return {0.5 * c, 0.5 * r};  // polar lattices halve their step per level
+  const glm::dvec2 g = grid().sampleCentre(r, c);
+  return coarser.grid().fractionalIndex(g.x, g.y);
+}
+
+bool ClipmapLevel::covers(const ClipmapLevel& coarser, int hole) const {
+  if (!valid_ || !coarser.valid_ || polar_ != coarser.polar_) return false;
+  const glm::dvec2 m = centreIndexIn(coarser);
+  const std::int64_t half = (n_ - 1) / 2;
+  double dc = static_cast<double>(coarser.col0_ + half) - m.x;
+  const double dr = static_cast<double>(coarser.row0_ + half) - m.y;
+  if (coarser.wrapLon_ && polar_ == 0) {
+    const auto cols = static_cast<double>(coarser.grid().cols());
+    dc -= cols * std::round(dc / cols);
+  }
+  const double slack = 0.25 * static_cast<double>(n_ - 1) - static_cast<double>(hole);
+  return std::abs(dc) <= slack && std::abs(dr) <= slack;
 }
 
 void ClipmapLevel::updateRange() {

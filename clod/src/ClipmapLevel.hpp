@@ -27,6 +27,37 @@ class ClipmapLevel {
   /// north/south pole; a change re-uploads the level.
   std::size_t moveTo(double gx, double gy, int polar = 0);
 
+  /// A move split in three for background loading: plan() (render thread, no I/O) says
+  /// which regions enter the window; fetch() (any thread) reads the samples and computes
+  /// the texels in double; apply() (render thread) uploads them and moves the window.
+  struct Plan {
+    struct Region {
+      std::int64_t r0, r1, c0, c1;
+      std::vector<float> texels;  // RGBA per sample, row-major
+    };
+    std::int64_t row0 = 0, col0 = 0;
+    bool full = false;
+    int polar = 0;
+    double polarStep = 0.0;
+    std::int64_t anchorRow = 0, anchorCol = 0;
+    glm::dvec3 anchor{0.0};
+    std::vector<Region> regions;
+    [[nodiscard]] bool empty() const noexcept;
+    [[nodiscard]] std::size_t texels() const noexcept;
+  };
+  [[nodiscard]] Plan plan(double gx, double gy, int polar) const;
+  /// Reads only the pyramid and the plan: safe on a worker thread while the level draws.
+  void fetch(Plan& plan) const;
+  std::size_t apply(const Plan& plan);
+  /// Reads (and drops) a ring `margin` samples wide around the plan's window, clipped to
+  /// the grid, so a paged source caches the patches of the next moves. Lat/lon lattices
+  /// only; any thread.
+  void prefetch(const Plan& plan, int margin) const;
+
+  /// True if this level's window covers the centre hole (half-width `hole` cells) of the
+  /// next coarser level, in the same lattice.
+  [[nodiscard]] bool covers(const ClipmapLevel& coarser, int hole) const;
+
   /// Window origin: virtual (row, col) of its top-left sample; may lie outside the grid.
   [[nodiscard]] std::int64_t row0() const noexcept { return row0_; }
   [[nodiscard]] std::int64_t col0() const noexcept { return col0_; }
@@ -51,14 +82,16 @@ class ClipmapLevel {
   [[nodiscard]] const topo::TopoGrid& grid() const noexcept;
   /// Grid point (longitude/x, latitude/y) of window lattice point (vr, vc).
   [[nodiscard]] glm::dvec2 lattice(double vr, double vc) const;
+  [[nodiscard]] glm::dvec2 lattice(double vr, double vc, int polar, double step) const;
+  /// This level's window centre as a fractional (col, row) index of `coarser`'s lattice.
+  [[nodiscard]] glm::dvec2 centreIndexIn(const ClipmapLevel& coarser) const;
+  void fill(const Plan& plan, Plan::Region& region) const;
   /// Height at a grid point by bilinear interpolation (polar frames), NaN near nodata.
   [[nodiscard]] float interpolate(const glm::dvec2& g) const;
   [[nodiscard]] float sampleAt(std::int64_t vr, std::int64_t vc) const;
   /// Maps a virtual (row, col) to a real sample, wrapping longitude and reflecting over a
   /// pole on global planet grids. False if outside the data.
   bool realIndex(std::int64_t vr, std::int64_t vc, std::size_t& r, std::size_t& c) const;
-  /// Fills and uploads virtual rows [r0, r1) × cols [c0, c1) (inside the current window).
-  std::size_t upload(std::int64_t r0, std::int64_t r1, std::int64_t c0, std::int64_t c1);
   void updateRange();
 
   const HeightPyramid& pyramid_;

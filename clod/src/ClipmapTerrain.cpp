@@ -10,8 +10,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <condition_variable>
 #include <cstdint>
+#include <deque>
+#include <mutex>
+#include <optional>
 #include <string>
+#include <thread>
 
 namespace regolith::clod {
 
@@ -23,6 +28,23 @@ Program makeProgram() {
 }
 
 }  // namespace
+
+struct ClipmapTerrain::Job {
+  std::size_t level = 0;
+  ClipmapLevel::Plan plan;
+};
+
+// The background loader: one worker thread, a queue served coarsest level first, and the
+// finished plans waiting for the render thread to upload them.
+struct ClipmapTerrain::Loader {
+  std::mutex mutex;
+  std::condition_variable wake, done;
+  std::vector<Job> queue, finished;
+  std::vector<bool> busy;  // per level: a job queued, running or finished, not yet applied
+  std::optional<glm::dvec3> target;
+  bool stop = false;
+  std::thread worker;
+};
 
 ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, ClipmapOptions options)
     : pyramid_(std::move(pyramid)), options_(options), program_(makeProgram()) {
@@ -60,7 +82,130 @@ ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, Cli
   buildMesh();
 }
 
-ClipmapTerrain::~ClipmapTerrain() = default;
+ClipmapTerrain::~ClipmapTerrain() {
+  if (loader_) {
+    {
+      const std::lock_guard lock(loader_->mutex);
+      loader_->stop = true;
+    }
+    loader_->wake.notify_all();
+    loader_->worker.join();
+  }
+}
+
+int ClipmapTerrain::polarFor(const glm::dvec2& g) const {
+  // Planets: within 40° of a pole every level uses a polar stereographic lattice about it,
+  // elsewhere latitude/longitude rows and columns. All levels switch together, so a finer
+  // level's window always covers the hole of the next coarser one in the same lattice.
+  if (pyramid_->kind() == SurfaceKind::Planet && std::abs(g.y) > 50.0) return g.y > 0 ? 1 : -1;
+  return 0;
+}
+
+void ClipmapTerrain::requestFocus(const glm::dvec3& focus) {
+  if (!loader_) {
+    loader_ = std::make_unique<Loader>();
+    loader_->busy.assign(levels_.size(), false);
+    loader_->worker = std::thread([this] { workerLoop(); });
+  }
+  {
+    const std::lock_guard lock(loader_->mutex);
+    loader_->target = focus;
+  }
+  schedule();
+}
+
+void ClipmapTerrain::schedule() {
+  std::unique_lock lock(loader_->mutex);
+  if (!loader_->target) return;
+  const glm::dvec2 g = pyramid_->gridPoint(*loader_->target);
+  const int polar = polarFor(g);
+  bool any = false;
+  for (std::size_t k = levels_.size(); k-- > 0;) {
+    if (loader_->busy[k]) continue;
+    ClipmapLevel::Plan plan = levels_[k]->plan(g.x, g.y, polar);
+    if (plan.empty()) continue;
+    loader_->busy[k] = true;
+    loader_->queue.push_back(Job{k, std::move(plan)});
+    any = true;
+  }
+  lock.unlock();
+  if (any) loader_->wake.notify_one();
+}
+
+void ClipmapTerrain::workerLoop() {
+  Loader& L = *loader_;
+  std::unique_lock lock(L.mutex);
+  for (;;) {
+    L.wake.wait(lock, [&] { return L.stop || !L.queue.empty(); });
+    if (L.stop) return;
+    // Coarsest level first: it covers the most ground and the finer ones wait for it anyway.
+    auto it = std::max_element(L.queue.begin(), L.queue.end(),
+                               [](const Job& a, const Job& b) { return a.level < b.level; });
+    Job job = std::move(*it);
+    L.queue.erase(it);
+    lock.unlock();
+    const ClipmapLevel& level = *levels_[job.level];
+    level.fetch(job.plan);
+    level.prefetch(job.plan, options_.prefetchMargin);
+    lock.lock();
+    L.finished.push_back(std::move(job));
+    L.done.notify_all();
+  }
+}
+
+std::size_t ClipmapTerrain::update(bool wait) {
+  if (!loader_) return 0;
+  std::vector<Job> ready;
+  {
+    std::unique_lock lock(loader_->mutex);
+    if (wait) {
+      const bool running =
+          std::any_of(loader_->busy.begin(), loader_->busy.end(), [](bool b) { return b; });
+      if (running) loader_->done.wait(lock, [&] { return !loader_->finished.empty(); });
+    }
+    ready.swap(loader_->finished);
+  }
+  // Coarse first, as loaded.
+  std::sort(ready.begin(), ready.end(),
+            [](const Job& a, const Job& b) { return a.level > b.level; });
+  std::size_t count = 0;
+  for (const Job& job : ready) count += levels_[job.level]->apply(job.plan);
+  {
+    const std::lock_guard lock(loader_->mutex);
+    for (const Job& job : ready) loader_->busy[job.level] = false;
+  }
+  uploaded_ += count;
+  schedule();
+  return count;
+}
+
+bool ClipmapTerrain::loading() const {
+  if (!loader_) return false;
+  const std::lock_guard lock(loader_->mutex);
+  return std::any_of(loader_->busy.begin(), loader_->busy.end(), [](bool b) { return b; });
+}
+
+std::size_t ClipmapTerrain::finishLoading() {
+  std::size_t count = 0;
+  while (loading()) count += update(true);
+  return count;
+}
+
+std::vector<bool> ClipmapTerrain::residentLevels() const {
+  std::vector<bool> out;
+  for (const auto& l : levels_) out.push_back(l->valid());
+  return out;
+}
+
+std::size_t ClipmapTerrain::firstConsistent() const {
+  // The coarsest resident level, extended inward while each finer level is resident and
+  // covers the next one's hole.
+  std::size_t k = levels_.size();
+  while (k > 0 && levels_[k - 1]->valid() &&
+         (k == levels_.size() || levels_[k - 1]->covers(*levels_[k], hole_)))
+    --k;
+  return k;
+}
 
 void ClipmapTerrain::setOptions(const ClipmapOptions& options) {
   if (options.size != options_.size || options.levels != options_.levels)
@@ -127,12 +272,12 @@ void ClipmapTerrain::buildMesh() {
 }
 
 std::size_t ClipmapTerrain::setFocus(const glm::dvec3& focus) {
+  if (loader_ && loading())
+    throw InvalidArgument(
+        "ClipmapTerrain::setFocus(): background loading is running; call "
+        "finishLoading() first or keep using requestFocus()");
   const glm::dvec2 g = pyramid_->gridPoint(focus);
-  // Planets: within 40° of a pole every level uses a polar stereographic lattice about it,
-  // elsewhere latitude/longitude rows and columns. All levels switch together, so a finer
-  // level's window always covers the hole of the next coarser one in the same lattice.
-  int polar = 0;
-  if (pyramid_->kind() == SurfaceKind::Planet && std::abs(g.y) > 50.0) polar = g.y > 0 ? 1 : -1;
+  const int polar = polarFor(g);
   std::size_t count = 0;
   for (auto& level : levels_) count += level->moveTo(g.x, g.y, polar);
   uploaded_ += count;
@@ -146,6 +291,8 @@ std::pair<long long, long long> ClipmapTerrain::windowOrigin(std::size_t level) 
 
 std::pair<std::size_t, std::size_t> ClipmapTerrain::activeLevels(const Camera& camera) const {
   const std::size_t count = levels_.size();
+  const std::size_t consistent = firstConsistent();
+  if (consistent == count) return {count, 0};  // nothing resident yet
   std::size_t first = count - 1;
   const double focal = camera.focalPixels();
   const double half = 0.5 * (options_.size - 1);
@@ -162,6 +309,7 @@ std::pair<std::size_t, std::size_t> ClipmapTerrain::activeLevels(const Camera& c
       break;
     }
   }
+  first = std::max(first, consistent);
   return {first, count - first};
 }
 

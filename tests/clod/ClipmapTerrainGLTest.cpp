@@ -449,3 +449,77 @@ TEST(ClipmapTerrainGLTest, InnerLevelsSwitchOffFarAwayAndVerticesDoNotGrowWithTh
 
 }  // namespace
 }  // namespace regolith::clod
+
+namespace regolith::clod {
+namespace {
+
+TEST(ClipmapTerrainGLTest, BackgroundLoadingIsCoarseFirstAndNeverShowsAGap) {
+  test::glContext();
+  const auto grid = test::centredGrid(2049, 2049, 1.0);
+  const auto pyramid = test::planePyramid(grid, test::hills);
+  ClipmapOptions opt;
+  opt.size = 127;
+  ClipmapTerrain terrain(pyramid, opt);
+  const std::size_t levels = terrain.levelCount();
+
+  // Start: nothing resident; the first frames draw what has arrived, coarsest first.
+  terrain.requestFocus({0.0, 0.0, 0.0});
+  std::vector<std::size_t> arrival;  // resident level count after each update
+  while (terrain.loading()) {
+    terrain.update(true);
+    const auto resident = terrain.residentLevels();
+    // Resident levels always form a coarse suffix [k, levels).
+    std::size_t k = levels;
+    while (k > 0 && resident[k - 1]) --k;
+    for (std::size_t j = 0; j < k; ++j) EXPECT_FALSE(resident[j]) << "level " << j;
+    arrival.push_back(levels - k);
+  }
+  EXPECT_EQ(arrival.back(), levels);
+  EXPECT_TRUE(std::is_sorted(arrival.begin(), arrival.end()));
+
+  // A fast, jumpy pan: the focus leaps up to ~500 m per frame (more than level 0's and
+  // level 1's windows), and frames call update() without waiting.
+  // Whatever has arrived, nothing is left unpainted: this camera looks down steeply enough
+  // that every pixel meets the terrain well inside the DEM (checked below).
+  std::size_t coarserFrames = 0;
+  for (int frame = 0; frame < 30; ++frame) {
+    Camera cam = obliqueCamera();
+    cam.target = {350.0 * std::sin(frame * 1.3), 250.0 * std::cos(frame * 0.9), -1400.0};
+    cam.position = cam.target + glm::dvec3(-90.0, -150.0, 200.0);
+    terrain.requestFocus(cam.target);
+    terrain.update(false);
+    const auto [first, count] = terrain.activeLevels(cam);
+    if (first > 0) ++coarserFrames;
+    EXPECT_GT(count, 0U);
+    const Shot shot = renderClipmap(terrain, cam);
+    int holes = 0;
+    for (int y = 0; y < cam.height; ++y)
+      for (int x = 0; x < cam.width; ++x) {
+        const glm::dvec3 d = cam.ray(x + 0.5, y + 0.5);
+        const glm::dvec3 p = cam.position + (-1400.0 - cam.position.z) / d.z * d;
+        ASSERT_LT(std::max(std::abs(p.x), std::abs(p.y)), 900.0);
+        holes += magenta(shot.color, x, y) ? 1 : 0;
+      }
+    EXPECT_EQ(holes, 0) << "frame " << frame;
+  }
+  std::printf("fast pan: %zu of 30 frames drew from a coarser level while loading\n",
+              coarserFrames);
+
+  // Once loading finishes, the picture is the synchronous one (to float rounding: the two
+  // reached their windows by different moves, so their level anchors differ).
+  terrain.finishLoading();
+  Camera cam = obliqueCamera();
+  cam.target = {350.0 * std::sin(29 * 1.3), 250.0 * std::cos(29 * 0.9), -1400.0};
+  cam.position = cam.target + glm::dvec3(-90.0, -150.0, 200.0);
+  const Shot async = renderClipmap(terrain, cam);
+  ClipmapTerrain sync(pyramid, opt);
+  sync.setFocus(cam.target);
+  const Shot direct = renderClipmap(sync, cam);
+  const DepthStats diff = compareDepth(cam, async.depth, direct.depth);
+  EXPECT_GT(diff.compared, cam.width * cam.height / 2);
+  EXPECT_LT(diff.max, 1e-5);
+  test::savePng("clipmap_async_end", async.color);
+}
+
+}  // namespace
+}  // namespace regolith::clod

@@ -29,6 +29,10 @@ struct ClipmapOptions {
   glm::vec3 lightDirection{0.4F, -0.3F, 0.866F};  ///< towards the light, scene frame
   glm::vec3 albedo{0.78F, 0.66F, 0.55F};
   float ambient = 0.2F;
+  /// Background loading (requestFocus): after each level's window, the loader also reads
+  /// a ring this many cells wide around it, so a paged source has the patches the next
+  /// moves need in its cache (the lazy-load window is the clipmap plus this margin).
+  int prefetchMargin = 32;
 };
 
 /// What one draw() did.
@@ -72,6 +76,23 @@ class ClipmapTerrain {
   /// longitude, latitude for a planet) and uploads what enters the windows. Returns the
   /// number of texels uploaded. Reads the pyramid's sources on the calling thread.
   std::size_t setFocus(const glm::dvec3& focus);
+  /// Background loading: sets the focus the levels should move to and returns at once. A
+  /// worker thread reads and prepares the new rows and columns, coarsest level first;
+  /// update() uploads what is ready. Until a level has caught up, draw() leaves it (and any
+  /// finer one) out and the next coarser consistent level draws its centre, so a frame
+  /// never waits for I/O and never shows a gap.
+  void requestFocus(const glm::dvec3& focus);
+  /// Uploads finished background work and schedules more (render thread). With
+  /// `wait` it first blocks until some job finishes, if one is running (tests, tools; a
+  /// frame loop passes false). Returns the texels uploaded.
+  std::size_t update(bool wait = false);
+  /// True while background jobs are queued or running.
+  [[nodiscard]] bool loading() const;
+  /// Runs update(true) until nothing is loading; returns the texels uploaded.
+  std::size_t finishLoading();
+  /// Levels with data resident (a level is resident once its first window is uploaded).
+  [[nodiscard]] std::vector<bool> residentLevels() const;
+
   /// Draws into the bound framebuffer (depth state: useReversedZ()).
   ClipmapFrame draw(const Camera& camera) const;
 
@@ -90,6 +111,13 @@ class ClipmapTerrain {
 
  private:
   void buildMesh();
+  void schedule();
+  void workerLoop();
+  [[nodiscard]] int polarFor(const glm::dvec2& gridPoint) const;
+  [[nodiscard]] std::size_t firstConsistent() const;
+
+  struct Job;
+  struct Loader;
 
   std::shared_ptr<const HeightPyramid> pyramid_;
   ClipmapOptions options_;
@@ -100,6 +128,7 @@ class ClipmapTerrain {
   std::size_t holeIndices_ = 0, ringIndices_ = 0, skirtIndices_ = 0;
   int hole_ = 0;
   std::size_t uploaded_ = 0;
+  std::unique_ptr<Loader> loader_;
 };
 
 }  // namespace regolith::clod
