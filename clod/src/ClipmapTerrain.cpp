@@ -69,7 +69,17 @@ ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, Cli
                             std::to_string(pyramid_->level(0).grid.spacingY()) +
                             "°, expected at most 3° and a window of at most 360°");
   }
-  const std::size_t count = options_.levels == 0 ? usable : options_.levels;
+  // A level whose half-window spans the whole grid covers it from any focus on it: coarser
+  // levels would add nothing but vertices.
+  std::size_t covering = usable;
+  for (std::size_t k = 0; k < usable; ++k) {
+    const auto& g = pyramid_->level(k).grid;
+    if (static_cast<double>((n - 1) / 2) >= static_cast<double>(std::max(g.rows(), g.cols()))) {
+      covering = k + 1;
+      break;
+    }
+  }
+  const std::size_t count = options_.levels == 0 ? covering : options_.levels;
   if (count > usable)
     throw InvalidArgument("ClipmapTerrain(): " + std::to_string(count) +
                           " levels asked for, the pyramid has " + std::to_string(usable) +
