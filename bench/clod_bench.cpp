@@ -12,8 +12,8 @@
 //       with background loading: mean and worst frame time (update without waiting +
 //       draw + glFinish), and how many frames drew from a coarser level while loading
 //
-// Run: build/bench/clod_bench --benchmark_min_time=0.5s   (the 8192² mesh takes seconds a
-// frame; each case runs at least 2 frames).
+// Run: build/bench/clod_bench   (about 4 minutes: the 8192² mesh takes half a minute a
+// frame).
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/HeadlessContext.hpp>
 #include <regolith/clod/MeshRenderer.hpp>
