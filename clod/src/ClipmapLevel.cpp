@@ -87,14 +87,16 @@ glm::dvec2 ClipmapLevel::lattice(double vr, double vc, int polar, double step) c
 }
 
 glm::dvec3 ClipmapLevel::centre() const {
+  const std::int64_t half = (n_ - 1) / 2;
   const glm::dvec2 p =
-      lattice(static_cast<double>(row0_ + (n_ - 1) / 2), static_cast<double>(col0_ + (n_ - 1) / 2));
+      lattice(static_cast<double>(row0_ + half), static_cast<double>(col0_ + half));
   return pyramid_.position(p.x, p.y, 0.0);
 }
 
 double ClipmapLevel::cellMetres() const {
-  const double r = static_cast<double>(row0_ + (n_ - 1) / 2);
-  const double c = static_cast<double>(col0_ + (n_ - 1) / 2);
+  const std::int64_t half = (n_ - 1) / 2;
+  const double r = static_cast<double>(row0_ + half);
+  const double c = static_cast<double>(col0_ + half);
   const auto at = [&](double rr, double cc) {
     const glm::dvec2 p = lattice(rr, cc);
     return pyramid_.position(p.x, p.y, 0.0);

@@ -74,7 +74,8 @@ ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, Cli
   std::size_t covering = usable;
   for (std::size_t k = 0; k < usable; ++k) {
     const auto& g = pyramid_->level(k).grid;
-    if (static_cast<double>((n - 1) / 2) >= static_cast<double>(std::max(g.rows(), g.cols()))) {
+    const auto halfCells = static_cast<std::size_t>((n - 1) / 2);
+    if (halfCells >= std::max(g.rows(), g.cols())) {
       covering = k + 1;
       break;
     }
@@ -233,6 +234,7 @@ void ClipmapTerrain::buildMesh() {
     for (int i = 0; i < n; ++i) verts.insert(verts.end(), {i, j, 0});
   // Perimeter loop: top row →, right column ↓, bottom row ←, left column ↑.
   std::vector<std::array<int, 2>> perimeter;
+  perimeter.reserve(4 * static_cast<std::size_t>(n - 1));
   for (int i = 0; i < n - 1; ++i) perimeter.push_back({i, 0});
   for (int j = 0; j < n - 1; ++j) perimeter.push_back({n - 1, j});
   for (int i = n - 1; i > 0; --i) perimeter.push_back({i, n - 1});
@@ -362,6 +364,8 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
     const std::size_t start = k == first ? 0 : holeIndices_;
     const std::size_t n = holeIndices_ + ringIndices_ + skirtIndices_ - start;
     glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(n), GL_UNSIGNED_INT,
+                   // GL takes offsets into the bound index buffer as pointers.
+                   // NOLINTNEXTLINE(performance-no-int-to-ptr)
                    reinterpret_cast<const void*>(start * sizeof(std::uint32_t)));
     frame.vertices += n;
     ++frame.levelsDrawn;

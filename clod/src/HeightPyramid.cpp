@@ -41,11 +41,11 @@ HeightPyramid HeightPyramid::fromSamples(const topo::TopoGrid& grid,
                                          SurfaceKind kind, std::optional<topo::Body> body,
                                          topo::LatitudeType latitudeType, std::size_t levelCount) {
   if (!samples) throw InvalidArgument("HeightPyramid::fromSamples(): samples are null");
-  std::vector<Level> levels;
-  levels.push_back({grid, samples});
   std::size_t rows = grid.rows(), cols = grid.cols();
   std::vector<float> fine(rows * cols);
   samples->readWindow(0, 0, rows, cols, fine);
+  std::vector<Level> levels;
+  levels.push_back({grid, std::move(samples)});
   for (auto& v : fine)
     if (grid.isNodata(v)) v = std::numeric_limits<float>::quiet_NaN();
   const topo::TopoGrid* g = &grid;
