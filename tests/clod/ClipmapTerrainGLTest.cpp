@@ -1,4 +1,5 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/clod/FocusController.hpp>
 #include <regolith/clod/MeshRenderer.hpp>
 #include <regolith/clod/RenderTarget.hpp>
 
@@ -579,6 +580,51 @@ TEST(ClipmapTerrainGLTest, NoSlitsBetweenLevelsAtGrazingAngles) {
       test::savePng("mesh_grazing" + std::to_string(step), ref.color);
     }
   }
+}
+
+}  // namespace
+}  // namespace regolith::clod
+
+namespace regolith::clod {
+namespace {
+
+// The camera looks past a rover at a point 500 m beyond it. With the focus at the look-at
+// point the rover stands on a coarse level; tied to the rover, the focus puts level 0 (the
+// full-resolution samples) under it, and the surface there matches the full mesh.
+TEST(ClipmapTerrainGLTest, FocusTiedToARoverPutsTheFinestLevelUnderIt) {
+  test::glContext();
+  const auto grid = test::centredGrid(2049, 2049, 1.0);
+  const auto pyramid = test::planePyramid(grid, test::hills);
+  MeshRenderer reference(grid, *pyramid->level(0).source);
+  const glm::dvec3 rover{-250.0, -150.0, test::hills(-250.0, -150.0)};
+  Camera cam;
+  cam.position = rover + glm::dvec3(-25.0, -25.0, 18.0);
+  cam.target = rover + 14.0 * (rover - cam.position);  // ~600 m beyond the rover
+  cam.width = cam.height = 200;
+  cam.near = 0.5;
+  FocusController focus;
+  focus.addCamera(cam, 0.0);
+  const Shot ref = render(cam, [&] { reference.draw(cam); });
+
+  const auto centreError = [&](const glm::dvec3& f) {
+    ClipmapTerrain terrain(pyramid, ClipmapOptions{});
+    terrain.setFocus(f);
+    const Shot shot = renderClipmap(terrain, cam);
+    double worst = 0.0;
+    for (int y = 95; y < 105; ++y)
+      for (int x = 95; x < 105; ++x) {
+        const double r = cam.viewDistance(ref.depth.at(x, y));
+        worst = std::max(worst, std::abs(cam.viewDistance(shot.depth.at(x, y)) - r) / r);
+      }
+    return worst;
+  };
+  const double untied = centreError(focus.focus(0.0));
+  focus.tieTo([&] { return rover; });
+  const double tied = centreError(focus.focus(0.0));
+  std::printf("depth error at the rover: focus on the look-at point %.2e, tied %.2e\n", untied,
+              tied);
+  EXPECT_LT(tied, 1e-5);
+  EXPECT_GT(untied, 10.0 * tied);
 }
 
 }  // namespace
