@@ -340,12 +340,33 @@ std::size_t ClipmapLevel::moveTo(double gx, double gy, int polar) {
   return apply(p);
 }
 
-glm::dvec2 ClipmapLevel::centreIndexIn(const ClipmapLevel& coarser) const {
-  const std::int64_t half = (n_ - 1) / 2;
-  const double r = static_cast<double>(row0_ + half), c = static_cast<double>(col0_ + half);
+glm::dvec2 ClipmapLevel::indexIn(const ClipmapLevel& coarser, double r, double c) const {
   if (polar_ != 0) return {0.5 * c, 0.5 * r};  // polar lattices halve their step per level
   const glm::dvec2 g = grid().sampleCentre(r, c);
   return coarser.grid().fractionalIndex(g.x, g.y);
+}
+
+glm::dvec2 ClipmapLevel::centreIndexIn(const ClipmapLevel& coarser) const {
+  const std::int64_t half = (n_ - 1) / 2;
+  return indexIn(coarser, static_cast<double>(row0_ + half), static_cast<double>(col0_ + half));
+}
+
+glm::dvec4 ClipmapLevel::footprintIn(const ClipmapLevel& coarser) const {
+  const auto last = static_cast<double>(n_ - 1);
+  const glm::dvec2 a = indexIn(coarser, static_cast<double>(row0_), static_cast<double>(col0_));
+  const glm::dvec2 b =
+      indexIn(coarser, static_cast<double>(row0_) + last, static_cast<double>(col0_) + last);
+  double i0 = a.x - static_cast<double>(coarser.col0_),
+         i1 = b.x - static_cast<double>(coarser.col0_);
+  const double j0 = a.y - static_cast<double>(coarser.row0_);
+  const double j1 = b.y - static_cast<double>(coarser.row0_);
+  if (coarser.wrapLon_ && polar_ == 0) {  // bring the footprint next to the window
+    const auto cols = static_cast<double>(coarser.grid().cols());
+    const double shift = cols * std::round((0.5 * (i0 + i1) - 0.5 * last) / cols);
+    i0 -= shift;
+    i1 -= shift;
+  }
+  return {std::min(i0, i1), std::min(j0, j1), std::max(i0, i1), std::max(j0, j1)};
 }
 
 bool ClipmapLevel::covers(const ClipmapLevel& coarser, int hole) const {

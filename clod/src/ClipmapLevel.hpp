@@ -6,7 +6,9 @@
 #include <regolith/clod/GlObjects.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -54,6 +56,9 @@ class ClipmapLevel {
   /// only; any thread.
   void prefetch(const Plan& plan, int margin) const;
 
+  /// This level's window as a rectangle (i0, j0, i1, j1) in `coarser`'s window vertex
+  /// coordinates (i along columns, j along rows).
+  [[nodiscard]] glm::dvec4 footprintIn(const ClipmapLevel& coarser) const;
   /// True if this level's window covers the centre hole (half-width `hole` cells) of the
   /// next coarser level, in the same lattice.
   [[nodiscard]] bool covers(const ClipmapLevel& coarser, int hole) const;
@@ -85,6 +90,7 @@ class ClipmapLevel {
   [[nodiscard]] glm::dvec2 lattice(double vr, double vc, int polar, double step) const;
   /// This level's window centre as a fractional (col, row) index of `coarser`'s lattice.
   [[nodiscard]] glm::dvec2 centreIndexIn(const ClipmapLevel& coarser) const;
+  [[nodiscard]] glm::dvec2 indexIn(const ClipmapLevel& coarser, double r, double c) const;
   void fill(const Plan& plan, Plan::Region& region) const;
   /// Height at a grid point by bilinear interpolation (polar frames), NaN near nodata.
   [[nodiscard]] float interpolate(const glm::dvec2& g) const;

@@ -360,6 +360,10 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
     program_.set("uAnchorRel", glm::vec3(l.anchor() - camera.position));
     program_.set("uAnchorFromCentre", glm::vec3(l.anchor()));
     program_.set("uSkirtDepth", static_cast<float>(skirt));
+    glm::vec4 finer(0.0F, 0.0F, -1.0F, -1.0F);  // empty
+    if (k > first) finer = glm::vec4(levels_[k - 1]->footprintIn(l));
+    program_.set("uFinerRect", finer);
+    program_.set("uDepthPush", options_.overlapDepthPush);
     glBindTextureUnit(0, l.texture());
     const std::size_t start = k == first ? 0 : holeIndices_;
     const std::size_t n = holeIndices_ + ringIndices_ + skirtIndices_ - start;

@@ -48,6 +48,8 @@ uniform vec3 uAnchorFromCentre;
 uniform int uPlanet;
 uniform float uSkirtDepth;
 uniform mat4 uViewProj;
+uniform vec4 uFinerRect;   // the finer level's window in this level's (i, j); empty if none
+uniform float uDepthPush;  // relative depth push for vertices under the finer level
 out VS { vec3 normal; float valid; } vsOut;
 vec4 fetch(int i, int j) {
   i = clamp(i, 0, uN - 1);
@@ -68,6 +70,11 @@ void main() {
   if (aVertex.z != 0) p -= up * uSkirtDepth;
   vsOut.valid = isnan(c.w) ? 0.0 : 1.0;
   gl_Position = uViewProj * vec4(p + uAnchorRel, 1.0);
+  // Where a finer level overlaps this one, this level's surface loses the depth test by a
+  // small relative margin, so the finer (more exact) surface shows. Only depth changes.
+  if (float(i) > uFinerRect.x && float(i) < uFinerRect.z && float(j) > uFinerRect.y &&
+      float(j) < uFinerRect.w)
+    gl_Position.z *= 1.0 - uDepthPush;
 }
 )";
 

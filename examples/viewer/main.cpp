@@ -122,7 +122,9 @@ int main(int argc, char** argv) {
         auto* o = static_cast<Orbit*>(glfwGetWindowUserPointer(w));
         o->distance *= std::pow(0.9, dy);
       });
-      ClipmapTerrain terrain(pyramid, ClipmapOptions{});
+      ClipmapOptions options;
+      options.overlapDepthPush = 0.02F;  // finer levels win where levels overlap
+      ClipmapTerrain terrain(pyramid, options);
       FocusController focus;
       int width = 1280, height = 720;
       focus.addCamera(orbitCamera(orbit, *pyramid, width, height), glfwGetTime());

@@ -33,6 +33,12 @@ struct ClipmapOptions {
   /// a ring this many cells wide around it, so a paged source has the patches the next
   /// moves need in its cache (the lazy-load window is the clipmap plus this margin).
   int prefetchMargin = 32;
+  /// Where a coarser level overlaps a finer one, push the coarser surface's depth back by
+  /// this fraction so the finer (more exact) surface wins the depth test there: fewer
+  /// patches of coarse terrain showing through near level borders at grazing angles, but
+  /// the depth buffer no longer holds the exact geometry in those bands (off by default;
+  /// the viewer uses 0.02).
+  float overlapDepthPush = 0.0F;
 };
 
 /// What one draw() did.
