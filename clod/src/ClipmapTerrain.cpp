@@ -13,6 +13,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <exception>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -32,6 +33,7 @@ Program makeProgram() {
 struct ClipmapTerrain::Job {
   std::size_t level = 0;
   ClipmapLevel::Plan plan;
+  std::exception_ptr error;  // a failed read, rethrown by update() on the render thread
 };
 
 // The background loader: one worker thread, a queue served coarsest level first, and the
@@ -136,7 +138,7 @@ void ClipmapTerrain::schedule() {
     ClipmapLevel::Plan plan = levels_[k]->plan(g.x, g.y, polar);
     if (plan.empty()) continue;
     loader_->busy[k] = true;
-    loader_->queue.push_back(Job{k, std::move(plan)});
+    loader_->queue.push_back(Job{k, std::move(plan), nullptr});
     any = true;
   }
   lock.unlock();
@@ -156,8 +158,12 @@ void ClipmapTerrain::workerLoop() {
     L.queue.erase(it);
     lock.unlock();
     const ClipmapLevel& level = *levels_[job.level];
-    level.fetch(job.plan);
-    level.prefetch(job.plan, options_.prefetchMargin);
+    try {
+      level.fetch(job.plan);
+      level.prefetch(job.plan, options_.prefetchMargin);
+    } catch (...) {
+      job.error = std::current_exception();
+    }
     lock.lock();
     L.finished.push_back(std::move(job));
     L.done.notify_all();
@@ -179,11 +185,14 @@ std::size_t ClipmapTerrain::update(bool wait) {
   // Coarse first, as loaded.
   std::sort(ready.begin(), ready.end(),
             [](const Job& a, const Job& b) { return a.level > b.level; });
-  std::size_t count = 0;
-  for (const Job& job : ready) count += levels_[job.level]->apply(job.plan);
   {
     const std::lock_guard lock(loader_->mutex);
     for (const Job& job : ready) loader_->busy[job.level] = false;
+  }
+  std::size_t count = 0;
+  for (const Job& job : ready) {
+    if (job.error) std::rethrow_exception(job.error);  // e.g. a store read that failed
+    count += levels_[job.level]->apply(job.plan);
   }
   uploaded_ += count;
   schedule();
@@ -359,6 +368,7 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
     program_.set("uOrigin", glm::ivec2(l.texelX(0), l.texelY(0)));
     program_.set("uAnchorRel", glm::vec3(l.anchor() - camera.position));
     program_.set("uAnchorFromCentre", glm::vec3(l.anchor()));
+    program_.set("uUp", glm::vec3(pyramid_->up(l.anchor())));
     program_.set("uSkirtDepth", static_cast<float>(skirt));
     glm::vec4 finer(0.0F, 0.0F, -1.0F, -1.0F);  // empty
     if (k > first) finer = glm::vec4(levels_[k - 1]->footprintIn(l));

@@ -36,6 +36,19 @@ HeightPyramid::HeightPyramid(std::vector<Level> levels, SurfaceKind kind,
   }
 }
 
+HeightPyramid::HeightPyramid(std::vector<Level> levels, topo::Placement placement)
+    : HeightPyramid(std::move(levels), SurfaceKind::Plane, placement.body()) {
+  placement_ = std::move(placement);
+}
+
+HeightPyramid HeightPyramid::fromSamples(const topo::TopoGrid& grid,
+                                         std::shared_ptr<const topo::SampleSource> samples,
+                                         const topo::Placement& placement, std::size_t levelCount) {
+  HeightPyramid flat = fromSamples(grid, std::move(samples), SurfaceKind::Plane, std::nullopt,
+                                   topo::LatitudeType::Planetocentric, levelCount);
+  return HeightPyramid(std::move(flat.levels_), placement);
+}
+
 HeightPyramid HeightPyramid::fromSamples(const topo::TopoGrid& grid,
                                          std::shared_ptr<const topo::SampleSource> samples,
                                          SurfaceKind kind, std::optional<topo::Body> body,
@@ -81,19 +94,28 @@ HeightPyramid HeightPyramid::fromSamples(const topo::TopoGrid& grid,
   return HeightPyramid(std::move(levels), kind, std::move(body), latitudeType);
 }
 
-glm::dvec3 HeightPyramid::position(double x, double y, double h) const noexcept {
+glm::dvec3 HeightPyramid::position(double x, double y, double h) const {
+  if (placement_) return placement_->toBodyFixed(x, y, h);
   if (kind_ == SurfaceKind::Plane) return {x, y, h};
   const double lat = body_->toPlanetodetic(y, latType_);
   return body_->toBodyFixed(topo::Geodetic{lat, x, h});
 }
 
-glm::dvec2 HeightPyramid::gridPoint(const glm::dvec3& p) const noexcept {
+glm::dvec2 HeightPyramid::gridPoint(const glm::dvec3& p) const {
+  if (placement_) {
+    const glm::dvec3 g = placement_->fromBodyFixed(p);
+    return {g.x, g.y};
+  }
   if (kind_ == SurfaceKind::Plane) return {p.x, p.y};
   const topo::Geodetic g = body_->toGeodetic(p);
   return {g.lonDeg, body_->fromPlanetodetic(g.latDeg, latType_)};
 }
 
-glm::dvec3 HeightPyramid::up(const glm::dvec3& p) const noexcept {
+glm::dvec3 HeightPyramid::up(const glm::dvec3& p) const {
+  if (placement_) {
+    const glm::dvec3 g = placement_->fromBodyFixed(p);
+    return placement_->normalToBodyFixed({0.0, 0.0, 1.0}, g.x, g.y, g.z);
+  }
   if (kind_ == SurfaceKind::Plane) return {0.0, 0.0, 1.0};
   const topo::Geodetic g = body_->toGeodetic(p);
   return body_->enuFrame(g.latDeg, g.lonDeg)[2];

@@ -46,6 +46,7 @@ uniform int uN;
 uniform vec3 uAnchorRel;
 uniform vec3 uAnchorFromCentre;
 uniform int uPlanet;
+uniform vec3 uUp;  // "up" for non-planet levels (a plane's +z, a placed DEM's h axis)
 uniform float uSkirtDepth;
 uniform mat4 uViewProj;
 uniform vec4 uFinerRect;   // the finer level's window in this level's (i, j); empty if none
@@ -61,7 +62,7 @@ void main() {
   int i = aVertex.x, j = aVertex.y;
   vec4 c = fetch(i, j);
   vec3 p = c.xyz;
-  vec3 up = uPlanet != 0 ? normalize(p + uAnchorFromCentre) : vec3(0.0, 0.0, 1.0);
+  vec3 up = uPlanet != 0 ? normalize(p + uAnchorFromCentre) : uUp;
   vec3 east = around(fetch(i + 1, j), p) - around(fetch(i - 1, j), p);
   vec3 north = around(fetch(i, j - 1), p) - around(fetch(i, j + 1), p);
   vec3 n = cross(east, north);

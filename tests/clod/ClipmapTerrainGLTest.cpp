@@ -2,6 +2,7 @@
 #include <regolith/clod/FocusController.hpp>
 #include <regolith/clod/MeshRenderer.hpp>
 #include <regolith/clod/RenderTarget.hpp>
+#include <regolith/topo/Placement.hpp>
 
 #include "GlContext.hpp"
 #include "TerrainFixtures.hpp"
@@ -633,6 +634,54 @@ TEST(ClipmapTerrainGLTest, FocusTiedToARoverPutsTheFinestLevelUnderIt) {
               tied);
   EXPECT_LT(tied, 1e-5);
   EXPECT_GT(untied, 10.0 * tied);
+}
+
+}  // namespace
+}  // namespace regolith::clod
+
+namespace regolith::clod {
+namespace {
+
+// A DEM placed on Mars by a local tangent plane: positions are body-fixed (3.4e6 m), the
+// camera too, and a flat DEM at h = 0 draws exactly the tangent plane.
+TEST(ClipmapTerrainGLTest, PlacedDemIsDrawnOnItsPlanetInBodyFixedCoordinates) {
+  test::glContext();
+  const topo::LocalTangentPlane plane(topo::Body::marsEllipsoid(), {-2.05, -5.5, -1400.0}, 30.0);
+  const topo::Placement placement(plane);
+  const auto grid = test::centredGrid(2049, 2049, 1.0);
+  auto samples = std::make_shared<topo::InMemorySamples>(
+      grid.rows(), grid.cols(), std::vector<float>(grid.rows() * grid.cols(), 0.0F));
+  const auto pyramid =
+      std::make_shared<const HeightPyramid>(HeightPyramid::fromSamples(grid, samples, placement));
+  ClipmapTerrain terrain(pyramid, ClipmapOptions{});
+  Camera cam = obliqueCamera();
+  cam.position = placement.toBodyFixed(-150.0, -420.0, 220.0);
+  cam.target = placement.toBodyFixed(0.0, 0.0, 0.0);
+  cam.up = plane.zAxis();
+  ASSERT_GT(glm::length(cam.position), 3.3e6);
+  terrain.setFocus(cam.target);
+  const Shot shot = renderClipmap(terrain, cam);
+  test::savePng("clipmap_placed_on_mars", shot.color);
+  const glm::dvec3 o = plane.originBodyFixed(), nrm = plane.zAxis();
+  int hits = 0, covered = 0;
+  double worst = 0.0;
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x) {
+      const glm::dvec3 d = cam.ray(x + 0.5, y + 0.5);
+      const double t = glm::dot(o - cam.position, nrm) / glm::dot(d, nrm);
+      const glm::dvec3 g = plane.fromBodyFixed(cam.position + t * d);
+      if (!(t > 0 && std::abs(g.x) < 1000.0 && std::abs(g.y) < 1000.0)) continue;
+      ++hits;
+      if (shot.depth.at(x, y) <= 0.0F) continue;
+      ++covered;
+      const double expected = t * glm::dot(d, cam.forward());
+      worst =
+          std::max(worst, std::abs(cam.viewDistance(shot.depth.at(x, y)) - expected) / expected);
+    }
+  EXPECT_GT(hits, cam.width * cam.height / 3);
+  EXPECT_EQ(covered, hits);
+  EXPECT_LT(worst, 2e-5);
+  EXPECT_NEAR(glm::length(pyramid->up(cam.target) - nrm), 0.0, 1e-9);
 }
 
 }  // namespace

@@ -90,7 +90,8 @@ class ClipmapTerrain {
   void requestFocus(const glm::dvec3& focus);
   /// Uploads finished background work and schedules more (render thread). With
   /// `wait` it first blocks until some job finishes, if one is running (tests, tools; a
-  /// frame loop passes false). Returns the texels uploaded.
+  /// frame loop passes false). Returns the texels uploaded. An error the worker met while
+  /// reading (a store I/O error) is rethrown here; that level is then asked again.
   std::size_t update(bool wait = false);
   /// True while background jobs are queued or running.
   [[nodiscard]] bool loading() const;
