@@ -8,8 +8,9 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git clang-format clang-tidy
   # I/O: HDF5 stores, GDAL import, PROJ (also the projection oracle in tests)
   libhdf5-dev hdf5-tools libgdal-dev gdal-bin libproj-dev proj-bin libdeflate-dev
-  # maths and rendering: GLM, OpenGL/EGL through Mesa (llvmpipe), GLFW windows, PNG
-  libglm-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev libpng-dev
+  # maths and rendering: GLM, OpenGL/EGL through Mesa (llvmpipe; clod links libglvnd's
+  # libOpenGL from libopengl-dev, no GLX), GLFW windows, PNG
+  libglm-dev libegl-dev libgl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev libpng-dev
   # tests, benchmarks, CLI, JSON
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   # Python bindings and Python-side oracles (Debian's interpreter, not PyPI)

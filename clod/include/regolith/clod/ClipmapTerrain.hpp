@@ -1,0 +1,141 @@
+#pragma once
+/// \file
+/// Geometry-clipmap terrain over a plane (DEM) or a spheroid (planet).
+
+#include <regolith/clod/Camera.hpp>
+#include <regolith/clod/GlObjects.hpp>
+#include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/clod/Program.hpp>
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+namespace regolith::clod {
+
+class ClipmapLevel;
+
+/// Settings of a ClipmapTerrain.
+struct ClipmapOptions {
+  /// Vertices per level side (odd, 15 ≤ size ≤ 2047).
+  int size = 255;
+  /// Levels used (0: every pyramid level). Level k reads pyramid level k.
+  std::size_t levels = 0;
+  /// A level draws only while its cells, at their nearest to the camera, span at least
+  /// this many pixels; finer levels switch off and the next one draws its centre.
+  double minCellPixels = 0.5;
+  glm::vec3 lightDirection{0.4F, -0.3F, 0.866F};  ///< towards the light, scene frame
+  glm::vec3 albedo{0.78F, 0.66F, 0.55F};
+  float ambient = 0.2F;
+  /// Background loading (requestFocus): after each level's window, the loader also reads
+  /// a ring this many cells wide around it, so a paged source has the patches the next
+  /// moves need in its cache (the lazy-load window is the clipmap plus this margin).
+  int prefetchMargin = 32;
+  /// Where a coarser level overlaps a finer one, push the coarser surface's depth back by
+  /// this fraction so the finer (more exact) surface wins the depth test there: fewer
+  /// patches of coarse terrain showing through near level borders at grazing angles, but
+  /// the depth buffer no longer holds the exact geometry in those bands (off by default;
+  /// the viewer uses 0.02).
+  float overlapDepthPush = 0.0F;
+};
+
+/// What one draw() did.
+struct ClipmapFrame {
+  std::size_t firstLevel = 0;   ///< innermost level drawn (it draws its centre)
+  std::size_t levelsDrawn = 0;  ///< levels drawn, from firstLevel outward
+  std::size_t vertices = 0;     ///< vertices submitted (indices drawn)
+};
+
+/// Geometry clipmaps (Losasso & Hoppe 2004; Asirvatham & Hoppe, GPU Gems 2 ch. 2): nested
+/// n × n grids centred on the focus, level k at the spacing of pyramid level k.
+///
+/// - The CPU builds one mesh once (grid, centre hole of the coarser levels, skirts) that
+///   every level shares.
+/// - Each level keeps a toroidally addressed RGBA32F texture: xyz the scene position of a
+///   sample relative to the level's anchor (computed in double on the CPU; small floats
+///   only), w its height or NaN over nodata. Moving the focus uploads only the rows and
+///   columns that enter a level's window.
+/// - Coarser levels leave out a centre hole a little smaller than the finer level's extent
+///   (the two overlap by a few cells) and each level hangs a skirt below its outer border,
+///   deep enough to reach below both its own and the next level's lowest sample, so no
+///   gap opens between levels.
+/// - A geometry shader drops triangles that touch a nodata sample; the fragment shader
+///   lights with a light direction, an albedo and the normal from neighbouring samples.
+///
+/// Planets: windows wrap in longitude on global grids and continue over a pole (the rows
+/// beyond it are the rows on the other side, half a turn of longitude away), so neither the
+/// ±180° meridian nor a pole is an edge.
+///
+/// Needs a current GL 4.5 context; belongs to its thread. The pyramid must outlive it.
+class ClipmapTerrain {
+ public:
+  /// Throws InvalidArgument for a size that is even or out of range, or more levels than
+  /// the pyramid has.
+  ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, ClipmapOptions options = {});
+  ClipmapTerrain(const ClipmapTerrain&) = delete;
+  ClipmapTerrain& operator=(const ClipmapTerrain&) = delete;
+  ~ClipmapTerrain();
+
+  /// Centres every level on the scene point `focus` (its grid point: x, y for a plane;
+  /// longitude, latitude for a planet) and uploads what enters the windows. Returns the
+  /// number of texels uploaded. Reads the pyramid's sources on the calling thread.
+  std::size_t setFocus(const glm::dvec3& focus);
+  /// Background loading: sets the focus the levels should move to and returns at once. A
+  /// worker thread reads and prepares the new rows and columns, coarsest level first;
+  /// update() uploads what is ready. Until a level has caught up, draw() leaves it (and any
+  /// finer one) out and the next coarser consistent level draws its centre, so a frame
+  /// never waits for I/O and never shows a gap.
+  void requestFocus(const glm::dvec3& focus);
+  /// Uploads finished background work and schedules more (render thread). With
+  /// `wait` it first blocks until some job finishes, if one is running (tests, tools; a
+  /// frame loop passes false). Returns the texels uploaded. An error the worker met while
+  /// reading (a store I/O error) is rethrown here; that level is then asked again.
+  std::size_t update(bool wait = false);
+  /// True while background jobs are queued or running.
+  [[nodiscard]] bool loading() const;
+  /// Runs update(true) until nothing is loading; returns the texels uploaded.
+  std::size_t finishLoading();
+  /// Levels with data resident (a level is resident once its first window is uploaded).
+  [[nodiscard]] std::vector<bool> residentLevels() const;
+
+  /// Draws into the bound framebuffer (depth state: useReversedZ()).
+  ClipmapFrame draw(const Camera& camera) const;
+
+  [[nodiscard]] std::size_t levelCount() const noexcept { return levels_.size(); }
+  [[nodiscard]] int size() const noexcept { return options_.size; }
+  [[nodiscard]] const ClipmapOptions& options() const noexcept { return options_; }
+  void setOptions(const ClipmapOptions& options);
+  /// Texels uploaded since construction.
+  [[nodiscard]] std::size_t uploadedTexels() const noexcept { return uploaded_; }
+  /// Window origin (row, col) of level k, in that pyramid level's sample indices.
+  [[nodiscard]] std::pair<long long, long long> windowOrigin(std::size_t level) const;
+  /// Levels that draw for this camera (first, count), without drawing.
+  [[nodiscard]] std::pair<std::size_t, std::size_t> activeLevels(const Camera& camera) const;
+  /// Grid cells in the centre hole of a coarser level (half-width, in that level's cells).
+  [[nodiscard]] int holeHalfWidth() const noexcept { return hole_; }
+
+ private:
+  void buildMesh();
+  void schedule();
+  void workerLoop();
+  [[nodiscard]] int polarFor(const glm::dvec2& gridPoint) const;
+  [[nodiscard]] std::size_t firstConsistent() const;
+
+  struct Job;
+  struct Loader;
+
+  std::shared_ptr<const HeightPyramid> pyramid_;
+  ClipmapOptions options_;
+  std::vector<std::unique_ptr<ClipmapLevel>> levels_;
+  Program program_;
+  VertexArray vao_;
+  Buffer vertices_, indices_;
+  std::size_t holeIndices_ = 0, ringIndices_ = 0, skirtIndices_ = 0;
+  int hole_ = 0;
+  std::size_t uploaded_ = 0;
+  std::unique_ptr<Loader> loader_;
+};
+
+}  // namespace regolith::clod

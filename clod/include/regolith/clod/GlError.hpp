@@ -1,0 +1,16 @@
+#pragma once
+/// \file
+/// The error type of the GL layer.
+
+#include <regolith/topo/Error.hpp>
+
+namespace regolith::clod {
+
+/// A GL or EGL call failed: no display, no 4.5 core context, a shader that does not
+/// compile (the message carries the info log), an incomplete framebuffer.
+class GlError : public regolith::Error {
+ public:
+  using regolith::Error::Error;
+};
+
+}  // namespace regolith::clod

@@ -1,0 +1,47 @@
+#pragma once
+/// \file
+/// One-call headless rendering of a terrain to an image or a PNG file.
+
+#include <regolith/clod/Camera.hpp>
+#include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/clod/Image.hpp>
+
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace regolith::clod {
+
+/// What to render. The camera is in the pyramid's scene frame (grid frame for a plane,
+/// body-fixed for a planet); its width and height are the image size.
+struct RenderRequest {
+  Camera camera;
+  ClipmapOptions clipmap;
+  glm::vec4 background{0.02F, 0.02F, 0.04F, 1.0F};
+  /// Clipmap focus; the camera's look-at point if unset.
+  std::optional<glm::dvec3> focus;
+};
+
+/// A camera at `position` looking along a heading (degrees clockwise from north: +y on a
+/// plane, local north on a planet) and a pitch (degrees, negative looks down), with "up"
+/// the pyramid's up at the position. Throws InvalidArgument for a pitch outside (−90, 90).
+[[nodiscard]] Camera cameraFromHeadingPitch(const HeightPyramid& pyramid,
+                                            const glm::dvec3& position, double headingDegrees,
+                                            double pitchDegrees, double fovYDegrees, int width,
+                                            int height);
+
+/// Renders the terrain headless: creates an EGL surfaceless context if none is current on
+/// this thread, loads every level synchronously around the focus, draws once. Throws
+/// GlError if no GL 4.5 context can be made, InvalidArgument for a bad request.
+[[nodiscard]] RgbaImage renderImage(std::shared_ptr<const HeightPyramid> pyramid,
+                                    const RenderRequest& request);
+
+/// renderImage(), then writePng() to `path` (crash-safe: temporary name, then rename).
+void renderToPng(std::shared_ptr<const HeightPyramid> pyramid, const RenderRequest& request,
+                 const std::string& path);
+
+}  // namespace regolith::clod

@@ -1,0 +1,45 @@
+#pragma once
+/// \file
+/// An offscreen framebuffer with colour and depth, and its read-back.
+
+#include <regolith/clod/GlObjects.hpp>
+#include <regolith/clod/Image.hpp>
+
+#include <glm/vec4.hpp>
+
+namespace regolith::clod {
+
+/// A framebuffer object with an RGBA8 colour texture and a 32-bit float depth texture,
+/// set up for Camera's reversed-Z projection (glClipControl zero-to-one, depth test
+/// GL_GREATER, depth cleared to 0). Headless renders and screenshots go through it.
+/// Move-only; belongs to its context's thread.
+class RenderTarget {
+ public:
+  /// Throws InvalidArgument unless 1 ≤ width, height ≤ 16384; GlError if incomplete.
+  RenderTarget(int width, int height);
+
+  [[nodiscard]] int width() const noexcept { return width_; }
+  [[nodiscard]] int height() const noexcept { return height_; }
+  [[nodiscard]] GLuint framebuffer() const noexcept { return fbo_.id(); }
+
+  /// Binds the framebuffer, sets the viewport and the reversed-Z depth state.
+  void bind() const noexcept;
+  /// Binds, then clears colour to `rgba` (components in [0, 1]) and depth to 0 (far).
+  void clear(const glm::vec4& rgba) const noexcept;
+  /// Reads the colour attachment (row 0 at the top).
+  [[nodiscard]] RgbaImage readColor() const;
+  /// Reads the depth attachment (row 0 at the top; 0 where nothing was drawn).
+  [[nodiscard]] DepthImage readDepth() const;
+
+ private:
+  int width_, height_;
+  Texture color_;
+  Texture depth_;
+  Framebuffer fbo_;
+};
+
+/// Sets the reversed-Z depth state on the bound framebuffer (clip control zero-to-one,
+/// GL_GREATER, depth writes on). Window renders call it too.
+void useReversedZ() noexcept;
+
+}  // namespace regolith::clod

@@ -1,0 +1,73 @@
+#include <regolith/clod/HeadlessContext.hpp>
+#include <regolith/clod/Render.hpp>
+#include <regolith/clod/RenderTarget.hpp>
+#include <regolith/topo/Error.hpp>
+
+#include <EGL/egl.h>
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <string>
+
+namespace regolith::clod {
+
+Camera cameraFromHeadingPitch(const HeightPyramid& pyramid, const glm::dvec3& position,
+                              double headingDegrees, double pitchDegrees, double fovYDegrees,
+                              int width, int height) {
+  if (!(pitchDegrees > -90.0 && pitchDegrees < 90.0))
+    throw InvalidArgument("cameraFromHeadingPitch(): pitch " + std::to_string(pitchDegrees) +
+                          "°, expected inside (−90, 90)");
+  const glm::dvec3 up = pyramid.up(position);
+  glm::dvec3 north{0.0, 1.0, 0.0};
+  if (pyramid.kind() == SurfaceKind::Planet) {
+    // Towards the north pole, projected on the local horizontal plane.
+    north = glm::dvec3(0.0, 0.0, 1.0) - up * up.z;
+    if (glm::length(north) < 1e-9) north = {1.0, 0.0, 0.0};  // at a pole
+    north = glm::normalize(north);
+  }
+  const glm::dvec3 east = glm::cross(north, up);
+  const double h = headingDegrees * std::numbers::pi / 180.0;
+  const double p = pitchDegrees * std::numbers::pi / 180.0;
+  const glm::dvec3 dir =
+      std::cos(p) * (std::cos(h) * north + std::sin(h) * east) + std::sin(p) * up;
+  Camera cam;
+  cam.position = position;
+  cam.target = position + dir * 100.0;
+  cam.up = up;
+  cam.fovYDegrees = fovYDegrees;
+  cam.width = width;
+  cam.height = height;
+  return cam;
+}
+
+RgbaImage renderImage(std::shared_ptr<const HeightPyramid> pyramid, const RenderRequest& request) {
+  if (!pyramid) throw InvalidArgument("renderImage(): pyramid is null");
+  const Camera& cam = request.camera;
+  if (!(cam.fovYDegrees > 0.0 && cam.fovYDegrees < 180.0))
+    throw InvalidArgument("renderImage(): field of view " + std::to_string(cam.fovYDegrees) +
+                          "°, expected inside (0, 180)");
+  if (!(cam.near > 0.0))
+    throw InvalidArgument("renderImage(): near plane " + std::to_string(cam.near) +
+                          " m, expected > 0");
+  std::unique_ptr<HeadlessContext> context;
+  if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<HeadlessContext>();
+  RgbaImage image;
+  {
+    ClipmapTerrain terrain(std::move(pyramid), request.clipmap);
+    terrain.setFocus(request.focus.value_or(cam.target));
+    RenderTarget target(cam.width, cam.height);
+    target.clear(request.background);
+    terrain.draw(cam);
+    image = target.readColor();
+  }  // GL objects go before the context
+  return image;
+}
+
+void renderToPng(std::shared_ptr<const HeightPyramid> pyramid, const RenderRequest& request,
+                 const std::string& path) {
+  writePng(path, renderImage(std::move(pyramid), request));
+}
+
+}  // namespace regolith::clod
