@@ -5,6 +5,8 @@
 #include <regolith/store/Pager.hpp>
 #include <regolith/topo/Error.hpp>
 
+#include "support/StoreScratch.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -25,21 +27,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path scratch(const std::string& name) {
-  struct Dir {
-    fs::path path =
-        fs::temp_directory_path() / ("regolith-genplanet-" + std::to_string(::getpid()));
-    Dir() { fs::create_directories(path); }
-    Dir(const Dir&) = delete;
-    Dir& operator=(const Dir&) = delete;
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  };
-  static const Dir dir;
-  return dir.path / name;
-}
+fs::path scratch(const std::string& name) { return test::scratchFile("genplanet", name); }
 
 MarsPlanetOptions smallPlanet(std::uint64_t seed = 7) {
   MarsPlanetOptions o;
@@ -50,14 +38,7 @@ MarsPlanetOptions smallPlanet(std::uint64_t seed = 7) {
   return o;
 }
 
-/// Level 0 of a grid, read with Store (row-major).
-std::vector<float> readLevel0(const fs::path& path, const std::string& grid) {
-  const Store s = Store::open(path);
-  const GridInfo& info = s.grid(grid);
-  std::vector<float> v(info.rows * info.cols);
-  s.readWindow(grid, 0, 0, 0, info.rows, info.cols, v);
-  return v;
-}
+using test::readLevel0;
 
 bool bitwiseEqual(const std::vector<float>& a, const std::vector<float>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;

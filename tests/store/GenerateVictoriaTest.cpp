@@ -5,6 +5,8 @@
 #include <regolith/store/Pager.hpp>
 #include <regolith/topo/Error.hpp>
 
+#include "support/StoreScratch.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -25,20 +27,7 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-fs::path scratch(const std::string& name) {
-  struct Dir {
-    fs::path path = fs::temp_directory_path() / ("regolith-genvic-" + std::to_string(::getpid()));
-    Dir() { fs::create_directories(path); }
-    Dir(const Dir&) = delete;
-    Dir& operator=(const Dir&) = delete;
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  };
-  static const Dir dir;
-  return dir.path / name;
-}
+fs::path scratch(const std::string& name) { return test::scratchFile("genvictoria", name); }
 
 VictoriaOptions options(std::size_t size, double spacing, std::uint64_t seed = 1) {
   VictoriaOptions o;
@@ -50,13 +39,7 @@ VictoriaOptions options(std::size_t size, double spacing, std::uint64_t seed = 1
   return o;
 }
 
-std::vector<float> readLevel0(const fs::path& path, const std::string& grid) {
-  const Store s = Store::open(path);
-  const GridInfo& info = s.grid(grid);
-  std::vector<float> v(info.rows * info.cols);
-  s.readWindow(grid, 0, 0, 0, info.rows, info.cols, v);
-  return v;
-}
+using test::readLevel0;
 
 /// A written Victoria store, paged.
 struct Written {

@@ -11,6 +11,7 @@
 #include <regolith/topo/Placement.hpp>
 
 #include "support/Fixtures.hpp"
+#include "support/StoreScratch.hpp"
 
 #include <cpl_conv.h>
 #include <gdal.h>
@@ -41,21 +42,7 @@ using regolith::test::fixture;
 
 namespace {
 
-/// A scratch folder for this test process, removed when the process exits normally.
-fs::path scratch(const std::string& name) {
-  struct Dir {
-    fs::path path = fs::temp_directory_path() / ("regolith-import-" + std::to_string(::getpid()));
-    Dir() { fs::create_directories(path); }
-    Dir(const Dir&) = delete;
-    Dir& operator=(const Dir&) = delete;
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  };
-  static const Dir dir;
-  return dir.path / name;
-}
+fs::path scratch(const std::string& name) { return test::scratchFile("import", name); }
 
 struct DatasetCloser {
   void operator()(void* ds) const noexcept {

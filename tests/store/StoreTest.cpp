@@ -6,6 +6,8 @@
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/Error.hpp>
 
+#include "support/StoreScratch.hpp"
+
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <signal.h>
@@ -39,21 +41,7 @@ namespace {
 constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 constexpr double kNanD = std::numeric_limits<double>::quiet_NaN();
 
-/// A scratch folder for this test process, removed when the process exits normally.
-fs::path scratch(const std::string& name) {
-  struct Dir {
-    fs::path path = fs::temp_directory_path() / ("regolith-store-" + std::to_string(::getpid()));
-    Dir() { fs::create_directories(path); }
-    Dir(const Dir&) = delete;
-    Dir& operator=(const Dir&) = delete;
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  };
-  static const Dir dir;
-  return dir.path / name;
-}
+fs::path scratch(const std::string& name) { return test::scratchFile("store", name); }
 
 // ---- analytic content ---------------------------------------------------------------------
 
