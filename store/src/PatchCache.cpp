@@ -453,8 +453,9 @@ std::shared_ptr<const topo::BlockTable> PatchCache::blockTable(std::uint32_t gri
                                                                std::size_t patchCols) {
   Impl& m = *impl_;
   const std::lock_guard lock(m.mutex);
-  auto& slot = m.tables[Impl::tableKey(grid, level)];
-  if (slot) {
+  const std::uint64_t tkey = Impl::tableKey(grid, level);
+  if (const auto it = m.tables.find(tkey); it != m.tables.end()) {
+    const std::shared_ptr<topo::BlockTable>& slot = it->second;
     if (slot->rows() != rows || slot->cols() != cols || slot->blockRows() != patchRows ||
         slot->blockCols() != patchCols) {
       throw InvalidArgument("store::PatchCache::blockTable(): grid " + std::to_string(grid) +
@@ -467,13 +468,15 @@ std::shared_ptr<const topo::BlockTable> PatchCache::blockTable(std::uint32_t gri
     }
     return slot;
   }
-  slot = std::make_shared<topo::BlockTable>(rows, cols, patchRows, patchCols);
+  // Made before it is entered in the map, so a throwing constructor leaves no empty entry.
+  auto table = std::make_shared<topo::BlockTable>(rows, cols, patchRows, patchCols);
+  m.tables.emplace(tkey, table);
   if (m.publishes()) {
     for (auto& [key, e] : m.entries) {
-      if (key.grid == grid && key.level == level) Impl::publishIn(*slot, key, e);
+      if (key.grid == grid && key.level == level) Impl::publishIn(*table, key, e);
     }
   }
-  return slot;
+  return table;
 }
 
 CacheStats PatchCache::stats() const {

@@ -533,3 +533,19 @@ TEST(PatchCache, LoaderExceptionsReachEveryWaiterAndNothingIsInserted) {
   EXPECT_EQ(s.loads, 1U);
   EXPECT_EQ(s.misses, std::uint64_t{kThreads} + 2);
 }
+
+TEST(PatchCache, BlockTablesAreOnePerGridLevelAndRefuseOtherSizes) {
+  PatchCache cache(1 << 20);
+  EXPECT_THROW((void)cache.blockTable(1, 0, 100, 100, 0, 16), InvalidArgument);
+  const auto t = cache.blockTable(1, 0, 100, 100, 16, 16);  // the failed call left nothing
+  ASSERT_NE(t, nullptr);
+  EXPECT_EQ(cache.blockTable(1, 0, 100, 100, 16, 16), t);
+  EXPECT_NE(cache.blockTable(1, 1, 50, 50, 16, 16), t);
+  try {
+    (void)cache.blockTable(1, 0, 100, 100, 32, 32);
+    FAIL() << "no exception";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("100x100 samples in 16x16 patches"), std::string::npos)
+        << e.what();
+  }
+}
