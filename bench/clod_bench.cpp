@@ -95,13 +95,8 @@ void errorCounters(benchmark::State& state, const DepthImage& a, const DepthImag
     for (int x = 1; x + 1 < ref.width; ++x) {
       const float r = ref.at(x, y), c = a.at(x, y);
       if (r <= 0.0F || c <= 0.0F) continue;
+      if (!ref.smoothAt(x, y, cam.near, 0.02)) continue;
       const double dr = cam.viewDistance(r);
-      bool smooth = true;
-      for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
-        const float n = ref.at(x + dx, y + dy);
-        smooth = smooth && n > 0.0F && std::abs(cam.viewDistance(n) - dr) < 0.02 * dr;
-      }
-      if (!smooth) continue;
       // The two points lie on one ray: their height difference is the geometric error.
       const glm::dvec3 d = cam.ray(x + 0.5, y + 0.5);
       const double along = glm::dot(d, cam.forward());

@@ -223,13 +223,8 @@ DepthStats compareDepth(const Camera& cam, const DepthImage& a, const DepthImage
     for (int x = 1; x + 1 < ref.width; ++x) {
       const float r = ref.at(x, y), c = a.at(x, y);
       if (r <= 0.0F || c <= 0.0F) continue;
+      if (!ref.smoothAt(x, y, cam.near, 0.02)) continue;
       const double dr = cam.viewDistance(r);
-      bool smooth = true;
-      for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
-        const float n = ref.at(x + dx, y + dy);
-        smooth = smooth && n > 0.0F && std::abs(cam.viewDistance(n) - dr) < 0.02 * dr;
-      }
-      if (!smooth) continue;
       if (within) {
         const glm::dvec3 d = cam.ray(x + 0.5, y + 0.5);
         if (!within(cam.position + dr / glm::dot(d, cam.forward()) * d)) continue;

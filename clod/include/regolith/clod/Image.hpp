@@ -2,9 +2,11 @@
 /// \file
 /// Captured images: 8-bit RGBA colour and float depth, row 0 at the top.
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace regolith::clod {
@@ -36,6 +38,21 @@ struct DepthImage {
   [[nodiscard]] float at(int x, int y) const noexcept {
     return depth[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
                  static_cast<std::size_t>(x)];
+  }
+  /// True if the inner pixel (x, y) and its 4 neighbours were drawn and the neighbours' view
+  /// distances (near / depth, Camera::viewDistance) lie within `tolerance` × that of (x, y):
+  /// no depth discontinuity there. For comparing renders away from silhouettes.
+  [[nodiscard]] bool smoothAt(int x, int y, double near, double tolerance) const noexcept {
+    const float r = at(x, y);
+    if (r <= 0.0F) return false;
+    const double dr = near / static_cast<double>(r);
+    for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+      const float n = at(x + dx, y + dy);
+      if (!(n > 0.0F && std::abs(near / static_cast<double>(n) - dr) < tolerance * dr)) {
+        return false;
+      }
+    }
+    return true;
   }
 };
 
