@@ -15,5 +15,6 @@ void addGenerateCommand(CLI::App& app);
 void addImportCommand(CLI::App& app);
 void addInfoCommand(CLI::App& app);
 void addQueryCommand(CLI::App& app);
+void addRenderCommand(CLI::App& app);
 
 }  // namespace regolith::tools

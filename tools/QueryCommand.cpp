@@ -4,6 +4,7 @@
 #include <regolith/topo/Error.hpp>
 
 #include "Commands.hpp"
+#include "StoreGrid.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -222,17 +223,6 @@ struct Args {
   std::size_t level = 0;
 };
 
-std::string chooseGrid(const store::Store& s, const std::string& requested) {
-  if (!requested.empty()) return requested;  // Store::grid() names the grids if missing
-  std::vector<std::string> names = s.gridNames();
-  if (names.size() == 1) return names[0];
-  std::sort(names.begin(), names.end());
-  std::string list;
-  for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
-  throw InvalidArgument("query: " + s.path().string() + " has " + std::to_string(names.size()) +
-                        " grids (" + list + "); choose one with --grid");
-}
-
 void runQuery(const Args& a) {
   static const std::map<std::string, Coords> kCoords{
       {"lonlat", Coords::LonLat}, {"grid", Coords::Grid}, {"xy", Coords::Xy}};
@@ -257,7 +247,7 @@ void runQuery(const Args& a) {
   }
 
   auto store = std::make_shared<const store::Store>(store::Store::open(a.store));
-  const std::string gridName = chooseGrid(*store, a.grid);
+  const std::string gridName = chooseGrid(*store, a.grid, "query");
   const store::GridInfo& info = store->grid(gridName);
   if (a.level >= info.levels) {
     throw InvalidArgument("query: grid '" + gridName + "' has " + std::to_string(info.levels) +

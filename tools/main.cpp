@@ -29,6 +29,7 @@ int main(int argc, char** argv) try {
   regolith::tools::addImportCommand(app);
   regolith::tools::addInfoCommand(app);
   regolith::tools::addQueryCommand(app);
+  regolith::tools::addRenderCommand(app);
 
   try {
     app.parse(argc, argv);

@@ -67,9 +67,12 @@ ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, Cli
       ++usable;
     }
     if (usable == 0)
-      throw InvalidArgument("ClipmapTerrain(): the planet's finest level has spacing " +
-                            std::to_string(pyramid_->level(0).grid.spacingY()) +
-                            "°, expected at most 3° and a window of at most 360°");
+      throw InvalidArgument(
+          "ClipmapTerrain(): the planet's finest level has spacing " +
+          std::to_string(pyramid_->level(0).grid.spacingY()) + "° and the window (size − 1) × " +
+          "spacing is " +
+          std::to_string(static_cast<double>(n - 1) * pyramid_->level(0).grid.spacingY()) +
+          "°; expected a spacing of at most 3° and a window of at most 360° (use a smaller size)");
   }
   // A level whose half-window spans the whole grid covers it from any focus on it: coarser
   // levels would add nothing but vertices.

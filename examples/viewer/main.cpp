@@ -10,6 +10,7 @@
 // (green under 16.7 ms, red above; full width = 100 ms).
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/FocusController.hpp>
+#include <regolith/clod/Render.hpp>
 #include <regolith/clod/RenderTarget.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
@@ -71,23 +72,7 @@ struct Orbit {
 };
 
 Camera orbitCamera(const Orbit& o, const HeightPyramid& pyramid, int width, int height) {
-  const glm::dvec3 up = pyramid.up(o.target);
-  glm::dvec3 north = pyramid.kind() == SurfaceKind::Planet ? glm::dvec3(0.0, 0.0, 1.0) - up * up.z
-                                                           : glm::dvec3(0.0, 1.0, 0.0);
-  if (glm::length(north) < 1e-9) north = {1.0, 0.0, 0.0};
-  north = glm::normalize(north);
-  const glm::dvec3 east = glm::cross(north, up);
-  const double h = o.heading * M_PI / 180.0, p = o.pitch * M_PI / 180.0;
-  const glm::dvec3 back =
-      -(std::cos(p) * (std::cos(h) * north + std::sin(h) * east)) + std::sin(p) * up;
-  Camera cam;
-  cam.target = o.target;
-  cam.position = o.target + back * o.distance;
-  cam.up = up;
-  cam.width = width;
-  cam.height = height;
-  cam.near = std::max(0.05, o.distance * 1e-3);
-  return cam;
+  return cameraLookingAt(pyramid, o.target, o.heading, o.pitch, o.distance, 45.0, width, height);
 }
 
 }  // namespace

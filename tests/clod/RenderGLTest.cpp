@@ -42,5 +42,39 @@ TEST(RenderGLTest, RendersAPngThatShowsTheTerrainWhereTheCameraLooks) {
   EXPECT_THROW((void)renderImage(pyramid, req), InvalidArgument);
 }
 
+TEST(RenderGLTest, CameraLookingAtOrbitsTheTargetAtTheGivenHeadingAndElevation) {
+  const auto pyramid =
+      test::planePyramid(test::centredGrid(33, 33, 1.0), test::Crater{0.0, 5.0, 1.0, 1.0, 2.0});
+  const glm::dvec3 target{3.0, -2.0, 7.0};
+  for (const double heading : {0.0, 30.0, 90.0, 200.0}) {
+    for (const double elevation : {10.0, 45.0, 89.0, 90.0}) {
+      const Camera cam = cameraLookingAt(*pyramid, target, heading, elevation, 50.0, 40.0, 64, 48);
+      const double h = heading * M_PI / 180.0, e = elevation * M_PI / 180.0;
+      // The camera looks along the heading (x east, y north on a plane), down at elevation.
+      const glm::dvec3 expected{std::cos(e) * std::sin(h), std::cos(e) * std::cos(h), -std::sin(e)};
+      EXPECT_NEAR(glm::dot(cam.forward(), expected), 1.0, 1e-12) << heading << " " << elevation;
+      EXPECT_NEAR(glm::length(cam.position - target), 50.0, 1e-9);
+      EXPECT_NEAR(glm::dot(cam.up, cam.forward()), 0.0, 1e-12);  // never degenerate
+      const glm::dvec3 p = cam.project(target);  // the target is at the image centre
+      EXPECT_NEAR(p.x, 32.0, 1e-9);
+      EXPECT_NEAR(p.y, 24.0, 1e-9);
+      // A point north of the target is higher in the image (smaller y) unless looking south.
+      const glm::dvec3 north = cam.project(target + glm::dvec3(0.0, 1.0, 0.0));
+      if (std::cos(h) > 0.1) {
+        EXPECT_LT(north.y, p.y);
+      }
+      if (std::cos(h) < -0.1) {
+        EXPECT_GT(north.y, p.y);
+      }
+    }
+  }
+  EXPECT_THROW((void)cameraLookingAt(*pyramid, target, 0.0, 0.0, 50.0, 40.0, 64, 48),
+               InvalidArgument);
+  EXPECT_THROW((void)cameraLookingAt(*pyramid, target, 0.0, 91.0, 50.0, 40.0, 64, 48),
+               InvalidArgument);
+  EXPECT_THROW((void)cameraLookingAt(*pyramid, target, 0.0, 45.0, -1.0, 40.0, 64, 48),
+               InvalidArgument);
+}
+
 }  // namespace
 }  // namespace regolith::clod

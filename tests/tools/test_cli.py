@@ -145,6 +145,8 @@ def attrs(path, grid):
     (["query"], ["--grid", "--interp", "--coords", "--cache-mb", "--frame", "nan", "valid",
                 "Example"]),
     (["demo"], ["--size", "--spacing", "--queries", "--out"]),
+    (["render"], ["--target", "--distance", "--heading", "--elevation", "--fov", "--out",
+                 "Example"]),
 ])
 def test_help(cmd, expect):
     p = run(*cmd, "--help")
@@ -850,3 +852,104 @@ def test_query_levels_frames_and_cache(victoria, fixture_stores):
 
 if __name__ == "__main__":
     sys.exit(pytest.main([__file__, "-q"]))
+
+
+# ---- render ---------------------------------------------------------------------------------
+
+BACKGROUND = np.array([5, 5, 10])  # clod::RenderRequest's default background, in 8 bits
+
+
+def read_png(path):
+    from PIL import Image  # Debian's python3-pil, which python3-matplotlib depends on
+    return np.asarray(Image.open(path).convert("RGB")).astype(int)
+
+
+def terrain_mask(img):
+    return np.abs(img - BACKGROUND).sum(axis=2) > 6
+
+
+def test_render_dem_from_above_matches_a_pinhole_projection(work, h5py_store):
+    """Looking straight down, the silhouette's bounding box is where a pinhole camera puts
+    the DEM's outermost samples (at their own heights): numpy is the oracle."""
+    path, data = h5py_store
+    x0, y0, dx, dy = 100.0, 200.0, 2.0, 3.0
+    rows, cols = data.shape
+    width, height, fov, dist = 320, 240, 40.0, 400.0
+    f = (height / 2) / math.tan(math.radians(fov / 2))
+    tx = x0 + dx * (cols - 1) / 2
+    ty = y0 - dy * (rows - 1) / 2
+    th, _ = bilinear(data.astype(np.float64), x0, y0, dx, dy, tx, ty)
+    for heading in (0.0, 90.0):
+        out = work / f"render-hand-{int(heading)}.png"
+        p = run("render", path, "-o", out, "--width", width, "--height", height, "--fov", fov,
+                "--elevation", 90, "--distance", dist, "--heading", heading)
+        assert f"height {th:.4f}"[:12] in p.stdout, p.stdout
+        img = read_png(out)
+        assert img.shape == (height, width, 3)
+        ys, xs = np.nonzero(terrain_mask(img))
+        # Outermost samples (valid ones) and their image positions.
+        r, c = np.mgrid[0:rows, 0:cols]
+        edge = (r == 0) | (r == rows - 1) | (c == 0) | (c == cols - 1)
+        ex, ey, ez = x0 + dx * c[edge], y0 - dy * r[edge], data[edge].astype(np.float64)
+        zc = th + dist  # camera height; the camera looks down
+        # heading 0: east is right, north up; heading 90: the image's top is east.
+        right, upv = ((ex - tx), (ey - ty)) if heading == 0 else (-(ey - ty), (ex - tx))
+        px = width / 2 + f * right / (zc - ez)
+        py = height / 2 - f * upv / (zc - ez)
+        assert xs.min() == pytest.approx(px.min(), abs=1.5)
+        assert xs.max() + 1 == pytest.approx(px.max(), abs=1.5)
+        assert ys.min() == pytest.approx(py.min(), abs=1.5)
+        assert ys.max() + 1 == pytest.approx(py.max(), abs=1.5)
+
+
+def test_render_planet_disc_has_the_projected_radius(work, planet):
+    out = work / "render-mars.png"
+    width, height, fov = 300, 300, 45.0
+    run("render", planet, "-o", out, "--width", width, "--height", height, "--fov", fov)
+    mask = terrain_mask(read_png(out))
+    with h5py.File(planet, "r") as f:
+        a = float(f["grids/mars"].attrs["equatorial_radius"])
+    # Default view: straight down on lon 0, lat 0 from 2 equatorial radii above the surface.
+    h0 = level0(planet, "mars")
+    centre_h = float(np.nanmean(h0))  # relief is a few km: well under a pixel here
+    f_px = (height / 2) / math.tan(math.radians(fov / 2))
+    d = a + centre_h + 2 * a
+    radius_px = f_px * math.tan(math.asin(a / d))
+    row = mask[height // 2]
+    cols = np.nonzero(row)[0]
+    assert cols.max() + 1 - cols.min() == pytest.approx(2 * radius_px, abs=2.0)
+    assert (cols.min() + cols.max() + 1) / 2 == pytest.approx(width / 2, abs=1.0)
+    assert not mask[0, 0] and not mask[-1, -1]  # space around the disc
+
+
+def test_render_oblique_view_of_the_crater(work, victoria):
+    out = work / "render-victoria.png"
+    p = run("render", victoria, "-o", out, "--width", 400, "--height", 300)
+    assert "Wrote" in p.stdout and "patches loaded" in p.stdout
+    img = read_png(out)
+    mask = terrain_mask(img)
+    # Default: the whole DEM in view at 35°: sky above, terrain below, the centre on it.
+    assert mask[150, 200] and not mask[0].any() and mask[-40].any()
+    assert img[mask].std() > 3  # lit relief, not a flat fill
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--target", "5000,0"], "outside grid 'victoria'"),
+    (["--target", "nan,0"], "finite"),
+    (["--elevation", "0"], "elevation"),
+    (["--width", "4"], "width"),
+    (["--grid", "nope"], "nope"),
+    (["--clipmap-size", "256"], "odd"),
+])
+def test_render_errors(work, victoria, args, needle):
+    p = run("render", victoria, "-o", work / "bad.png", *args, check=False)
+    assert p.returncode != 0
+    assert p.stderr.startswith("regolith: error: "), p.stderr
+    assert needle in p.stderr, p.stderr
+    assert not (work / "bad.png").exists()
+
+
+def test_render_needs_a_grid_choice(work, fixture_stores):
+    path, _ = fixture_stores
+    p = run("render", path, "-o", work / "bad.png", check=False)
+    assert p.returncode != 0 and "choose one with --grid" in p.stderr, p.stderr

@@ -34,6 +34,17 @@ struct RenderRequest {
                                             double pitchDegrees, double fovYDegrees, int width,
                                             int height);
 
+/// An orbit camera: looks at scene point `target` from `distance` metres away, from the
+/// direction given by a heading (degrees clockwise from north, the direction the camera
+/// looks in) and an elevation above the target's horizon (degrees, in (0, 90]; 90 looks
+/// straight down with north at the top of the image). The image's vertical is the target's
+/// "up" tilted into the view plane, so the horizon stays level. Near plane: distance × 1e-3
+/// (at least 5 cm). Throws InvalidArgument for an elevation outside (0, 90] or a distance
+/// that is not positive and finite.
+[[nodiscard]] Camera cameraLookingAt(const HeightPyramid& pyramid, const glm::dvec3& target,
+                                     double headingDegrees, double elevationDegrees,
+                                     double distance, double fovYDegrees, int width, int height);
+
 /// Renders the terrain headless: creates an EGL surfaceless context if none is current on
 /// this thread, loads every level synchronously around the focus, draws once. Throws
 /// GlError if no GL 4.5 context can be made, InvalidArgument for a bad request.

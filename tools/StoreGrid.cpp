@@ -1,0 +1,38 @@
+#include "StoreGrid.hpp"
+
+#include <regolith/topo/Error.hpp>
+
+#include <algorithm>
+#include <optional>
+#include <utility>
+#include <vector>
+
+namespace regolith::tools {
+
+std::string chooseGrid(const store::Store& s, const std::string& requested,
+                       const std::string& command) {
+  if (!requested.empty()) return requested;
+  std::vector<std::string> names = s.gridNames();
+  if (names.size() == 1) return names[0];
+  std::sort(names.begin(), names.end());
+  std::string list;
+  for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+  throw InvalidArgument(command + ": " + s.path().string() + " has " +
+                        std::to_string(names.size()) + " grids (" + list +
+                        "); choose one with --grid");
+}
+
+std::shared_ptr<const clod::HeightPyramid> pyramidFromStore(const store::Pager& pager,
+                                                            const std::string& grid) {
+  const store::GridInfo& info = pager.store().grid(grid);
+  std::vector<clod::HeightPyramid::Level> levels;
+  levels.reserve(info.levels);
+  for (std::size_t l = 0; l < info.levels; ++l)
+    levels.push_back({store::topoGridOf(info, l), pager.source(grid, l)});
+  const bool planet = info.kind == store::GridKind::Planet;
+  return std::make_shared<const clod::HeightPyramid>(
+      std::move(levels), planet ? clod::SurfaceKind::Planet : clod::SurfaceKind::Plane,
+      planet ? std::optional<topo::Body>(store::bodyOf(info)) : std::nullopt, info.latitudeType);
+}
+
+}  // namespace regolith::tools

@@ -1,0 +1,24 @@
+#pragma once
+// Helpers the subcommands share to pick a store's grid and hand it to the renderer.
+#include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/store/Pager.hpp>
+#include <regolith/store/Store.hpp>
+
+#include <memory>
+#include <string>
+
+namespace regolith::tools {
+
+/// `requested` if not empty (Store::grid() names the grids if it is missing), else the
+/// store's only grid; throws InvalidArgument("<command>: <file> has N grids (a, b); choose
+/// one with --grid") if there are several.
+std::string chooseGrid(const store::Store& s, const std::string& requested,
+                       const std::string& command);
+
+/// A store grid as the renderer's height pyramid: one level per stored pyramid level, each
+/// read through the pager (so rendering pages patches into the pager's cache). A DEM is
+/// drawn in its grid frame (x east, y north, z height), a planet in body-fixed metres.
+std::shared_ptr<const clod::HeightPyramid> pyramidFromStore(const store::Pager& pager,
+                                                            const std::string& grid);
+
+}  // namespace regolith::tools
