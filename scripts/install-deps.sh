@@ -11,10 +11,12 @@ PACKAGES=(
   # maths and rendering: GLM, OpenGL/EGL through Mesa (llvmpipe; clod links libglvnd's
   # libOpenGL from libopengl-dev, no GLX), GLFW windows, PNG
   libglm-dev libegl-dev libgl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev libpng-dev
+  # a virtual X server for the viewer's window test (xvfb-run needs xauth)
+  xvfb xauth
   # tests, benchmarks, CLI, JSON
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   # Python bindings and Python-side oracles (Debian's interpreter, not PyPI)
-  python3 python3-dev pybind11-dev python3-numpy python3-pytest python3-h5py python3-gdal python3-matplotlib
+  python3 python3-dev pybind11-dev python3-numpy python3-pytest python3-h5py python3-gdal python3-matplotlib python3-pil
 )
 
 missing=()

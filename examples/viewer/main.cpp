@@ -2,6 +2,9 @@
 //
 //   regolith_viewer [store.h5 grid]     a store's grid, paged; without arguments a
 //                                       synthetic 4097² crater DEM at 1 m
+//   regolith_viewer ... --frames N --screenshot out.png
+//                                       runs N frames (synchronous loading), saves the
+//                                       last one and exits (the smoke test under Xvfb)
 //
 // Mouse: left drag orbits around the look-at point, wheel zooms. Keys: W/A/S/D move the
 // look-at point (and with it the focus), T ties the focus to a marker driving in circles
@@ -22,9 +25,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <memory>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -79,7 +85,31 @@ Camera orbitCamera(const Orbit& o, const HeightPyramid& pyramid, int width, int 
 
 int main(int argc, char** argv) {
   try {
-    const auto pyramid = argc >= 3 ? pyramidFromStore(argv[1], argv[2]) : syntheticDem();
+    std::vector<std::string> positional;
+    long frameLimit = 0;  // 0: until the window closes
+    std::string finalShot;
+    for (int i = 1; i < argc; ++i) {
+      const std::string arg = argv[i];
+      if ((arg == "--frames" || arg == "--screenshot") && i + 1 < argc) {
+        const std::string value = argv[++i];
+        if (arg == "--screenshot") {
+          finalShot = value;
+        } else {
+          frameLimit = std::strtol(value.c_str(), nullptr, 10);
+          if (frameLimit <= 0) throw std::invalid_argument("--frames " + value + ": expected > 0");
+        }
+      } else if (arg.rfind("--", 0) == 0) {
+        throw std::invalid_argument("unknown option " + arg +
+                                    " (usage: regolith_viewer [store.h5 grid] [--frames N "
+                                    "--screenshot out.png])");
+      } else {
+        positional.push_back(arg);
+      }
+    }
+    if (positional.size() != 0 && positional.size() != 2)
+      throw std::invalid_argument("expected a store and a grid name, or nothing");
+    const auto pyramid =
+        positional.size() == 2 ? pyramidFromStore(positional[0], positional[1]) : syntheticDem();
     if (glfwInit() == GLFW_FALSE) {
       std::fprintf(stderr, "regolith_viewer: glfwInit() failed (no display?)\n");
       return 1;
@@ -114,7 +144,9 @@ int main(int argc, char** argv) {
       int width = 1280, height = 720;
       focus.addCamera(orbitCamera(orbit, *pyramid, width, height), glfwGetTime());
       auto target = std::make_unique<RenderTarget>(width, height);
-      bool async = true, tiedPrev = false, screenshotPrev = false, asyncPrev = false;
+      // A scripted run (--frames) loads synchronously so its frames are deterministic.
+      bool async = frameLimit == 0, tiedPrev = false, screenshotPrev = false, asyncPrev = false;
+      long frames = 0;
       int shots = 0;
       double frameMs = 0.0;
       while (glfwWindowShouldClose(window) == GLFW_FALSE) {
@@ -204,6 +236,19 @@ int main(int argc, char** argv) {
           std::printf("saved %s\n", name);
         }
         screenshotPrev = shotKey;
+        if (frameLimit > 0 && ++frames >= frameLimit) {
+          const RgbaImage last = target->readColor();
+          std::size_t covered = 0;
+          for (int y = 8; y < last.height; ++y)  // below the frame-time bar
+            for (int x = 0; x < last.width; ++x) covered += last.is(x, y, 5, 5, 13) ? 0U : 1U;
+          const double share =
+              100.0 * static_cast<double>(covered) /
+              (static_cast<double>(last.width) * static_cast<double>(last.height - 8));
+          if (!finalShot.empty()) writePng(finalShot, last);
+          std::printf("%ld frames in a %dx%d window; terrain on %.0f%% of pixels%s%s\n", frames,
+                      width, height, share, finalShot.empty() ? "" : "; saved ", finalShot.c_str());
+          glfwSetWindowShouldClose(window, GLFW_TRUE);
+        }
         glBlitNamedFramebuffer(target->framebuffer(), 0, 0, 0, width, height, 0, 0, width, height,
                                GL_COLOR_BUFFER_BIT, GL_NEAREST);
         glfwSwapBuffers(window);
