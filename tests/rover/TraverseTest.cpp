@@ -1,0 +1,234 @@
+// The traverse on real stores: contacts against direct TopoDem queries, the chassis on
+// analytic planes, the cache budget, and bad options.
+#include <regolith/rover/Traverse.hpp>
+#include <regolith/store/Generate.hpp>
+#include <regolith/store/Pager.hpp>
+#include <regolith/store/Store.hpp>
+#include <regolith/topo/Error.hpp>
+#include <regolith/topo/TopoDem.hpp>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <support/StoreScratch.hpp>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+
+namespace {
+
+using namespace regolith;
+using namespace regolith::rover;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+/// The default Victoria-like crater at 4 m spacing (1204 m square, like the 1 m default), in
+/// 64×64 patches; written once per test process.
+const std::filesystem::path& victoriaStore() {
+  static const std::filesystem::path path = [] {
+    auto p = test::scratchFile("rover", "victoria.h5");
+    store::VictoriaOptions o;
+    o.size = 302;
+    o.spacing = 4.0;
+    o.write.patchRows = o.write.patchCols = 64;
+    store::VictoriaGenerator(o).write(p);
+    return p;
+  }();
+  return path;
+}
+
+/// A plane h = gx·x + gy·y + h0 on a 201×201 grid at 1 m centred on (0, 0), 64×64 patches.
+std::filesystem::path planeStore(const std::string& name, double gx, double gy, double h0) {
+  const auto path = test::scratchFile("rover", name);
+  store::GridSource g;
+  g.info.name = "plane";
+  g.info.rows = g.info.cols = 201;
+  g.info.x0 = -100.0;
+  g.info.y0 = 100.0;
+  g.info.placement.originLatDeg = -2.05;
+  g.info.placement.originLonDeg = -5.5;
+  g.samples = topo::InMemorySamples::fromFunction(201, 201, [&](std::size_t r, std::size_t c) {
+    const double x = -100.0 + static_cast<double>(c), y = 100.0 - static_cast<double>(r);
+    return static_cast<float>(gx * x + gy * y + h0);
+  });
+  store::WriteOptions w;
+  w.patchRows = w.patchCols = 64;
+  store::writeStore(path, std::span(&g, 1), w);
+  return path;
+}
+
+TraverseOptions victoriaOptions() {
+  TraverseOptions o;
+  o.store = victoriaStore();
+  o.path = defaultVictoriaPath();
+  o.speed = 100.0;  // 10 cm per 1 ms step: about 11,400 steps over the 1,138 m path
+  return o;
+}
+
+TEST(TraverseTest, WheelContactsEqualDirectTopoDemQueries) {
+  // An independent pager and cache over the same file: the oracle.
+  auto file = std::make_shared<const store::Store>(store::Store::open(victoriaStore()));
+  const store::Pager pager(file, std::make_shared<store::PatchCache>(std::size_t{64} << 20));
+  const topo::TopoDem dem = pager.dem("victoria");
+  const store::VictoriaShape shape = store::VictoriaGenerator(store::VictoriaOptions{}).shape();
+  const Rover rover;
+  std::size_t checked = 0;
+  double worstShape = 0.0;
+  const TraverseResult r = runTraverse(victoriaOptions(), [&](const StepState& s) {
+    const auto wheels = rover.wheelPositions(s.ground);
+    for (std::size_t i = 0; i < kWheels; ++i) {
+      const WheelContact& c = s.wheels[i];
+      EXPECT_EQ(c.x, wheels[i].x);
+      EXPECT_EQ(c.y, wheels[i].y);
+      const topo::SurfaceSample q = dem.surface(c.x, c.y);
+      EXPECT_EQ(c.status, topo::QueryStatus::Ok);
+      EXPECT_EQ(c.height, q.height);
+      EXPECT_EQ(c.normal, q.normal);
+      worstShape = std::max(worstShape, std::abs(c.height - shape.height(c.x, c.y)));
+      ++checked;
+    }
+    return true;
+  });
+  EXPECT_EQ(checked, r.queries);
+  EXPECT_EQ(r.queries, 6 * r.steps);
+  // The path: 147.6 m to (−430, −20), on to 170° on a 430 m circle, then six chords of 20°.
+  const double length =
+      std::hypot(130.0, 70.0) +
+      std::hypot(-430.0 - 430.0 * std::cos(170.0 * kDeg), -20.0 - 430.0 * std::sin(170.0 * kDeg)) +
+      12.0 * 430.0 * std::sin(10.0 * kDeg);
+  EXPECT_EQ(r.steps, static_cast<std::size_t>(std::floor(length / 0.1)) + 1);
+  EXPECT_NEAR(r.distance, length, 0.1);
+  // Outside oracle: the analytic crater. Bilinear interpolation of 4 m samples of the
+  // gentle ejecta blanket the path drives on stays within a few centimetres.
+  EXPECT_LT(worstShape, 0.1);
+  EXPECT_GT(r.cache.loads, 0U);
+  EXPECT_EQ(r.cache.loads, r.reads.reads);
+  EXPECT_GT(r.reads.bytesRead, 0U);
+}
+
+TEST(TraverseTest, ChassisMatchesATiltedPlane) {
+  // h = 0.125·x − 0.0625·y: exact in float at integer x, y, and bilinear is exact on planes.
+  TraverseOptions o;
+  o.store = planeStore("tilted.h5", 0.125, -0.0625, 3.0);
+  o.grid = "plane";
+  o.path = {{-80.0, -70.0}, {60.0, 50.0}, {60.0, -60.0}};
+  o.speed = 50.0;
+  const glm::dvec3 n = glm::normalize(glm::dvec3(-0.125, 0.0625, 1.0));
+  std::size_t steps = 0;
+  (void)runTraverse(o, [&](const StepState& s) {
+    const ChassisPose& p = s.chassis;
+    const glm::dvec3 f{std::sin(s.ground.heading), std::cos(s.ground.heading), 0.0};
+    const glm::dvec3 l{-f.y, f.x, 0.0};
+    // The slope along the heading gives the pitch. Rolling by φ about the pitched forward
+    // axis turns the up axis towards −left by φ, and the left axis stays horizontal, so the
+    // plane's normal has n·l = −sin φ.
+    const double pitch = std::atan(0.125 * f.x - 0.0625 * f.y);
+    const double roll = std::asin(-glm::dot(n, l));
+    EXPECT_NEAR(p.pitch, pitch, 1e-12);
+    EXPECT_NEAR(p.roll, roll, 1e-12);
+    EXPECT_NEAR(p.height, 0.125 * s.ground.x - 0.0625 * s.ground.y + 3.0, 1e-9);
+    EXPECT_NEAR(glm::distance(p.up, n), 0.0, 1e-12);
+    EXPECT_NEAR(p.residual, 0.0, 1e-9);
+    ++steps;
+    return true;
+  });
+  EXPECT_EQ(steps, 5888U);  // ⌊294.39 m / 5 cm⌋ + 1
+}
+
+TEST(TraverseTest, FlatPlaneIsLevel) {
+  TraverseOptions o;
+  o.store = planeStore("flat.h5", 0.0, 0.0, -1400.25);
+  o.grid = "plane";
+  o.path = {{-80.0, 0.0}, {80.0, 30.0}};
+  o.speed = 50.0;
+  const TraverseResult r = runTraverse(o, [&](const StepState& s) {
+    EXPECT_EQ(s.chassis.pitch, 0.0);
+    EXPECT_EQ(s.chassis.roll, 0.0);
+    EXPECT_EQ(s.chassis.height, -1400.25);
+    for (const WheelContact& c : s.wheels) EXPECT_EQ(c.normal, glm::dvec3(0.0, 0.0, 1.0));
+    return true;
+  });
+  EXPECT_EQ(r.maxTilt, 0.0);
+}
+
+TEST(TraverseTest, ResidentBytesNeverExceedTheBudget) {
+  TraverseOptions o = victoriaOptions();
+  // Three 64×64 patches (16 KiB of samples each, plus overhead): the path crosses ~15.
+  o.cacheBytes = 3 * (64 * 64 * 4 + 1024);
+  std::size_t over = 0;
+  const TraverseResult r = runTraverse(o, [&](const StepState& s) {
+    over += s.cache.residentBytes > o.cacheBytes ? 1 : 0;
+    EXPECT_EQ(s.cache.capacityBytes, o.cacheBytes);
+    return true;
+  });
+  EXPECT_LE(r.peakResidentBytes, o.cacheBytes);
+  EXPECT_GT(r.peakResidentBytes, 0U);
+  EXPECT_LE(r.cache.residentBytes, o.cacheBytes);
+  EXPECT_EQ(r.cache.capacityBytes, o.cacheBytes);
+  EXPECT_GT(r.cache.evictions, 0U);  // the budget did bind
+  EXPECT_EQ(over, 0U);
+}
+
+TEST(TraverseTest, TheCallbackCanStopTheTraverse) {
+  std::size_t seen = 0;
+  const TraverseResult r = runTraverse(victoriaOptions(), [&](const StepState& s) {
+    ++seen;
+    return s.step < 99;
+  });
+  EXPECT_EQ(seen, 100U);
+  EXPECT_EQ(r.steps, 100U);
+}
+
+std::string errorOf(const TraverseOptions& o) {
+  try {
+    (void)runTraverse(o);
+  } catch (const regolith::Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(TraverseTest, BadOptionsGiveClearErrors) {
+  TraverseOptions o = victoriaOptions();
+  o.cacheBytes = 0;
+  EXPECT_EQ(errorOf(o),
+            "rover::runTraverse(): cacheBytes is 0, expected a cache budget > 0 bytes");
+  EXPECT_THROW((void)runTraverse(o), InvalidArgument);
+
+  o = victoriaOptions();
+  o.path[1].y = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(errorOf(o),
+            "rover::runTraverse(): path waypoint 1 is (-430, nan), expected finite grid "
+            "coordinates in metres");
+
+  o = victoriaOptions();
+  o.path.resize(1);
+  EXPECT_EQ(errorOf(o), "rover::runTraverse(): path has 1 waypoints, expected at least 2");
+
+  o = victoriaOptions();
+  o.speed = -1.0;
+  EXPECT_EQ(errorOf(o), "rover::runTraverse(): speed is -1 m/s, expected finite and > 0");
+
+  // The grid's pixel extent is [−604, 604] m; the rover reaches 1.556 m from its centre.
+  o = victoriaOptions();
+  o.path.push_back({603.0, 0.0});
+  const std::string e = errorOf(o);
+  EXPECT_NE(e.find("rover::runTraverse(): path waypoint 9 (603, 0) puts a wheel (reach 1.55563 m) "
+                   "outside grid 'victoria' of "),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find(": x must lie in [-602.444, 602.444]"), std::string::npos) << e;
+
+  o = victoriaOptions();
+  o.grid = "nope";
+  EXPECT_NE(errorOf(o).find("nope"), std::string::npos);
+  EXPECT_THROW((void)runTraverse(o), store::StoreError);
+
+  o = victoriaOptions();
+  o.store = "/nonexistent/rover.h5";
+  EXPECT_THROW((void)runTraverse(o), store::StoreError);
+}
+
+}  // namespace
