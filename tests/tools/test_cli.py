@@ -144,7 +144,8 @@ def attrs(path, grid):
                   "--nodata", "tiles", "Example"]),
     (["query"], ["--grid", "--interp", "--coords", "--cache-mb", "--frame", "nan", "valid",
                 "Example"]),
-    (["demo"], ["--size", "--spacing", "--queries", "--out"]),
+    (["walkthrough"], ["--size", "--spacing", "--queries", "--out"]),
+    (["demo"], ["--out", "--data", "--cache-mb", "--frames", "--quick"]),
     (["render"], ["--target", "--distance", "--heading", "--elevation", "--fov", "--out",
                  "Example"]),
 ])
