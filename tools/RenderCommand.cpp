@@ -8,6 +8,7 @@
 #include "StoreGrid.hpp"
 
 #include <CLI/CLI.hpp>
+#include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -29,7 +30,9 @@ struct Args {
   std::string grid;
   std::string out = "render.png";
   int width = 1280, height = 720;
-  std::vector<double> target;  // a, b: x, y (DEM) or lon, lat (planet)
+  std::vector<double> target;    // a, b: x, y (DEM) or lon, lat (planet)
+  std::vector<double> position;  // a, b, altitude above the surface there
+  std::optional<double> pitch;
   std::optional<double> distance;
   double heading = 0.0;
   std::optional<double> elevation;
@@ -60,17 +63,19 @@ void runRender(const Args& a) {
   const store::Pager pager(store, cache);
   const auto pyramid = pyramidFromStore(pager, gridName);
 
-  // The look-at point: --target, else the grid's centre; on the surface where it has data.
+  // A grid point given on the command line: checked, and lifted to the surface (the finest
+  // level with data there; 0 m over nodata everywhere).
   const topo::TopoGrid g0 = store::topoGridOf(info, 0);
-  double ta = 0.5 * (g0.west() + g0.east()), tb = 0.5 * (g0.north() + g0.south());
-  if (!a.target.empty()) {
-    ta = a.target[0];
-    tb = a.target[1];
-    if (!std::isfinite(ta) || !std::isfinite(tb))
-      throw InvalidArgument("render: --target must be two finite numbers");
-    if (planet ? std::abs(tb) > 90.0 : !g0.contains(ta, tb)) {
+  struct Ground {
+    double a, b, h;
+  };
+  const auto ground = [&](double pa, double pb, const char* option) {
+    if (!std::isfinite(pa) || !std::isfinite(pb))
+      throw InvalidArgument(std::string("render: ") + option + " must be finite numbers");
+    if (planet ? std::abs(pb) > 90.0 : !g0.contains(pa, pb)) {
       std::ostringstream msg;
-      msg << "render: --target " << ta << "," << tb << " is outside grid '" << gridName << "' ("
+      msg << "render: " << option << " " << pa << "," << pb << " is outside grid '" << gridName
+          << "' ("
           << (planet ? "latitude must be within [-90, 90]"
                      : "x in [" + std::to_string(g0.west()) + ", " + std::to_string(g0.east()) +
                            "], y in [" + std::to_string(g0.south()) + ", " +
@@ -78,8 +83,13 @@ void runRender(const Args& a) {
           << ")";
       throw InvalidArgument(msg.str());
     }
-  }
-  const double th = surfaceHeight(pager, gridName, info, ta, tb).value_or(0.0);
+    return Ground{pa, pb, surfaceHeight(pager, gridName, info, pa, pb).value_or(0.0)};
+  };
+  // The look-at point: --look-at, else the grid's centre.
+  const Ground t = a.target.empty() ? ground(0.5 * (g0.west() + g0.east()),
+                                             0.5 * (g0.north() + g0.south()), "--look-at")
+                                    : ground(a.target[0], a.target[1], "--look-at");
+  const double ta = t.a, tb = t.b, th = t.h;
   const glm::dvec3 target = pyramid->position(ta, tb, th);
 
   // Defaults: a planet seen whole from straight above; a DEM at 35° from 1.2 × its extent.
@@ -88,8 +98,46 @@ void runRender(const Args& a) {
   const double distance = a.distance.value_or(planet ? 2.0 * extent : 1.2 * extent);
   const double elevation = a.elevation.value_or(planet ? 90.0 : 35.0);
   clod::RenderRequest request;
-  request.camera = clod::cameraLookingAt(*pyramid, target, a.heading, elevation, distance, a.fov,
-                                         a.width, a.height);
+  std::ostringstream view;
+  view << std::setprecision(10);
+  if (a.position.empty()) {
+    request.camera = clod::cameraLookingAt(*pyramid, target, a.heading, elevation, distance, a.fov,
+                                           a.width, a.height);
+    view << "looking at " << (planet ? "lon,lat " : "x,y ") << ta << "," << tb << " (height " << th
+         << " m) from " << distance << " m, heading " << a.heading << "°, elevation " << elevation
+         << "°";
+  } else {
+    // A camera at a position: --look-at aims it at a surface point, else heading and pitch.
+    const Ground p = ground(a.position[0], a.position[1], "--position");
+    if (!std::isfinite(a.position[2]))
+      throw InvalidArgument("render: --position altitude must be a finite number");
+    const glm::dvec3 eye = pyramid->position(p.a, p.b, p.h + a.position[2]);
+    view << "from " << (planet ? "lon,lat " : "x,y ") << p.a << "," << p.b << " at "
+         << a.position[2] << " m above the surface (height " << p.h << " m), ";
+    if (!a.target.empty()) {
+      const glm::dvec3 dir = target - eye;
+      if (glm::length(dir) < 1e-6)
+        throw InvalidArgument("render: --position and --look-at are the same point");
+      request.camera.position = eye;
+      request.camera.target = target;
+      // Up: the local vertical, or north when looking straight down.
+      glm::dvec3 up = pyramid->up(eye);
+      if (glm::length(glm::cross(glm::normalize(dir), up)) < 1e-9)
+        up = clod::cameraLookingAt(*pyramid, target, 0.0, 90.0, 1.0, a.fov, 2, 2).up;
+      request.camera.up = up;
+      request.camera.fovYDegrees = a.fov;
+      request.camera.width = a.width;
+      request.camera.height = a.height;
+      request.camera.near = std::max(0.05, 1e-3 * glm::length(dir));
+      view << "looking at " << ta << "," << tb << " (height " << th << " m)";
+    } else {
+      const double pitch = a.pitch.value_or(-20.0);
+      request.camera =
+          clod::cameraFromHeadingPitch(*pyramid, eye, a.heading, pitch, a.fov, a.width, a.height);
+      request.camera.near = std::max(0.05, 1e-3 * std::abs(a.position[2]));
+      view << "heading " << a.heading << "°, pitch " << pitch << "°";
+    }
+  }
   request.clipmap.size = a.clipmapSize;
   if (planet) {
     // On a coarse planet, shrink the levels to the largest odd size whose finest window
@@ -109,10 +157,8 @@ void runRender(const Args& a) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const store::CacheStats stats = cache->stats();
-  std::cout << std::setprecision(10) << "Wrote " << a.out << " (" << a.width << "×" << a.height
-            << "): grid '" << gridName << "' of " << a.store << ", looking at "
-            << (planet ? "lon,lat " : "x,y ") << ta << "," << tb << " (height " << th << " m) from "
-            << distance << " m, heading " << a.heading << "°, elevation " << elevation << "°\n"
+  std::cout << "Wrote " << a.out << " (" << a.width << "×" << a.height << "): grid '" << gridName
+            << "' of " << a.store << ", " << view.str() << "\n"
             << std::setprecision(3) << "  " << seconds << " s; " << stats.loads
             << " patches loaded, " << static_cast<double>(stats.bytesLoaded) / 1048576.0
             << " MiB loaded\n";
@@ -125,8 +171,9 @@ void addRenderCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "render",
       "Renders a store's grid headless (EGL, no display or GPU needed) with the geometry-"
-      "clipmap renderer and writes a PNG. The camera looks at a target point on the surface "
-      "from a distance, a heading and an elevation above the target's horizon");
+      "clipmap renderer and writes a PNG. The camera orbits a look-at point on the surface "
+      "(distance, heading, elevation), or stands at --position and looks at --look-at or "
+      "along --heading and --pitch");
   cmd->add_option("store", a->store, "Store file (HDF5)")->required();
   cmd->add_option("--grid", a->grid, "Grid to render (default: the store's only grid)");
   cmd->add_option("-o,--out", a->out, "PNG file to write (replaced atomically)")
@@ -137,23 +184,35 @@ void addRenderCommand(CLI::App& app) {
   cmd->add_option("--height", a->height, "Image height in pixels")
       ->check(CLI::Range(16, 8192))
       ->capture_default_str();
-  cmd->add_option("--target", a->target,
-                  "Look-at point 'a,b': x,y in metres for a DEM, lon,lat in degrees for a "
-                  "planet (default: the grid's centre); the camera aims at the surface there")
+  cmd->add_option("--look-at,--target", a->target,
+                  "Look-at point 'a,b' on the surface: x,y in metres for a DEM, lon,lat in "
+                  "degrees for a planet (default: the grid's centre)")
       ->delimiter(',')
       ->expected(2);
+  cmd->add_option("--position", a->position,
+                  "Camera position 'a,b,altitude': a grid point as for --look-at and the "
+                  "height above the surface there, in metres. The camera then looks at "
+                  "--look-at if given, else along --heading and --pitch (without "
+                  "--position it orbits the look-at point)")
+      ->delimiter(',')
+      ->expected(3);
   cmd->add_option("--distance", a->distance,
-                  "Camera distance from the target in metres (default: a DEM's larger extent "
-                  "× 1.2; a planet's equatorial radius × 2)")
+                  "Orbit: camera distance from the look-at point in metres (default: a DEM's "
+                  "larger extent × 1.2; a planet's equatorial radius × 2)")
       ->check(CLI::Range(1e-3, 1e13));
   cmd->add_option("--heading", a->heading,
                   "Direction the camera looks in, degrees clockwise from north")
       ->check(CLI::Range(-360.0, 360.0))
       ->capture_default_str();
   cmd->add_option("--elevation", a->elevation,
-                  "Camera elevation above the target's horizon in degrees, (0, 90]; 90 looks "
-                  "straight down with north up (default: 35 for a DEM, 90 for a planet)")
+                  "Orbit: camera elevation above the look-at point's horizon in degrees, "
+                  "(0, 90]; 90 looks straight down with north up (default: 35 for a DEM, 90 "
+                  "for a planet)")
       ->check(CLI::Range(1e-3, 90.0));
+  cmd->add_option("--pitch", a->pitch,
+                  "With --position and no --look-at: view pitch in degrees, (-90, 90), "
+                  "negative looks down (default: -20)")
+      ->check(CLI::Range(-89.999, 89.999));
   cmd->add_option("--fov", a->fov, "Vertical field of view in degrees")
       ->check(CLI::Range(1.0, 170.0))
       ->capture_default_str();
@@ -167,8 +226,10 @@ void addRenderCommand(CLI::App& app) {
   cmd->footer(
       "Examples:\n"
       "  regolith render victoria.h5 -o victoria.png\n"
-      "  regolith render victoria.h5 --target 0,-300 --distance 900 --heading 20 --elevation 25\n"
-      "  regolith render mars.h5 --target -5.5,-2 --distance 2e6 --elevation 60\n"
+      "  regolith render victoria.h5 --look-at 0,-300 --distance 900 --heading 20 --elevation 25\n"
+      "  regolith render victoria.h5 --position -450,0,2 --look-at 0,0\n"
+      "  regolith render victoria.h5 --position -450,0,2 --heading 90 --pitch -10\n"
+      "  regolith render mars.h5 --look-at -5.5,-2 --distance 2e6 --elevation 60\n"
       "Exit status: 0 on success; non-zero with 'regolith: error: ...' on stderr otherwise "
       "(including when no OpenGL 4.5 context can be made).");
   cmd->callback([a] { runRender(*a); });

@@ -936,7 +936,10 @@ def test_render_oblique_view_of_the_crater(work, victoria):
 
 @pytest.mark.parametrize("args,needle", [
     (["--target", "5000,0"], "outside grid 'victoria'"),
-    (["--target", "nan,0"], "finite"),
+    (["--look-at", "nan,0"], "finite"),
+    (["--position", "0,9000,10"], "--position 0,9000 is outside grid 'victoria'"),
+    (["--position", "0,0,nan"], "altitude"),
+    (["--position", "0,0"], "--position"),
     (["--elevation", "0"], "elevation"),
     (["--width", "4"], "width"),
     (["--grid", "nope"], "nope"),
@@ -948,6 +951,39 @@ def test_render_errors(work, victoria, args, needle):
     assert p.stderr.startswith("regolith: error: "), p.stderr
     assert needle in p.stderr, p.stderr
     assert not (work / "bad.png").exists()
+
+
+def test_render_camera_modes_agree(work, h5py_store):
+    """An orbit (look-at, heading, elevation, distance), a camera at a position aimed at the
+    same look-at point, and one at that position with the same heading and pitch see the
+    same image: the position is given as a grid point and an altitude above the surface
+    there, which the test computes with its own bilinear interpolation of the samples."""
+    path, data = h5py_store
+    x0, y0, dx, dy = 100.0, 200.0, 2.0, 3.0
+    heights = data.astype(np.float64)
+    tx, ty = 150.0, 140.0
+    th, _ = bilinear(heights, x0, y0, dx, dy, tx, ty)
+    heading, elevation, dist = 30.0, 60.0, 80.0
+    h, e = math.radians(heading), math.radians(elevation)
+    fwd = np.array([math.cos(e) * math.sin(h), math.cos(e) * math.cos(h), -math.sin(e)])
+    px, py, pz = np.array([tx, ty, th]) - fwd * dist
+    ph, _ = bilinear(heights, x0, y0, dx, dy, px, py)
+    common = ["--width", 200, "--height", 150]
+    images = []
+    for i, args in enumerate([
+            ["--look-at", f"{tx},{ty}", "--heading", heading, "--elevation", elevation,
+             "--distance", dist],
+            ["--position", f"{px!r},{py!r},{pz - ph!r}", "--look-at", f"{tx},{ty}"],
+            ["--position", f"{px!r},{py!r},{pz - ph!r}", "--heading", heading, "--pitch",
+             -elevation]]):
+        out = work / f"render-mode-{i}.png"
+        run("render", path, "-o", out, *common, *args)
+        images.append(read_png(out))
+    for img in images[1:]:
+        diff = np.abs(img - images[0]).sum(axis=2)
+        assert terrain_mask(img).sum() > 1000
+        assert diff.mean() < 0.5, diff.mean()
+        assert (diff > 30).sum() < 20  # at most a few silhouette pixels
 
 
 def test_render_needs_a_grid_choice(work, fixture_stores):
