@@ -338,3 +338,38 @@ TEST(Pager, EightThreadsJumpingBetweenPatchesUnderEvictionGetTheInMemoryAnswers)
   EXPECT_LE(s.residentBytes, s.capacityBytes);
   EXPECT_GT(s.evictions, 100u);
 }
+
+TEST(Pager, BatchesThatPrefetchAheadUnderEvictionGetTheInMemoryAnswers) {
+  // heights() prefetches the cells of points a few ahead from the block table's hints;
+  // patches are evicted and freed meanwhile (a small budget, four threads), and every batch
+  // still equals the in-memory answers, nodata and points outside the grid included.
+  Opened o = openFixture(3 * patchBytes());
+  const TopoDem dem = o.pager.dem("dem");
+  const TopoDem mem = inMemoryDem();
+  std::vector<double> xs(3000), ys(3000), ref(3000);
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<double> x(-520.0, 420.0), y(-320.0, 420.0);
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    xs[i] = x(rng);
+    ys[i] = y(rng);
+    ref[i] = mem.height(xs[i], ys[i]).height;
+  }
+  std::vector<std::size_t> wrong(4, 0);
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < 4; ++t) {
+    threads.emplace_back([&, t] {
+      std::vector<double> got(xs.size());
+      std::vector<QueryStatus> status(xs.size());
+      for (int round = 0; round < 3; ++round) {
+        dem.heights(xs, ys, got,
+                    round == 1 ? std::span<QueryStatus>(status) : std::span<QueryStatus>());
+        for (std::size_t i = 0; i < xs.size(); ++i) {
+          if (!(got[i] == ref[i] || (std::isnan(got[i]) && std::isnan(ref[i])))) ++wrong[t];
+        }
+      }
+    });
+  }
+  for (auto& th : threads) th.join();
+  for (std::size_t t = 0; t < 4; ++t) EXPECT_EQ(wrong[t], 0u) << "thread " << t;
+  EXPECT_GT(o.cache->stats().evictions, 100u);
+}

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <thread>
+#include <vector>
 
 using namespace regolith;
 using namespace regolith::topo;
@@ -50,6 +51,25 @@ TEST(BlockTable, RetractedBlocksAreNoLongerFound) {
   EXPECT_EQ(t.find(3, 7), nullptr);
   t.retract(1, 1);
   EXPECT_EQ(t.find(5, 5), nullptr);
+}
+
+TEST(BlockTable, PrefetchHintsNeverReadABlock) {
+  // prefetchCell() takes its address from the table's copy of the data pointer, never from
+  // the block: after a block is retracted and freed, prefetching its cells is a no-op (an
+  // AddressSanitizer build would report a read of the freed block).
+  BlockTable t(64, 64, 16, 16);
+  std::vector<float> samples(16 * 16, 1.0F);
+  auto* b = new PublishedBlock{samples.data(), 16, 32, 16, 16, 16, 32.0, 47.0, 16.0, 31.0};
+  for (std::size_t r = 0; r < 64; r += 5)
+    for (std::size_t c = 0; c < 64; c += 3) t.prefetchCell(r, c);  // nothing published
+  t.publish(1, 2, b);
+  for (std::size_t r = 16; r < 32; ++r)
+    for (std::size_t c = 32; c < 48; ++c) t.prefetchCell(r, c);
+  t.retract(1, 2);
+  delete b;  // NOLINT(cppcoreguidelines-owning-memory): the cache frees blocks like this
+  for (std::size_t r = 16; r < 32; ++r)
+    for (std::size_t c = 32; c < 48; ++c) t.prefetchCell(r, c);
+  EXPECT_EQ(t.find(20, 40), nullptr);
 }
 
 TEST(BlockTable, ZeroSizesAreRefusedClearly) {

@@ -29,6 +29,7 @@ BlockTable::BlockTable(std::size_t rows, std::size_t cols, std::size_t blockRows
   const std::size_t n = ((rows + blockRows - 1) / blockRows) * blocksPerRow_;
   slots_ = std::make_unique<Slot[]>(n);
   for (std::size_t i = 0; i < n; ++i) slots_[i].store(nullptr, std::memory_order_relaxed);
+  hints_ = std::make_unique<Hint[]>(n);
 }
 
 namespace hazard {

@@ -155,6 +155,12 @@ SurfaceSample TopoDem::surface(double x, double y, Interpolation interp, NormalF
   return s;
 }
 
+namespace {
+/// Batch queries prefetch the cell of the point this many ahead (random points: the memory
+/// misses of several points overlap instead of being paid one after another).
+constexpr std::size_t kPrefetchAhead = 8;
+}  // namespace
+
 void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, std::span<double> out,
                       std::span<QueryStatus> status, Interpolation interp) const {
   constexpr const char* op = "TopoDem::heights()";
@@ -173,6 +179,17 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
     // so the loop body has no branches but the bounds and missing-sample tests.
     auto loop = [&](auto recip, auto wantStatus) {
       for (std::size_t i = 0; i < n; ++i) {
+        if (i + kPrefetchAhead < n) {
+          // The cell of a point a few ahead: its memory miss overlaps this point's work.
+          const std::size_t j = i + kPrefetchAhead;
+          const double uj = recip ? (xs[j] - m.x0) * m.idx : (xs[j] - m.x0) / m.dx;
+          const double vj = recip ? (m.y0 - ys[j]) * m.idy : (m.y0 - ys[j]) / m.dy;
+          if (uj >= 0.0 && vj >= 0.0 && uj < f.uMax && vj < f.vMax) {
+            const float* p = f.data + static_cast<long>(vj) * f.cols + static_cast<long>(uj);
+            __builtin_prefetch(p);
+            __builtin_prefetch(p + f.cols);
+          }
+        }
         const double u = recip ? (xs[i] - m.x0) * m.idx : (xs[i] - m.x0) / m.dx;
         const double v = recip ? (m.y0 - ys[i]) * m.idy : (m.y0 - ys[i]) / m.dy;
         double h = 0.0;
@@ -204,6 +221,17 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
     const BlockTable* table = table_;
     const std::uint64_t id = sourceId_;
     for (std::size_t i = 0; i < n; ++i) {
+      if (table != nullptr && i + kPrefetchAhead < n) {
+        // The cell of a point a few ahead, unless it is in the thread's block (a run, as on
+        // a rover path, where everything is in cache already).
+        const std::size_t j = i + kPrefetchAhead;
+        const double uj = m.u(xs[j]), vj = m.v(ys[j]);
+        const detail::ThreadBlock& tb = detail::tlBlock;
+        const bool inThreadBlock =
+            tb.source == id && uj >= tb.uLo && uj < tb.uHi && vj >= tb.vLo && vj < tb.vHi;
+        if (!inThreadBlock && uj >= 0.0 && vj >= 0.0 && uj < f.uMax && vj < f.vMax)
+          table->prefetchCell(static_cast<std::size_t>(vj), static_cast<std::size_t>(uj));
+      }
       double h = 0.0;
       if (detail::pagedBilinear(f, table, id, m.u(xs[i]), m.v(ys[i]), h)) [[likely]] {
         out[i] = h;

@@ -73,17 +73,51 @@ class BlockTable {
   }
   /// Publishes block (blockRow, blockCol), which must be complete (data and geometry).
   void publish(std::size_t blockRow, std::size_t blockCol, const PublishedBlock* block) noexcept {
-    slots_[blockRow * blocksPerRow_ + blockCol].store(block, std::memory_order_release);
+    const std::size_t i = blockRow * blocksPerRow_ + blockCol;
+    hints_[i].stride.store(block->stride, std::memory_order_relaxed);
+    hints_[i].data.store(block->data, std::memory_order_relaxed);
+    slots_[i].store(block, std::memory_order_release);
   }
   /// Removes block (blockRow, blockCol); readers may still use it until it is reclaimed.
   void retract(std::size_t blockRow, std::size_t blockCol) noexcept {
-    slots_[blockRow * blocksPerRow_ + blockCol].store(nullptr, std::memory_order_seq_cst);
+    const std::size_t i = blockRow * blocksPerRow_ + blockCol;
+    hints_[i].data.store(nullptr, std::memory_order_relaxed);
+    slots_[i].store(nullptr, std::memory_order_seq_cst);
+  }
+
+  /// Asks the processor to fetch the bilinear cell of sample (r, c) (rows r and r + 1) and
+  /// the block's header into the cache, if the block is published. A hint only: it reads
+  /// no block (the address comes from a copy of the block's data pointer and stride kept in
+  /// the table), so it needs no hazard protection, and a stale address is harmless (a
+  /// prefetch never faults). Batch queries issue it a few points ahead, so the memory misses
+  /// of several random points overlap. Requires r < rows(), c < cols().
+  void prefetchCell(std::size_t r, std::size_t c) const noexcept {
+    const std::size_t br = rowShift_ >= 0 ? r >> rowShift_ : r / blockRows_;
+    const std::size_t bc = colShift_ >= 0 ? c >> colShift_ : c / blockCols_;
+    const std::size_t i = br * blocksPerRow_ + bc;
+    const float* data = hints_[i].data.load(std::memory_order_relaxed);
+    if (data == nullptr) return;
+    const std::size_t stride = hints_[i].stride.load(std::memory_order_relaxed);
+    // Integer arithmetic: the pointer may be stale, so no pointer arithmetic on it.
+    const std::uintptr_t p =
+        reinterpret_cast<std::uintptr_t>(data) +
+        ((r - br * blockRows_) * stride + (c - bc * blockCols_)) * sizeof(float);
+    __builtin_prefetch(reinterpret_cast<const void*>(p));                           // NOLINT
+    __builtin_prefetch(reinterpret_cast<const void*>(p + stride * sizeof(float)));  // NOLINT
+    __builtin_prefetch(slots_[i].load(std::memory_order_relaxed));
   }
 
  private:
+  /// Copies of a published block's data pointer and row stride, for prefetchCell().
+  struct Hint {
+    std::atomic<const float*> data{nullptr};
+    std::atomic<std::size_t> stride{0};
+  };
+
   std::size_t rows_, cols_, blockRows_, blockCols_, blocksPerRow_;
   int rowShift_ = -1, colShift_ = -1;  // log2 of the block size, or −1 if not a power of two
   std::unique_ptr<Slot[]> slots_;
+  std::unique_ptr<Hint[]> hints_;
 };
 
 /// Hazard records: one per thread, process-wide (the hazard domain is per-process
