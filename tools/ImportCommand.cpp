@@ -57,14 +57,10 @@ void printSummary(const std::string& out, const store::ImportReport& r, std::ost
   for (std::size_t i = 1; i < corrections.size(); ++i) {
     os << "                  " << corrections[i] << "\n";
   }
-  if (r.tiles == 1) {
-    const double total = static_cast<double>(g.rows) * static_cast<double>(g.cols);
-    os << "  missing:        " << r.missingSamples << " samples ("
-       << shortestNumber(std::round(1000.0 * static_cast<double>(r.missingSamples) / total) / 10.0)
-       << "%)\n";
-  } else {
-    os << "  missing:        not counted for tiles (gaps between tiles read as missing)\n";
-  }
+  const double total = static_cast<double>(g.rows) * static_cast<double>(g.cols);
+  os << "  missing:        " << r.missingSamples << " samples ("
+     << shortestNumber(std::round(1000.0 * static_cast<double>(r.missingSamples) / total) / 10.0)
+     << "%" << (r.tiles > 1 ? ", gaps between tiles included" : "") << ")\n";
   os << "  levels:         " << g.levels << ", patch " << g.patchRows << " x " << g.patchCols
      << "\n";
   os << "  tiles:          " << r.tiles << "\n";

@@ -180,6 +180,13 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   rep.tiles = rasters.size();
   const std::vector<GridSource> grids{src};
   writeStore(store, grids, writeOptionsOf(options));
+  // Missing: what the tiles held as missing, plus the gaps no tile covers.
+  std::size_t covered = 0;
+  for (const auto& r : rasters) {
+    rep.missingSamples += r->missingRead();
+    covered += r->rows() * r->cols();
+  }
+  rep.missingSamples += rows * cols - covered;
   rep.info = writtenInfo(store, src.info.name);
   rep.seconds = secondsSince(t0);
   return rep;

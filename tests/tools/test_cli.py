@@ -509,6 +509,16 @@ def test_import_tiles_equals_the_single_import(work):
     one, many = store_heights(single, "s"), store_heights(mosaic, "s")
     assert np.array_equal(one, many, equal_nan=True)
     assert np.array_equal(one, gdal_heights(src), equal_nan=True)
+    # Missing samples are counted across tiles as for the whole file...
+    assert summary_field(p.stdout, "missing").startswith(f"{int(np.isnan(one).sum())} samples")
+    # ... and a gap (a tile left out) counts as missing: h5py's count of NaN is the oracle.
+    gappy = work / "shoemaker-gap.h5"
+    p = run("import", *tiles[:4], *tiles[5:], "--out", gappy, "--patch", 32, "--grid", "s")
+    with_gap = store_heights(gappy, "s")
+    assert with_gap.shape == one.shape  # the left-out tile is not on the mosaic's border
+    assert summary_field(p.stdout, "missing").startswith(
+        f"{int(np.isnan(with_gap).sum())} samples"), p.stdout
+    assert "gaps between tiles included" in summary_field(p.stdout, "missing")
     # The pyramid levels are built across tile borders, as for the whole file.
     for k in range(1, int(a["levels"])):
         assert np.array_equal(store_heights(single, "s", k), store_heights(mosaic, "s", k),

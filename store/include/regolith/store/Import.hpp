@@ -60,8 +60,8 @@ struct ImportReport {
   bool offsetCorrected = false, spacingSnapped = false;
   /// Whether a source without a declared nodata value had its −32768 voids taken as missing.
   bool voidMarkerAssumed = false;
-  /// Level-0 samples that are missing (nodata, special pixels, NaN); importRaster() only
-  /// (importTiles() leaves it 0).
+  /// Level-0 samples that are missing (nodata, special pixels, NaN); for importTiles() also
+  /// the samples of gaps that no tile covers.
   std::size_t missingSamples = 0;
   /// Number of source files.
   std::size_t tiles = 1;
