@@ -23,7 +23,7 @@ glm::dvec3 upAfter(double heading, double pitch, double roll) {
   const glm::dvec3 l0{-f0.y, f0.x, 0.0};
   const glm::dvec3 u0{0.0, 0.0, 1.0};
   const glm::dvec3 u1 = -std::sin(pitch) * f0 + std::cos(pitch) * u0;  // up after pitch
-  return -std::sin(roll) * l0 + std::cos(roll) * u1;                    // up after roll
+  return -std::sin(roll) * l0 + std::cos(roll) * u1;                   // up after roll
 }
 
 /// Contacts on the plane through (cx, cy, h0) with unit normal n.
@@ -74,8 +74,8 @@ TEST(RoverTest, TiltedPlaneGivesItsPitchAndRoll) {
         const GroundPose pose{100.0, -50.0, heading * kDeg};
         const glm::dvec3 n = upAfter(pose.heading, pitch * kDeg, roll * kDeg);
         const ChassisPose p = rover.settle(pose, onPlane(rover, pose, 12.25, n));
-        SCOPED_TRACE(testing::Message() << "heading " << heading << " pitch " << pitch
-                                        << " roll " << roll);
+        SCOPED_TRACE(testing::Message()
+                     << "heading " << heading << " pitch " << pitch << " roll " << roll);
         EXPECT_NEAR(p.pitch, pitch * kDeg, 1e-12);
         EXPECT_NEAR(p.roll, roll * kDeg, 1e-12);
         EXPECT_NEAR(p.height, 12.25, 1e-9);

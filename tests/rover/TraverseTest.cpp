@@ -9,7 +9,6 @@
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
-
 #include <support/StoreScratch.hpp>
 
 #include <cmath>
@@ -193,8 +192,7 @@ std::string errorOf(const TraverseOptions& o) {
 TEST(TraverseTest, BadOptionsGiveClearErrors) {
   TraverseOptions o = victoriaOptions();
   o.cacheBytes = 0;
-  EXPECT_EQ(errorOf(o),
-            "rover::runTraverse(): cacheBytes is 0, expected a cache budget > 0 bytes");
+  EXPECT_EQ(errorOf(o), "rover::runTraverse(): cacheBytes is 0, expected a cache budget > 0 bytes");
   EXPECT_THROW((void)runTraverse(o), InvalidArgument);
 
   o = victoriaOptions();
