@@ -125,6 +125,27 @@ def test_batches_keep_their_shape_and_agree_with_single_queries(victoria):
                          y.astype(np.float32)[:, ::2].astype(np.float64)))
 
 
+def test_out_arrays_receive_the_results(victoria):
+    dem = regolith.open(victoria)
+    x = np.linspace(-500.0, 500.0, 1000)
+    y = np.linspace(-200.0, 300.0, 1000)
+    h, n = dem.surfaces(x, y)
+    oh, on = np.full(1000, -1.0), np.full((1000, 3), -1.0)
+    rh, rn = dem.surfaces(x, y, out=(oh, on))
+    assert rh is oh and rn is on
+    np.testing.assert_array_equal(oh, h)
+    np.testing.assert_array_equal(on, n)
+    o = np.empty(1000)
+    assert dem.heights(x, y, out=o) is o
+    np.testing.assert_array_equal(o, h)
+    with pytest.raises(regolith.InvalidArgument, match=r"out has shape \(999,\), expected"):
+        dem.heights(x, y, out=np.empty(999))
+    with pytest.raises(regolith.InvalidArgument, match="out must be a float64"):
+        dem.heights(x, y, out=np.empty(1000, dtype=np.float32))
+    with pytest.raises(regolith.InvalidArgument, match="C-contiguous"):
+        dem.heights(x, y, out=np.empty(2000)[::2])
+
+
 def test_outside_points_are_nan_with_a_status(victoria):
     dem = regolith.open(victoria)
     h, st = dem.heights(np.array([0.0, 605.0, -1e6]), np.array([0.0, 0.0, 0.0]), status=True)

@@ -39,12 +39,29 @@ std::span<const double> in(const DoubleArray& a) {
   return {a.data(), static_cast<std::size_t>(a.size())};
 }
 
+/// `out` if given (a writable, C-contiguous float64 array of `shape`: results are written
+/// into it, so repeated batches allocate nothing), else a new array.
+py::array_t<double> outputArray(const char* op, const char* name, const py::object& out,
+                                const std::vector<py::ssize_t>& shape) {
+  if (out.is_none()) return py::array_t<double>(shape);
+  const auto fail = [&](const std::string& why) {
+    return InvalidArgument(std::string(op) + ": " + name + " " + why);
+  };
+  if (!py::isinstance<py::array_t<double>>(out)) throw fail("must be a float64 numpy array");
+  auto a = py::reinterpret_borrow<py::array_t<double>>(out);
+  const std::vector<py::ssize_t> got(a.shape(), a.shape() + a.ndim());
+  if (got != shape) throw fail("has shape " + shapeOf(a) + ", expected the shape of the result");
+  if ((a.flags() & py::array::c_style) == 0) throw fail("must be C-contiguous");
+  if (!a.writeable()) throw fail("is read-only");
+  return a;
+}
+
 /// Heights (and statuses) for a Dem or a Planet: fn(xs, ys, out, status).
 template <class Fn>
 py::object batchHeights(const char* op, const char* na, const DoubleArray& a, const char* nb,
-                        const DoubleArray& b, bool withStatus, Fn&& fn) {
+                        const DoubleArray& b, bool withStatus, const py::object& outArg, Fn&& fn) {
   const auto shape = commonShape(op, na, a, nb, b);
-  py::array_t<double> out(shape);
+  py::array_t<double> out = outputArray(op, "out", outArg, shape);
   const auto n = static_cast<std::size_t>(a.size());
   std::vector<topo::QueryStatus> status(withStatus ? n : 0);
   {
@@ -61,12 +78,21 @@ py::object batchHeights(const char* op, const char* na, const DoubleArray& a, co
 /// Heights and normals: fn(xs, ys, heights, normals, status).
 template <class Fn>
 py::tuple batchSurfaces(const char* op, const char* na, const DoubleArray& a, const char* nb,
-                        const DoubleArray& b, bool withStatus, Fn&& fn) {
+                        const DoubleArray& b, bool withStatus, const py::object& outArg, Fn&& fn) {
   const auto shape = commonShape(op, na, a, nb, b);
   auto nshape = shape;
   nshape.push_back(3);
-  py::array_t<double> heights(shape);
-  py::array_t<double> normals(nshape);
+  py::object outH = py::none(), outN = py::none();
+  if (!outArg.is_none()) {
+    const auto t = py::reinterpret_borrow<py::tuple>(outArg);
+    if (!py::isinstance<py::tuple>(outArg) || t.size() != 2) {
+      throw InvalidArgument(std::string(op) + ": out must be a (heights, normals) tuple");
+    }
+    outH = t[0];
+    outN = t[1];
+  }
+  py::array_t<double> heights = outputArray(op, "out[0]", outH, shape);
+  py::array_t<double> normals = outputArray(op, "out[1]", outN, nshape);
   const auto n = static_cast<std::size_t>(a.size());
   std::vector<topo::QueryStatus> status(withStatus ? n : 0);
   {
@@ -123,29 +149,33 @@ void bindQueries(py::module_& m) {
   dem.def(
          "heights",
          [](const DemTerrain& t, const DoubleArray& x, const DoubleArray& y,
-            const std::string& interp, bool status) {
+            const std::string& interp, bool status, const py::object& out) {
            const auto k = parseInterpolation(interp);
            return batchHeights(
-               "Dem.heights()", "x", x, "y", y, status,
-               [&](auto xs, auto ys, auto out, auto st) { demOf(t).heights(xs, ys, out, st, k); });
+               "Dem.heights()", "x", x, "y", y, status, out,
+               [&](auto xs, auto ys, auto hs, auto st) { demOf(t).heights(xs, ys, hs, st, k); });
          },
          py::arg("x"), py::arg("y"), py::arg("interp") = "bilinear", py::arg("status") = false,
-         "Heights at (x, y); with status=True also a uint8 array of STATUS_* codes.")
+         py::arg("out") = py::none(),
+         "Heights at (x, y); with status=True also a uint8 array of STATUS_* codes. out: a "
+         "float64 array of x's shape to write into (no allocation).")
       .def(
           "surfaces",
           [](const DemTerrain& t, const DoubleArray& x, const DoubleArray& y,
-             const std::string& interp, const std::string& frame, bool status) {
+             const std::string& interp, const std::string& frame, bool status,
+             const py::object& out) {
             const auto k = parseInterpolation(interp);
             const auto f = parseFrame(frame);
-            return batchSurfaces("Dem.surfaces()", "x", x, "y", y, status,
+            return batchSurfaces("Dem.surfaces()", "x", x, "y", y, status, out,
                                  [&](auto xs, auto ys, auto h, auto n, auto st) {
                                    demOf(t).surfaces(xs, ys, h, n, st, k, f);
                                  });
           },
           py::arg("x"), py::arg("y"), py::arg("interp") = "bilinear", py::arg("frame") = "grid",
-          py::arg("status") = false,
+          py::arg("status") = false, py::arg("out") = py::none(),
           "(heights, normals[..., 3]) at (x, y); unit normals in the grid frame (x, y, h) or "
-          "frame='body' (body-fixed); with status=True also the STATUS_* codes.")
+          "frame='body' (body-fixed); with status=True also the STATUS_* codes. out: a "
+          "(heights, normals) pair of float64 arrays to write into (no allocation).")
       .def(
           "height",
           [](const DemTerrain& t, double x, double y, const std::string& interp) {
@@ -184,27 +214,29 @@ void bindQueries(py::module_& m) {
       .def(
           "heights",
           [](const PlanetTerrain& t, const DoubleArray& lat, const DoubleArray& lon,
-             const std::string& interp, bool status) {
+             const std::string& interp, bool status, const py::object& out) {
             const auto k = parseInterpolation(interp);
-            return batchHeights("Planet.heights()", "lat", lat, "lon", lon, status,
-                                [&](auto la, auto lo, auto out, auto st) {
-                                  planetOf(t).heights(la, lo, out, st, k);
+            return batchHeights("Planet.heights()", "lat", lat, "lon", lon, status, out,
+                                [&](auto la, auto lo, auto hs, auto st) {
+                                  planetOf(t).heights(la, lo, hs, st, k);
                                 });
           },
-          py::arg("lat"), py::arg("lon"), py::arg("interp") = "bilinear", py::arg("status") = false)
+          py::arg("lat"), py::arg("lon"), py::arg("interp") = "bilinear", py::arg("status") = false,
+          py::arg("out") = py::none())
       .def(
           "surfaces",
           [](const PlanetTerrain& t, const DoubleArray& lat, const DoubleArray& lon,
-             const std::string& interp, const std::string& frame, bool status) {
+             const std::string& interp, const std::string& frame, bool status,
+             const py::object& out) {
             const auto k = parseInterpolation(interp);
             const auto f = parseFrame(frame);
-            return batchSurfaces("Planet.surfaces()", "lat", lat, "lon", lon, status,
+            return batchSurfaces("Planet.surfaces()", "lat", lat, "lon", lon, status, out,
                                  [&](auto la, auto lo, auto h, auto n, auto st) {
                                    planetOf(t).surfaces(la, lo, h, n, st, k, f);
                                  });
           },
           py::arg("lat"), py::arg("lon"), py::arg("interp") = "bilinear", py::arg("frame") = "grid",
-          py::arg("status") = false)
+          py::arg("status") = false, py::arg("out") = py::none())
       .def("__repr__", [](const PlanetTerrain& t) {
         return "<regolith.Planet '" + t.grid + "' level " + std::to_string(t.level) + " of '" +
                t.store->path().string() + "'>";
