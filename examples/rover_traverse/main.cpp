@@ -63,7 +63,7 @@ double mib(double bytes) { return bytes / 1048576.0; }
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   CLI::App app{"A six-wheel rover drives a path across the Victoria-like DEM on Mars at 1 kHz"};
   std::string storePath = "out/rover/victoria.h5", grid = "victoria", pathText, tracks;
   double cacheMb = 16.0, speed = 1.0, stepMs = 1.0;
@@ -165,4 +165,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s\n", e.what());
     return 1;
   }
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "rover_traverse: %s\n", e.what());
+  return 1;
 }

@@ -45,6 +45,8 @@ void bindErrors(py::module_& m) {
       newException(m, "GlError", py::make_tuple(py::handle(error)),
                    "No OpenGL 4.5 context, or a GL failure while rendering (clod::GlError).");
 
+  // pybind11's translator type is void(*)(std::exception_ptr): the parameter must be by value.
+  // NOLINTNEXTLINE(performance-unnecessary-value-param)
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);

@@ -52,7 +52,7 @@ struct Record {
   }
 };
 
-py::array_t<double> array(const std::vector<double>& v, std::vector<py::ssize_t> shape) {
+py::array_t<double> array(const std::vector<double>& v, const std::vector<py::ssize_t>& shape) {
   py::array_t<double> a(shape);
   std::copy(v.begin(), v.end(), a.mutable_data());
   return a;
