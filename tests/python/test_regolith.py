@@ -323,3 +323,34 @@ def test_traverse_bad_options_raise_clear_errors(victoria):
 
     with pytest.raises(KeyError, match="from the callback"):
         regolith.run_traverse(victoria, speed=100.0, callback=boom)
+
+
+def test_rover_settles_on_a_tilted_plane():
+    rover = regolith.Rover()
+    heading, pitch, roll = math.radians(40.0), math.radians(9.0), math.radians(-14.0)
+    # The chassis frame: yaw, then pitch nose-up about left, then roll (right side down).
+    f0 = np.array([math.sin(heading), math.cos(heading), 0.0])
+    l0 = np.array([-f0[1], f0[0], 0.0])
+    u1 = -math.sin(pitch) * f0 + math.cos(pitch) * np.array([0.0, 0.0, 1.0])
+    up = -math.sin(roll) * l0 + math.cos(roll) * u1
+    w = rover.wheel_positions(10.0, 20.0, heading)
+    assert w.shape == (6, 2)
+    np.testing.assert_allclose(np.linalg.norm(w - [10.0, 20.0], axis=1).max(), rover.reach)
+    h = 5.0 - (up[0] * (w[:, 0] - 10.0) + up[1] * (w[:, 1] - 20.0)) / up[2]
+    c = rover.settle(10.0, 20.0, heading, h)
+    assert c["pitch"] == pytest.approx(pitch, abs=1e-12)
+    assert c["roll"] == pytest.approx(roll, abs=1e-12)
+    assert c["height"] == pytest.approx(5.0, abs=1e-12)
+    np.testing.assert_allclose(c["up"], up, atol=1e-12)
+    h[3] = np.nan
+    with pytest.raises(regolith.DomainError, match="wheel 3 at .* has no terrain under it"):
+        rover.settle(10.0, 20.0, heading, h)
+    with pytest.raises(regolith.InvalidArgument, match="trackWidth"):
+        regolith.Rover(track_width=0.0)
+
+
+def test_traverse_uses_the_given_rover(victoria):
+    narrow = regolith.Rover(track_width=1.0)
+    r = regolith.run_traverse(victoria, speed=100.0, max_steps=1, record_every=1, rover=narrow)
+    w = r["record"]["wheels"][0]
+    assert np.linalg.norm(w[0, :2] - w[1, :2]) == pytest.approx(1.0, abs=1e-12)

@@ -8,6 +8,9 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <array>
+#include <cmath>
+#include <optional>
 #include <vector>
 
 namespace regolith::python {
@@ -58,6 +61,19 @@ py::array_t<double> array(const std::vector<double>& v, const std::vector<py::ss
   return a;
 }
 
+py::dict chassisDict(const rover::ChassisPose& p) {
+  py::dict c;
+  c["height"] = p.height;
+  c["pitch"] = p.pitch;
+  c["roll"] = p.roll;
+  c["heading"] = p.heading;
+  c["residual"] = p.residual;
+  c["position"] = py::make_tuple(p.position.x, p.position.y, p.position.z);
+  c["up"] = py::make_tuple(p.up.x, p.up.y, p.up.z);
+  c["forward"] = py::make_tuple(p.forward.x, p.forward.y, p.forward.z);
+  return c;
+}
+
 py::dict stateDict(const rover::StepState& s) {
   py::dict d;
   d["step"] = s.step;
@@ -86,9 +102,63 @@ py::dict stateDict(const rover::StepState& s) {
   return d;
 }
 
+void bindRoverClass(py::module_& m) {
+  py::class_<rover::Rover>(
+      m, "Rover",
+      "Six-wheel rover kinematics (rover::Rover): axle offsets (front, middle, rear; metres "
+      "along the heading), track width and clearance. Wheel i is on axle i // 2, side i % 2 "
+      "(0 left, 1 right). Headings are radians clockwise from north (+y).")
+      .def(py::init([](const std::array<double, 3>& axles, double track, double clearance) {
+             rover::RoverGeometry g;
+             g.axleOffsets = axles;
+             g.trackWidth = track;
+             g.clearance = clearance;
+             return rover::Rover(g);
+           }),
+           py::arg("axle_offsets") = std::array<double, 3>{1.10, 0.0, -1.00},
+           py::arg("track_width") = 2.20, py::arg("clearance") = 0.66)
+      .def_property_readonly("reach", [](const rover::Rover& r) { return r.geometry().reach(); })
+      .def(
+          "wheel_positions",
+          [](const rover::Rover& r, double x, double y, double heading) {
+            const auto w = r.wheelPositions({x, y, heading});
+            py::array_t<double> a({py::ssize_t{6}, py::ssize_t{2}});
+            for (std::size_t i = 0; i < rover::kWheels; ++i) {
+              a.mutable_data()[2 * i] = w[i].x;
+              a.mutable_data()[2 * i + 1] = w[i].y;
+            }
+            return a;
+          },
+          py::arg("x"), py::arg("y"), py::arg("heading"),
+          "Grid (x, y) of the six wheel contacts, a (6, 2) array.")
+      .def(
+          "settle",
+          [](const rover::Rover& r, double x, double y, double heading,
+             const DoubleArray& heights) {
+            if (heights.ndim() != 1 || heights.shape(0) != 6) {
+              throw InvalidArgument("Rover.settle(): heights must have shape (6,), got " +
+                                    std::to_string(heights.size()) + " values");
+            }
+            const rover::GroundPose pose{x, y, heading};
+            const auto w = r.wheelPositions(pose);
+            std::array<rover::WheelContact, rover::kWheels> c{};
+            for (std::size_t i = 0; i < rover::kWheels; ++i) {
+              const double h = heights.data()[i];
+              c[i] = {w[i].x, w[i].y, h, glm::dvec3(0.0, 0.0, 1.0),
+                      std::isnan(h) ? topo::QueryStatus::Nodata : topo::QueryStatus::Ok};
+            }
+            return chassisDict(r.settle(pose, c));
+          },
+          py::arg("x"), py::arg("y"), py::arg("heading"), py::arg("heights"),
+          "Settles the chassis on the terrain heights under the six wheels (at "
+          "wheel_positions()): height, pitch, roll (radians), residual, position, up, forward. "
+          "A NaN height raises DomainError.");
+}
+
 }  // namespace
 
 void bindRover(py::module_& m) {
+  bindRoverClass(m);
   m.def(
       "default_victoria_path",
       [](double scale) { return pathArray(rover::defaultVictoriaPath(scale)); },
@@ -102,8 +172,10 @@ void bindRover(py::module_& m) {
          const std::string& grid, std::size_t level, std::size_t cacheBytes,
          const std::string& policy, double speed, double step, std::size_t maxSteps,
          const std::string& interp, std::size_t recordEvery,
-         const std::function<py::object(py::dict)>& callback, std::size_t callbackEvery) {
+         const std::function<py::object(py::dict)>& callback, std::size_t callbackEvery,
+         const std::optional<rover::Rover>& vehicle) {
         rover::TraverseOptions o;
+        if (vehicle) o.geometry = vehicle->geometry();
         o.store = storePath;
         o.grid = grid;
         o.level = level;
@@ -161,7 +233,7 @@ void bindRover(py::module_& m) {
       py::arg("level") = 0, py::arg("cache_bytes") = std::size_t{64} << 20,
       py::arg("policy") = "lru", py::arg("speed") = 1.0, py::arg("step") = 0.001,
       py::arg("max_steps") = 0, py::arg("interp") = "bilinear", py::arg("record_every") = 0,
-      py::arg("callback") = nullptr, py::arg("callback_every") = 1,
+      py::arg("callback") = nullptr, py::arg("callback_every") = 1, py::arg("rover") = py::none(),
       R"doc(Drives a six-wheel rover along `path` ((N, 2) grid x, y in metres; default:
 default_victoria_path()) across a DEM of a store, paged through a cache of cache_bytes,
 querying height and normal under each wheel every `step` seconds (rover::runTraverse).
@@ -171,7 +243,7 @@ cache (hits, misses, loads, evictions, bytes_loaded, resident_bytes, ...), reads
 peak_resident_bytes, budget_bytes, max_tilt, max_residual; with record_every=k > 0 also
 'record': every k-th step's step, time, ground (x, y, heading), wheels (k, 6, 3: x, y, h),
 normals (k, 6, 3), chassis (k, 4: height, pitch, roll, residual) and position (k, 3).
-callback(state) is called every callback_every steps with a dict (step, time, distance,
+rover: a Rover (default: Rover()). callback(state) is called every callback_every steps with a dict (step, time, distance,
 ground, wheels, normals, chassis, resident_bytes); returning False stops the traverse.
 The GIL is released between callbacks. Raises InvalidArgument for bad options, StoreError for
 a bad store, DomainError if a wheel lands on nodata.)doc");
