@@ -1,0 +1,52 @@
+#pragma once
+// Shared by the binding sources: the terrain handles Python holds, and argument parsing.
+
+#include <regolith/store/PatchCache.hpp>
+#include <regolith/store/Store.hpp>
+#include <regolith/topo/Query.hpp>
+#include <regolith/topo/TopoDem.hpp>
+#include <regolith/topo/TopoPlanet.hpp>
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace regolith::python {
+
+namespace py = pybind11;
+
+/// A paged grid as Python sees it: the store and the cache it pages through stay alive as
+/// long as the handle does. Exactly one of dem / planet is set.
+struct Terrain {
+  std::shared_ptr<const store::Store> store;
+  std::shared_ptr<store::PatchCache> cache;
+  std::string grid;
+  std::size_t level = 0;
+  std::optional<topo::TopoDem> dem;
+  std::optional<topo::TopoPlanet> planet;
+};
+/// Distinct types for Python's Dem and Planet classes.
+struct DemTerrain : Terrain {};
+struct PlanetTerrain : Terrain {};
+
+/// C-contiguous float64 view of any array-like (copies only if it is not one already).
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+[[nodiscard]] topo::Interpolation parseInterpolation(const std::string& name);
+[[nodiscard]] topo::NormalFrame parseFrame(const std::string& name);
+[[nodiscard]] store::CachePolicy parsePolicy(const std::string& name);
+[[nodiscard]] std::string policyName(store::CachePolicy p);
+[[nodiscard]] py::dict statsDict(const store::CacheStats& s);
+
+void bindErrors(py::module_& m);
+void bindStore(py::module_& m);
+void bindQueries(py::module_& m);
+/// Adds render() to the Dem and Planet classes.
+void bindRender(py::class_<DemTerrain, std::shared_ptr<DemTerrain>>& dem,
+                py::class_<PlanetTerrain, std::shared_ptr<PlanetTerrain>>& planet);
+void bindRover(py::module_& m);
+
+}  // namespace regolith::python

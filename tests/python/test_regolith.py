@@ -1,0 +1,356 @@
+"""pytest suite of the regolith Python module (bindings/python), run by ctest.
+
+Outside oracles: h5py reads the stores' samples and attributes directly
+(docs/store-format.md), GDAL writes the rasters that are imported, and analytic planes give
+exact heights and normals. The module is found through PYTHONPATH (ctest sets it to the
+build's bindings/python/package).
+"""
+
+import math
+import threading
+
+import h5py
+import numpy as np
+import pytest
+from osgeo import gdal
+
+import regolith
+
+gdal.UseExceptions()
+
+
+@pytest.fixture(scope="module")
+def victoria(tmp_path_factory):
+    path = tmp_path_factory.mktemp("victoria") / "victoria.h5"
+    regolith.generate_victoria(path, size=302, spacing=4.0, patch_size=64)
+    return path
+
+
+@pytest.fixture(scope="module")
+def plane_tif(tmp_path_factory):
+    """A GeoTIFF of h = 0.25·x − 0.125·y + 10 on a 1 m grid (x east, y north), written by GDAL."""
+    path = tmp_path_factory.mktemp("plane") / "plane.tif"
+    rows, cols = 120, 160
+    x0, y0 = 500.0, 2000.0  # top-left corner of the top-left pixel
+    ds = gdal.GetDriverByName("GTiff").Create(str(path), cols, rows, 1, gdal.GDT_Float32)
+    ds.SetGeoTransform((x0, 1.0, 0.0, y0, 0.0, -1.0))
+    srs = (
+        'PROJCS["Mars equirectangular",GEOGCS["Mars",DATUM["Mars",SPHEROID["Mars",3396190,0]],'
+        'PRIMEM["Reference meridian",0],UNIT["degree",0.0174532925199433]],'
+        'PROJECTION["Equirectangular"],PARAMETER["standard_parallel_1",0],'
+        'PARAMETER["central_meridian",0],PARAMETER["false_easting",0],'
+        'PARAMETER["false_northing",0],UNIT["metre",1]]'
+    )
+    ds.SetProjection(srs)
+    c, r = np.meshgrid(np.arange(cols), np.arange(rows))
+    x = x0 + 0.5 + c
+    y = y0 - 0.5 - r
+    ds.GetRasterBand(1).WriteArray((0.25 * x - 0.125 * y + 10.0).astype(np.float32))
+    ds = None
+    return path
+
+
+def level0(path, grid):
+    with h5py.File(path, "r") as f:
+        g = f["grids"][grid]
+        return g["level0"][...], dict(g.attrs)
+
+
+# ---- stores and grids -----------------------------------------------------------------------
+
+
+def test_store_lists_its_grids_as_h5py_reads_them(victoria):
+    s = regolith.Store(victoria)
+    with h5py.File(victoria, "r") as f:
+        names = sorted(f["grids"].keys())
+        attrs = dict(f["grids"]["victoria"].attrs)
+    assert s.grid_names() == names == ["victoria"]
+    info = s.grid("victoria")
+    assert info.kind == "dem"
+    assert (info.rows, info.cols) == (int(attrs["rows"]), int(attrs["cols"])) == (302, 302)
+    assert info.x0 == pytest.approx(float(attrs["x0"]), abs=0) and info.y0 == float(attrs["y0"])
+    assert info.levels == int(attrs["levels"])
+    assert info.extent == (info.x0 - 2.0, info.x0 + 301 * 4.0 + 2.0,
+                           info.y0 - 301 * 4.0 - 2.0, info.y0 + 2.0)
+    assert list(s.grids) == ["victoria"] and s.grids["victoria"].rows == 302
+
+
+def test_a_missing_store_raises_store_error_with_the_path(tmp_path):
+    with pytest.raises(regolith.StoreError, match=r"store::open\(\): .*nope\.h5") as e:
+        regolith.Store(tmp_path / "nope.h5")
+    assert isinstance(e.value, OSError) and isinstance(e.value, regolith.Error)
+    with pytest.raises(regolith.StoreError, match="nope.h5: no such file"):
+        regolith.open(tmp_path / "nope.h5", grid="victoria")
+
+
+def test_an_unknown_grid_raises_store_error(victoria):
+    with pytest.raises(regolith.StoreError, match="'nope'"):
+        regolith.open(victoria, grid="nope")
+
+
+# ---- batch queries --------------------------------------------------------------------------
+
+
+def test_heights_at_sample_centres_are_the_stored_samples(victoria):
+    samples, attrs = level0(victoria, "victoria")
+    dem = regolith.open(victoria)
+    rng = np.random.default_rng(7)
+    r = rng.integers(0, 302, 5000)
+    c = rng.integers(0, 302, 5000)
+    x = float(attrs["x0"]) + 4.0 * c
+    y = float(attrs["y0"]) - 4.0 * r
+    h = dem.heights(x, y)
+    np.testing.assert_array_equal(h, samples[r, c].astype(np.float64))
+    # Midway between two samples of a row, bilinear is their mean.
+    inner = c < 301
+    hm = dem.heights(x[inner] + 2.0, y[inner])
+    expect = 0.5 * (samples[r[inner], c[inner]].astype(np.float64)
+                    + samples[r[inner], c[inner] + 1].astype(np.float64))
+    np.testing.assert_allclose(hm, expect, rtol=0, atol=1e-9)
+
+
+def test_batches_keep_their_shape_and_agree_with_single_queries(victoria):
+    dem = regolith.open(victoria)
+    x = np.linspace(-500.0, 500.0, 24).reshape(4, 6)
+    y = np.linspace(300.0, -300.0, 24).reshape(4, 6)
+    h, n = dem.surfaces(x, y, interp="bicubic")
+    assert h.shape == (4, 6) and n.shape == (4, 6, 3) and h.dtype == np.float64
+    single = np.array([dem.height(a, b, interp="bicubic") for a, b in zip(x.ravel(), y.ravel())])
+    np.testing.assert_array_equal(h.ravel(), single)
+    np.testing.assert_allclose(np.linalg.norm(n, axis=-1), 1.0, atol=1e-12)
+    # float32 and strided inputs are converted, not rejected.
+    h32 = dem.heights(x.astype(np.float32)[:, ::2], y.astype(np.float32)[:, ::2])
+    np.testing.assert_array_equal(
+        h32, dem.heights(x.astype(np.float32)[:, ::2].astype(np.float64),
+                         y.astype(np.float32)[:, ::2].astype(np.float64)))
+
+
+def test_out_arrays_receive_the_results(victoria):
+    dem = regolith.open(victoria)
+    x = np.linspace(-500.0, 500.0, 1000)
+    y = np.linspace(-200.0, 300.0, 1000)
+    h, n = dem.surfaces(x, y)
+    oh, on = np.full(1000, -1.0), np.full((1000, 3), -1.0)
+    rh, rn = dem.surfaces(x, y, out=(oh, on))
+    assert rh is oh and rn is on
+    np.testing.assert_array_equal(oh, h)
+    np.testing.assert_array_equal(on, n)
+    o = np.empty(1000)
+    assert dem.heights(x, y, out=o) is o
+    np.testing.assert_array_equal(o, h)
+    with pytest.raises(regolith.InvalidArgument, match=r"out has shape \(999,\), expected"):
+        dem.heights(x, y, out=np.empty(999))
+    with pytest.raises(regolith.InvalidArgument, match="out must be a float64"):
+        dem.heights(x, y, out=np.empty(1000, dtype=np.float32))
+    with pytest.raises(regolith.InvalidArgument, match="C-contiguous"):
+        dem.heights(x, y, out=np.empty(2000)[::2])
+
+
+def test_outside_points_are_nan_with_a_status(victoria):
+    dem = regolith.open(victoria)
+    h, st = dem.heights(np.array([0.0, 605.0, -1e6]), np.array([0.0, 0.0, 0.0]), status=True)
+    assert not math.isnan(h[0]) and math.isnan(h[1]) and math.isnan(h[2])
+    assert st.tolist() == [regolith.STATUS_OK, regolith.STATUS_OUTSIDE, regolith.STATUS_OUTSIDE]
+    h, n, st = dem.surfaces(np.array([605.0]), np.array([0.0]), status=True)
+    assert math.isnan(h[0]) and np.isnan(n).all() and st[0] == regolith.STATUS_OUTSIDE
+
+
+def test_bad_query_input_raises_with_the_cpp_message(victoria):
+    dem = regolith.open(victoria)
+    with pytest.raises(regolith.InvalidArgument, match=r"TopoDem::heights\(\): xs\[1\] is nan"):
+        dem.heights(np.array([0.0, np.nan]), np.array([0.0, 0.0]))
+    with pytest.raises(ValueError, match=r"Dem.heights\(\): x has shape \(3,\) and y has shape "
+                                         r"\(2,\), expected the same shape"):
+        dem.heights(np.zeros(3), np.zeros(2))
+    with pytest.raises(regolith.InvalidArgument, match="interpolation 'cubic' is unknown"):
+        dem.heights(np.zeros(1), np.zeros(1), interp="cubic")
+
+
+def test_batch_queries_run_from_several_threads(victoria):
+    dem = regolith.open(victoria)
+    x = np.random.default_rng(3).uniform(-600, 600, 200_000)
+    y = np.random.default_rng(4).uniform(-600, 600, 200_000)
+    expect = dem.heights(x, y)
+    out = [None] * 4
+
+    def work(i):
+        out[i] = dem.heights(x, y)
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for o in out:
+        np.testing.assert_array_equal(o, expect)
+
+
+def test_cache_statistics_and_budget(victoria):
+    cache = regolith.Cache(3 * (64 * 64 * 4 + 1024), policy="hitcount")
+    dem = regolith.open(victoria, cache=cache)
+    assert dem.cache is cache and cache.policy == "hitcount"
+    dem.heights(np.linspace(-600, 600, 10_000), np.linspace(-600, 600, 10_000))
+    s = cache.stats()
+    assert s["loads"] >= 5 and s["evictions"] > 0  # the diagonal crosses 5 patch rows
+    assert s["resident_bytes"] <= s["capacity_bytes"] == 3 * (64 * 64 * 4 + 1024)
+    assert regolith.Store(victoria).counters()["reads"] == 0  # a new Store has read nothing
+    with pytest.raises(regolith.InvalidArgument, match="capacity_bytes is 0"):
+        regolith.Cache(0)
+
+
+# ---- import and generate --------------------------------------------------------------------
+
+
+def test_import_raster_gives_exact_plane_heights_and_normals(plane_tif, tmp_path):
+    out = tmp_path / "plane.h5"
+    rep = regolith.import_raster(plane_tif, out, grid="plane", patch_size=64)
+    assert rep["driver"] == "GTiff" and (rep["rows"], rep["cols"]) == (120, 160)
+    dem = regolith.open(out)
+    assert dem.extent == (500.0, 660.0, 1880.0, 2000.0)
+    rng = np.random.default_rng(1)
+    x = rng.uniform(501.0, 659.0, 1000)
+    y = rng.uniform(1881.0, 1999.0, 1000)
+    h, n = dem.surfaces(x, y)
+    np.testing.assert_allclose(h, 0.25 * x - 0.125 * y + 10.0, rtol=0, atol=2e-4)
+    expect = np.array([-0.25, 0.125, 1.0]) / math.sqrt(0.25**2 + 0.125**2 + 1.0)
+    np.testing.assert_allclose(n, np.broadcast_to(expect, n.shape), rtol=0, atol=1e-5)
+
+
+def test_import_of_a_non_raster_raises_raster_import_error(tmp_path):
+    bad = tmp_path / "not-a-raster.tif"
+    bad.write_text("hello")
+    with pytest.raises(regolith.RasterImportError, match="not-a-raster.tif") as e:
+        regolith.import_raster(bad, tmp_path / "x.h5")
+    assert isinstance(e.value, regolith.StoreError)
+    assert not (tmp_path / "x.h5").exists()
+
+
+def test_generate_mars_gives_a_planet_whose_samples_h5py_reads(tmp_path):
+    out = tmp_path / "mars.h5"
+    info = regolith.generate_mars(out, rows=64, patch_size=32)
+    assert info.kind == "planet" and (info.rows, info.cols) == (64, 128)
+    planet = regolith.open(out)
+    assert isinstance(planet, regolith.Planet)
+    samples, attrs = level0(out, "mars")
+    r = np.arange(0, 64, 7)
+    c = np.arange(0, 128, 13)[: r.size]
+    dx, dy = (float(v) for v in attrs["spacing"])
+    assert (dx, dy) == (180.0 / 64, 180.0 / 64)
+    lat = float(attrs["y0"]) - dy * r
+    lon = float(attrs["x0"]) + dx * c
+    np.testing.assert_array_equal(planet.heights(lat, lon), samples[r, c].astype(np.float64))
+    h, n = planet.surfaces(lat, lon)
+    np.testing.assert_allclose(np.linalg.norm(n, axis=-1), 1.0, atol=1e-12)
+    with pytest.raises(regolith.InvalidArgument, match="rows"):
+        regolith.generate_mars(tmp_path / "bad.h5", rows=1)
+
+
+def test_generate_victoria_rejects_a_bad_spacing(tmp_path):
+    with pytest.raises(regolith.InvalidArgument, match="spacing"):
+        regolith.generate_victoria(tmp_path / "v.h5", spacing=-1.0)
+    assert not (tmp_path / "v.h5").exists()
+
+
+# ---- rendering ------------------------------------------------------------------------------
+
+
+def test_render_returns_an_rgba_image_of_the_terrain(victoria):
+    dem = regolith.open(victoria)
+    bg = (0.0, 0.0, 1.0, 1.0)
+    img = dem.render(position=(0.0, -900.0, 300.0), look_at=(0.0, 0.0, -40.0), width=160,
+                     height=120, background=bg)
+    assert img.shape == (120, 160, 4) and img.dtype == np.uint8
+    blue = (img[..., 0] == 0) & (img[..., 1] == 0) & (img[..., 2] == 255)
+    assert not blue[60, 80] and not blue[119, 80]  # the crater, and the ground below it
+    assert blue[0, 80]  # the sky above the horizon at 1.2 km
+    # Looking up at the sky instead: all background.
+    sky = dem.render(position=(0.0, -900.0, 300.0), heading_deg=0.0, pitch_deg=60.0,
+                     width=64, height=48, background=bg)
+    assert ((sky[..., 2] == 255) & (sky[..., 0] == 0)).all()
+    with pytest.raises(regolith.InvalidArgument, match="look_at or heading_deg"):
+        dem.render(position=(0.0, 0.0, 100.0))
+
+
+# ---- the rover traverse ---------------------------------------------------------------------
+
+
+def test_traverse_contacts_equal_dem_queries(victoria):
+    r = regolith.run_traverse(victoria, speed=100.0, record_every=50, cache_bytes=1 << 20)
+    rec = r["record"]
+    assert r["steps"] == 11386 and r["queries"] == 6 * r["steps"]
+    assert rec["wheels"].shape == (len(rec["step"]), 6, 3)
+    dem = regolith.open(victoria)
+    w = rec["wheels"]
+    h, n = dem.surfaces(w[..., 0], w[..., 1])
+    np.testing.assert_array_equal(w[..., 2], h)
+    np.testing.assert_array_equal(rec["normals"], n)
+    assert r["peak_resident_bytes"] <= r["budget_bytes"] == 1 << 20
+    assert r["cache"]["loads"] == r["reads"] > 0
+    assert r["queries_per_second"] > 0
+
+
+def test_traverse_callback_sees_each_step_and_can_stop(victoria):
+    seen = []
+
+    def cb(state):
+        seen.append((state["step"], state["wheels"].copy(), state["chassis"]["pitch"]))
+        return state["step"] < 30
+
+    r = regolith.run_traverse(victoria, speed=100.0, callback=cb, callback_every=10)
+    assert [s for s, _, _ in seen] == [0, 10, 20, 30] and r["steps"] == 31
+    # Step 0 stands at the first waypoint, heading along the first segment: the wheels'
+    # mean is (0.2/6) m ahead of the centre (axles at +1.1, 0, −1.0, two wheels each).
+    path = regolith.default_victoria_path()
+    heading = path[1] - path[0]
+    heading /= np.linalg.norm(heading)
+    np.testing.assert_allclose(seen[0][1][:, :2].mean(axis=0), path[0] + (0.2 / 6) * heading,
+                               rtol=0, atol=1e-9)
+
+
+def test_traverse_bad_options_raise_clear_errors(victoria):
+    with pytest.raises(regolith.InvalidArgument,
+                       match=r"rover::runTraverse\(\): cacheBytes is 0, expected a cache budget"):
+        regolith.run_traverse(victoria, cache_bytes=0)
+    with pytest.raises(ValueError, match=r"path waypoint 1 is \(nan, 0\)"):
+        regolith.run_traverse(victoria, path=np.array([[0.0, 0.0], [np.nan, 0.0]]))
+    with pytest.raises(regolith.InvalidArgument, match=r"path waypoint 1 \(700, 0\) puts a wheel"):
+        regolith.run_traverse(victoria, path=np.array([[0.0, 0.0], [700.0, 0.0]]))
+    with pytest.raises(regolith.InvalidArgument, match=r"\(N, 2\) array"):
+        regolith.run_traverse(victoria, path=np.zeros(4))
+
+    def boom(state):
+        raise KeyError("from the callback")
+
+    with pytest.raises(KeyError, match="from the callback"):
+        regolith.run_traverse(victoria, speed=100.0, callback=boom)
+
+
+def test_rover_settles_on_a_tilted_plane():
+    rover = regolith.Rover()
+    heading, pitch, roll = math.radians(40.0), math.radians(9.0), math.radians(-14.0)
+    # The chassis frame: yaw, then pitch nose-up about left, then roll (right side down).
+    f0 = np.array([math.sin(heading), math.cos(heading), 0.0])
+    l0 = np.array([-f0[1], f0[0], 0.0])
+    u1 = -math.sin(pitch) * f0 + math.cos(pitch) * np.array([0.0, 0.0, 1.0])
+    up = -math.sin(roll) * l0 + math.cos(roll) * u1
+    w = rover.wheel_positions(10.0, 20.0, heading)
+    assert w.shape == (6, 2)
+    np.testing.assert_allclose(np.linalg.norm(w - [10.0, 20.0], axis=1).max(), rover.reach)
+    h = 5.0 - (up[0] * (w[:, 0] - 10.0) + up[1] * (w[:, 1] - 20.0)) / up[2]
+    c = rover.settle(10.0, 20.0, heading, h)
+    assert c["pitch"] == pytest.approx(pitch, abs=1e-12)
+    assert c["roll"] == pytest.approx(roll, abs=1e-12)
+    assert c["height"] == pytest.approx(5.0, abs=1e-12)
+    np.testing.assert_allclose(c["up"], up, atol=1e-12)
+    h[3] = np.nan
+    with pytest.raises(regolith.DomainError, match="wheel 3 at .* has no terrain under it"):
+        rover.settle(10.0, 20.0, heading, h)
+    with pytest.raises(regolith.InvalidArgument, match="trackWidth"):
+        regolith.Rover(track_width=0.0)
+
+
+def test_traverse_uses_the_given_rover(victoria):
+    narrow = regolith.Rover(track_width=1.0)
+    r = regolith.run_traverse(victoria, speed=100.0, max_steps=1, record_every=1, rover=narrow)
+    w = r["record"]["wheels"][0]
+    assert np.linalg.norm(w[0, :2] - w[1, :2]) == pytest.approx(1.0, abs=1e-12)
