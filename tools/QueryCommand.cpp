@@ -309,9 +309,8 @@ void addQueryCommand(CLI::App& app) {
       "'a,b' (if one starts with '-.', put -- before the first point) or, with none given, as CSV "
       "lines on stdin (an optional header line naming the columns; blank lines and lines "
       "starting with # are skipped)");
-  cmd->add_option("store", a->store, "Store file (HDF5)")->required();
+  addStoreGridOptions(*cmd, a->store, a->grid, a->cacheMb, "query");
   cmd->add_option("points", a->points, "Points 'a,b' in the --coords order");
-  cmd->add_option("--grid", a->grid, "Grid to query (default: the store's only grid)");
   cmd->add_option("--interp", a->interp, "Interpolation kernel")
       ->check(CLI::IsMember({"nearest", "bilinear", "bicubic"}))
       ->capture_default_str();
@@ -329,9 +328,6 @@ void addQueryCommand(CLI::App& app) {
       ->check(CLI::IsMember({"grid", "body"}))
       ->capture_default_str();
   cmd->add_option("--level", a->level, "Pyramid level to query (grid coordinates then index it)")
-      ->capture_default_str();
-  cmd->add_option("--cache-mb", a->cacheMb, "Patch cache budget in MiB")
-      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 20U))
       ->capture_default_str();
   cmd->footer(
       "Examples:\n"

@@ -174,8 +174,7 @@ void addRenderCommand(CLI::App& app) {
       "clipmap renderer and writes a PNG. The camera orbits a look-at point on the surface "
       "(distance, heading, elevation), or stands at --position and looks at --look-at or "
       "along --heading and --pitch");
-  cmd->add_option("store", a->store, "Store file (HDF5)")->required();
-  cmd->add_option("--grid", a->grid, "Grid to render (default: the store's only grid)");
+  addStoreGridOptions(*cmd, a->store, a->grid, a->cacheMb, "render");
   cmd->add_option("-o,--out", a->out, "PNG file to write (replaced atomically)")
       ->capture_default_str();
   cmd->add_option("--width", a->width, "Image width in pixels")
@@ -219,9 +218,6 @@ void addRenderCommand(CLI::App& app) {
   cmd->add_option("--clipmap-size", a->clipmapSize,
                   "Vertices per clipmap level side (odd, 15 to 2047)")
       ->check(CLI::Range(15, 2047))
-      ->capture_default_str();
-  cmd->add_option("--cache-mb", a->cacheMb, "Patch cache budget in MiB")
-      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 20U))
       ->capture_default_str();
   cmd->footer(
       "Examples:\n"
