@@ -66,15 +66,15 @@ PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layou
   // Rover frame: x forward, y left, z up. Mast camera 1.5 m up, looking 15° down ahead.
   n.mastCamera = graph.add(
       n.rover, "mast_camera",
-      Pose::lookAt({0.3, 0.0, 1.5}, {0.3 + std::cos(15.0 * kDeg), 0.0, 1.5 - std::sin(15.0 * kDeg)},
+      Pose::lookAt({0.6, 0.0, 1.5}, {0.6 + std::cos(15.0 * kDeg), 0.0, 1.5 - std::sin(15.0 * kDeg)},
                    {0.0, 0.0, 1.0}),
       NodeKind::Camera);
   n.chaseCamera = graph.add(n.rover, "chase_camera",
                             Pose::lookAt({-8.0, 0.0, 3.0}, {0.0, 0.0, 0.5}, {0.0, 0.0, 1.0}),
                             NodeKind::Camera);
-  // Orbit camera: 400 km above Victoria, looking straight down, north up in the image.
+  // Orbit camera: 20 km above Victoria, looking straight down, north up in the image.
   const topo::LocalTangentPlane site(layout.mars, layout.victoriaOrigin, 0.0);
-  const glm::dvec3 above = site.toBodyFixed({0.0, 0.0, 400e3});
+  const glm::dvec3 above = site.toBodyFixed({0.0, 0.0, 20e3});
   n.orbitCamera = graph.add(n.mars, "orbit_camera",
                             Pose::lookAt(above, site.originBodyFixed(), site.yAxis()),
                             NodeKind::Camera);

@@ -1,0 +1,283 @@
+// clod::SceneRenderer drawing the paper's scene (scene::MarsVictoriaScene): the DEM wins over
+// the planet with no gap at the border, sits at its geodetic place and height, two DEMs on
+// one planet, several cameras, and a focus switch that changes nothing on screen.
+#include <regolith/clod/RenderTarget.hpp>
+#include <regolith/clod/SceneRenderer.hpp>
+#include <regolith/scene/MarsVictoria.hpp>
+#include <regolith/topo/Error.hpp>
+#include <regolith/topo/Projection.hpp>
+
+#include "clod/GlContext.hpp"
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <numbers>
+
+namespace regolith::scene {
+namespace {
+
+constexpr glm::vec4 kMagenta{1.0F, 0.0F, 1.0F, 1.0F};
+
+MarsVictoriaOptions smallScene() {
+  MarsVictoriaOptions o;
+  o.planetRows = 180;  // 1° samples
+  o.demSize = 301;     // 1.2 km at 4 m
+  o.demSpacing = 4.0;
+  o.secondDemSize = 101;
+  o.secondDemSpacing = 4.0;
+  o.clipmapSize = 63;
+  return o;
+}
+
+// One scene and renderer for the whole suite (GL objects on the shared test context).
+class SceneRendererGLTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    test::glContext();
+    scene_ = std::make_unique<MarsVictoriaScene>(smallScene());
+    renderer_ = std::make_unique<clod::SceneRenderer>();
+    scene_->registerWith(*renderer_);
+    auto& g = scene_->graph();
+    camInMars_ = g.add(scene_->nodes().mars, "test_camera_mars", Pose{}, NodeKind::Camera);
+    camInDem_ = g.add(scene_->nodes().victoria, "test_camera_dem", Pose{}, NodeKind::Camera);
+  }
+  static void TearDownTestSuite() {
+    test::glContext();
+    renderer_.reset();
+    scene_.reset();
+  }
+
+  struct Shot {
+    clod::RgbaImage color;
+    clod::DepthImage depth;
+    clod::Camera marsCamera;  // the camera in Mars's body-fixed frame (double)
+  };
+
+  // Renders `camera` (its pose set by the caller) with `focus` into a w × h target.
+  static Shot shoot(NodeId camera, NodeId focus, int w, int h, double fov = 45.0,
+                    double near = 0.5) {
+    test::glContext();
+    clod::RenderTarget target(w, h);
+    target.clear(kMagenta);
+    clod::SceneView view;
+    view.width = w;
+    view.height = h;
+    view.fovYDegrees = fov;
+    view.near = near;
+    view.lightInFocus = scene_->lightInFocus(focus);
+    const RenderList list = scene_->graph().renderList(focus, camera);
+    const clod::SceneFrame f = renderer_->draw(list, view);
+    EXPECT_EQ(f.itemsUnknown, 0U);
+    Shot s{target.readColor(), target.readDepth(),
+           clod::cameraInItem(list.findDrawable(kDrawMars)->cameraInItem(), view)};
+    return s;
+  }
+
+  static bool isDem(const clod::RgbaImage& im, int x, int y) {
+    const auto* p = im.pixel(x, y);
+    return p[1] > p[0] && !(p[0] == 255 && p[2] == 255);
+  }
+  static bool isPlanet(const clod::RgbaImage& im, int x, int y) {
+    const auto* p = im.pixel(x, y);
+    return p[0] > p[1] && p[2] < 200;
+  }
+  static std::size_t count(const clod::RgbaImage& im, bool (*pred)(const clod::RgbaImage&, int, int)) {
+    std::size_t n = 0;
+    for (int y = 0; y < im.height; ++y)
+      for (int x = 0; x < im.width; ++x) n += pred(im, x, y) ? 1U : 0U;
+    return n;
+  }
+  static std::size_t magenta(const clod::RgbaImage& im) {
+    std::size_t n = 0;
+    for (int y = 0; y < im.height; ++y)
+      for (int x = 0; x < im.width; ++x) n += im.is(x, y, 255, 0, 255) ? 1U : 0U;
+    return n;
+  }
+
+  static inline std::unique_ptr<MarsVictoriaScene> scene_;
+  static inline std::unique_ptr<clod::SceneRenderer> renderer_;
+  static inline NodeId camInMars_ = 0, camInDem_ = 0;
+};
+
+TEST_F(SceneRendererGLTest, BorderBetweenDemAndPlanetHasNoGapOrCrack) {
+  // Views across the DEM's border from outside, from inside, along an edge and at a corner,
+  // all looking down enough that terrain fills the image: any gap shows the magenta
+  // background or the planet's far side (thousands of km away).
+  struct View {
+    glm::dvec3 eye, target;
+  };
+  const View views[] = {
+      {{-900.0, -900.0, 250.0}, {-600.0, -600.0, 0.0}},  // outside the SW corner
+      {{0.0, 400.0, 120.0}, {0.0, 650.0, 0.0}},          // inside, looking out over the N edge
+      {{700.0, -700.0, 150.0}, {600.0, -500.0, 0.0}},     // along the E edge
+      {{0.0, -1500.0, 400.0}, {0.0, -600.0, 0.0}},       // outside, the S edge from afar
+      {{-610.0, 0.0, 3000.0}, {-600.0, 0.0, 0.0}},       // over the W edge, looking down
+  };
+  int i = 0;
+  for (const View& v : views) {
+    scene_->graph().setLocal(camInDem_, Pose::lookAt(v.eye, v.target, {0.0, 0.0, 1.0}));
+    const Shot s = shoot(camInDem_, scene_->nodes().victoria, 200, 150);
+    test::savePng("scene_border_" + std::to_string(i++), s.color);
+    EXPECT_EQ(magenta(s.color), 0U) << "view " << i - 1;
+    std::size_t far = 0;
+    for (float d : s.depth.depth) far += d > 0.0F && 0.5 / static_cast<double>(d) > 100e3 ? 1U : 0U;
+    EXPECT_EQ(far, 0U) << "view " << i - 1 << ": pixels see through the planet";
+    // The view does show the border: both surfaces are in the image.
+    EXPECT_GT(count(s.color, isDem), 200U) << "view " << i - 1;
+    EXPECT_GT(count(s.color, isPlanet), 200U) << "view " << i - 1;
+  }
+}
+
+TEST_F(SceneRendererGLTest, DemCentreIsAtItsGeodeticPositionAndHeight) {
+  const auto& layout = scene_->layout();
+  const topo::Body& mars = layout.mars;
+  const topo::Geodetic site = layout.victoriaOrigin;
+  const double hc = scene_->demHeight(0.0, 0.0);
+  // The oracle: topo's geodesy, independent of the scene graph's poses.
+  const glm::dvec3 expected =
+      mars.toBodyFixed({site.latDeg, site.lonDeg, site.height + hc});
+  const glm::dmat3 enu = mars.enuFrame(site.latDeg, site.lonDeg);
+  const topo::LocalTangentPlane plane(mars, site, 0.0);
+  for (const double pitch : {90.0, 55.0}) {
+    // 1 km from the crater centre, from the south, looking at it `pitch` degrees down.
+    const double p = pitch * std::numbers::pi / 180.0;
+    const glm::dvec3 eye = expected + 1000.0 * (std::cos(p) * -enu[1] + std::sin(p) * enu[2]);
+    scene_->graph().setLocal(camInMars_, Pose::lookAt(eye, expected, enu[1] + enu[2]));
+    const Shot s = shoot(camInMars_, scene_->nodes().victoria, 240, 180);
+    test::savePng("scene_centre_pitch" + std::to_string(static_cast<int>(pitch)), s.color);
+    const glm::dvec3 px = s.marsCamera.project(expected);
+    const int ix = static_cast<int>(std::floor(px.x)), iy = static_cast<int>(std::floor(px.y));
+    ASSERT_TRUE(isDem(s.color, ix, iy));
+    // The rendered surface point under that pixel's centre, back to geodetic, then into the
+    // DEM's tangent plane (topo's geodesy: independent of the scene graph's poses).
+    const float d = s.depth.at(ix, iy);
+    ASSERT_GT(d, 0.0F);
+    const glm::dvec3 ray = s.marsCamera.ray(ix + 0.5, iy + 0.5);
+    const double dist = s.marsCamera.viewDistance(static_cast<double>(d)) /
+                        glm::dot(ray, s.marsCamera.forward());
+    const glm::dvec3 rendered = s.marsCamera.position + ray * dist;
+    const glm::dvec3 local = plane.forward(mars.toGeodetic(rendered));
+    // Metres per pixel on the ground there; the pixel centre is at most 0.71 px from the
+    // projected centre, so the rendered point lies within 1 px of it on the ground.
+    const double mPerPx = glm::length(eye - expected) / s.marsCamera.focalPixels();
+    const double ground = glm::length(glm::dvec2(local.x, local.y)) / (mPerPx / std::sin(p));
+    // Height: the rendered surface is the DEM's (bilinear in its samples, 4 m spacing) at
+    // the rendered point's plane position.
+    const double dh = local.z - scene_->demHeight(local.x, local.y);
+    std::printf("pitch %.0f°: rendered point %.3f px from the DEM centre on the ground, "
+                "%.3f m off the DEM surface (%.2f m/px)\n",
+                pitch, ground, dh, mPerPx);
+    EXPECT_LT(ground, 1.0);
+    EXPECT_LT(std::abs(dh), 0.25);
+  }
+  // Straight down from 3 km: the DEM's footprint (a square, its edges at the same height to
+  // a metre) is centred on the projected centre to within a pixel.
+  scene_->graph().setLocal(camInMars_,
+                           Pose::lookAt(expected + 3000.0 * enu[2], expected, enu[1]));
+  const Shot s = shoot(camInMars_, scene_->nodes().victoria, 240, 180);
+  const glm::dvec3 px = s.marsCamera.project(expected);
+  int x0 = s.color.width, x1 = -1, y0 = s.color.height, y1 = -1;
+  for (int y = 0; y < s.color.height; ++y)
+    for (int x = 0; x < s.color.width; ++x)
+      if (isDem(s.color, x, y)) {
+        x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+      }
+  ASSERT_GT(x0, 0);  // the whole DEM is in the image
+  ASSERT_LT(x1, s.color.width - 1);
+  EXPECT_NEAR(0.5 * (x0 + x1 + 1), px.x, 1.0);
+  EXPECT_NEAR(0.5 * (y0 + y1 + 1), px.y, 1.0);
+}
+
+TEST_F(SceneRendererGLTest, TwoDemsOnOnePlanetEachAtItsPlace) {
+  const auto& layout = scene_->layout();
+  const topo::Body& mars = layout.mars;
+  const glm::dvec3 a = mars.toBodyFixed(layout.victoriaOrigin);
+  const glm::dvec3 b = mars.toBodyFixed(layout.secondDemOrigin);
+  const glm::dvec3 mid = 0.5 * (a + b);
+  const glm::dvec3 up = glm::normalize(mid);
+  scene_->graph().setLocal(camInMars_,
+                           Pose::lookAt(mid + up * 20e3, mid, glm::dvec3(0.0, 0.0, 1.0)));
+  const Shot s = shoot(camInMars_, scene_->nodes().mars, 240, 180, 45.0, 10.0);
+  test::savePng("scene_two_dems", s.color);
+  for (const glm::dvec3& c : {a, b}) {
+    const glm::dvec3 px = s.marsCamera.project(c);
+    EXPECT_TRUE(isDem(s.color, static_cast<int>(px.x), static_cast<int>(px.y)));
+  }
+  const glm::dvec3 pm = s.marsCamera.project(mid);
+  EXPECT_TRUE(isPlanet(s.color, static_cast<int>(pm.x), static_cast<int>(pm.y)));
+  EXPECT_EQ(magenta(s.color), 0U);
+}
+
+TEST_F(SceneRendererGLTest, OrbitAndMastCamerasRenderTheSameSceneAsViewports) {
+  const auto& n = scene_->nodes();
+  scene_->placeRover(0.0, -395.0, 0.0);
+  test::glContext();
+  clod::RenderTarget target(320, 120);
+  target.clear(kMagenta);
+  for (const auto& [camera, x] : {std::pair{n.orbitCamera, 0}, {n.mastCamera, 160}}) {
+    clod::SceneView view;
+    view.x = x;
+    view.width = 160;
+    view.height = 120;
+    view.near = camera == n.orbitCamera ? 100.0 : 0.05;
+    view.lightInFocus = scene_->lightInFocus(n.victoria);
+    renderer_->draw(scene_->graph().renderList(n.victoria, camera), view);
+  }
+  const clod::RgbaImage im = target.readColor();
+  test::savePng("scene_two_viewports", im);
+  // Orbit view (left): Victoria in the middle, planet around it.
+  EXPECT_TRUE(isDem(im, 80, 60));
+  EXPECT_TRUE(isPlanet(im, 5, 5));
+  // Mast view (right): the DEM's ground fills the lower half; the upper part is sky or
+  // terrain beyond the rim, never a hole in the ground.
+  std::size_t holes = 0, dem = 0;
+  for (int y = 60; y < 120; ++y)
+    for (int x = 160; x < 320; ++x) {
+      holes += im.is(x, y, 255, 0, 255) ? 1U : 0U;
+      dem += isDem(im, x, y) ? 1U : 0U;
+    }
+  EXPECT_EQ(holes, 0U);
+  EXPECT_GT(dem, 160U * 50U);
+}
+
+TEST_F(SceneRendererGLTest, SwitchingTheFocusMovesNothingOnScreen) {
+  const auto& n = scene_->nodes();
+  scene_->placeRover(0.0, -395.0, 30.0);
+  const Shot ref = shoot(n.chaseCamera, n.victoria, 160, 120, 45.0, 0.05);
+  test::savePng("scene_focus_victoria", ref.color);
+  ASSERT_GT(count(ref.color, isDem), 1000U);
+  // Victoria → Mars → rover → back: the camera's pose in each item's frame is exact to
+  // double rounding of small numbers, so the frames are identical. Through Earth or the Sun
+  // 1e11 m offsets cancel and leave ~1e-4 m: a few edge pixels may flip, nothing moves.
+  for (const NodeId focus : {n.mars, n.rover, n.victoria, n.earth, n.sun, n.victoria}) {
+    const Shot s = shoot(n.chaseCamera, focus, 160, 120, 45.0, 0.05);
+    std::size_t differ = 0;
+    for (std::size_t k = 0; k < ref.color.rgba.size(); ++k)
+      differ += std::abs(int{ref.color.rgba[k]} - int{s.color.rgba[k]}) > 2 ? 1U : 0U;
+    const bool far = focus == n.earth || focus == n.sun;
+    EXPECT_LE(differ, far ? 12U : 0U) << "focus " << scene_->graph().node(focus).name;
+  }
+}
+
+TEST_F(SceneRendererGLTest, RejectsBadRegistrations) {
+  test::glContext();
+  clod::SceneRenderer r;
+  EXPECT_THROW(r.addTerrain(1, nullptr), InvalidArgument);
+  r.addTerrain(0, scene_->mars());
+  r.addTerrain(1, scene_->victoria());
+  EXPECT_THROW(r.addTerrain(1, scene_->victoria()), InvalidArgument);
+  EXPECT_THROW(r.addCutOut(1, 0), InvalidArgument);   // a DEM is no planet
+  EXPECT_THROW(r.addCutOut(0, 7), InvalidArgument);   // unknown
+  EXPECT_THROW(r.addMesh(2, {clod::MeshVertex{}}, {1, 1, 1}), InvalidArgument);
+  clod::SceneView bad;
+  bad.width = 0;
+  EXPECT_THROW(r.draw(RenderList{}, bad), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace regolith::scene
