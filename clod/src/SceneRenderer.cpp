@@ -24,20 +24,20 @@ namespace {
 
 // Meshes and DEM border skirts: positions relative to the item's anchor (float, small),
 // uAnchorRel = anchor − camera in the item frame (double on the CPU, then float). A skirt
-// vertex with aBottom = 1 hangs uSkirtDown below and uSkirtIn metres inward (−normal) of
-// its top.
+// vertex with aBottom = 1 sits at height uFloor (grid frame h; the anchor has h = 0),
+// uSkirtIn metres inward (−normal) of its top; the floor's vertices (normal 0) too.
 constexpr const char* kMeshVertex = R"(#version 450 core
 layout(location = 0) in vec3 aPos;
 layout(location = 1) in vec3 aNormal;
 layout(location = 2) in float aBottom;
 uniform mat4 uViewProj;
 uniform vec3 uAnchorRel;
-uniform vec3 uSkirtDown;
+uniform float uFloor;
 uniform float uSkirtIn;
 uniform vec3 uLitNormal;  // skirts: lit as the ground they stand for (zero: use aNormal)
 out vec3 vNormal;
 void main() {
-  vec3 p = aPos + aBottom * (uSkirtDown - aNormal * uSkirtIn);
+  vec3 p = aBottom > 0.5 ? vec3(aPos.xy - aNormal.xy * uSkirtIn, uFloor) : aPos;
   vNormal = dot(uLitNormal, uLitNormal) > 0.0 ? uLitNormal : aNormal;
   gl_Position = uViewProj * vec4(p + uAnchorRel, 1.0);
 }
@@ -143,6 +143,7 @@ struct SceneRenderer::Terrain {
   std::unique_ptr<Texture> mask;
   std::unique_ptr<Skirt> skirt;
   float edgeLow = 0.0F, edgeHigh = 0.0F;  // border heights (grid frame h)
+  float lowest = 0.0F;                    // lowest sample
 };
 
 struct SceneRenderer::Mesh {
@@ -270,6 +271,31 @@ void SceneRenderer::addCutOut(int planet, int dem) {
     }
   t.edgeLow = lo;
   t.edgeHigh = hi;
+  // The floor: a rectangle under every cell with data, at the skirts' bottom. Whatever small
+  // crack a DEM's own clipmap levels leave (where a level's border meets the grid's edge
+  // its skirt is cut), the view through it ends on the floor, not on the planet's far side.
+  t.lowest = std::numeric_limits<float>::max();
+  double fx0 = std::numeric_limits<double>::max(), fx1 = -fx0, fy0 = fx0, fy1 = -fx0;
+  for (std::size_t r = 0; r < cr; ++r)
+    for (std::size_t c = 0; c < cc; ++c) {
+      if (cell[r * cc + c] == 0) continue;
+      for (std::size_t k = 0; k < 4; ++k) {
+        const std::size_t rr = r + k / 2, ccol = c + k % 2;
+        t.lowest = std::min(t.lowest, at(rr, ccol));
+        const glm::dvec2 xy =
+            g.sampleCentre(static_cast<double>(rr), static_cast<double>(ccol));
+        fx0 = std::min(fx0, xy.x), fx1 = std::max(fx1, xy.x);
+        fy0 = std::min(fy0, xy.y), fy1 = std::max(fy1, xy.y);
+      }
+    }
+  if (!verts.empty()) {
+    const auto corner = [&](double x, double y) {
+      return glm::vec3(glm::dvec3(x, y, 0.0) - skirt->anchor);
+    };
+    for (const glm::vec3& q : {corner(fx0, fy0), corner(fx1, fy0), corner(fx1, fy1),
+                               corner(fx0, fy0), corner(fx1, fy1), corner(fx0, fy1)})
+      verts.push_back({q, glm::vec3(0.0F), 1.0F});
+  }
   glNamedBufferStorage(skirt->buffer.id(), static_cast<GLsizeiptr>(verts.size() * sizeof(SkirtVertex)),
                        verts.data(), 0);
   setupVao(skirt->vao, skirt->buffer, sizeof(SkirtVertex));
@@ -354,7 +380,7 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
   meshProgram_.use();
   for (const scene::RenderItem& item : list.items) {
     const auto it = terrains_.find(item.drawable);
-    if (it == terrains_.end() || !it->second->skirt) continue;
+    if (!skirts_ || it == terrains_.end() || !it->second->skirt) continue;
     Terrain& t = *it->second;
     double gap = 0.0, sag = 0.0;
     for (const auto& [key, planet] : terrains_) {
@@ -388,18 +414,27 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
     const auto [first, count] = t.clipmap->activeLevels(cam);
     const std::size_t coarsest = count == 0 ? t.clipmap->levelCount() - 1 : first + count - 1;
     const double inward = t.pyramid->level(coarsest).grid.spacingX();
-    const double depth = static_cast<double>(t.edgeHigh - t.edgeLow) + gap + sag + inward + 1.0;
+    // The bottom: below the lowest sample and below the planet anywhere along the border.
+    const double floor = std::min(static_cast<double>(t.lowest),
+                                  static_cast<double>(t.edgeLow) - gap - sag) -
+                         inward - 1.0;
     meshProgram_.set("uViewProj", cam.viewProjection());
     meshProgram_.set("uAnchorRel", glm::vec3(t.skirt->anchor - cam.position));
-    meshProgram_.set("uSkirtDown", glm::vec3(0.0F, 0.0F, -static_cast<float>(depth)));
+    meshProgram_.set("uFloor", static_cast<float>(floor - t.skirt->anchor.z));
     meshProgram_.set("uSkirtIn", static_cast<float>(inward));
     meshProgram_.set("uLitNormal", glm::vec3(0.0F, 0.0F, 1.0F));
     meshProgram_.set("uLight", lightIn(item.inFocus, view.lightInFocus));
     meshProgram_.set("uAlbedo", t.options.albedo);
     meshProgram_.set("uAmbient", t.options.ambient);
     glBindVertexArray(t.skirt->vao.id());
+    // Twice: straight down (closes the wall between the border and a planet below or above
+    // it, seen from outside), then down and inward (covers the band a coarser DEM level
+    // leaves inside the finest level's border, seen from above).
+    meshProgram_.set("uSkirtIn", 0.0F);
     glDrawArrays(GL_TRIANGLES, 0, t.skirt->count);
-    frame.vertices += static_cast<std::size_t>(t.skirt->count);
+    meshProgram_.set("uSkirtIn", static_cast<float>(inward));
+    glDrawArrays(GL_TRIANGLES, 0, t.skirt->count);
+    frame.vertices += 2 * static_cast<std::size_t>(t.skirt->count);
   }
 
   // Meshes: item → camera in double, the camera in the item frame, floats small.
@@ -410,7 +445,7 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
     const Camera cam = cameraInItem(item.cameraInItem(), view);
     meshProgram_.set("uViewProj", cam.viewProjection());
     meshProgram_.set("uAnchorRel", glm::vec3(-cam.position));
-    meshProgram_.set("uSkirtDown", glm::vec3(0.0F));
+    meshProgram_.set("uFloor", 0.0F);
     meshProgram_.set("uSkirtIn", 0.0F);
     meshProgram_.set("uLitNormal", glm::vec3(0.0F));
     meshProgram_.set("uLight", lightIn(item.inFocus, view.lightInFocus));

@@ -84,6 +84,10 @@ class SceneRenderer {
   /// Z, as RenderTarget sets it). Terrain foci follow the camera (clamped onto each DEM).
   SceneFrame draw(const scene::RenderList& list, const SceneView& view);
 
+  /// Draws the DEM border skirts (default on). Off only to show what they prevent: the
+  /// planet's cut edge and the DEM's border then leave gaps wherever their heights differ.
+  void setBorderSkirts(bool on) noexcept { skirts_ = on; }
+
   /// The clipmap of a terrain key (nullptr if none).
   [[nodiscard]] const ClipmapTerrain* terrain(int drawable) const;
 
@@ -94,6 +98,7 @@ class SceneRenderer {
   std::map<int, std::unique_ptr<Terrain>> terrains_;
   std::map<int, std::unique_ptr<Mesh>> meshes_;
   Program meshProgram_;
+  bool skirts_ = true;
 };
 
 /// The clod Camera for drawing an item whose camera pose (camera → item frame) is `pose`.
