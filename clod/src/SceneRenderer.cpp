@@ -104,9 +104,9 @@ void appendBox(std::vector<MeshVertex>& out, const glm::vec3& lo, const glm::vec
 
 std::vector<MeshVertex> roverMesh() {
   std::vector<MeshVertex> v;
-  appendBox(v, {-0.8F, -0.55F, 0.45F}, {0.8F, 0.55F, 0.8F});     // body
-  appendBox(v, {0.2F, -0.08F, 0.8F}, {0.36F, 0.08F, 1.4F});      // mast
-  appendBox(v, {0.15F, -0.25F, 1.4F}, {0.45F, 0.25F, 1.6F});     // head
+  appendBox(v, {-0.8F, -0.55F, 0.45F}, {0.8F, 0.55F, 0.8F});  // body
+  appendBox(v, {0.2F, -0.08F, 0.8F}, {0.36F, 0.08F, 1.4F});   // mast
+  appendBox(v, {0.15F, -0.25F, 1.4F}, {0.45F, 0.25F, 1.6F});  // head
   for (const float x : {-0.65F, 0.0F, 0.65F})
     for (const float y : {-0.62F, 0.62F})
       appendBox(v, {x - 0.13F, y - 0.1F, 0.0F}, {x + 0.13F, y + 0.1F, 0.26F});  // wheels
@@ -162,8 +162,8 @@ void SceneRenderer::addTerrain(int drawable, std::shared_ptr<const HeightPyramid
                                const ClipmapOptions& options) {
   if (!pyramid) throw InvalidArgument("SceneRenderer::addTerrain(): pyramid is null");
   if (terrains_.count(drawable) != 0 || meshes_.count(drawable) != 0)
-    throw InvalidArgument("SceneRenderer::addTerrain(): drawable key " +
-                          std::to_string(drawable) + " is taken");
+    throw InvalidArgument("SceneRenderer::addTerrain(): drawable key " + std::to_string(drawable) +
+                          " is taken");
   auto t = std::make_unique<Terrain>();
   t->pyramid = pyramid;
   t->options = options;
@@ -256,8 +256,8 @@ void SceneRenderer::addCutOut(int planet, int dem) {
     return glm::vec3(glm::dvec3(xy.x, xy.y, static_cast<double>(v)) - skirt->anchor);
   };
   const auto side = [&](glm::vec3 a, glm::vec3 b, glm::vec3 n) {
-    for (const auto& [q, bottom] : {std::pair{a, 0.0F}, {b, 0.0F}, {b, 1.0F}, {a, 0.0F},
-                                    {b, 1.0F}, {a, 1.0F}})
+    for (const auto& [q, bottom] :
+         {std::pair{a, 0.0F}, {b, 0.0F}, {b, 1.0F}, {a, 0.0F}, {b, 1.0F}, {a, 1.0F}})
       verts.push_back({q, n, bottom});
   };
   for (long long r = 0; r < static_cast<long long>(cr); ++r)
@@ -282,8 +282,7 @@ void SceneRenderer::addCutOut(int planet, int dem) {
       for (std::size_t k = 0; k < 4; ++k) {
         const std::size_t rr = r + k / 2, ccol = c + k % 2;
         t.lowest = std::min(t.lowest, at(rr, ccol));
-        const glm::dvec2 xy =
-            g.sampleCentre(static_cast<double>(rr), static_cast<double>(ccol));
+        const glm::dvec2 xy = g.sampleCentre(static_cast<double>(rr), static_cast<double>(ccol));
         fx0 = std::min(fx0, xy.x), fx1 = std::max(fx1, xy.x);
         fy0 = std::min(fy0, xy.y), fy1 = std::max(fy1, xy.y);
       }
@@ -296,8 +295,9 @@ void SceneRenderer::addCutOut(int planet, int dem) {
                                corner(fx0, fy0), corner(fx1, fy1), corner(fx0, fy1)})
       verts.push_back({q, glm::vec3(0.0F), 1.0F});
   }
-  glNamedBufferStorage(skirt->buffer.id(), static_cast<GLsizeiptr>(verts.size() * sizeof(SkirtVertex)),
-                       verts.data(), 0);
+  glNamedBufferStorage(skirt->buffer.id(),
+                       static_cast<GLsizeiptr>(verts.size() * sizeof(SkirtVertex)), verts.data(),
+                       0);
   setupVao(skirt->vao, skirt->buffer, sizeof(SkirtVertex));
   skirt->count = static_cast<GLsizei>(verts.size());
   t.skirt = std::move(skirt);
@@ -365,9 +365,9 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
       ++cuts;
     }
     prog.set("uCutCount", cuts);
-    prog.set("uCutViewport", glm::vec4(static_cast<float>(view.x), static_cast<float>(view.y),
-                                       static_cast<float>(view.width),
-                                       static_cast<float>(view.height)));
+    prog.set("uCutViewport",
+             glm::vec4(static_cast<float>(view.x), static_cast<float>(view.y),
+                       static_cast<float>(view.width), static_cast<float>(view.height)));
     prog.set("uCutProj", glm::vec3(glm::dvec3(view.near, aspect / f, 1.0 / f)));
     const ClipmapFrame cf = t.clipmap->draw(cam);
     frame.vertices += cf.vertices;
@@ -415,9 +415,9 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
     const std::size_t coarsest = count == 0 ? t.clipmap->levelCount() - 1 : first + count - 1;
     const double inward = t.pyramid->level(coarsest).grid.spacingX();
     // The bottom: below the lowest sample and below the planet anywhere along the border.
-    const double floor = std::min(static_cast<double>(t.lowest),
-                                  static_cast<double>(t.edgeLow) - gap - sag) -
-                         inward - 1.0;
+    const double floor =
+        std::min(static_cast<double>(t.lowest), static_cast<double>(t.edgeLow) - gap - sag) -
+        inward - 1.0;
     meshProgram_.set("uViewProj", cam.viewProjection());
     meshProgram_.set("uAnchorRel", glm::vec3(t.skirt->anchor - cam.position));
     meshProgram_.set("uFloor", static_cast<float>(floor - t.skirt->anchor.z));

@@ -35,7 +35,7 @@ void appendBox(std::vector<MeshVertex>& out, const glm::vec3& lo, const glm::vec
 /// from the render list (GL eye convention).
 struct SceneView {
   double fovYDegrees = 45.0;
-  double near = 0.1;  ///< metres
+  double near = 0.1;                            ///< metres
   int x = 0, y = 0, width = 640, height = 480;  ///< viewport in the bound framebuffer (GL: y up)
   /// Towards the light, in the render list's focus frame (normalised when used).
   glm::dvec3 lightInFocus{0.4, -0.3, 0.866};

@@ -78,7 +78,7 @@ class MarsVictoriaScene {
 /// What the fly-over renders and where.
 struct FlyoverOptions {
   std::filesystem::path outputDir = "mars_victoria_frames";
-  int frames = 48;
+  int frames = 72;
   int width = 480, height = 270;
   MarsVictoriaOptions scene{};
   /// Also write a frame of the rover's mast camera and of the orbit camera (one PNG with
