@@ -162,7 +162,7 @@ TEST_F(SceneRendererBorderGLTest, BorderBetweenDemAndPlanetHasNoGapOrCrack) {
   }
 }
 
-TEST_F(SceneRendererBorderGLTest, WithoutBorderSkirtsTheSameViewsShowGaps) {
+TEST_F(SceneRendererGLTest, WithoutBorderSkirtsTheSameViewsShowGaps) {
   // The control for the test above: the views do look where a crack would show.
   renderer_->setBorderSkirts(false);
   std::size_t magentaPixels = 0, far = 0;
