@@ -14,9 +14,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 #include <numbers>
+#include <vector>
 
 namespace regolith::scene {
 namespace {
@@ -310,6 +312,39 @@ TEST_F(SceneRendererGLTest, SwitchingTheFocusMovesNothingOnScreen) {
     const bool far = focus == n.earth || focus == n.sun;
     EXPECT_LE(differ, far ? 12U : 0U) << "focus " << scene_->graph().node(focus).name;
   }
+}
+
+TEST_F(SceneRendererGLTest, RoverStaysStillOnScreenWhileMovingInMillimetreSteps) {
+  // On the GPU: the chase camera rides on the rover, so the rover must not move on screen
+  // while it drives 1 mm per frame across the rim. Re-rooted, its pixels are identical
+  // frame after frame (a Mars-rooted float pipeline would hop by tens of pixels, see
+  // JitterTest).
+  const auto& n = scene_->nodes();
+  std::vector<std::uint8_t> first;
+  std::size_t roverPixels = 0;
+  for (int i = 0; i < 12; ++i) {
+    const double y = -395.0 + 0.001 * i;
+    scene_->graph().setLocal(n.rover, roverPose({0.0, y, scene_->demHeight(0.0, -395.0)}, 0.0));
+    const Shot s = shoot(n.chaseCamera, n.victoria, 160, 120, 45.0, 0.05);
+    std::vector<std::uint8_t> mask(static_cast<std::size_t>(160 * 120));
+    for (int yy = 0; yy < 120; ++yy)
+      for (int x = 0; x < 160; ++x) {
+        const auto* p = s.color.pixel(x, yy);
+        mask[static_cast<std::size_t>(yy * 160 + x)] =
+            std::abs(p[0] - p[1]) < 6 && p[0] > 60 ? 1 : 0;  // grey: the rover
+      }
+    if (i == 0) {
+      first = mask;
+      for (auto m : mask) roverPixels += m;
+      continue;
+    }
+    std::size_t moved = 0;
+    for (std::size_t k = 0; k < mask.size(); ++k) moved += mask[k] != first[k] ? 1U : 0U;
+    EXPECT_EQ(moved, 0U) << "frame " << i;
+  }
+  std::printf("rover: %zu pixels, identical in 12 frames 1 mm apart\n", roverPixels);
+  EXPECT_GT(roverPixels, 300U);  // the rover is in view
+  scene_->placeRover(0.0, -395.0, 0.0);
 }
 
 TEST_F(SceneRendererGLTest, RejectsBadRegistrations) {
