@@ -144,6 +144,7 @@ struct SceneRenderer::Terrain {
   std::unique_ptr<Skirt> skirt;
   float edgeLow = 0.0F, edgeHigh = 0.0F;  // border heights (grid frame h)
   float lowest = 0.0F;                    // lowest sample
+  std::size_t maskLevel = 0;              // the pyramid level the mask and skirts come from
 };
 
 struct SceneRenderer::Mesh {
@@ -213,8 +214,21 @@ void SceneRenderer::addCutOut(int planet, int dem) {
 
   // The finest level's samples, its cell mask (a cell has data if its four corners do) and
   // the skirt: one quad along every cell side between a cell with data and one without.
-  const auto& level = t.pyramid->level(0);
+  // The finest pyramid level at most kMaxMaskSide a side (a paged DEM may be far larger than
+  // memory; its level 0 is then represented by a coarser one, and the inward skirt widens to
+  // that level's cell).
+  constexpr std::size_t kMaxMaskSide = 4096;
+  std::size_t m = 0;
+  while (m + 1 < t.pyramid->levelCount() &&
+         std::max(t.pyramid->level(m).grid.rows(), t.pyramid->level(m).grid.cols()) > kMaxMaskSide)
+    ++m;
+  t.maskLevel = m;
+  const auto& level = t.pyramid->level(m);
   const topo::TopoGrid& g = level.grid;
+  if (std::max(g.rows(), g.cols()) > kMaxMaskSide)
+    throw InvalidArgument("SceneRenderer::addCutOut(): DEM " + std::to_string(dem) +
+                          " has no pyramid level of at most " + std::to_string(kMaxMaskSide) +
+                          " samples a side for its cell mask");
   const std::size_t rows = g.rows(), cols = g.cols();
   if (rows < 2 || cols < 2)
     throw InvalidArgument("SceneRenderer::addCutOut(): DEM " + std::to_string(dem) +
@@ -342,7 +356,7 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
       const scene::RenderItem* d = list.findDrawable(dem);
       if (d == nullptr) continue;
       const Terrain& dt = *terrains_.at(dem);
-      const auto& g = dt.pyramid->level(0).grid;
+      const auto& g = dt.pyramid->level(dt.maskLevel).grid;
       // DEM grid frame ← planet frame, composed through the focus in double.
       const scene::Pose planetToDem = d->inFocus.inverse() * item.inFocus;
       const glm::dmat3 eyeToWorld = glm::transpose(cam.rotation());
@@ -413,7 +427,10 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
     const Camera cam = cameraInItem(item.cameraInItem(), view);
     const auto [first, count] = t.clipmap->activeLevels(cam);
     const std::size_t coarsest = count == 0 ? t.clipmap->levelCount() - 1 : first + count - 1;
-    const double inward = t.pyramid->level(coarsest).grid.spacingX();
+    // Inward: past the coarsest drawn level's inset, and past a coarse mask's cells.
+    const double maskCell = t.pyramid->level(t.maskLevel).grid.spacingX();
+    const double inward = std::max(t.pyramid->level(coarsest).grid.spacingX(),
+                                   t.maskLevel > 0 ? 2.0 * maskCell : maskCell);
     // The bottom: below the lowest sample and below the planet anywhere along the border.
     const double floor =
         std::min(static_cast<double>(t.lowest), static_cast<double>(t.edgeLow) - gap - sag) -

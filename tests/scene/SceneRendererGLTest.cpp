@@ -347,6 +347,71 @@ TEST_F(SceneRendererGLTest, RoverStaysStillOnScreenWhileMovingInMillimetreSteps)
   scene_->placeRover(0.0, -395.0, 0.0);
 }
 
+// A HiRISE-class DEM too large for a level-0 mask (8193 × 8193 at 0.25 m), its samples a
+// function computed on demand (nothing held in memory).
+class SlopeSamples final : public topo::SampleSource {
+ public:
+  SlopeSamples(std::size_t n, double spacing) : n_(n), spacing_(spacing) {}
+  [[nodiscard]] std::size_t rows() const noexcept override { return n_; }
+  [[nodiscard]] std::size_t cols() const noexcept override { return n_; }
+  [[nodiscard]] float sample(std::size_t r, std::size_t c) const override {
+    return static_cast<float>(0.002 * spacing_ * static_cast<double>(c) +
+                              std::sin(0.01 * static_cast<double>(r)));
+  }
+
+ private:
+  std::size_t n_;
+  double spacing_;
+};
+
+TEST_F(SceneRendererGLTest, LargeDemCutsThePlanetThroughACoarserMask) {
+  std::vector<clod::HeightPyramid::Level> levels;
+  const std::size_t n0 = 8193;
+  const double dx0 = 0.25, half = 0.5 * static_cast<double>(n0 - 1) * dx0;
+  for (std::size_t k = 0; k < 4; ++k) {
+    const std::size_t n = (n0 + (std::size_t{1} << k) - 1) >> k;
+    const double dx = dx0 * static_cast<double>(std::size_t{1} << k);
+    const double off = 0.5 * (dx - dx0);  // level k sample 0 at the mean of level k−1's
+    levels.push_back({topo::TopoGrid(n, n, -half + off, half - off, dx, dx),
+                      std::make_shared<SlopeSamples>(n, dx)});
+  }
+  auto dem =
+      std::make_shared<const clod::HeightPyramid>(std::move(levels), clod::SurfaceKind::Plane);
+  test::glContext();
+  clod::SceneRenderer r;
+  clod::ClipmapOptions o;
+  o.size = 63;
+  o.albedo = MarsVictoriaScene::kPlanetAlbedo;
+  r.addTerrain(0, scene_->mars(), o);
+  o.albedo = MarsVictoriaScene::kDemAlbedo;
+  r.addTerrain(1, dem, o);
+  r.addCutOut(0, 1);  // level 0 and 1 exceed 4096 a side: the mask comes from level 2
+  SceneGraph g("mars");
+  const auto& layout = scene_->layout();
+  const NodeId mars = g.add(g.root(), "planet", Pose{}, NodeKind::Terrain, 0);
+  const NodeId d = g.add(mars, "dem", tangentPlanePose(layout.mars, layout.victoriaOrigin, 0.0),
+                         NodeKind::Terrain, 1);
+  const NodeId cam =
+      g.add(d, "camera", Pose::lookAt({-1500.0, -1500.0, 1200.0}, {-900.0, -900.0, 0.0}, {0, 0, 1}),
+            NodeKind::Camera);
+  clod::RenderTarget target(200, 150);
+  target.clear(kMagenta);
+  clod::SceneView view;
+  view.width = 200;
+  view.height = 150;
+  view.near = 1.0;
+  r.draw(g.renderList(d, cam), view);
+  const clod::RgbaImage im = target.readColor();
+  test::savePng("scene_large_dem", im);
+  EXPECT_EQ(magenta(im), 0U);
+  std::size_t far = 0;
+  for (float v : target.readDepth().depth)
+    far += v > 0.0F && 1.0 / static_cast<double>(v) > 100e3 ? 1U : 0U;
+  EXPECT_EQ(far, 0U);
+  EXPECT_GT(count(im, isDem), 2000U);  // the view holds the DEM's corner and the planet
+  EXPECT_GT(count(im, isPlanet), 2000U);
+}
+
 TEST_F(SceneRendererGLTest, RejectsBadRegistrations) {
   test::glContext();
   clod::SceneRenderer r;
