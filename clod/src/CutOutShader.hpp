@@ -7,6 +7,8 @@
 // row) by an affine map computed in double on the CPU), and discarded if that cell of the
 // DEM has data. With no cut-out (uCutCount = 0, the default) nothing changes.
 
+#include <regolith/topo/Error.hpp>
+
 #include <string>
 
 namespace regolith::clod::shaders {
@@ -39,11 +41,15 @@ bool regolithCutOut() {
 )";
 
 /// `fragment` with the cut-out functions declared before its main() and a discard as
-/// main()'s first statement. Returns `fragment` unchanged if it has no "void main() {".
+/// main()'s first statement. Throws regolith::Error if it has no "void main() {" (a
+/// shader edit that would otherwise switch cut-outs off without a word).
 inline std::string withCutOuts(const std::string& fragment) {
   const std::string mainDecl = "void main() {";
   const auto at = fragment.find(mainDecl);
-  if (at == std::string::npos) return fragment;
+  if (at == std::string::npos)
+    throw Error(
+        "shaders::withCutOuts(): the fragment shader has no 'void main() {' to put "
+        "the cut-out test in");
   std::string out = fragment.substr(0, at);
   out += kCutOutFunctions;
   out += mainDecl;
