@@ -412,6 +412,53 @@ TEST_F(SceneRendererGLTest, LargeDemCutsThePlanetThroughACoarserMask) {
   EXPECT_GT(count(im, isPlanet), 2000U);
 }
 
+TEST_F(SceneRendererGLTest, DemWinsWhereItHasDataEvenBelowThePlanet) {
+  // Victoria sunk 500 m below the planet's surface: without the cut-out the planet hides
+  // it; with it the DEM shows wherever it has data, and the planet around it. (The walls of
+  // the pit between the DEM's border and the planet's cut edge above it are not drawn: the
+  // skirts only hang down from the border; docs/scenegraph.md, Limits. So no background
+  // count here: this test is about which surface wins.)
+  const auto& layout = scene_->layout();
+  topo::Geodetic sunk = layout.victoriaOrigin;
+  sunk.height -= 500.0;  // below the planet's chords too (1° cells sag ~130 m)
+  SceneGraph g("mars");
+  const NodeId mars = g.add(g.root(), "planet", Pose{}, NodeKind::Terrain, 0);
+  const NodeId d =
+      g.add(mars, "dem", tangentPlanePose(layout.mars, sunk, 0.0), NodeKind::Terrain, 1);
+  const NodeId cam =
+      g.add(d, "camera", Pose::lookAt({0.0, -1200.0, 2500.0}, {0.0, 0.0, 0.0}, {0, 0, 1}),
+            NodeKind::Camera);
+  test::glContext();
+  std::size_t demPixels[2] = {0, 0};
+  for (const bool cut : {false, true}) {
+    clod::SceneRenderer r;
+    clod::ClipmapOptions o;
+    o.size = 63;
+    o.albedo = MarsVictoriaScene::kPlanetAlbedo;
+    r.addTerrain(0, scene_->mars(), o);
+    o.albedo = MarsVictoriaScene::kDemAlbedo;
+    r.addTerrain(1, scene_->victoria(), o);
+    if (cut) r.addCutOut(0, 1);
+    clod::RenderTarget target(200, 150);
+    target.clear(kMagenta);
+    clod::SceneView view;
+    view.width = 200;
+    view.height = 150;
+    view.near = 1.0;
+    r.draw(g.renderList(d, cam), view);
+    const clod::RgbaImage im = target.readColor();
+    test::savePng(cut ? "scene_sunk_dem_cut" : "scene_sunk_dem_nocut", im);
+    demPixels[cut ? 1 : 0] = count(im, isDem);
+    if (cut) {
+      EXPECT_TRUE(isDem(im, 100, 75));  // the crater centre
+      EXPECT_GT(count(im, isPlanet), 1000U);
+    }
+  }
+  std::printf("DEM pixels: %zu without the cut-out, %zu with it\n", demPixels[0], demPixels[1]);
+  EXPECT_LT(demPixels[0], 200U);
+  EXPECT_GT(demPixels[1], 5000U);
+}
+
 TEST_F(SceneRendererGLTest, RejectsBadRegistrations) {
   test::glContext();
   clod::SceneRenderer r;
