@@ -16,6 +16,7 @@
 #include <limits>
 #include <numbers>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace regolith::clod {
@@ -30,14 +31,19 @@ constexpr const char* kMeshVertex = R"(#version 450 core
 layout(location = 0) in vec3 aPos;
 layout(location = 1) in vec3 aNormal;
 layout(location = 2) in float aBottom;
+layout(location = 3) in vec3 aFlange;
 uniform mat4 uViewProj;
 uniform vec3 uAnchorRel;
 uniform float uFloor;
 uniform float uSkirtIn;
+uniform vec2 uFlange;  // > 0: bottom vertices go outward uFlange.x and up uFlange.y instead
 uniform vec3 uLitNormal;  // skirts: lit as the ground they stand for (zero: use aNormal)
 out vec3 vNormal;
 void main() {
   vec3 p = aBottom > 0.5 ? vec3(aPos.xy - aNormal.xy * uSkirtIn, uFloor) : aPos;
+  if (uFlange.x > 0.0 && aBottom > 0.5)  // the floor (normal 0) collapses to a point
+    p = dot(aNormal, aNormal) > 0.0 ? vec3(aPos.xy + aFlange.xy * uFlange.x, aPos.z + uFlange.y)
+                                    : vec3(0.0);
   vNormal = dot(uLitNormal, uLitNormal) > 0.0 ? uLitNormal : aNormal;
   gl_Position = uViewProj * vec4(p + uAnchorRel, 1.0);
 }
@@ -59,6 +65,7 @@ struct SkirtVertex {
   glm::vec3 position;
   glm::vec3 normal;
   float bottom;
+  glm::vec3 flange{0.0F};  // pit flanges: outward direction, mitred at corners (sum of normals)
 };
 
 void setupVao(const VertexArray& vao, const Buffer& buffer, GLsizei stride) {
@@ -72,6 +79,9 @@ void setupVao(const VertexArray& vao, const Buffer& buffer, GLsizei stride) {
   glEnableVertexArrayAttrib(vao.id(), 2);
   glVertexArrayAttribFormat(vao.id(), 2, 1, GL_FLOAT, GL_FALSE, 6 * sizeof(float));
   glVertexArrayAttribBinding(vao.id(), 2, 0);
+  glEnableVertexArrayAttrib(vao.id(), 3);
+  glVertexArrayAttribFormat(vao.id(), 3, 3, GL_FLOAT, GL_FALSE, 7 * sizeof(float));
+  glVertexArrayAttribBinding(vao.id(), 3, 0);
 }
 
 glm::vec3 lightIn(const scene::Pose& itemInFocus, const glm::dvec3& lightInFocus) {
@@ -183,7 +193,7 @@ void SceneRenderer::addMesh(int drawable, const std::vector<MeshVertex>& vertice
   auto m = std::make_unique<Mesh>();
   std::vector<SkirtVertex> verts;
   verts.reserve(vertices.size());
-  for (const auto& v : vertices) verts.push_back({v.position, v.normal, 0.0F});
+  for (const auto& v : vertices) verts.push_back({v.position, v.normal, 0.0F, glm::vec3(0.0F)});
   glNamedBufferStorage(m->buffer.id(), static_cast<GLsizeiptr>(verts.size() * sizeof(SkirtVertex)),
                        verts.data(), 0);
   setupVao(m->vao, m->buffer, sizeof(SkirtVertex));
@@ -269,20 +279,40 @@ void SceneRenderer::addCutOut(int planet, int dem) {
     const glm::dvec2 xy = g.sampleCentre(static_cast<double>(r), static_cast<double>(c));
     return glm::vec3(glm::dvec3(xy.x, xy.y, static_cast<double>(v)) - skirt->anchor);
   };
-  const auto side = [&](glm::vec3 a, glm::vec3 b, glm::vec3 n) {
-    for (const auto& [q, bottom] :
-         {std::pair{a, 0.0F}, {b, 0.0F}, {b, 1.0F}, {a, 0.0F}, {b, 1.0F}, {a, 1.0F}})
-      verts.push_back({q, n, bottom});
+  // Border sides between sample points ka and kb (row·cols + col), outward normal n; the
+  // flange direction at a point sums the normals of the sides meeting there (a mitre).
+  struct Side {
+    std::size_t ka, kb;
+    glm::vec3 n;
+  };
+  std::vector<Side> sides;
+  std::map<std::size_t, glm::vec3> mitre;
+  const auto side = [&](std::size_t ra, std::size_t ca, std::size_t rb, std::size_t cb,
+                        glm::vec3 n) {
+    sides.push_back({ra * cols + ca, rb * cols + cb, n});
+    mitre[ra * cols + ca] += n;
+    mitre[rb * cols + cb] += n;
   };
   for (long long r = 0; r < static_cast<long long>(cr); ++r)
     for (long long c = 0; c < static_cast<long long>(cc); ++c) {
       if (!has(r, c)) continue;
       const auto ur = static_cast<std::size_t>(r), uc = static_cast<std::size_t>(c);
-      if (!has(r - 1, c)) side(point(ur, uc), point(ur, uc + 1), {0, 1, 0});           // north
-      if (!has(r + 1, c)) side(point(ur + 1, uc), point(ur + 1, uc + 1), {0, -1, 0});  // south
-      if (!has(r, c - 1)) side(point(ur, uc), point(ur + 1, uc), {-1, 0, 0});          // west
-      if (!has(r, c + 1)) side(point(ur, uc + 1), point(ur + 1, uc + 1), {1, 0, 0});   // east
+      if (!has(r - 1, c)) side(ur, uc, ur, uc + 1, {0, 1, 0});           // north
+      if (!has(r + 1, c)) side(ur + 1, uc, ur + 1, uc + 1, {0, -1, 0});  // south
+      if (!has(r, c - 1)) side(ur, uc, ur + 1, uc, {-1, 0, 0});          // west
+      if (!has(r, c + 1)) side(ur, uc + 1, ur + 1, uc + 1, {1, 0, 0});   // east
     }
+  for (const Side& sd : sides) {
+    const glm::vec3 a = point(sd.ka / cols, sd.ka % cols), b = point(sd.kb / cols, sd.kb % cols);
+    const glm::vec3 fa = mitre[sd.ka], fb = mitre[sd.kb];
+    for (const auto& [q, bottom, f] : {std::tuple{a, 0.0F, fa},
+                                       {b, 0.0F, fb},
+                                       {b, 1.0F, fb},
+                                       {a, 0.0F, fa},
+                                       {b, 1.0F, fb},
+                                       {a, 1.0F, fa}})
+      verts.push_back({q, sd.n, bottom, f});
+  }
   t.edgeLow = lo;
   t.edgeHigh = hi;
   // The floor: a rectangle under every cell with data, at the skirts' bottom. Whatever small
@@ -307,7 +337,7 @@ void SceneRenderer::addCutOut(int planet, int dem) {
     };
     for (const glm::vec3& q : {corner(fx0, fy0), corner(fx1, fy0), corner(fx1, fy1),
                                corner(fx0, fy0), corner(fx1, fy1), corner(fx0, fy1)})
-      verts.push_back({q, glm::vec3(0.0F), 1.0F});
+      verts.push_back({q, glm::vec3(0.0F), 1.0F, glm::vec3(0.0F)});
   }
   glNamedBufferStorage(skirt->buffer.id(),
                        static_cast<GLsizeiptr>(verts.size() * sizeof(SkirtVertex)), verts.data(),
@@ -396,7 +426,7 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
     const auto it = terrains_.find(item.drawable);
     if (!skirts_ || it == terrains_.end() || !it->second->skirt) continue;
     Terrain& t = *it->second;
-    double gap = 0.0, sag = 0.0;
+    double gap = 0.0, sag = 0.0, above = 0.0;
     for (const auto& [key, planet] : terrains_) {
       if (std::find(planet->cutBy.begin(), planet->cutBy.end(), item.drawable) ==
           planet->cutBy.end())
@@ -423,6 +453,11 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
       const double demH = planet->pyramid->body()->toGeodetic(demOrigin).height;
       gap = std::max({gap, std::abs(demH + static_cast<double>(t.edgeLow) - ph),
                       std::abs(demH + static_cast<double>(t.edgeHigh) - ph)});
+      // How far the planet's chords surely lie above the border's highest point (a DEM set
+      // lower than the planet: a pit whose walls rise from the border to the planet).
+      // (The chord across one cell sags at most c²/8R below its samples.)
+      above = std::max(
+          above, ph - 0.25 * cell * cell / (8.0 * r) - demH - static_cast<double>(t.edgeHigh));
     }
     const Camera cam = cameraInItem(item.cameraInItem(), view);
     const auto [first, count] = t.clipmap->activeLevels(cam);
@@ -438,6 +473,7 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
     meshProgram_.set("uViewProj", cam.viewProjection());
     meshProgram_.set("uAnchorRel", glm::vec3(t.skirt->anchor - cam.position));
     meshProgram_.set("uFloor", static_cast<float>(floor - t.skirt->anchor.z));
+    meshProgram_.set("uFlange", glm::vec2(0.0F));
     meshProgram_.set("uSkirtIn", static_cast<float>(inward));
     meshProgram_.set("uLitNormal", glm::vec3(0.0F, 0.0F, 1.0F));
     meshProgram_.set("uLight", lightIn(item.inFocus, view.lightInFocus));
@@ -452,6 +488,15 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
     meshProgram_.set("uSkirtIn", static_cast<float>(inward));
     glDrawArrays(GL_TRIANGLES, 0, t.skirt->count);
     frame.vertices += 2 * static_cast<std::size_t>(t.skirt->count);
+    if (above > 0.0) {
+      // A pit: a flange from the border rising outward under the planet (slope 1:4) to the
+      // planet's lowest chord height there, so a view into the pit meets a wall.
+      meshProgram_.set("uFlange", glm::vec2(static_cast<float>(std::max(4.0 * above, inward)),
+                                            static_cast<float>(above)));
+      glDrawArrays(GL_TRIANGLES, 0, t.skirt->count);
+      meshProgram_.set("uFlange", glm::vec2(0.0F));
+      frame.vertices += static_cast<std::size_t>(t.skirt->count);
+    }
   }
 
   // Meshes: item → camera in double, the camera in the item frame, floats small.
@@ -464,6 +509,7 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
     meshProgram_.set("uAnchorRel", glm::vec3(-cam.position));
     meshProgram_.set("uFloor", 0.0F);
     meshProgram_.set("uSkirtIn", 0.0F);
+    meshProgram_.set("uFlange", glm::vec2(0.0F));
     meshProgram_.set("uLitNormal", glm::vec3(0.0F));
     meshProgram_.set("uLight", lightIn(item.inFocus, view.lightInFocus));
     meshProgram_.set("uAlbedo", m.albedo);

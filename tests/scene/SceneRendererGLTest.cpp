@@ -414,10 +414,9 @@ TEST_F(SceneRendererGLTest, LargeDemCutsThePlanetThroughACoarserMask) {
 
 TEST_F(SceneRendererGLTest, DemWinsWhereItHasDataEvenBelowThePlanet) {
   // Victoria sunk 500 m below the planet's surface: without the cut-out the planet hides
-  // it; with it the DEM shows wherever it has data, and the planet around it. (The walls of
-  // the pit between the DEM's border and the planet's cut edge above it are not drawn: the
-  // skirts only hang down from the border; docs/scenegraph.md, Limits. So no background
-  // count here: this test is about which surface wins.)
+  // it; with it the DEM shows wherever it has data, and the planet around it, and the pit
+  // between the DEM's border and the planet's cut edge above it has walls (the flanges):
+  // no background, nothing seen through the planet.
   const auto& layout = scene_->layout();
   topo::Geodetic sunk = layout.victoriaOrigin;
   sunk.height -= 500.0;  // below the planet's chords too (1° cells sag ~130 m)
@@ -449,6 +448,11 @@ TEST_F(SceneRendererGLTest, DemWinsWhereItHasDataEvenBelowThePlanet) {
     const clod::RgbaImage im = target.readColor();
     test::savePng(cut ? "scene_sunk_dem_cut" : "scene_sunk_dem_nocut", im);
     demPixels[cut ? 1 : 0] = count(im, isDem);
+    EXPECT_EQ(magenta(im), 0U) << (cut ? "with" : "without") << " the cut-out";
+    std::size_t far = 0;
+    for (float v : target.readDepth().depth)
+      far += v > 0.0F && 1.0 / static_cast<double>(v) > 100e3 ? 1U : 0U;
+    EXPECT_EQ(far, 0U) << (cut ? "with" : "without") << " the cut-out";
     if (cut) {
       EXPECT_TRUE(isDem(im, 100, 75));  // the crater centre
       EXPECT_GT(count(im, isPlanet), 1000U);
