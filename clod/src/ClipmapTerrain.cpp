@@ -3,6 +3,7 @@
 #include <regolith/topo/Error.hpp>
 
 #include "ClipmapLevel.hpp"
+#include "CutOutShader.hpp"
 #include "Shaders.hpp"
 
 #include <glm/geometric.hpp>
@@ -24,8 +25,10 @@ namespace regolith::clod {
 namespace {
 
 Program makeProgram() {
+  // Scene graph (issue 6): the fragment stage also carries the cut-out test (CutOutShader.hpp;
+  // inert unless SceneRenderer sets uCutCount), so a planet gives way where a DEM has data.
   return Program("clipmap", ShaderSources{shaders::kClipmapVertex, shaders::kDropNodataGeometry,
-                                          shaders::kLitFragment});
+                                          shaders::withCutOuts(shaders::kLitFragment)});
 }
 
 }  // namespace

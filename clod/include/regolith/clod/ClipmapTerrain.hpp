@@ -115,6 +115,11 @@ class ClipmapTerrain {
   [[nodiscard]] std::pair<std::size_t, std::size_t> activeLevels(const Camera& camera) const;
   /// Grid cells in the centre hole of a coarser level (half-width, in that level's cells).
   [[nodiscard]] int holeHalfWidth() const noexcept { return hole_; }
+  /// The pyramid drawn.
+  [[nodiscard]] const HeightPyramid& pyramid() const noexcept { return *pyramid_; }
+  /// The GL program (scene graph: SceneRenderer sets the cut-out uniforms on it, which keep
+  /// their values across draw() calls).
+  [[nodiscard]] const Program& program() const noexcept { return program_; }
 
  private:
   void buildMesh();

@@ -1,0 +1,107 @@
+#pragma once
+/// \file
+/// Draws a scene graph's render list: terrains (clipmaps) and small meshes, each in its own
+/// frame, with DEMs that win over the planet they sit on.
+
+#include <regolith/clod/Camera.hpp>
+#include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/clod/GlObjects.hpp>
+#include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/clod/Program.hpp>
+#include <regolith/scene/RenderList.hpp>
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <vector>
+
+namespace regolith::clod {
+
+/// A mesh vertex in its item's frame (metres, float: meshes are small, e.g. a rover).
+struct MeshVertex {
+  glm::vec3 position{0.0F};
+  glm::vec3 normal{0.0F, 0.0F, 1.0F};
+};
+
+/// The 36 vertices (12 triangles, outward normals) of the box [lo, hi], appended to `out`.
+void appendBox(std::vector<MeshVertex>& out, const glm::vec3& lo, const glm::vec3& hi);
+/// A rover-sized model in the rover frame (x forward, y left, z up; origin on the ground
+/// under the body centre): body, mast and head, six wheels. About 1.6 m × 1.2 m × 1.6 m.
+[[nodiscard]] std::vector<MeshVertex> roverMesh();
+
+/// Camera intrinsics and the viewport a render list is drawn into. The camera's pose comes
+/// from the render list (GL eye convention).
+struct SceneView {
+  double fovYDegrees = 45.0;
+  double near = 0.1;                            ///< metres
+  int x = 0, y = 0, width = 640, height = 480;  ///< viewport in the bound framebuffer (GL: y up)
+  /// Towards the light, in the render list's focus frame (normalised when used).
+  glm::dvec3 lightInFocus{0.4, -0.3, 0.866};
+};
+
+/// What one draw() did.
+struct SceneFrame {
+  std::size_t terrainsDrawn = 0, meshesDrawn = 0;
+  std::size_t itemsUnknown = 0;  ///< render-list items with a key nothing is registered for
+  std::size_t texelsUploaded = 0;
+  std::size_t vertices = 0;
+};
+
+/// Draws render lists (scene::SceneGraph::renderList). Each item is drawn in its own frame:
+/// the camera's pose relative to the item (double, from the render list) becomes a clod
+/// Camera in that frame, so a terrain's clipmap sends the GPU only camera-relative floats,
+/// whatever the focus. A mesh gets its item → camera pose, made in double, cast to float.
+///
+/// Cut-outs: a DEM drawn over a planet (addCutOut) makes the planet's fragments vanish where
+/// the DEM has data (a cell mask of the DEM's finest level, tested per fragment in the DEM's
+/// grid frame), and a skirt hangs from the DEM's data border, down and inward, below both
+/// surfaces, so no gap opens along the border whatever the two surfaces' heights and
+/// whatever clipmap level each draws.
+///
+/// Needs a current GL 4.5 context; belongs to its thread. Not copyable.
+class SceneRenderer {
+ public:
+  SceneRenderer();
+  SceneRenderer(const SceneRenderer&) = delete;
+  SceneRenderer& operator=(const SceneRenderer&) = delete;
+  ~SceneRenderer();
+
+  /// Terrain drawn for render-list items with key `drawable`. Its scene frame (grid frame
+  /// for a Plane pyramid, body-fixed for a Planet or placed DEM) is the item's frame.
+  /// Throws InvalidArgument if the key is taken.
+  void addTerrain(int drawable, std::shared_ptr<const HeightPyramid> pyramid,
+                  const ClipmapOptions& options = {});
+  /// A mesh in its item's frame for key `drawable`, flat-lit with `albedo`.
+  void addMesh(int drawable, const std::vector<MeshVertex>& vertices, const glm::vec3& albedo);
+  /// DEM `dem` (a Plane pyramid, registered with addTerrain) wins over planet `planet` (a
+  /// Planet pyramid) where the DEM has data. At most 4 DEMs per planet. Throws
+  /// InvalidArgument for unknown keys, wrong kinds, or a fifth DEM.
+  void addCutOut(int planet, int dem);
+
+  /// Draws `list` into the bound framebuffer within view's viewport (depth state: reversed
+  /// Z, as RenderTarget sets it). Terrain foci follow the camera (clamped onto each DEM).
+  SceneFrame draw(const scene::RenderList& list, const SceneView& view);
+
+  /// Draws the DEM border skirts (default on). Off only to show what they prevent: the
+  /// planet's cut edge and the DEM's border then leave gaps wherever their heights differ.
+  void setBorderSkirts(bool on) noexcept { skirts_ = on; }
+
+  /// The clipmap of a terrain key (nullptr if none).
+  [[nodiscard]] const ClipmapTerrain* terrain(int drawable) const;
+
+ private:
+  struct Terrain;
+  struct Mesh;
+  struct Skirt;
+  std::map<int, std::unique_ptr<Terrain>> terrains_;
+  std::map<int, std::unique_ptr<Mesh>> meshes_;
+  Program meshProgram_;
+  bool skirts_ = true;
+};
+
+/// The clod Camera for drawing an item whose camera pose (camera → item frame) is `pose`.
+[[nodiscard]] Camera cameraInItem(const scene::Pose& pose, const SceneView& view);
+
+}  // namespace regolith::clod

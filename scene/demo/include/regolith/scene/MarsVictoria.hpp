@@ -1,0 +1,112 @@
+#pragma once
+/// \file
+/// The paper's example scene with data (generated Mars, Victoria-like DEMs, a rover, Earth),
+/// ready to render, and the headless fly-over from orbit down to the rover.
+
+#include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/clod/SceneRenderer.hpp>
+#include <regolith/scene/PaperScene.hpp>
+#include <regolith/scene/SceneGraph.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace regolith::scene {
+
+/// Sizes of the generated data (small by default so tests and the demo stay fast).
+struct MarsVictoriaOptions {
+  /// store::MarsPlanetGenerator rows (latitude samples pole to pole) on the IAU ellipsoid.
+  std::size_t planetRows = 360;
+  /// store::VictoriaGenerator grid: samples per side and spacing (m).
+  std::size_t demSize = 601;
+  double demSpacing = 2.0;
+  /// A second, smaller Victoria-like DEM (another seed) on Mars near the first.
+  bool secondDem = true;
+  std::size_t secondDemSize = 201;
+  double secondDemSpacing = 2.0;
+  std::uint64_t seed = 1;
+  /// Clipmap vertices per level side for every terrain.
+  int clipmapSize = 127;
+};
+
+/// The scene: graph (buildPaperScene), data and what each drawable key draws. Building it
+/// needs no GL; registerWith() does. The DEMs' origin heights are those of the planet's
+/// surface (bilinear in its finest level) at their sites, so the plains meet the planet.
+class MarsVictoriaScene {
+ public:
+  /// Throws InvalidArgument for bad sizes (from the generators).
+  explicit MarsVictoriaScene(const MarsVictoriaOptions& options = {});
+
+  [[nodiscard]] SceneGraph& graph() noexcept { return graph_; }
+  [[nodiscard]] const SceneGraph& graph() const noexcept { return graph_; }
+  [[nodiscard]] const PaperSceneNodes& nodes() const noexcept { return nodes_; }
+  [[nodiscard]] const PaperSceneLayout& layout() const noexcept { return layout_; }
+  [[nodiscard]] const std::shared_ptr<const clod::HeightPyramid>& mars() const { return mars_; }
+  [[nodiscard]] const std::shared_ptr<const clod::HeightPyramid>& victoria() const {
+    return victoria_;
+  }
+  [[nodiscard]] const std::shared_ptr<const clod::HeightPyramid>& secondDem() const {
+    return second_;
+  }
+  /// Height of the Victoria DEM at (x, y) in its frame (bilinear in its finest level), m.
+  [[nodiscard]] double demHeight(double x, double y) const;
+  /// Puts the rover at (x, y) on the Victoria DEM (on the surface) with a heading.
+  void placeRover(double x, double y, double headingDeg);
+
+  /// Albedos: the DEMs are drawn greener than the planet so tests can tell them apart.
+  static constexpr glm::vec3 kPlanetAlbedo{0.80F, 0.52F, 0.38F};
+  static constexpr glm::vec3 kDemAlbedo{0.55F, 0.75F, 0.45F};
+
+  /// Registers every drawable of the scene with a renderer (terrains, cut-outs, rover).
+  void registerWith(clod::SceneRenderer& renderer) const;
+  /// A light direction in `focus`'s frame: morning sun over Victoria (35° up, from the east).
+  [[nodiscard]] glm::dvec3 lightInFocus(NodeId focus) const;
+
+ private:
+  MarsVictoriaOptions options_;
+  SceneGraph graph_{"sun"};
+  PaperSceneLayout layout_;
+  PaperSceneNodes nodes_;
+  std::shared_ptr<const clod::HeightPyramid> mars_, victoria_, second_, earth_;
+};
+
+/// What the fly-over renders and where.
+struct FlyoverOptions {
+  std::filesystem::path outputDir = "mars_victoria_frames";
+  int frames = 72;
+  int width = 480, height = 270;
+  MarsVictoriaOptions scene{};
+  /// Also write a frame of the rover's mast camera and of the orbit camera (one PNG with
+  /// both as viewports) after the fly-over.
+  bool multiView = true;
+  /// Called after each frame with (frames written, frames in all, path).
+  std::function<void(int, int, const std::filesystem::path&)> progress;
+};
+
+struct FlyoverSummary {
+  std::vector<std::filesystem::path> files;
+  double seconds = 0.0;       ///< wall time of the whole run (scene build included)
+  double renderSeconds = 0.0;  ///< drawing and reading back frames only
+  /// The frame where the focus switched from Mars to Victoria (-1: never).
+  int focusSwitchFrame = -1;
+  /// Camera distance to the rover at the first and last frame (m).
+  double startDistance = 0.0, endDistance = 0.0;
+};
+
+/// Renders the fly-over headless: the camera starts far enough out to see Mars whole and
+/// descends on a smooth logarithmic path to a few metres from the rover on Victoria's rim,
+/// the focus switching from Mars to Victoria on the way. Writes frame_NNNN.png files (and
+/// multiview.png) into outputDir, creating it. Creates an EGL context if none is current.
+/// Throws InvalidArgument for fewer than 2 frames or an empty image, GlError without GL,
+/// regolith::Error if a PNG cannot be written.
+FlyoverSummary renderFlyover(const FlyoverOptions& options);
+
+/// The fly-over camera's pose in the Victoria DEM frame at t ∈ [0, 1] for a rover at `rover`.
+[[nodiscard]] Pose flyoverCamera(double t, const glm::dvec3& rover);
+
+}  // namespace regolith::scene

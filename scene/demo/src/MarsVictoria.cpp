@@ -1,0 +1,225 @@
+#include <regolith/clod/HeadlessContext.hpp>
+#include <regolith/clod/RenderTarget.hpp>
+#include <regolith/scene/MarsVictoria.hpp>
+#include <regolith/store/Generate.hpp>
+#include <regolith/store/GridInfo.hpp>
+#include <regolith/topo/Error.hpp>
+#include <regolith/topo/Projection.hpp>
+
+#include <EGL/egl.h>
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <string>
+
+namespace regolith::scene {
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// Bilinear height of a pyramid level at fractional (col, row), clamped to the grid.
+double bilinear(const clod::HeightPyramid::Level& level, double col, double row) {
+  const auto& g = level.grid;
+  const double c = std::clamp(col, 0.0, static_cast<double>(g.cols() - 1));
+  const double r = std::clamp(row, 0.0, static_cast<double>(g.rows() - 1));
+  const auto c0 = static_cast<std::size_t>(std::min(std::floor(c), static_cast<double>(g.cols() - 2)));
+  const auto r0 = static_cast<std::size_t>(std::min(std::floor(r), static_cast<double>(g.rows() - 2)));
+  const double fc = c - static_cast<double>(c0), fr = r - static_cast<double>(r0);
+  const auto s = [&](std::size_t rr, std::size_t cc) {
+    return static_cast<double>(level.source->sample(rr, cc));
+  };
+  return (1 - fr) * ((1 - fc) * s(r0, c0) + fc * s(r0, c0 + 1)) +
+         fr * ((1 - fc) * s(r0 + 1, c0) + fc * s(r0 + 1, c0 + 1));
+}
+
+// The planet's surface height (above its ellipsoid) at a planetodetic site.
+double planetHeightAt(const clod::HeightPyramid& planet, const topo::Geodetic& site) {
+  const double latC = planet.body()->planetocentricFromPlanetodetic(site.latDeg);
+  const auto& level = planet.level(0);
+  const glm::dvec2 idx = level.grid.fractionalIndex(topo::wrapLongitude180(site.lonDeg), latC);
+  return bilinear(level, idx.x, idx.y);
+}
+
+std::shared_ptr<const clod::HeightPyramid> demPyramid(const store::VictoriaGenerator& gen) {
+  const store::GridInfo info = gen.gridInfo();
+  return std::make_shared<const clod::HeightPyramid>(clod::HeightPyramid::fromSamples(
+      store::topoGridOf(info), gen.samples(), clod::SurfaceKind::Plane));
+}
+
+}  // namespace
+
+MarsVictoriaScene::MarsVictoriaScene(const MarsVictoriaOptions& options) : options_(options) {
+  store::MarsPlanetOptions po;
+  po.rows = options.planetRows;
+  po.seed = options.seed;
+  po.ellipsoid = true;
+  const store::MarsPlanetGenerator planet(po);
+  const store::GridInfo pinfo = planet.gridInfo();
+  mars_ = std::make_shared<const clod::HeightPyramid>(clod::HeightPyramid::fromSamples(
+      store::topoGridOf(pinfo), planet.samples(), clod::SurfaceKind::Planet, store::bodyOf(pinfo),
+      pinfo.latitudeType));
+
+  layout_.mars = store::bodyOf(pinfo);
+  layout_.victoriaOrigin = {store::VictoriaGenerator::kOriginLatDeg,
+                            store::VictoriaGenerator::kOriginLonDeg, 0.0};
+  layout_.victoriaOrigin.height = planetHeightAt(*mars_, layout_.victoriaOrigin);
+  layout_.secondDem = options.secondDem;
+  layout_.secondDemOrigin.height = planetHeightAt(*mars_, layout_.secondDemOrigin);
+
+  store::VictoriaOptions vo;
+  vo.size = options.demSize;
+  vo.spacing = options.demSpacing;
+  vo.seed = options.seed;
+  vo.originHeight = layout_.victoriaOrigin.height;
+  victoria_ = demPyramid(store::VictoriaGenerator(vo));
+  if (options.secondDem) {
+    store::VictoriaOptions so;
+    so.size = options.secondDemSize;
+    so.spacing = options.secondDemSpacing;
+    so.seed = options.seed + 1;
+    so.gridName = "victoria2";
+    so.originHeight = layout_.secondDemOrigin.height;
+    second_ = demPyramid(store::VictoriaGenerator(so));
+  }
+  // Earth: a WGS84 ellipsoid with no relief, 3° samples (it is a dot from Mars).
+  const topo::Body earth = topo::Body::earthWgs84();
+  const topo::TopoGrid eg(60, 120, -178.5, 88.5, 3.0, 3.0);
+  earth_ = std::make_shared<const clod::HeightPyramid>(clod::HeightPyramid::fromSamples(
+      eg, std::make_shared<topo::InMemorySamples>(60, 120, std::vector<float>(7200, 0.0F)),
+      clod::SurfaceKind::Planet, earth));
+
+  layout_.roverInDem = {0.0, -395.0, 0.0};
+  nodes_ = buildPaperScene(graph_, layout_);
+  placeRover(0.0, -395.0, 0.0);
+}
+
+double MarsVictoriaScene::demHeight(double x, double y) const {
+  const auto& level = victoria_->level(0);
+  const glm::dvec2 idx = level.grid.fractionalIndex(x, y);
+  return bilinear(level, idx.x, idx.y);
+}
+
+void MarsVictoriaScene::placeRover(double x, double y, double headingDeg) {
+  graph_.setLocal(nodes_.rover, roverPose({x, y, demHeight(x, y)}, headingDeg));
+}
+
+void MarsVictoriaScene::registerWith(clod::SceneRenderer& renderer) const {
+  clod::ClipmapOptions planet;
+  planet.size = options_.clipmapSize;
+  planet.albedo = kPlanetAlbedo;
+  clod::ClipmapOptions dem = planet;
+  dem.albedo = kDemAlbedo;
+  renderer.addTerrain(kDrawMars, mars_, planet);
+  renderer.addTerrain(kDrawVictoria, victoria_, dem);
+  renderer.addCutOut(kDrawMars, kDrawVictoria);
+  if (second_) {
+    renderer.addTerrain(kDrawSecondDem, second_, dem);
+    renderer.addCutOut(kDrawMars, kDrawSecondDem);
+  }
+  clod::ClipmapOptions earth = planet;
+  earth.size = 31;
+  earth.albedo = {0.3F, 0.45F, 0.8F};
+  renderer.addTerrain(kDrawEarth, earth_, earth);
+  renderer.addMesh(kDrawRover, clod::roverMesh(), {0.85F, 0.85F, 0.8F});
+}
+
+glm::dvec3 MarsVictoriaScene::lightInFocus(NodeId focus) const {
+  // Victoria frame: x east, y north, z up.
+  const glm::dvec3 local{std::cos(35.0 * kDeg), -0.3, std::sin(35.0 * kDeg)};
+  return graph_.relative(focus, nodes_.victoria).applyVector(glm::normalize(local));
+}
+
+Pose flyoverCamera(double t, const glm::dvec3& rover) {
+  // Smoothstep in t, logarithmic in distance: 8000 km out to 6 m from the rover. The view
+  // direction turns from straight down (north up in the image) to a low look along +y.
+  const double s = t * t * (3.0 - 2.0 * t);
+  const double dist = std::exp(std::log(8.0e6) + s * (std::log(6.0) - std::log(8.0e6)));
+  const double tilt = std::pow(s, 3.0);  // stays near nadir until close
+  const glm::dvec3 dir = glm::normalize(glm::mix(glm::dvec3(0.0, -0.02, 1.0),
+                                                 glm::dvec3(0.0, -1.0, 0.35), tilt));
+  const glm::dvec3 target = rover + glm::dvec3(0.0, 0.0, 0.8);
+  const glm::dvec3 up = glm::normalize(glm::mix(glm::dvec3(0.0, 1.0, 0.0),
+                                                glm::dvec3(0.0, 0.0, 1.0), tilt));
+  return Pose::lookAt(target + dist * dir, target, up);
+}
+
+FlyoverSummary renderFlyover(const FlyoverOptions& options) {
+  if (options.frames < 2)
+    throw InvalidArgument("renderFlyover(): " + std::to_string(options.frames) +
+                          " frames, expected at least 2");
+  if (options.width < 1 || options.height < 1)
+    throw InvalidArgument("renderFlyover(): image " + std::to_string(options.width) + "×" +
+                          std::to_string(options.height) + ", expected a non-empty image");
+  const auto t0 = std::chrono::steady_clock::now();
+  FlyoverSummary summary;
+  std::filesystem::create_directories(options.outputDir);
+  std::unique_ptr<clod::HeadlessContext> context;
+  if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<clod::HeadlessContext>();
+  {
+    MarsVictoriaScene scene(options.scene);
+    SceneGraph& g = scene.graph();
+    const PaperSceneNodes& n = scene.nodes();
+    const glm::dvec3 rover = g.relative(n.victoria, n.rover).translation;
+    const NodeId cam = g.add(n.victoria, "flyover_camera", flyoverCamera(0.0, rover),
+                             NodeKind::Camera);
+    clod::SceneRenderer renderer;
+    scene.registerWith(renderer);
+    clod::RenderTarget target(options.width, options.height);
+    double renderSeconds = 0.0;
+    for (int i = 0; i < options.frames; ++i) {
+      const double t = static_cast<double>(i) / (options.frames - 1);
+      const Pose pose = flyoverCamera(t, rover);
+      g.setLocal(cam, pose);
+      const double dist = glm::length(pose.translation - rover);
+      // Focus: Mars while the camera is far, Victoria once within 200 km of the rover.
+      const NodeId focus = dist > 2.0e5 ? n.mars : n.victoria;
+      if (focus == n.victoria && summary.focusSwitchFrame < 0) summary.focusSwitchFrame = i;
+      if (i == 0) summary.startDistance = dist;
+      summary.endDistance = dist;
+      clod::SceneView view;
+      view.fovYDegrees = 45.0;
+      view.near = std::clamp(0.01 * dist, 0.05, 1000.0);
+      view.width = options.width;
+      view.height = options.height;
+      view.lightInFocus = scene.lightInFocus(focus);
+      const auto r0 = std::chrono::steady_clock::now();
+      target.clear({0.02F, 0.02F, 0.04F, 1.0F});
+      renderer.draw(g.renderList(focus, cam), view);
+      const clod::RgbaImage image = target.readColor();
+      renderSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%04d.png", i);
+      const auto path = options.outputDir / name;
+      clod::writePng(path.string(), image);
+      summary.files.push_back(path);
+      if (options.progress) options.progress(i + 1, options.frames, path);
+    }
+    if (options.multiView) {
+      // Two viewports of one frame: the orbit camera (left) and the rover's mast camera.
+      const int half = options.width / 2;
+      target.clear({0.02F, 0.02F, 0.04F, 1.0F});
+      for (const auto& [camera, x] : {std::pair{n.orbitCamera, 0}, {n.mastCamera, half}}) {
+        clod::SceneView view;
+        view.x = x;
+        view.width = half;
+        view.height = options.height;
+        view.near = camera == n.orbitCamera ? 100.0 : 0.05;
+        view.lightInFocus = scene.lightInFocus(n.victoria);
+        renderer.draw(g.renderList(n.victoria, camera), view);
+      }
+      const auto path = options.outputDir / "multiview.png";
+      clod::writePng(path.string(), target.readColor());
+      summary.files.push_back(path);
+    }
+    summary.renderSeconds = renderSeconds;
+  }
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return summary;
+}
+
+}  // namespace regolith::scene

@@ -1,0 +1,65 @@
+#pragma once
+/// \file
+/// The example scene of the JPL paper (section IV.B, figure 10): the Sun, Earth and Mars, the
+/// Victoria Crater DEM on Mars, a rover on the DEM and cameras, as a scene graph.
+
+#include <regolith/scene/SceneGraph.hpp>
+#include <regolith/topo/Body.hpp>
+
+#include <glm/vec3.hpp>
+
+namespace regolith::scene {
+
+/// Drawable keys the paper scene gives its nodes (a renderer maps them to what it draws).
+enum PaperDrawable : int {
+  kDrawMars = 0,
+  kDrawVictoria = 1,
+  kDrawEarth = 2,
+  kDrawRover = 3,
+  kDrawSecondDem = 4,
+};
+
+/// Where things are. Lengths in metres, angles in degrees.
+struct PaperSceneLayout {
+  /// Mars (the body of the planet grid and of the DEM placements).
+  topo::Body mars = topo::Body::marsEllipsoid();
+  /// Heliocentric distances and ecliptic longitudes of Mars and Earth; Mars's spin angle
+  /// (rotation of its body-fixed frame about its pole) and obliquity.
+  double marsDistance = 2.279e11, marsLongitudeDeg = 30.0;
+  double earthDistance = 1.496e11, earthLongitudeDeg = 75.0;
+  double marsSpinDeg = 120.0, marsObliquityDeg = 25.19;
+  /// The Victoria DEM: a local tangent plane at this planetodetic origin (the plane's x east,
+  /// y north at heading 0, z up). Default: the site store::VictoriaGenerator uses.
+  topo::Geodetic victoriaOrigin{-2.05, -5.5, -1400.0};
+  double victoriaHeadingDeg = 0.0;
+  /// A second DEM on Mars (same kind of placement), if `secondDem`.
+  bool secondDem = false;
+  topo::Geodetic secondDemOrigin{-2.0, -5.4, -1400.0};
+  /// The rover's origin in the Victoria DEM's frame (x east, y north, z up; on the rim).
+  glm::dvec3 roverInDem{0.0, -395.0, 8.0};
+  double roverHeadingDeg = 0.0;  ///< clockwise from the DEM's +y
+};
+
+/// The nodes of a built paper scene.
+struct PaperSceneNodes {
+  NodeId sun = 0, earth = 0, mars = 0, victoria = 0, secondDem = 0, rover = 0;
+  /// Cameras: one 20 km over Victoria looking down (child of Mars), the rover's mast camera
+  /// (child of the rover, 1.5 m up in front of the mast head, looking ahead and 15° down), a chase camera behind the rover.
+  NodeId orbitCamera = 0, mastCamera = 0, chaseCamera = 0;
+};
+
+/// Builds the scene into an empty graph (whose root is taken as the Sun): Sun → Earth,
+/// Sun → Mars → Victoria → rover (→ mast and chase cameras), Mars → orbit camera,
+/// Mars → second DEM if asked. Throws InvalidArgument if the graph is not empty.
+PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layout = {});
+
+/// The pose (DEM frame → Mars body-fixed) of a DEM whose local tangent plane has this
+/// planetodetic origin and heading.
+[[nodiscard]] Pose tangentPlanePose(const topo::Body& body, const topo::Geodetic& origin,
+                                    double headingDeg);
+
+/// The pose of a rover at `position` (DEM frame) with a heading (degrees clockwise from +y),
+/// its x forward, y left, z up.
+[[nodiscard]] Pose roverPose(const glm::dvec3& position, double headingDeg);
+
+}  // namespace regolith::scene

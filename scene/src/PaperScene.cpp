@@ -1,0 +1,84 @@
+#include <regolith/scene/PaperScene.hpp>
+#include <regolith/topo/Error.hpp>
+#include <regolith/topo/Projection.hpp>
+
+#include <cmath>
+#include <numbers>
+
+namespace regolith::scene {
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+Pose rotationAbout(const glm::dvec3& axis, double degrees) {
+  Pose p;
+  p.rotation = glm::angleAxis(degrees * kDeg, glm::normalize(axis));
+  return p;
+}
+
+}  // namespace
+
+Pose tangentPlanePose(const topo::Body& body, const topo::Geodetic& origin, double headingDeg) {
+  const topo::LocalTangentPlane plane(body, origin, headingDeg);
+  return Pose::fromAxes(plane.originBodyFixed(), plane.xAxis(), plane.yAxis(), plane.zAxis());
+}
+
+Pose roverPose(const glm::dvec3& position, double headingDeg) {
+  // Heading clockwise from +y (north at heading 0): forward = (sin h, cos h, 0).
+  const double h = headingDeg * kDeg;
+  const glm::dvec3 fwd{std::sin(h), std::cos(h), 0.0};
+  const glm::dvec3 up{0.0, 0.0, 1.0};
+  return Pose::fromAxes(position, fwd, glm::cross(up, fwd), up);
+}
+
+PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layout) {
+  if (graph.size() != 1)
+    throw InvalidArgument("buildPaperScene(): the graph has " + std::to_string(graph.size()) +
+                          " nodes, expected an empty graph (its root only)");
+  PaperSceneNodes n;
+  n.sun = graph.root();
+  // Heliocentric frame: the ecliptic is the x-y plane.
+  const auto orbitPose = [](double distance, double longitudeDeg) {
+    Pose p;
+    p.translation = distance * glm::dvec3(std::cos(longitudeDeg * kDeg),
+                                          std::sin(longitudeDeg * kDeg), 0.0);
+    return p;
+  };
+  Pose earth = orbitPose(layout.earthDistance, layout.earthLongitudeDeg) *
+               rotationAbout({1.0, 0.0, 0.0}, 23.44);
+  n.earth = graph.add(n.sun, "earth", earth, NodeKind::Terrain, kDrawEarth);
+  // Mars body-fixed frame: tilted by the obliquity, turned by its spin angle.
+  const Pose mars = orbitPose(layout.marsDistance, layout.marsLongitudeDeg) *
+                    rotationAbout({1.0, 0.0, 0.0}, layout.marsObliquityDeg) *
+                    rotationAbout({0.0, 0.0, 1.0}, layout.marsSpinDeg);
+  n.mars = graph.add(n.sun, "mars", mars, NodeKind::Terrain, kDrawMars);
+  n.victoria = graph.add(
+      n.mars, "victoria",
+      tangentPlanePose(layout.mars, layout.victoriaOrigin, layout.victoriaHeadingDeg),
+      NodeKind::Terrain, kDrawVictoria);
+  if (layout.secondDem)
+    n.secondDem = graph.add(n.mars, "second_dem",
+                            tangentPlanePose(layout.mars, layout.secondDemOrigin, 0.0),
+                            NodeKind::Terrain, kDrawSecondDem);
+  n.rover = graph.add(n.victoria, "rover", roverPose(layout.roverInDem, layout.roverHeadingDeg),
+                      NodeKind::Object, kDrawRover);
+  // Rover frame: x forward, y left, z up. Mast camera 1.5 m up, looking 15° down ahead.
+  n.mastCamera = graph.add(
+      n.rover, "mast_camera",
+      Pose::lookAt({0.6, 0.0, 1.5}, {0.6 + std::cos(15.0 * kDeg), 0.0, 1.5 - std::sin(15.0 * kDeg)},
+                   {0.0, 0.0, 1.0}),
+      NodeKind::Camera);
+  n.chaseCamera = graph.add(n.rover, "chase_camera",
+                            Pose::lookAt({-8.0, 0.0, 3.0}, {0.0, 0.0, 0.5}, {0.0, 0.0, 1.0}),
+                            NodeKind::Camera);
+  // Orbit camera: 20 km above Victoria, looking straight down, north up in the image.
+  const topo::LocalTangentPlane site(layout.mars, layout.victoriaOrigin, 0.0);
+  const glm::dvec3 above = site.toBodyFixed({0.0, 0.0, 20e3});
+  n.orbitCamera = graph.add(n.mars, "orbit_camera",
+                            Pose::lookAt(above, site.originBodyFixed(), site.yAxis()),
+                            NodeKind::Camera);
+  return n;
+}
+
+}  // namespace regolith::scene
