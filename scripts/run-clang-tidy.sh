@@ -24,7 +24,7 @@ command -v "$clang_tidy" >/dev/null || { echo "run-clang-tidy: $clang_tidy not f
 
 # Library sources of every module that exists, plus the command-line tool.
 shopt -s nullglob
-candidates=("$root"/{topo,store,clod,scenegraph,scene,scene/demo,rover}/src/*.cpp "$root"/tools/*.cpp "$root"/tools/src/*.cpp)
+candidates=("$root"/{topo,store,clod,scenegraph,scenegraph/demo,rover}/src/*.cpp "$root"/tools/*.cpp "$root"/tools/src/*.cpp)
 shopt -u nullglob
 
 files=()

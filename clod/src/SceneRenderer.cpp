@@ -84,7 +84,7 @@ void setupVao(const VertexArray& vao, const Buffer& buffer, GLsizei stride) {
   glVertexArrayAttribBinding(vao.id(), 3, 0);
 }
 
-glm::vec3 lightIn(const scene::Pose& itemInFocus, const glm::dvec3& lightInFocus) {
+glm::vec3 lightIn(const scenegraph::Pose& itemInFocus, const glm::dvec3& lightInFocus) {
   return glm::vec3(glm::normalize(glm::conjugate(itemInFocus.rotation) * lightInFocus));
 }
 
@@ -123,7 +123,7 @@ std::vector<MeshVertex> roverMesh() {
   return v;
 }
 
-Camera cameraInItem(const scene::Pose& pose, const SceneView& view) {
+Camera cameraInItem(const scenegraph::Pose& pose, const SceneView& view) {
   Camera cam;
   cam.position = pose.translation;
   const glm::dvec3 forward = pose.applyVector({0.0, 0.0, -1.0});
@@ -353,7 +353,7 @@ const ClipmapTerrain* SceneRenderer::terrain(int drawable) const {
   return it == terrains_.end() ? nullptr : it->second->clipmap.get();
 }
 
-SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& view) {
+SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneView& view) {
   if (view.width < 1 || view.height < 1 || !(view.near > 0.0) ||
       !(view.fovYDegrees > 0.0 && view.fovYDegrees < 180.0))
     throw InvalidArgument("SceneRenderer::draw(): viewport " + std::to_string(view.width) + "×" +
@@ -366,7 +366,7 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
   const double f = 1.0 / std::tan(0.5 * view.fovYDegrees * std::numbers::pi / 180.0);
   const double aspect = static_cast<double>(view.width) / view.height;
 
-  for (const scene::RenderItem& item : list.items) {
+  for (const scenegraph::RenderItem& item : list.items) {
     const auto it = terrains_.find(item.drawable);
     if (it == terrains_.end()) {
       if (meshes_.count(item.drawable) == 0) ++frame.itemsUnknown;
@@ -383,12 +383,12 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
     const Program& prog = t.clipmap->program();
     int cuts = 0;
     for (const int dem : t.cutBy) {
-      const scene::RenderItem* d = list.findDrawable(dem);
+      const scenegraph::RenderItem* d = list.findDrawable(dem);
       if (d == nullptr) continue;
       const Terrain& dt = *terrains_.at(dem);
       const auto& g = dt.pyramid->level(dt.maskLevel).grid;
       // DEM grid frame ← planet frame, composed through the focus in double.
-      const scene::Pose planetToDem = d->inFocus.inverse() * item.inFocus;
+      const scenegraph::Pose planetToDem = d->inFocus.inverse() * item.inFocus;
       const glm::dmat3 eyeToWorld = glm::transpose(cam.rotation());
       const glm::dmat3 eyeToGrid = planetToDem.matrix() * eyeToWorld;
       const glm::dvec3 camInGrid = planetToDem.apply(cam.position);
@@ -422,7 +422,7 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
   // past the coarsest DEM level's edge (a coarse level's border sits up to half a cell inside
   // the finest level's).
   meshProgram_.use();
-  for (const scene::RenderItem& item : list.items) {
+  for (const scenegraph::RenderItem& item : list.items) {
     const auto it = terrains_.find(item.drawable);
     if (!skirts_ || it == terrains_.end() || !it->second->skirt) continue;
     Terrain& t = *it->second;
@@ -431,7 +431,7 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
       if (std::find(planet->cutBy.begin(), planet->cutBy.end(), item.drawable) ==
           planet->cutBy.end())
         continue;
-      const scene::RenderItem* pi = list.findDrawable(key);
+      const scenegraph::RenderItem* pi = list.findDrawable(key);
       if (pi == nullptr) continue;
       // How far the planet's surface can be from the DEM border: the planet's relief over
       // the cell under the DEM and the sag of a chord across its coarsest cell drawn.
@@ -500,7 +500,7 @@ SceneFrame SceneRenderer::draw(const scene::RenderList& list, const SceneView& v
   }
 
   // Meshes: item → camera in double, the camera in the item frame, floats small.
-  for (const scene::RenderItem& item : list.items) {
+  for (const scenegraph::RenderItem& item : list.items) {
     const auto it = meshes_.find(item.drawable);
     if (it == meshes_.end()) continue;
     const Mesh& m = *it->second;

@@ -8,7 +8,7 @@
 #include <regolith/clod/GlObjects.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/Program.hpp>
-#include <regolith/scene/RenderList.hpp>
+#include <regolith/scenegraph/RenderList.hpp>
 
 #include <glm/vec3.hpp>
 
@@ -49,7 +49,7 @@ struct SceneFrame {
   std::size_t vertices = 0;
 };
 
-/// Draws render lists (scene::SceneGraph::renderList). Each item is drawn in its own frame:
+/// Draws render lists (scenegraph::SceneGraph::renderList). Each item is drawn in its own frame:
 /// the camera's pose relative to the item (double, from the render list) becomes a clod
 /// Camera in that frame, so a terrain's clipmap sends the GPU only camera-relative floats,
 /// whatever the focus. A mesh gets its item → camera pose, made in double, cast to float.
@@ -82,7 +82,7 @@ class SceneRenderer {
 
   /// Draws `list` into the bound framebuffer within view's viewport (depth state: reversed
   /// Z, as RenderTarget sets it). Terrain foci follow the camera (clamped onto each DEM).
-  SceneFrame draw(const scene::RenderList& list, const SceneView& view);
+  SceneFrame draw(const scenegraph::RenderList& list, const SceneView& view);
 
   /// Draws the DEM border skirts (default on). Off only to show what they prevent: the
   /// planet's cut edge and the DEM's border then leave gaps wherever their heights differ.
@@ -102,6 +102,6 @@ class SceneRenderer {
 };
 
 /// The clod Camera for drawing an item whose camera pose (camera → item frame) is `pose`.
-[[nodiscard]] Camera cameraInItem(const scene::Pose& pose, const SceneView& view);
+[[nodiscard]] Camera cameraInItem(const scenegraph::Pose& pose, const SceneView& view);
 
 }  // namespace regolith::clod

@@ -1,11 +1,11 @@
-#include <regolith/scene/PaperScene.hpp>
+#include <regolith/scenegraph/PaperScene.hpp>
 #include <regolith/topo/Error.hpp>
 #include <regolith/topo/Projection.hpp>
 
 #include <cmath>
 #include <numbers>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 
 namespace {
 
@@ -41,8 +41,8 @@ PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layou
   // Heliocentric frame: the ecliptic is the x-y plane.
   const auto orbitPose = [](double distance, double longitudeDeg) {
     Pose p;
-    p.translation = distance * glm::dvec3(std::cos(longitudeDeg * kDeg),
-                                          std::sin(longitudeDeg * kDeg), 0.0);
+    p.translation =
+        distance * glm::dvec3(std::cos(longitudeDeg * kDeg), std::sin(longitudeDeg * kDeg), 0.0);
     return p;
   };
   Pose earth = orbitPose(layout.earthDistance, layout.earthLongitudeDeg) *
@@ -53,14 +53,14 @@ PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layou
                     rotationAbout({1.0, 0.0, 0.0}, layout.marsObliquityDeg) *
                     rotationAbout({0.0, 0.0, 1.0}, layout.marsSpinDeg);
   n.mars = graph.add(n.sun, "mars", mars, NodeKind::Terrain, kDrawMars);
-  n.victoria = graph.add(
-      n.mars, "victoria",
-      tangentPlanePose(layout.mars, layout.victoriaOrigin, layout.victoriaHeadingDeg),
-      NodeKind::Terrain, kDrawVictoria);
+  n.victoria =
+      graph.add(n.mars, "victoria",
+                tangentPlanePose(layout.mars, layout.victoriaOrigin, layout.victoriaHeadingDeg),
+                NodeKind::Terrain, kDrawVictoria);
   if (layout.secondDem)
-    n.secondDem = graph.add(n.mars, "second_dem",
-                            tangentPlanePose(layout.mars, layout.secondDemOrigin, 0.0),
-                            NodeKind::Terrain, kDrawSecondDem);
+    n.secondDem =
+        graph.add(n.mars, "second_dem", tangentPlanePose(layout.mars, layout.secondDemOrigin, 0.0),
+                  NodeKind::Terrain, kDrawSecondDem);
   n.rover = graph.add(n.victoria, "rover", roverPose(layout.roverInDem, layout.roverHeadingDeg),
                       NodeKind::Object, kDrawRover);
   // Rover frame: x forward, y left, z up. Mast camera 1.5 m up, looking 15° down ahead.
@@ -69,16 +69,16 @@ PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layou
       Pose::lookAt({0.6, 0.0, 1.5}, {0.6 + std::cos(15.0 * kDeg), 0.0, 1.5 - std::sin(15.0 * kDeg)},
                    {0.0, 0.0, 1.0}),
       NodeKind::Camera);
-  n.chaseCamera = graph.add(n.rover, "chase_camera",
-                            Pose::lookAt({-8.0, 0.0, 3.0}, {0.0, 0.0, 0.5}, {0.0, 0.0, 1.0}),
-                            NodeKind::Camera);
+  n.chaseCamera =
+      graph.add(n.rover, "chase_camera",
+                Pose::lookAt({-8.0, 0.0, 3.0}, {0.0, 0.0, 0.5}, {0.0, 0.0, 1.0}), NodeKind::Camera);
   // Orbit camera: 20 km above Victoria, looking straight down, north up in the image.
   const topo::LocalTangentPlane site(layout.mars, layout.victoriaOrigin, 0.0);
   const glm::dvec3 above = site.toBodyFixed({0.0, 0.0, 20e3});
-  n.orbitCamera = graph.add(n.mars, "orbit_camera",
-                            Pose::lookAt(above, site.originBodyFixed(), site.yAxis()),
-                            NodeKind::Camera);
+  n.orbitCamera =
+      graph.add(n.mars, "orbit_camera", Pose::lookAt(above, site.originBodyFixed(), site.yAxis()),
+                NodeKind::Camera);
   return n;
 }
 
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

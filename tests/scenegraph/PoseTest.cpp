@@ -1,4 +1,4 @@
-#include <regolith/scene/Pose.hpp>
+#include <regolith/scenegraph/Pose.hpp>
 #include <regolith/topo/Error.hpp>
 
 #include <glm/geometric.hpp>
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <numbers>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 namespace {
 
 void expectNear(const glm::dvec3& a, const glm::dvec3& b, double tol) {
@@ -65,4 +65,4 @@ TEST(PoseTest, LookAtPutsTheTargetOnTheMinusZAxis) {
 }
 
 }  // namespace
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

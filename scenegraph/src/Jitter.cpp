@@ -1,4 +1,4 @@
-#include <regolith/scene/Jitter.hpp>
+#include <regolith/scenegraph/Jitter.hpp>
 #include <regolith/topo/Error.hpp>
 
 #include <glm/geometric.hpp>
@@ -12,7 +12,7 @@
 #include <numbers>
 #include <optional>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 
 namespace {
 
@@ -41,8 +41,8 @@ JitterResult measureJitter(SceneGraph& graph, NodeId camera, NodeId focus, NodeI
                            std::size_t frames,
                            const std::function<void(SceneGraph&, std::size_t)>& step,
                            const JitterCamera& intrinsics, double anchorCell) {
-  if (!(intrinsics.fovYDegrees > 0.0 && intrinsics.fovYDegrees < 180.0) ||
-      intrinsics.width < 1 || intrinsics.height < 1)
+  if (!(intrinsics.fovYDegrees > 0.0 && intrinsics.fovYDegrees < 180.0) || intrinsics.width < 1 ||
+      intrinsics.height < 1)
     throw InvalidArgument("measureJitter(): camera intrinsics out of range");
   if (!(anchorCell > 0.0))
     throw InvalidArgument("measureJitter(): anchor cell " + std::to_string(anchorCell) +
@@ -56,9 +56,9 @@ JitterResult measureJitter(SceneGraph& graph, NodeId camera, NodeId focus, NodeI
   const auto hF = static_cast<float>(h);
 
   JitterResult result;
-  result.name = pipeline == Pipeline::Rerooted ? "re-rooted at '" + graph.node(focus).name + "'"
-                                               : "naive, float world = '" +
-                                                     graph.node(world).name + "'";
+  result.name = pipeline == Pipeline::Rerooted
+                    ? "re-rooted at '" + graph.node(focus).name + "'"
+                    : "naive, float world = '" + graph.node(world).name + "'";
   std::vector<std::optional<glm::dvec2>> previous(points.size());
   for (std::size_t i = 0; i < frames; ++i) {
     step(graph, i);
@@ -82,9 +82,9 @@ JitterResult measureJitter(SceneGraph& graph, NodeId camera, NodeId focus, NodeI
         // The item's frame: the tracked node's. Camera in the item frame, through the focus.
         const Pose cameraInItem = inFocus[tp.node].inverse() * list.cameraInFocus;
         const glm::dvec3 anchor = glm::round(tp.local / anchorCell) * anchorCell;
-        const glm::vec3 offsetF(tp.local - anchor);                        // texel / vertex
-        const glm::vec3 anchorRelF(anchor - cameraInItem.translation);     // uniform
-        const glm::mat3 rotF(glm::transpose(cameraInItem.matrix()));       // item → eye
+        const glm::vec3 offsetF(tp.local - anchor);                     // texel / vertex
+        const glm::vec3 anchorRelF(anchor - cameraInItem.translation);  // uniform
+        const glm::mat3 rotF(glm::transpose(cameraInItem.matrix()));    // item → eye
         approx = project(rotF * (offsetF + anchorRelF), focalF, wF, hF);
       }
       if (!approx) {
@@ -101,4 +101,4 @@ JitterResult measureJitter(SceneGraph& graph, NodeId camera, NodeId focus, NodeI
   return result;
 }
 
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

@@ -3,12 +3,12 @@
 /// The example scene of the JPL paper (section IV.B, figure 10): the Sun, Earth and Mars, the
 /// Victoria Crater DEM on Mars, a rover on the DEM and cameras, as a scene graph.
 
-#include <regolith/scene/SceneGraph.hpp>
+#include <regolith/scenegraph/SceneGraph.hpp>
 #include <regolith/topo/Body.hpp>
 
 #include <glm/vec3.hpp>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 
 /// Drawable keys the paper scene gives its nodes (a renderer maps them to what it draws).
 enum PaperDrawable : int {
@@ -44,7 +44,8 @@ struct PaperSceneLayout {
 struct PaperSceneNodes {
   NodeId sun = 0, earth = 0, mars = 0, victoria = 0, secondDem = 0, rover = 0;
   /// Cameras: one 20 km over Victoria looking down (child of Mars), the rover's mast camera
-  /// (child of the rover, 1.5 m up in front of the mast head, looking ahead and 15° down), a chase camera behind the rover.
+  /// (child of the rover, 1.5 m up in front of the mast head, looking ahead and 15° down), a chase
+  /// camera behind the rover.
   NodeId orbitCamera = 0, mastCamera = 0, chaseCamera = 0;
 };
 
@@ -62,4 +63,4 @@ PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layou
 /// its x forward, y left, z up.
 [[nodiscard]] Pose roverPose(const glm::dvec3& position, double headingDeg);
 
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

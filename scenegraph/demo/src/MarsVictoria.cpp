@@ -1,6 +1,6 @@
 #include <regolith/clod/HeadlessContext.hpp>
 #include <regolith/clod/RenderTarget.hpp>
-#include <regolith/scene/MarsVictoria.hpp>
+#include <regolith/scenegraph/MarsVictoria.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/topo/Error.hpp>
@@ -16,7 +16,7 @@
 #include <numbers>
 #include <string>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 
 namespace {
 
@@ -27,8 +27,10 @@ double bilinear(const clod::HeightPyramid::Level& level, double col, double row)
   const auto& g = level.grid;
   const double c = std::clamp(col, 0.0, static_cast<double>(g.cols() - 1));
   const double r = std::clamp(row, 0.0, static_cast<double>(g.rows() - 1));
-  const auto c0 = static_cast<std::size_t>(std::min(std::floor(c), static_cast<double>(g.cols() - 2)));
-  const auto r0 = static_cast<std::size_t>(std::min(std::floor(r), static_cast<double>(g.rows() - 2)));
+  const auto c0 =
+      static_cast<std::size_t>(std::min(std::floor(c), static_cast<double>(g.cols() - 2)));
+  const auto r0 =
+      static_cast<std::size_t>(std::min(std::floor(r), static_cast<double>(g.rows() - 2)));
   const double fc = c - static_cast<double>(c0), fr = r - static_cast<double>(r0);
   const auto s = [&](std::size_t rr, std::size_t cc) {
     return static_cast<double>(level.source->sample(rr, cc));
@@ -140,11 +142,11 @@ Pose flyoverCamera(double t, const glm::dvec3& rover) {
   const double s = t * t * (3.0 - 2.0 * t);
   const double dist = std::exp(std::log(8.0e6) + s * (std::log(6.0) - std::log(8.0e6)));
   const double tilt = std::pow(s, 3.0);  // stays near nadir until close
-  const glm::dvec3 dir = glm::normalize(glm::mix(glm::dvec3(0.0, -0.02, 1.0),
-                                                 glm::dvec3(0.0, -1.0, 0.35), tilt));
+  const glm::dvec3 dir =
+      glm::normalize(glm::mix(glm::dvec3(0.0, -0.02, 1.0), glm::dvec3(0.0, -1.0, 0.35), tilt));
   const glm::dvec3 target = rover + glm::dvec3(0.0, 0.0, 0.8);
-  const glm::dvec3 up = glm::normalize(glm::mix(glm::dvec3(0.0, 1.0, 0.0),
-                                                glm::dvec3(0.0, 0.0, 1.0), tilt));
+  const glm::dvec3 up =
+      glm::normalize(glm::mix(glm::dvec3(0.0, 1.0, 0.0), glm::dvec3(0.0, 0.0, 1.0), tilt));
   return Pose::lookAt(target + dist * dir, target, up);
 }
 
@@ -165,8 +167,8 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
     SceneGraph& g = scene.graph();
     const PaperSceneNodes& n = scene.nodes();
     const glm::dvec3 rover = g.relative(n.victoria, n.rover).translation;
-    const NodeId cam = g.add(n.victoria, "flyover_camera", flyoverCamera(0.0, rover),
-                             NodeKind::Camera);
+    const NodeId cam =
+        g.add(n.victoria, "flyover_camera", flyoverCamera(0.0, rover), NodeKind::Camera);
     clod::SceneRenderer renderer;
     scene.registerWith(renderer);
     clod::RenderTarget target(options.width, options.height);
@@ -222,4 +224,4 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
   return summary;
 }
 
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

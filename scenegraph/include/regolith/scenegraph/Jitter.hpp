@@ -2,7 +2,7 @@
 /// \file
 /// Screen-space jitter of float32 vertex pipelines, measured against double precision.
 
-#include <regolith/scene/SceneGraph.hpp>
+#include <regolith/scenegraph/SceneGraph.hpp>
 
 #include <glm/vec3.hpp>
 
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 
 /// A point to follow: a position in the frame of a scene node (metres).
 struct TrackedPoint {
@@ -59,7 +59,8 @@ struct JitterCamera {
 /// `world` the frame of the naive pipeline. Points behind the camera in double are skipped.
 JitterResult measureJitter(SceneGraph& graph, NodeId camera, NodeId focus, NodeId world,
                            Pipeline pipeline, const std::vector<TrackedPoint>& points,
-                           std::size_t frames, const std::function<void(SceneGraph&, std::size_t)>& step,
+                           std::size_t frames,
+                           const std::function<void(SceneGraph&, std::size_t)>& step,
                            const JitterCamera& intrinsics = {}, double anchorCell = 64.0);
 
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

@@ -1,6 +1,6 @@
-#include <regolith/scene/RenderList.hpp>
+#include <regolith/scenegraph/RenderList.hpp>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 
 glm::mat4 RenderItem::modelView() const noexcept {
   glm::dmat4 m(inCamera.matrix());
@@ -20,4 +20,4 @@ const RenderItem* RenderList::findDrawable(int drawable) const noexcept {
   return nullptr;
 }
 
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

@@ -1,14 +1,14 @@
 // Screen-space jitter of the rover and nearby terrain vertices as the rover moves across
 // Victoria in 1 mm steps, for naive float32 pipelines and the re-rooted one (issue 6).
-#include <regolith/scene/Jitter.hpp>
-#include <regolith/scene/PaperScene.hpp>
+#include <regolith/scenegraph/Jitter.hpp>
+#include <regolith/scenegraph/PaperScene.hpp>
 #include <regolith/topo/Error.hpp>
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 namespace {
 
 struct RoverRun {
@@ -83,4 +83,4 @@ TEST(JitterTest, RejectsBadIntrinsics) {
 }
 
 }  // namespace
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

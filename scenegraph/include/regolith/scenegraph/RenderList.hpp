@@ -2,14 +2,14 @@
 /// \file
 /// What a renderer draws for one camera: the scene graph re-rooted at the focus.
 
-#include <regolith/scene/Pose.hpp>
+#include <regolith/scenegraph/Pose.hpp>
 
 #include <glm/mat4x4.hpp>
 
 #include <cstddef>
 #include <vector>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 
 /// One thing to draw: a drawable node, the key under which the renderer knows it, and its
 /// frame relative to the focus and to the camera (item frame → focus frame, item frame →
@@ -43,4 +43,4 @@ struct RenderList {
   [[nodiscard]] const RenderItem* findDrawable(int drawable) const noexcept;
 };
 
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

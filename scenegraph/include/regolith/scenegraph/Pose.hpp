@@ -6,7 +6,7 @@
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 
 /// A rigid transform from a child frame to its parent frame: p_parent = rotation · p_child +
 /// translation. Metres and unit quaternions, double. Value type; every member is pure.
@@ -41,4 +41,4 @@ struct Pose {
 /// Composition: (a * b) applies b, then a (a: middle → outer, b: inner → middle).
 [[nodiscard]] Pose operator*(const Pose& a, const Pose& b) noexcept;
 
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

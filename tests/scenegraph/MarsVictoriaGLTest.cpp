@@ -1,7 +1,7 @@
-// scene::MarsVictoriaScene and scene::renderFlyover(): the fly-over writes readable PNGs
+// scenegraph::MarsVictoriaScene and scenegraph::renderFlyover(): the fly-over writes readable PNGs
 // from Mars whole down to the rover, switching the focus on the way.
 #include <regolith/clod/Image.hpp>
-#include <regolith/scene/MarsVictoria.hpp>
+#include <regolith/scenegraph/MarsVictoria.hpp>
 #include <regolith/topo/Error.hpp>
 
 #include "clod/GlContext.hpp"
@@ -12,7 +12,7 @@
 #include <filesystem>
 #include <string>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 namespace {
 
 MarsVictoriaOptions small() {
@@ -88,4 +88,4 @@ TEST(MarsVictoriaGLTest, RejectsBadOptions) {
 }
 
 }  // namespace
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

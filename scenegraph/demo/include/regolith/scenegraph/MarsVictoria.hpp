@@ -5,8 +5,8 @@
 
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
-#include <regolith/scene/PaperScene.hpp>
-#include <regolith/scene/SceneGraph.hpp>
+#include <regolith/scenegraph/PaperScene.hpp>
+#include <regolith/scenegraph/SceneGraph.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 
 /// Sizes of the generated data (small by default so tests and the demo stay fast).
 struct MarsVictoriaOptions {
@@ -90,7 +90,7 @@ struct FlyoverOptions {
 
 struct FlyoverSummary {
   std::vector<std::filesystem::path> files;
-  double seconds = 0.0;       ///< wall time of the whole run (scene build included)
+  double seconds = 0.0;        ///< wall time of the whole run (scene build included)
   double renderSeconds = 0.0;  ///< drawing and reading back frames only
   /// The frame where the focus switched from Mars to Victoria (-1: never).
   int focusSwitchFrame = -1;
@@ -109,4 +109,4 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options);
 /// The fly-over camera's pose in the Victoria DEM frame at t ∈ [0, 1] for a rover at `rover`.
 [[nodiscard]] Pose flyoverCamera(double t, const glm::dvec3& rover);
 
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

@@ -3,8 +3,8 @@
 /// A tree of frames with double-precision edges, re-rooted at the object of interest to
 /// produce render lists (JPL Dspace/SimScape paper, section IV.B, figures 10–12).
 
-#include <regolith/scene/Pose.hpp>
-#include <regolith/scene/RenderList.hpp>
+#include <regolith/scenegraph/Pose.hpp>
+#include <regolith/scenegraph/RenderList.hpp>
 
 #include <cstddef>
 #include <optional>
@@ -12,7 +12,7 @@
 #include <string_view>
 #include <vector>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 
 /// Index of a node in its SceneGraph.
 using NodeId = std::size_t;
@@ -58,8 +58,8 @@ class SceneGraph {
   /// Adds a child of `parent` at `local` (child → parent). Names must be unique and not
   /// empty. Throws InvalidArgument for an unknown parent, a duplicate or empty name, or a
   /// pose that is not finite.
-  NodeId add(NodeId parent, std::string name, const Pose& local,
-             NodeKind kind = NodeKind::Frame, int drawable = -1);
+  NodeId add(NodeId parent, std::string name, const Pose& local, NodeKind kind = NodeKind::Frame,
+             int drawable = -1);
   /// Moves a node relative to its parent. Throws as add() for a bad id or pose; the root
   /// stays at the identity (InvalidArgument).
   void setLocal(NodeId id, const Pose& local);
@@ -92,4 +92,4 @@ class SceneGraph {
   std::vector<std::vector<NodeId>> children_;
 };
 
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

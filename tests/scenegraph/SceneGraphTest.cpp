@@ -1,5 +1,5 @@
-#include <regolith/scene/PaperScene.hpp>
-#include <regolith/scene/SceneGraph.hpp>
+#include <regolith/scenegraph/PaperScene.hpp>
+#include <regolith/scenegraph/SceneGraph.hpp>
 #include <regolith/topo/Error.hpp>
 #include <regolith/topo/Projection.hpp>
 
@@ -8,7 +8,7 @@
 
 #include <cmath>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 namespace {
 
 void expectNear(const glm::dvec3& a, const glm::dvec3& b, double tol) {
@@ -145,4 +145,4 @@ TEST(SceneGraphTest, MovingTheRoverOneMillimetreMovesItOneMillimetreInTheRenderL
 }
 
 }  // namespace
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

@@ -1,11 +1,11 @@
-#include <regolith/scene/Pose.hpp>
+#include <regolith/scenegraph/Pose.hpp>
 #include <regolith/topo/Error.hpp>
 
 #include <glm/geometric.hpp>
 
 #include <cmath>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 
 Pose Pose::fromAxes(const glm::dvec3& origin, const glm::dvec3& xAxis, const glm::dvec3& yAxis,
                     const glm::dvec3& zAxis) {
@@ -47,4 +47,4 @@ Pose operator*(const Pose& a, const Pose& b) noexcept {
   return p;
 }
 
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph

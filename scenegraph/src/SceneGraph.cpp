@@ -1,11 +1,11 @@
-#include <regolith/scene/SceneGraph.hpp>
+#include <regolith/scenegraph/SceneGraph.hpp>
 #include <regolith/topo/Error.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 
-namespace regolith::scene {
+namespace regolith::scenegraph {
 
 namespace {
 
@@ -159,4 +159,4 @@ RenderList SceneGraph::renderList(NodeId focus, NodeId camera) const {
   return list;
 }
 
-}  // namespace regolith::scene
+}  // namespace regolith::scenegraph
