@@ -1,13 +1,16 @@
 #include "MainDemo.hpp"
 
 #include <regolith/rover/Traverse.hpp>
+#include <regolith/scenegraph/MarsVictoria.hpp>
 #include <regolith/store/Generate.hpp>
+#include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/Error.hpp>
 
 #include "CancelOnSignal.hpp"
 #include "TerminalProgress.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -29,13 +32,14 @@ double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-/// True if `path` opens as a store holding grid `grid` (a stale or foreign file does not).
-bool hasGrid(const fs::path& path, const std::string& grid) {
+/// True if `path` opens as a store holding grid `grid` with `levels` pyramid levels (a
+/// corrupt, foreign or differently made file does not count, and is regenerated).
+bool hasGrid(const fs::path& path, const std::string& grid, std::size_t levels) {
   if (!fs::exists(path)) return false;
   try {
     const store::Store s = store::Store::open(path);
     for (const std::string& n : s.gridNames())
-      if (n == grid) return true;
+      if (n == grid) return s.grid(n).levels == levels;
   } catch (const Error&) {
   }
   return false;
@@ -55,46 +59,69 @@ struct DefaultData {
   std::string marsNote, victoriaNote;
 };
 
+/// Mars's surface height at the Victoria site (bilinear in the stored planet's level 0), so
+/// the DEM's plains meet the planet where the scene draws both.
+double marsHeightAtVictoria(const fs::path& mars, const std::string& grid) {
+  auto s = std::make_shared<const store::Store>(store::Store::open(mars));
+  const store::Pager pager(s, std::make_shared<store::PatchCache>(std::size_t{16} << 20));
+  const topo::TopoPlanet planet = pager.planet(grid);
+  const double latC =
+      planet.body().planetocentricFromPlanetodetic(store::VictoriaGenerator::kOriginLatDeg);
+  const topo::HeightSample h =
+      planet.height(topo::LatLon{latC, store::VictoriaGenerator::kOriginLonDeg});
+  if (!h.valid()) throw Error("demo: " + mars.string() + " has no height at the Victoria site");
+  return h.height;
+}
+
 DefaultData ensureData(const MainDemoOptions& o, const fs::path& dir, std::ostream& out) {
   fs::create_directories(dir);
   DefaultData d{dir / "mars.h5", dir / "victoria.h5", "", ""};
   const CancelOnSignal cancel;
-  {
-    store::MarsPlanetOptions m;
-    m.rows = o.quick ? 256 : 1024;
+  const auto note = [](Clock::time_point t0) {
+    std::ostringstream s;
+    s << std::fixed << std::setprecision(1) << "generated in " << secondsSince(t0) << " s";
+    return s.str();
+  };
+  store::MarsPlanetOptions m;
+  m.rows = o.quick ? 256 : 1024;
+  m.ellipsoid = true;  // the IAU ellipsoid, as the Victoria DEM's placement uses
+  // Levels down to 16 × 32 samples: the clipmap's coarsest level then spans the globe.
+  m.write.levels = o.quick ? 5 : 7;
+  bool marsNew = false;
+  if (hasGrid(d.mars, m.gridName, m.write.levels)) {
+    d.marsNote = "reused";
+  } else {
+    out << "  generating " << d.mars.string() << " (procedural Mars, " << m.rows << " x "
+        << 2 * m.rows << " samples)..." << std::endl;
     const auto t0 = Clock::now();
-    if (hasGrid(d.mars, m.gridName)) {
-      d.marsNote = "reused";
-    } else {
-      out << "  generating " << d.mars.string() << " (procedural Mars, " << m.rows << " x "
-          << 2 * m.rows << " samples)..." << std::endl;
-      TerminalProgress progress = TerminalProgress::forStderr();
-      m.write = writeOptions(progress);
-      store::MarsPlanetGenerator(m).write(d.mars);
-      std::ostringstream s;
-      s << std::fixed << std::setprecision(1) << "generated in " << secondsSince(t0) << " s";
-      d.marsNote = s.str();
-    }
+    TerminalProgress progress = TerminalProgress::forStderr();
+    const std::size_t levels = m.write.levels;
+    m.write = writeOptions(progress);
+    m.write.levels = levels;
+    store::MarsPlanetGenerator(m).write(d.mars);
+    d.marsNote = note(t0);
+    marsNew = true;
   }
-  {
-    store::VictoriaOptions v;
-    if (o.quick) {  // the same 1.2 km square at 3 m
-      v.size = 401;
-      v.spacing = 3.0;
-    }
+  store::VictoriaOptions v;
+  if (o.quick) {  // the same 1.2 km square at 3 m
+    v.size = 401;
+    v.spacing = 3.0;
+  }
+  // Levels down to under 40 samples a side, so the clipmap's coarsest level covers the DEM.
+  const std::size_t demLevels = o.quick ? 5 : 6;
+  if (!marsNew && hasGrid(d.victoria, v.gridName, demLevels)) {
+    d.victoriaNote = "reused";
+  } else {
+    v.originHeight = marsHeightAtVictoria(d.mars, m.gridName);
+    out << "  generating " << d.victoria.string() << " (Victoria-like crater, " << v.size << " x "
+        << v.size << " samples at " << v.spacing << " m, placed on the planet's surface at "
+        << std::setprecision(6) << v.originHeight << " m)..." << std::endl;
     const auto t0 = Clock::now();
-    if (hasGrid(d.victoria, v.gridName)) {
-      d.victoriaNote = "reused";
-    } else {
-      out << "  generating " << d.victoria.string() << " (Victoria-like crater, " << v.size << " x "
-          << v.size << " samples at " << v.spacing << " m)..." << std::endl;
-      TerminalProgress progress = TerminalProgress::forStderr();
-      v.write = writeOptions(progress);
-      store::VictoriaGenerator(v).write(d.victoria);
-      std::ostringstream s;
-      s << std::fixed << std::setprecision(1) << "generated in " << secondsSince(t0) << " s";
-      d.victoriaNote = s.str();
-    }
+    TerminalProgress progress = TerminalProgress::forStderr();
+    v.write = writeOptions(progress);
+    v.write.levels = demLevels;
+    store::VictoriaGenerator(v).write(d.victoria);
+    d.victoriaNote = note(t0);
   }
   return d;
 }
@@ -143,19 +170,35 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
   fs::create_directories(o.outDir);
   const fs::path dataDir = o.dataDir.empty() ? o.outDir / "data" : o.dataDir;
 
-  out << "[1/3] Default data in " << dataDir.string() << "\n";
+  out << "[1/4] Default data in " << dataDir.string() << "\n";
   const DefaultData data = ensureData(o, dataDir, out);
   out << "  " << data.mars.string() << ": " << data.marsNote << "\n  " << data.victoria.string()
       << ": " << data.victoriaNote << "\n";
 
-  out << "[2/3] Rover traverse across the crater (6 wheels, 1 ms steps, cache budget " << o.cacheMb
+  out << "[2/4] Rover traverse across the crater (6 wheels, 1 ms steps, cache budget " << o.cacheMb
       << " MiB)\n";
   const auto t1 = Clock::now();
   const TraverseRun trav = runTraverse(o, data.victoria, out);
   const double traverseSeconds = secondsSince(t1);
   const rover::TraverseResult& r = trav.result;
 
-  out << "[3/3] Renders: not yet wired\n";
+  out << "[3/4] Fly-over from orbit down to the rover on the crater rim (" << o.frames
+      << " frames, " << o.width << "x" << o.height << ")" << std::endl;
+  scenegraph::FlyoverOptions fly;
+  fly.outputDir = o.outDir / "flyover";
+  fly.frames = static_cast<int>(o.frames);
+  fly.width = o.width;
+  fly.height = o.height;
+  fly.scene.marsStore = data.mars;
+  fly.scene.victoriaStore = data.victoria;
+  fly.scene.clipmapSize = 127;
+  fly.scene.demAlbedo = glm::vec3{0.86F, 0.60F, 0.46F};  // a lighter tone of the planet's
+  fly.progress = [&out, every = std::max<std::size_t>(1, o.frames / 6)](int done, int all,
+                                                                        const fs::path& path) {
+    if (static_cast<std::size_t>(done) % every == 0 || done == all)
+      out << "  frame " << done << "/" << all << ": " << path.string() << std::endl;
+  };
+  const scenegraph::FlyoverSummary flyover = scenegraph::renderFlyover(fly);
 
   out << "\n==== Summary (" << std::fixed << std::setprecision(1) << secondsSince(start) << " s)\n";
   out << "Traverse: " << r.steps << " steps, " << std::setprecision(0) << r.distance
@@ -167,6 +210,11 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
       << r.peakResidentBytes / 1024 << " KiB at most, budget " << r.budgetBytes / 1024 << " KiB\n";
   out << "  chassis: largest tilt " << std::setprecision(1) << r.maxTilt * 180.0 / M_PI
       << "°, largest contact residual " << std::setprecision(3) << r.maxResidual << " m\n";
+  out << "Fly-over: " << flyover.files.size() << " images in " << (o.outDir / "flyover").string()
+      << " (" << std::setprecision(1) << flyover.renderSeconds << " s drawing, " << flyover.seconds
+      << " s in all; " << std::setprecision(0) << flyover.startDistance / 1e3 << " km to "
+      << std::setprecision(1) << flyover.endDistance
+      << " m from the rover, focus Mars → Victoria at frame " << flyover.focusSwitchFrame << ")\n";
 }
 
 }  // namespace regolith::tools

@@ -3,6 +3,8 @@
 #include <regolith/scenegraph/MarsVictoria.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/GridInfo.hpp>
+#include <regolith/store/Pager.hpp>
+#include <regolith/store/Store.hpp>
 #include <regolith/topo/Error.hpp>
 #include <regolith/topo/Projection.hpp>
 
@@ -53,9 +55,44 @@ std::shared_ptr<const clod::HeightPyramid> demPyramid(const store::VictoriaGener
       store::topoGridOf(info), gen.samples(), clod::SurfaceKind::Plane));
 }
 
+// The second, smaller Victoria-like DEM (another seed), generated in memory.
+std::shared_ptr<const clod::HeightPyramid> secondDemPyramid(const MarsVictoriaOptions& options,
+                                                            double originHeight) {
+  store::VictoriaOptions so;
+  so.size = options.secondDemSize;
+  so.spacing = options.secondDemSpacing;
+  so.seed = options.seed + 1;
+  so.gridName = "victoria2";
+  so.originHeight = originHeight;
+  return demPyramid(store::VictoriaGenerator(so));
+}
+
+// One grid of a store as a pyramid paged through `pager` (every stored level).
+std::shared_ptr<const clod::HeightPyramid> storePyramid(const store::Pager& pager,
+                                                        const std::string& grid,
+                                                        clod::SurfaceKind kind) {
+  const store::GridInfo& info = pager.store().grid(grid);
+  std::vector<clod::HeightPyramid::Level> levels;
+  for (std::size_t l = 0; l < info.levels; ++l)
+    levels.push_back({store::topoGridOf(info, l), pager.source(grid, l)});
+  const bool planet = kind == clod::SurfaceKind::Planet;
+  return std::make_shared<const clod::HeightPyramid>(
+      std::move(levels), kind, planet ? std::optional(store::bodyOf(info)) : std::nullopt,
+      info.latitudeType);
+}
+
 }  // namespace
 
 MarsVictoriaScene::MarsVictoriaScene(const MarsVictoriaOptions& options) : options_(options) {
+  if (options.marsStore.empty() != options.victoriaStore.empty())
+    throw InvalidArgument("MarsVictoriaScene: marsStore and victoriaStore go together (got " +
+                          (options.marsStore.empty() ? std::string("only victoriaStore")
+                                                     : std::string("only marsStore")) +
+                          ")");
+  if (!options.marsStore.empty()) {
+    fromStores(options);
+    return;
+  }
   store::MarsPlanetOptions po;
   po.rows = options.planetRows;
   po.seed = options.seed;
@@ -79,15 +116,44 @@ MarsVictoriaScene::MarsVictoriaScene(const MarsVictoriaOptions& options) : optio
   vo.seed = options.seed;
   vo.originHeight = layout_.victoriaOrigin.height;
   victoria_ = demPyramid(store::VictoriaGenerator(vo));
-  if (options.secondDem) {
-    store::VictoriaOptions so;
-    so.size = options.secondDemSize;
-    so.spacing = options.secondDemSpacing;
-    so.seed = options.seed + 1;
-    so.gridName = "victoria2";
-    so.originHeight = layout_.secondDemOrigin.height;
-    second_ = demPyramid(store::VictoriaGenerator(so));
-  }
+  if (options.secondDem) second_ = secondDemPyramid(options, layout_.secondDemOrigin.height);
+  finish();
+}
+
+void MarsVictoriaScene::fromStores(const MarsVictoriaOptions& options) {
+  // Both grids through one pager: the stores are opened once and read patch by patch.
+  auto cache = std::make_shared<store::PatchCache>(options.cacheBytes);
+  auto marsStore = std::make_shared<const store::Store>(store::Store::open(options.marsStore));
+  auto demStore = std::make_shared<const store::Store>(store::Store::open(options.victoriaStore));
+  const store::GridInfo& pinfo = marsStore->grid(options.marsGrid);
+  const store::GridInfo& dinfo = demStore->grid(options.victoriaGrid);
+  if (pinfo.kind != store::GridKind::Planet)
+    throw InvalidArgument("MarsVictoriaScene: " + options.marsStore.string() + " grid '" +
+                          options.marsGrid + "' is not a planet grid");
+  if (dinfo.kind != store::GridKind::Dem ||
+      dinfo.placement.kind != store::PlacementInfo::Kind::LocalTangentPlane)
+    throw InvalidArgument("MarsVictoriaScene: " + options.victoriaStore.string() + " grid '" +
+                          options.victoriaGrid +
+                          "' is not a DEM on a local tangent plane (placement)");
+  auto marsPager = std::make_shared<store::Pager>(marsStore, cache);
+  auto demPager = std::make_shared<store::Pager>(demStore, cache);
+  mars_ = storePyramid(*marsPager, options.marsGrid, clod::SurfaceKind::Planet);
+  victoria_ = storePyramid(*demPager, options.victoriaGrid, clod::SurfaceKind::Plane);
+  pager_ =
+      std::make_shared<std::pair<std::shared_ptr<store::Pager>, std::shared_ptr<store::Pager>>>(
+          marsPager, demPager);
+
+  layout_.mars = store::bodyOf(pinfo);
+  layout_.victoriaOrigin = {dinfo.placement.originLatDeg, dinfo.placement.originLonDeg,
+                            dinfo.placement.originHeight};
+  layout_.victoriaHeadingDeg = dinfo.placement.headingDeg;
+  layout_.secondDem = options.secondDem;
+  layout_.secondDemOrigin.height = planetHeightAt(*mars_, layout_.secondDemOrigin);
+  if (options.secondDem) second_ = secondDemPyramid(options, layout_.secondDemOrigin.height);
+  finish();
+}
+
+void MarsVictoriaScene::finish() {
   // Earth: a WGS84 ellipsoid with no relief, 3° samples (it is a dot from Mars).
   const topo::Body earth = topo::Body::earthWgs84();
   const topo::TopoGrid eg(60, 120, -178.5, 88.5, 3.0, 3.0);
@@ -115,7 +181,7 @@ void MarsVictoriaScene::registerWith(clod::SceneRenderer& renderer) const {
   planet.size = options_.clipmapSize;
   planet.albedo = kPlanetAlbedo;
   clod::ClipmapOptions dem = planet;
-  dem.albedo = kDemAlbedo;
+  dem.albedo = options_.demAlbedo.value_or(kDemAlbedo);
   renderer.addTerrain(kDrawMars, mars_, planet);
   renderer.addTerrain(kDrawVictoria, victoria_, dem);
   renderer.addCutOut(kDrawMars, kDrawVictoria);

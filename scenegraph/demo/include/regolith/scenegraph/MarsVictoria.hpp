@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,17 @@ struct MarsVictoriaOptions {
   std::uint64_t seed = 1;
   /// Clipmap vertices per level side for every terrain.
   int clipmapSize = 127;
+  /// Stores to draw instead of generating Mars and Victoria in memory: a planet grid and a
+  /// DEM grid (kind dem, local tangent plane placement), paged through one patch cache of
+  /// `cacheBytes`. The DEM sits at its store's placement origin and heading; the planet's
+  /// body is its store's. Both empty: generate (planetRows, demSize, demSpacing, seed).
+  /// One given without the other: InvalidArgument.
+  std::filesystem::path marsStore, victoriaStore;
+  std::string marsGrid = "mars", victoriaGrid = "victoria";
+  std::size_t cacheBytes = std::size_t{256} << 20;
+  /// The DEMs' albedo; unset: MarsVictoriaScene::kDemAlbedo (greener than the planet, so
+  /// tests can tell the two apart).
+  std::optional<glm::vec3> demAlbedo;
 };
 
 /// The scene: graph (buildPaperScene), data and what each drawable key draws. Building it
@@ -68,11 +80,15 @@ class MarsVictoriaScene {
   [[nodiscard]] glm::dvec3 lightInFocus(NodeId focus) const;
 
  private:
+  void fromStores(const MarsVictoriaOptions& options);
+  void finish();  // Earth, the graph, the rover
+
   MarsVictoriaOptions options_;
   SceneGraph graph_{"sun"};
   PaperSceneLayout layout_;
   PaperSceneNodes nodes_;
   std::shared_ptr<const clod::HeightPyramid> mars_, victoria_, second_, earth_;
+  std::shared_ptr<void> pager_;  // keeps the stores' pager alive while the scene draws them
 };
 
 /// What the fly-over renders and where.
