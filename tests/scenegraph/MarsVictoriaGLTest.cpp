@@ -2,6 +2,7 @@
 // from Mars whole down to the rover, switching the focus on the way.
 #include <regolith/clod/Image.hpp>
 #include <regolith/scenegraph/MarsVictoria.hpp>
+#include <regolith/store/Generate.hpp>
 #include <regolith/topo/Error.hpp>
 
 #include "clod/GlContext.hpp"
@@ -9,6 +10,7 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <string>
 
@@ -76,6 +78,72 @@ TEST(MarsVictoriaGLTest, FlyoverCameraEndsLookingAtTheRover) {
     EXPECT_NEAR(inEye.y, 0.0, 1e-6 * glm::length(inEye));
     EXPECT_LT(inEye.z, 0.0);
   }
+}
+
+TEST(MarsVictoriaGLTest, SceneFromStoresEqualsTheGeneratedScene) {
+  // The same Mars and Victoria written as stores (as `regolith demo` writes them) and drawn
+  // paged: same placement, same heights, and the same fly-over frames as the scene that
+  // generates them in memory.
+  test::glContext();
+  const MarsVictoriaOptions mem = small();
+  const MarsVictoriaScene generated(mem);
+  const auto dir = std::filesystem::path(::testing::TempDir()) / "regolith_scene_stores";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  store::MarsPlanetOptions po;
+  po.rows = mem.planetRows;
+  po.seed = mem.seed;
+  po.ellipsoid = true;
+  po.write.levels = 7;  // the in-memory pyramid goes on down to 2 × 2; the clipmap's
+                        // coarsest usable level is the same either way
+  store::MarsPlanetGenerator(po).write(dir / "mars.h5");
+  store::VictoriaOptions vo;
+  vo.size = mem.demSize;
+  vo.spacing = mem.demSpacing;
+  vo.seed = mem.seed;
+  vo.originHeight = generated.layout().victoriaOrigin.height;
+  vo.write.levels = 6;
+  store::VictoriaGenerator(vo).write(dir / "victoria.h5");
+
+  MarsVictoriaOptions fromStores = mem;
+  fromStores.marsStore = dir / "mars.h5";
+  fromStores.victoriaStore = dir / "victoria.h5";
+  const MarsVictoriaScene paged(fromStores);
+  const topo::Geodetic a = generated.layout().victoriaOrigin, b = paged.layout().victoriaOrigin;
+  EXPECT_NEAR(a.latDeg, b.latDeg, 1e-12);
+  EXPECT_NEAR(a.lonDeg, b.lonDeg, 1e-12);
+  EXPECT_EQ(a.height, b.height);
+  EXPECT_EQ(generated.layout().mars.equatorialRadius(), paged.layout().mars.equatorialRadius());
+  EXPECT_EQ(generated.layout().mars.polarRadius(), paged.layout().mars.polarRadius());
+  for (const glm::dvec2 p :
+       {glm::dvec2{0.0, 0.0}, glm::dvec2{-395.5, 12.25}, glm::dvec2{300, -410}})
+    EXPECT_EQ(generated.demHeight(p.x, p.y), paged.demHeight(p.x, p.y)) << p.x << ", " << p.y;
+
+  FlyoverOptions o;
+  o.frames = 4;
+  o.width = 96;
+  o.height = 64;
+  o.multiView = false;
+  o.outputDir = dir / "generated";
+  o.scene = mem;
+  const FlyoverSummary s1 = renderFlyover(o);
+  o.outputDir = dir / "paged";
+  o.scene = fromStores;
+  const FlyoverSummary s2 = renderFlyover(o);
+  ASSERT_EQ(s1.files.size(), s2.files.size());
+  for (std::size_t i = 0; i < s1.files.size(); ++i) {
+    const clod::RgbaImage x = clod::readPng(s1.files[i].string());
+    const clod::RgbaImage y = clod::readPng(s2.files[i].string());
+    double diff = 0.0;
+    for (std::size_t k = 0; k < x.rgba.size(); ++k)
+      diff += std::abs(static_cast<int>(x.rgba[k]) - static_cast<int>(y.rgba[k]));
+    EXPECT_LT(diff / static_cast<double>(x.rgba.size()), 1.0) << "frame " << i;
+  }
+  std::filesystem::remove_all(dir);
+
+  MarsVictoriaOptions half = mem;
+  half.marsStore = dir / "mars.h5";
+  EXPECT_THROW(MarsVictoriaScene{half}, InvalidArgument);
 }
 
 TEST(MarsVictoriaGLTest, RejectsBadOptions) {
