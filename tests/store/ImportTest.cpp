@@ -755,7 +755,8 @@ void expectSameGrids(const Store& a, const std::string& ga, const Store& b, cons
 }  // namespace
 
 TEST(ImportTiles, TilesCutWithGdalImportAsOneGridEqualToTheSingleImport) {
-  for (const std::string name : {"S11E119.hgt", "Shoemaker_1k.tif", "ldem_4_reduced.cub"}) {
+  for (const std::string name :
+       {"S11E119.hgt", "Shoemaker_1k.tif", "ldem_4_reduced.cub", "dem_nodata.dem"}) {
     SCOPED_TRACE(name);
     const fs::path src = fixture(name);
     const GridInfo whole = describeRaster(src);
@@ -772,6 +773,11 @@ TEST(ImportTiles, TilesCutWithGdalImportAsOneGridEqualToTheSingleImport) {
     const Store a = Store::open(scratch("single.h5")), b = Store::open(scratch("tiled.h5"));
     EXPECT_TRUE(b.tiled(single.info.name));
     expectSameGrids(a, single.info.name, b, single.info.name);
+    // A tiled transverse Mercator grid needs a 1.2 reader (which reads tiles too).
+    const bool tm = single.info.placement.kind == PlacementInfo::Kind::TransverseMercator &&
+                    single.info.kind == GridKind::Dem;
+    EXPECT_EQ(b.formatVersion(), (std::array<int, 2>{1, tm ? 2 : 1}));
+    EXPECT_EQ(b.grid(single.info.name).placement.kind, single.info.placement.kind);
   }
 }
 
