@@ -340,6 +340,19 @@ TEST(TransverseMercatorPlacement, PositionsAreTheInverseProjectionOnTheBodyAndMa
   report("utm10_placement.body_fixed_vs_PROJ_cart_max_m", worst);
 }
 
+TEST(TransverseMercatorPlacement, RefusesAProjectionMadeOnAnotherEllipsoid) {
+  const Body wgs = Body::earthWgs84();
+  const std::string msg = messageOf<regolith::InvalidArgument>(
+      [&] { (void)Placement(clarke1866(), TransverseMercator::utm(wgs, 10, true)); });
+  EXPECT_NE(msg.find("Placement(): the transverse Mercator projection is on an ellipsoid of "
+                     "a = 6378137"),
+            std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("Earth (Clarke 1866): a = 6378206.4"), std::string::npos) << msg;
+  EXPECT_THROW((void)Placement(Body::marsSphere(), TransverseMercator(Body::marsEllipsoid(), 0.0)),
+               regolith::InvalidArgument);
+}
+
 TEST(TransverseMercatorPlacement, AFlatGridsNormalIsTheEllipsoidNormalAndTheJacobianScalesByK) {
   // The Jacobian is central differences over ±0.5 m: on Earth positions round to ~1e-9 m, so
   // its columns are good to ~1e-9 relative.

@@ -3,6 +3,9 @@
 
 #include <glm/geometric.hpp>
 
+#include <cmath>
+#include <string>
+
 namespace regolith::topo {
 
 Placement::Placement(LocalTangentPlane plane)
@@ -15,7 +18,20 @@ Placement::Placement(const Body& body, Equirectangular projection, LatitudeType 
     : body_(body), latType_(latitudeType), proj_(projection) {}
 
 Placement::Placement(const Body& body, TransverseMercator projection)
-    : body_(body), latType_(LatitudeType::Planetodetic), proj_(projection) {}
+    : body_(body), latType_(LatitudeType::Planetodetic), proj_(projection) {
+  // The projection's latitudes are planetodetic on its own ellipsoid: another body would put
+  // every sample somewhere else.
+  const double a = body.equatorialRadius(), e2 = body.eccentricitySquared();
+  if (std::abs(projection.equatorialRadius() - a) > 1e-9 * a ||
+      std::abs(projection.eccentricitySquared() - e2) > 1e-12) {
+    throw InvalidArgument(
+        "Placement(): the transverse Mercator projection is on an ellipsoid of "
+        "a = " +
+        std::to_string(projection.equatorialRadius()) + " m, e^2 = " +
+        std::to_string(projection.eccentricitySquared()) + ", expected the body's (" + body.name() +
+        ": a = " + std::to_string(a) + " m, e^2 = " + std::to_string(e2) + ")");
+  }
+}
 
 Placement::Kind Placement::kind() const noexcept {
   switch (proj_.index()) {

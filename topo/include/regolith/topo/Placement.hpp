@@ -31,7 +31,8 @@ class Placement {
   Placement(const Body& body, PolarStereographic projection);
   Placement(const Body& body, Equirectangular projection,
             LatitudeType latitudeType = LatitudeType::Planetocentric);
-  /// `projection` should be made on `body` (its latitudes are planetodetic on that ellipsoid).
+  /// `projection` must be made on `body` (its latitudes are planetodetic on that ellipsoid);
+  /// throws InvalidArgument if its radius or eccentricity differ.
   Placement(const Body& body, TransverseMercator projection);
 
   [[nodiscard]] Kind kind() const noexcept;
