@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -36,6 +37,7 @@ std::string placementName(PlacementInfo::Kind k) {
     case PlacementInfo::Kind::LocalTangentPlane: return "local_tangent_plane";
     case PlacementInfo::Kind::PolarStereographic: return "polar_stereographic";
     case PlacementInfo::Kind::Equirectangular: return "equirectangular";
+    case PlacementInfo::Kind::TransverseMercator: return "transverse_mercator";
   }
   return "unknown";
 }
@@ -65,6 +67,13 @@ ordered_json placementJson(const GridInfo& g) {
       j["lat_true_scale_deg"] = p.latTrueScaleDeg ? ordered_json(*p.latTrueScaleDeg) : nullptr;
       j["lon_centre_deg"] = p.lonCentreDeg;
       j["lat_origin_deg"] = p.latOriginDeg;
+      break;
+    case PlacementInfo::Kind::TransverseMercator:
+      j["lon_centre_deg"] = p.lonCentreDeg;
+      j["lat_origin_deg"] = p.latOriginDeg;
+      j["scale_factor"] = p.scaleFactor ? ordered_json(*p.scaleFactor) : nullptr;
+      j["false_easting"] = p.falseEasting;
+      j["false_northing"] = p.falseNorthing;
       break;
   }
   return j;
@@ -147,6 +156,13 @@ void printPlacement(const GridInfo& g, std::ostream& out) {
           << shortestNumber(p.latTrueScaleDeg.value_or(0.0)) << " deg, centre lon "
           << shortestNumber(p.lonCentreDeg) << " deg, origin lat " << shortestNumber(p.latOriginDeg)
           << " deg\n";
+      break;
+    case PlacementInfo::Kind::TransverseMercator:
+      out << ", central meridian " << shortestNumber(p.lonCentreDeg) << " deg, origin lat "
+          << shortestNumber(p.latOriginDeg) << " deg, scale factor "
+          << shortestNumber(p.scaleFactor.value_or(std::numeric_limits<double>::quiet_NaN()))
+          << ", false easting " << shortestNumber(p.falseEasting) << " m, false northing "
+          << shortestNumber(p.falseNorthing) << " m\n";
       break;
   }
 }

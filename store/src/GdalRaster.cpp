@@ -349,10 +349,24 @@ void Raster::analyse(const ImportOptions& options) {
       info.spacingY = dyM;
       info.x0 = gt[0] * lf + 0.5 * dxM;
       info.y0 = gt[3] * lf - 0.5 * dyM;
+    } else if (method == SRS_PT_TRANSVERSE_MERCATOR) {
+      // Transverse Mercator (EPSG 9807), UTM zones north and south among them; x, y stay the
+      // file's map coordinates, false easting/northing included, as for polar stereographic.
+      info.kind = GridKind::Dem;
+      pl.kind = PlacementInfo::Kind::TransverseMercator;
+      pl.lonCentreDeg = lon0;
+      pl.latOriginDeg = lat0;
+      pl.scaleFactor = projParm(srs, SRS_PP_SCALE_FACTOR, 1.0);
+      pl.falseEasting = fe;
+      pl.falseNorthing = fn;
+      info.spacingX = dxM;
+      info.spacingY = dyM;
+      info.x0 = gt[0] * lf + 0.5 * dxM;
+      info.y0 = gt[3] * lf - 0.5 * dyM;
     } else {
       throw ImportError(p + ": unsupported projection " + l.projection +
                         "; supported: geographic, equirectangular (simple cylindrical) on a "
-                        "sphere, polar stereographic");
+                        "sphere, polar stereographic, transverse Mercator (UTM)");
     }
   } else {
     throw ImportError(p + ": CRS '" + crs + "' is neither geographic nor projected");

@@ -56,6 +56,13 @@ topo::Placement placementOf(const GridInfo& info) {
               topo::PolarStereographic::withScaleFactor(body, pole, *p.scaleFactor, p.lonCentreDeg,
                                                         p.falseEasting, p.falseNorthing)};
     }
+    case PlacementInfo::Kind::TransverseMercator:
+      if (!p.scaleFactor) {
+        throw InvalidArgument("store::placementOf(): grid '" + info.name +
+                              "' transverse Mercator placement has no scale_factor");
+      }
+      return {body, topo::TransverseMercator(body, p.lonCentreDeg, p.latOriginDeg, *p.scaleFactor,
+                                             p.falseEasting, p.falseNorthing)};
     case PlacementInfo::Kind::Equirectangular:
       return {body,
               topo::Equirectangular(p.projectionRadius, p.latTrueScaleDeg.value_or(0.0),
@@ -86,6 +93,13 @@ PlacementInfo placementInfoOf(const topo::Placement& placement) {
     p.latTrueScaleDeg = eq->latTrueScaleDeg();
     p.lonCentreDeg = eq->lonCentreDeg();
     p.latOriginDeg = eq->latOriginDeg();
+  } else if (const auto* tm = placement.transverseMercator()) {
+    p.kind = PlacementInfo::Kind::TransverseMercator;
+    p.lonCentreDeg = tm->lonCentreDeg();
+    p.latOriginDeg = tm->latOriginDeg();
+    p.scaleFactor = tm->scaleFactor();
+    p.falseEasting = tm->falseEasting();
+    p.falseNorthing = tm->falseNorthing();
   }
   return p;
 }

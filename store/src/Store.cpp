@@ -124,9 +124,17 @@ void readPlacement(hid_t g, GridInfo& info, const Context& ctx, const std::strin
     }
     p.lonCentreDeg = finiteNumber(g, format::kLonCentre, ctx, owner);
     p.latOriginDeg = finiteNumber(g, format::kLatOrigin, ctx, owner);
+  } else if (kind == format::kTransverseMercator) {
+    p.kind = PlacementInfo::Kind::TransverseMercator;
+    p.lonCentreDeg = finiteNumber(g, format::kLonCentre, ctx, owner);
+    p.latOriginDeg = finiteNumber(g, format::kLatOrigin, ctx, owner);
+    p.scaleFactor = finiteNumber(g, format::kScaleFactor, ctx, owner);
+    p.falseEasting = finiteNumber(g, format::kFalseEasting, ctx, owner);
+    p.falseNorthing = finiteNumber(g, format::kFalseNorthing, ctx, owner);
   } else {
     fail(ctx, owner + " has placement '" + kind +
-                  "', expected 'local_tangent_plane', 'polar_stereographic' or 'equirectangular'");
+                  "', expected 'local_tangent_plane', 'polar_stereographic', 'equirectangular' "
+                  "or 'transverse_mercator'");
   }
   try {
     (void)placementOf(info);

@@ -73,6 +73,20 @@ inline constexpr std::string_view kPlanetodetic = "planetodetic";
 inline constexpr std::string_view kLocalTangentPlane = "local_tangent_plane";
 inline constexpr std::string_view kPolarStereographic = "polar_stereographic";
 inline constexpr std::string_view kEquirectangular = "equirectangular";
+inline constexpr std::string_view kTransverseMercator = "transverse_mercator";
+
+// Transverse Mercator placements (format 1.2): a grid with one has format_version [1, 2].
+inline constexpr int kTransverseMercatorFormatMinor = 2;
+
+/// The minor format version a grid needs: 0, 1 for a tiled grid, 2 for a transverse
+/// Mercator placement (minor versions are cumulative: a 1.2 reader reads tiles too).
+[[nodiscard]] inline int gridFormatMinor(const GridInfo& info, bool tiled) noexcept {
+  if (info.kind == GridKind::Dem &&
+      info.placement.kind == PlacementInfo::Kind::TransverseMercator) {
+    return kTransverseMercatorFormatMinor;
+  }
+  return tiled ? kTiledFormatMinor : 0;
+}
 
 /// Level dataset name: "level0", "level1", ...
 [[nodiscard]] inline std::string levelName(std::size_t level) {

@@ -221,14 +221,17 @@ std::string_view placementName(PlacementInfo::Kind k) {
     case PlacementInfo::Kind::LocalTangentPlane: return format::kLocalTangentPlane;
     case PlacementInfo::Kind::PolarStereographic: return format::kPolarStereographic;
     case PlacementInfo::Kind::Equirectangular: return format::kEquirectangular;
+    case PlacementInfo::Kind::TransverseMercator: return format::kTransverseMercator;
   }
   return "?";
 }
 
 void writeAttributes(hid_t g, const GridInfo& info, bool tiled, const Context& ctx) {
   using namespace hdf5;
-  writeInt32s(g, format::kFormatVersion,
-              {kFormatVersionMajor, tiled ? format::kTiledFormatMinor : kFormatVersionMinor}, ctx);
+  writeInt32s(
+      g, format::kFormatVersion,
+      {kFormatVersionMajor, std::max(kFormatVersionMinor, format::gridFormatMinor(info, tiled))},
+      ctx);
   writeString(g, format::kKind,
               std::string(info.kind == GridKind::Dem ? format::kDem : format::kPlanet), ctx);
   writeUInt64(g, format::kRows, info.rows, ctx);
@@ -276,6 +279,14 @@ void writeAttributes(hid_t g, const GridInfo& info, bool tiled, const Context& c
       if (p.latTrueScaleDeg) writeDouble(g, format::kLatTrueScale, *p.latTrueScaleDeg, ctx);
       writeDouble(g, format::kLonCentre, p.lonCentreDeg, ctx);
       writeDouble(g, format::kLatOrigin, p.latOriginDeg, ctx);
+      break;
+    case PlacementInfo::Kind::TransverseMercator:
+      writeDouble(g, format::kLonCentre, p.lonCentreDeg, ctx);
+      writeDouble(g, format::kLatOrigin, p.latOriginDeg, ctx);
+      writeDouble(g, format::kScaleFactor,
+                  p.scaleFactor.value_or(std::numeric_limits<double>::quiet_NaN()), ctx);
+      writeDouble(g, format::kFalseEasting, p.falseEasting, ctx);
+      writeDouble(g, format::kFalseNorthing, p.falseNorthing, ctx);
       break;
   }
 }
@@ -830,11 +841,11 @@ void writeStore(const std::filesystem::path& path, std::span<const GridSource> g
   std::vector<Prepared> prepared;
   std::set<std::string, std::less<>> names;
   double totalSamples = 0.0;
-  bool anyTiled = false;
+  int rootMinor = kFormatVersionMinor;
   for (const GridSource& src : grids) {
     prepared.push_back(prepare(src, options, dir, ctx));
     const GridInfo& info = prepared.back().info;
-    anyTiled = anyTiled || !prepared.back().tiles.empty();
+    rootMinor = std::max(rootMinor, format::gridFormatMinor(info, !prepared.back().tiles.empty()));
     for (const PreparedTile& t : prepared.back().tiles) {
       if (t.samples) totalSamples += static_cast<double>(t.rows * t.cols);
     }
@@ -871,9 +882,7 @@ void writeStore(const std::filesystem::path& path, std::span<const GridSource> g
       const hdf5::Group root(
           hdf5::check(H5Gopen2(file.get(), "/", H5P_DEFAULT), ctx, "cannot open '/'"));
       hdf5::writeString(root.get(), format::kMarker, format::kMarkerValue, ctx);
-      hdf5::writeInt32s(
-          root.get(), format::kFormatVersion,
-          {kFormatVersionMajor, anyTiled ? format::kTiledFormatMinor : kFormatVersionMinor}, ctx);
+      hdf5::writeInt32s(root.get(), format::kFormatVersion, {kFormatVersionMajor, rootMinor}, ctx);
       gridsGroup = createGroup(file.get(), format::kGrids, ctx);
     }
     for (std::size_t i = 0; i < grids.size(); ++i) {

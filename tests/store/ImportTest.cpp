@@ -28,10 +28,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <iterator>
 #include <limits>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -288,7 +290,14 @@ void checkFixture(const std::string& name, const Expect& e) {
   const fs::path src = fixture(name);
   const ImportReport rep = checkImport(src, e, fs::path(name).stem().string() + ".h5", e.pdsShift);
   const fs::path copy = scratch(fs::path(name).stem().string() + "_pds4.xml");
-  translate(src, copy, {"-of", "PDS4"}, e.pdsShift);
+  // GDAL's PDS4 writer labels latitudes planetocentric by default, and its reader then takes
+  // the body for a sphere; an ellipsoidal transverse Mercator source is copied as
+  // planetographic so that the copy keeps its ellipsoid.
+  const bool tm = rep.info.kind == GridKind::Dem &&
+                  rep.info.placement.kind == PlacementInfo::Kind::TransverseMercator;
+  std::vector<std::string> args{"-of", "PDS4"};
+  if (tm) args.insert(args.end(), {"-co", "LATITUDE_TYPE=Planetographic"});
+  translate(src, copy, args, e.pdsShift);
   Expect e4 = e;
   if (OSRIsGeographic(GDALGetSpatialRef(openGdal(src).get())) != 0) {
     e4.kind = GridKind::Dem;  // see below
@@ -315,8 +324,29 @@ void checkFixture(const std::string& name, const Expect& e) {
     return;
   }
   EXPECT_EQ(a.kind, b.kind) << name;
-  EXPECT_NEAR(a.x0, b.x0, 1e-9 * std::max(1.0, std::abs(a.x0))) << name;
-  EXPECT_NEAR(a.y0, b.y0, 1e-9 * std::max(1.0, std::abs(a.y0))) << name;
+  if (tm) {
+    // GDAL's PDS4 writer has no false easting/northing for transverse Mercator: it moves the
+    // geotransform by them instead. The samples still sit at the same places on the body.
+    ASSERT_EQ(b.placement.kind, PlacementInfo::Kind::TransverseMercator) << name;
+    EXPECT_EQ(a.equatorialRadius, b.equatorialRadius) << name;
+    EXPECT_NEAR(a.polarRadius, b.polarRadius, 1e-6) << name;
+    EXPECT_NEAR(a.x0 - a.placement.falseEasting, b.x0 - b.placement.falseEasting, 1e-6) << name;
+    EXPECT_NEAR(a.y0 - a.placement.falseNorthing, b.y0 - b.placement.falseNorthing, 1e-6) << name;
+    for (const std::size_t r : {std::size_t{0}, a.rows - 1}) {
+      for (const std::size_t c : {std::size_t{0}, a.cols - 1}) {
+        const double rr = static_cast<double>(r), cc = static_cast<double>(c);
+        const topo::Geodetic ga =
+            placementOf(a).toGeodetic(a.x0 + cc * a.spacingX, a.y0 - rr * a.spacingY, 0.0);
+        const topo::Geodetic gb =
+            placementOf(b).toGeodetic(b.x0 + cc * b.spacingX, b.y0 - rr * b.spacingY, 0.0);
+        EXPECT_NEAR(ga.latDeg, gb.latDeg, 1e-9) << name;
+        EXPECT_NEAR(lonDiff(ga.lonDeg, gb.lonDeg), 0.0, 1e-9) << name;
+      }
+    }
+  } else {
+    EXPECT_NEAR(a.x0, b.x0, 1e-9 * std::max(1.0, std::abs(a.x0))) << name;
+    EXPECT_NEAR(a.y0, b.y0, 1e-9 * std::max(1.0, std::abs(a.y0))) << name;
+  }
   EXPECT_NEAR(a.spacingX, b.spacingX, 1e-12 * a.spacingX) << name;
   EXPECT_NEAR(a.spacingY, b.spacingY, 1e-12 * a.spacingY) << name;
   EXPECT_EQ(a.latitudeType, b.latitudeType) << name;
@@ -455,15 +485,96 @@ TEST(Import, VoidsOfAFileDeclaringNoNodataAreMissingNotHeights) {
   checkFixture("dem_unfinished.tif", e);
 }
 
-TEST(Import, UtmIsAnUnsupportedProjectionNamingTheFile) {
-  const std::string msg =
-      errorOf([] { (void)importRaster(fixture("dem_nodata.dem"), scratch("utm.h5")); });
-  EXPECT_NE(msg.find("store::importRaster(): " + fixture("dem_nodata.dem")), std::string::npos)
-      << msg;
-  EXPECT_NE(msg.find("unsupported projection NAD27 / UTM zone 10N (Transverse_Mercator)"),
-            std::string::npos)
-      << msg;
-  EXPECT_FALSE(fs::exists(scratch("utm.h5")));
+TEST(Import, Nad27UtmGeotiffIsATransverseMercatorDemOnClarke1866WithNodataMissing) {
+  // dem_nodata.dem: a 65×65 int16 GeoTIFF (despite its name), NAD27 / UTM zone 10N, nodata
+  // −32767 (fixtures README). Its PDS4 copy made with GDAL imports to the same grid.
+  Expect e{GridKind::Dem, PlacementInfo::Kind::TransverseMercator, 0.0, false, 0.0, true};
+  checkFixture("dem_nodata.dem", e);
+  const ImportReport rep = importRaster(fixture("dem_nodata.dem"), scratch("utm.h5"));
+  const GridInfo& g = rep.info;
+  EXPECT_EQ(rep.driver, "GTiff");
+  EXPECT_NE(rep.projection.find("NAD27 / UTM zone 10N (Transverse_Mercator)"), std::string::npos)
+      << rep.projection;
+  EXPECT_EQ(g.bodyName, "Earth");
+  EXPECT_EQ(g.equatorialRadius, 6378206.4);  // Clarke 1866, from the CRS
+  EXPECT_NEAR(g.polarRadius, 6356583.8, 1e-3);
+  EXPECT_EQ(g.latitudeType, topo::LatitudeType::Planetodetic);
+  EXPECT_EQ(g.placement.lonCentreDeg, -123.0);
+  EXPECT_EQ(g.placement.latOriginDeg, 0.0);
+  EXPECT_EQ(g.placement.scaleFactor, std::optional<double>(0.9996));
+  EXPECT_EQ(g.placement.falseEasting, 500000.0);
+  EXPECT_EQ(g.placement.falseNorthing, 0.0);
+  // Every −32767 sample is missing, and only those (GDAL's count of them, independently).
+  const Oracle o = readGdal(fixture("dem_nodata.dem"));
+  ASSERT_EQ(o.nodata, std::optional<double>(-32767.0));
+  std::size_t nodata = 0;
+  for (const double v : o.raw) nodata += v == -32767.0 ? 1U : 0U;
+  EXPECT_GT(nodata, 0U);
+  EXPECT_EQ(rep.missingSamples, nodata);
+  EXPECT_EQ(Store::open(scratch("utm.h5")).formatVersion(), (std::array<int, 2>{1, 2}));
+}
+
+namespace {
+
+/// Runs a shell command; returns its standard output.
+std::string run(const std::string& command) {
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
+  if (!pipe) return {};
+  std::string out;
+  std::array<char, 4096> buf{};
+  std::size_t n = 0;
+  while ((n = std::fread(buf.data(), 1, buf.size(), pipe.get())) > 0) out.append(buf.data(), n);
+  return out;
+}
+
+}  // namespace
+
+TEST(Import, EverySampleCentreOfTheUtmFixtureHasTheLatLonGdaltransformGivesInNad27) {
+  // `gdaltransform -t_srs EPSG:4267 dem_nodata.dem` maps pixel/line coordinates through the
+  // file's geotransform and PROJ to NAD27 longitude/latitude: the pixel centres are
+  // (col + 0.5, row + 0.5). The imported placement must give the same, to 1e-9°, and map them
+  // back to the sample centres to 1 mm.
+  const fs::path src = fixture("dem_nodata.dem");
+  const ImportReport rep = importRaster(src, scratch("utm-gdaltransform.h5"));
+  const GridInfo& g = rep.info;
+  const fs::path in = scratch("utm-pixel-centres.txt");
+  {
+    std::ofstream f(in);
+    f.precision(17);
+    for (std::size_t r = 0; r < g.rows; ++r) {
+      for (std::size_t c = 0; c < g.cols; ++c) {
+        f << static_cast<double>(c) + 0.5 << ' ' << static_cast<double>(r) + 0.5 << '\n';
+      }
+    }
+  }
+  const std::string out =
+      run("gdaltransform -t_srs EPSG:4267 '" + src.string() + "' < '" + in.string() + "'");
+  std::istringstream lines(out);
+  const topo::Placement pl = placementOf(Store::open(scratch("utm-gdaltransform.h5")).grid(g.name));
+  double worstDeg = 0.0, worstM = 0.0;
+  std::size_t n = 0;
+  for (std::size_t r = 0; r < g.rows; ++r) {
+    for (std::size_t c = 0; c < g.cols; ++c) {
+      double lon = std::nan(""), lat = std::nan(""), z = 0.0;
+      ASSERT_TRUE(lines >> lon >> lat >> z)
+          << "gdaltransform output after " << n << " points: " << out.substr(0, 500);
+      const double x = g.x0 + static_cast<double>(c) * g.spacingX;
+      const double y = g.y0 - static_cast<double>(r) * g.spacingY;
+      const topo::Geodetic geo = pl.toGeodetic(x, y, 0.0);
+      EXPECT_NEAR(geo.latDeg, lat, 1e-9) << r << "," << c;
+      EXPECT_NEAR(lonDiff(geo.lonDeg, lon), 0.0, 1e-9) << r << "," << c;
+      worstDeg =
+          std::max({worstDeg, std::abs(geo.latDeg - lat), std::abs(lonDiff(geo.lonDeg, lon))});
+      const glm::dvec3 back = pl.fromGeodetic({lat, lon, 0.0});
+      EXPECT_NEAR(back.x, x, 1e-3) << r << "," << c;
+      EXPECT_NEAR(back.y, y, 1e-3) << r << "," << c;
+      worstM = std::max({worstM, std::abs(back.x - x), std::abs(back.y - y)});
+      ++n;
+    }
+  }
+  EXPECT_EQ(n, 65U * 65U);
+  std::cout << "[ measured ] utm fixture: lat/lon vs gdaltransform max " << worstDeg
+            << " deg; gdaltransform lat/lon mapped back vs sample centres max " << worstM << " m\n";
 }
 
 // ---- imported grids answer queries: the kind decides TopoPlanet or TopoDem -----------------
@@ -478,7 +589,7 @@ TEST(Import, ImportedGridsAnswerTopoQueriesWithGdalsValuesAtGdalsPixelCentres) {
        {Case{"megt90n000cb.lbl", true, 4.0}, Case{"ldem_4_reduced.cub", false, 4.0 / 3.0},
         Case{"S11E119.hgt", false, 0.0}, Case{"Shoemaker_1k.tif", false, 0.0},
         Case{"vest64_dtm_specialpixels_downsampled.cub", false, 0.0},
-        Case{"ulcn2005_lpo_npole.cub", false, 0.0}}) {
+        Case{"ulcn2005_lpo_npole.cub", false, 0.0}, Case{"dem_nodata.dem", false, 0.0}}) {
     SCOPED_TRACE(k.file);
     const fs::path store = scratch("query.h5");
     const ImportReport rep = importRaster(fixture(k.file), store, smallPatches());
@@ -644,7 +755,8 @@ void expectSameGrids(const Store& a, const std::string& ga, const Store& b, cons
 }  // namespace
 
 TEST(ImportTiles, TilesCutWithGdalImportAsOneGridEqualToTheSingleImport) {
-  for (const std::string name : {"S11E119.hgt", "Shoemaker_1k.tif", "ldem_4_reduced.cub"}) {
+  for (const std::string name :
+       {"S11E119.hgt", "Shoemaker_1k.tif", "ldem_4_reduced.cub", "dem_nodata.dem"}) {
     SCOPED_TRACE(name);
     const fs::path src = fixture(name);
     const GridInfo whole = describeRaster(src);
@@ -661,6 +773,11 @@ TEST(ImportTiles, TilesCutWithGdalImportAsOneGridEqualToTheSingleImport) {
     const Store a = Store::open(scratch("single.h5")), b = Store::open(scratch("tiled.h5"));
     EXPECT_TRUE(b.tiled(single.info.name));
     expectSameGrids(a, single.info.name, b, single.info.name);
+    // A tiled transverse Mercator grid needs a 1.2 reader (which reads tiles too).
+    const bool tm = single.info.placement.kind == PlacementInfo::Kind::TransverseMercator &&
+                    single.info.kind == GridKind::Dem;
+    EXPECT_EQ(b.formatVersion(), (std::array<int, 2>{1, tm ? 2 : 1}));
+    EXPECT_EQ(b.grid(single.info.name).placement.kind, single.info.placement.kind);
   }
 }
 
@@ -815,4 +932,81 @@ TEST(ImportThreads, OneThreadAndSeveralThreadsWriteTheSameStore) {
     }
   }
   EXPECT_EQ(bad, 0U);
+}
+
+TEST(ImportErrors, LambertConformalConicIsAnUnsupportedProjection) {
+  const fs::path p = makeGeotiff("lcc.tif", 1, GDT_Float32,
+                                 "+proj=lcc +lat_1=33 +lat_2=45 +lat_0=39 +lon_0=-96 +x_0=0 "
+                                 "+y_0=0 +ellps=GRS80 +units=m",
+                                 {1000.0, 100.0, 0.0, 5000.0, 0.0, -100.0});
+  const std::string msg = errorOf([&] { (void)importRaster(p, scratch("lcc.h5")); });
+  EXPECT_NE(msg.find(p.string() + ": unsupported projection"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("Lambert_Conformal_Conic"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("transverse Mercator (UTM)"), std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists(scratch("lcc.h5")));
+}
+
+// ---- transverse Mercator beyond the fixture: south zones, other origins and ellipsoids ------
+
+TEST(Import, TransverseMercatorGeotiffsOfAnyZoneAndOriginPlaceTheirSamplesWherePROJDoes) {
+  struct Case {
+    const char* file;
+    const char* crs;
+    std::array<double, 6> gt;
+    double lon0, lat0, k0, fe, fn, a;
+  };
+  // WGS 84 / UTM 33S (false northing 10,000 km), the British National Grid (Airy 1830,
+  // origin 49°N 2°W, k0 0.9996012717, negative false northing), and a Mars ellipsoid zone
+  // 7° wide of its central meridian with a latitude of origin south of the equator.
+  const std::vector<Case> cases{
+      {"utm33s.tif",
+       "EPSG:32733",
+       {430000.0, 30.0, 0.0, 7900000.0, 0.0, -30.0},
+       15.0,
+       0.0,
+       0.9996,
+       500000.0,
+       10000000.0,
+       6378137.0},
+      {"bng.tif",
+       "EPSG:27700",
+       {529000.0, 5.0, 0.0, 181000.0, 0.0, -5.0},
+       -2.0,
+       49.0,
+       0.9996012717,
+       400000.0,
+       -100000.0,
+       6377563.396},
+      {"mars_tm.tif",
+       "+proj=tmerc +lat_0=-20 +lon_0=137.4 +k=1 +x_0=250000 +y_0=0 +a=3396190 +b=3376200 "
+       "+units=m",
+       {650000.0, 200.0, 0.0, 300000.0, 0.0, -200.0},
+       137.4,
+       -20.0,
+       1.0,
+       250000.0,
+       0.0,
+       3396190.0},
+  };
+  for (const Case& k : cases) {
+    SCOPED_TRACE(k.file);
+    const fs::path p = makeGeotiff(k.file, 1, GDT_Float32, k.crs, k.gt);
+    const ImportReport rep = importRaster(p, scratch(std::string(k.file) + ".h5"), smallPatches());
+    const GridInfo& g = rep.info;
+    ASSERT_EQ(g.kind, GridKind::Dem);
+    ASSERT_EQ(g.placement.kind, PlacementInfo::Kind::TransverseMercator);
+    EXPECT_NEAR(g.placement.lonCentreDeg, k.lon0, 1e-12);
+    EXPECT_NEAR(g.placement.latOriginDeg, k.lat0, 1e-12);
+    EXPECT_EQ(g.placement.scaleFactor, std::optional<double>(k.k0));
+    EXPECT_EQ(g.placement.falseEasting, k.fe);
+    EXPECT_EQ(g.placement.falseNorthing, k.fn);
+    EXPECT_EQ(g.equatorialRadius, k.a);
+    // Values, and sample centres against GDAL's geotransform and PROJ's inverse (OGR) at the
+    // corners and middle, as for every fixture.
+    const Oracle o = readGdal(p);
+    const Store s = Store::open(scratch(std::string(k.file) + ".h5"));
+    EXPECT_EQ(expectSamplesMatch(s, g.name, o, 0.0, k.file), 0U);
+    expectGeoreferencing(g, p, o, Expect{GridKind::Dem, PlacementInfo::Kind::TransverseMercator},
+                         k.file);
+  }
 }

@@ -1238,3 +1238,149 @@ TEST(StoreWriter, ASigkilledWriterNeverLeavesAPartialFileUnderTheFinalName) {
   std::cout << "[          ] " << replaced << " of 10 timed kills came after the rename\n";
   EXPECT_TRUE(filesBeside(p) == std::vector<fs::path>{p});
 }
+
+// ---- transverse Mercator placements (format 1.2) -------------------------------------------
+
+namespace {
+
+/// A UTM zone 10 south grid on Clarke 1866 (NAD27's ellipsoid), 9×7 samples of 150 × 216 m.
+GridInfo utmInfo(const std::string& name) {
+  GridInfo g = demInfo(name, 9, 7);
+  g.x0 = 557880.4615384615;
+  g.y0 = 5121897.0;
+  g.spacingX = 150.92307692307693;
+  g.spacingY = 216.0;
+  g.bodyName = "Earth";
+  g.equatorialRadius = 6378206.4;
+  g.polarRadius = 6356583.8;
+  g.placement = {};
+  g.placement.kind = PlacementInfo::Kind::TransverseMercator;
+  g.placement.lonCentreDeg = -123.0;
+  g.placement.latOriginDeg = 0.5;
+  g.placement.scaleFactor = 0.9996;
+  g.placement.falseEasting = 500000.0;
+  g.placement.falseNorthing = 10000000.0;
+  return g;
+}
+
+fs::path writeUtmStore(const std::string& file) {
+  const fs::path p = scratch(file);
+  const std::vector<GridSource> grids{source(utmInfo("utm"), crater),
+                                      source(demInfo("crater", 37, 53), crater)};
+  writeStore(p, grids);
+  return p;
+}
+
+}  // namespace
+
+TEST(StoreWriter, TransverseMercatorPlacementIsWrittenAsDocumentedWithFormat12) {
+  const fs::path p = writeUtmStore("utm-layout.h5");
+  const H5 file(H5Fopen(p.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  const H5 root(H5Gopen2(file, "/", H5P_DEFAULT), H5Gclose);
+  // The file needs a 1.2 reader; the grid without the new placement stays 1.0.
+  EXPECT_EQ(rawAttrNumbers(root, "format_version"), (std::vector<double>{1.0, 2.0}));
+  const H5 other(H5Gopen2(file, "/grids/crater", H5P_DEFAULT), H5Gclose);
+  EXPECT_EQ(rawAttrNumbers(other, "format_version"), (std::vector<double>{1.0, 0.0}));
+  const H5 g(H5Gopen2(file, "/grids/utm", H5P_DEFAULT), H5Gclose);
+  EXPECT_EQ(rawAttrNumbers(g, "format_version"), (std::vector<double>{1.0, 2.0}));
+  EXPECT_EQ(rawAttrString(g, "placement"), "transverse_mercator");
+  EXPECT_EQ(rawAttrNumbers(g, "lon_centre_deg"), std::vector<double>{-123.0});
+  EXPECT_EQ(rawAttrNumbers(g, "lat_origin_deg"), std::vector<double>{0.5});
+  EXPECT_EQ(rawAttrNumbers(g, "scale_factor"), std::vector<double>{0.9996});
+  EXPECT_EQ(rawAttrNumbers(g, "false_easting"), std::vector<double>{500000.0});
+  EXPECT_EQ(rawAttrNumbers(g, "false_northing"), std::vector<double>{10000000.0});
+  EXPECT_EQ(rawAttrNumbers(g, "equatorial_radius"), std::vector<double>{6378206.4});
+  EXPECT_EQ(rawAttrNumbers(g, "polar_radius"), std::vector<double>{6356583.8});
+  // Only the attributes of this placement.
+  for (const char* absent :
+       {"pole", "lat_true_scale_deg", "projection_radius", "origin_lat_deg", "heading_deg"}) {
+    EXPECT_EQ(H5Aexists(g, absent), 0) << absent;
+  }
+}
+
+TEST(Store, TransverseMercatorPlacementRoundTripsAndPlacesSamplesLikeTheOriginal) {
+  const fs::path p = writeUtmStore("utm-roundtrip.h5");
+  const Store s = Store::open(p);
+  EXPECT_EQ(s.formatVersion(), (std::array<int, 2>{1, 2}));
+  const GridInfo want = utmInfo("utm");
+  const GridInfo& g = s.grid("utm");
+  EXPECT_EQ(g.placement.kind, PlacementInfo::Kind::TransverseMercator);
+  EXPECT_EQ(g.placement.lonCentreDeg, -123.0);
+  EXPECT_EQ(g.placement.latOriginDeg, 0.5);
+  ASSERT_TRUE(g.placement.scaleFactor.has_value());
+  EXPECT_EQ(*g.placement.scaleFactor, 0.9996);
+  EXPECT_EQ(g.placement.falseEasting, 500000.0);
+  EXPECT_EQ(g.placement.falseNorthing, 10000000.0);
+  const topo::Placement a = placementOf(want), b = placementOf(g);
+  ASSERT_NE(b.transverseMercator(), nullptr);
+  EXPECT_EQ(b.transverseMercator()->scaleFactor(), 0.9996);
+  EXPECT_EQ(b.body().equatorialRadius(), 6378206.4);
+  EXPECT_EQ(b.body().polarRadius(), 6356583.8);
+  for (std::size_t r = 0; r < g.rows; r += 4) {
+    for (std::size_t c = 0; c < g.cols; c += 3) {
+      const double x = g.x0 + static_cast<double>(c) * g.spacingX;
+      const double y = g.y0 - static_cast<double>(r) * g.spacingY;
+      EXPECT_EQ(b.toBodyFixed(x, y, 10.0), a.toBodyFixed(x, y, 10.0)) << r << "," << c;
+    }
+  }
+  // placementInfoOf inverts placementOf.
+  const PlacementInfo back = placementInfoOf(b);
+  EXPECT_EQ(back.kind, PlacementInfo::Kind::TransverseMercator);
+  EXPECT_EQ(back.lonCentreDeg, -123.0);
+  EXPECT_EQ(back.latOriginDeg, 0.5);
+  EXPECT_EQ(back.scaleFactor, std::optional<double>(0.9996));
+  EXPECT_EQ(back.falseEasting, 500000.0);
+  EXPECT_EQ(back.falseNorthing, 10000000.0);
+  // The samples are the ones written.
+  std::vector<float> got(g.rows * g.cols);
+  s.readWindow("utm", 0, 0, 0, g.rows, g.cols, got);
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    const float w = crater(i / g.cols, i % g.cols);
+    EXPECT_TRUE(std::isnan(w) ? std::isnan(got[i]) : got[i] == w) << i;
+  }
+}
+
+TEST(Store, RejectsABadTransverseMercatorPlacementNamingTheField) {
+  const fs::path p = writeUtmStore("utm-bad.h5");
+  const std::string pre = "store::open(): " + p.string() + ": grid 'utm' ";
+  editRaw(p, [](hid_t f) { ok(H5Adelete_by_name(f, "/grids/utm", "scale_factor", H5P_DEFAULT)); });
+  EXPECT_EQ(openError(p), pre + "has no attribute 'scale_factor'");
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/utm", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(g, "scale_factor", {0.0}, H5T_IEEE_F64LE);
+  });
+  std::string msg = openError(p);
+  EXPECT_EQ(
+      msg.rfind(pre + "has an unusable placement (TransverseMercator(): scale factor is 0", 0), 0U)
+      << msg;
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/utm", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(g, "scale_factor", {0.9996}, H5T_IEEE_F64LE);
+    rawSetNumbers(g, "lat_origin_deg", {95.0}, H5T_IEEE_F64LE);
+  });
+  msg = openError(p);
+  EXPECT_NE(msg.find(pre + "has an unusable placement (TransverseMercator(): latitude is 95"),
+            std::string::npos)
+      << msg;
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/utm", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(g, "lat_origin_deg", {kNanD}, H5T_IEEE_F64LE);
+  });
+  EXPECT_EQ(openError(p), pre + "has lat_origin_deg nan, expected a finite number");
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/utm", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(g, "lat_origin_deg", {0.0}, H5T_IEEE_F64LE);
+    rawSetString(g, "placement", "transverse_mercator_south_orientated");
+  });
+  EXPECT_EQ(openError(p), pre +
+                              "has placement 'transverse_mercator_south_orientated', expected "
+                              "'local_tangent_plane', 'polar_stereographic', 'equirectangular' "
+                              "or 'transverse_mercator'");
+  // A writer given a transverse Mercator placement without k0 refuses it and writes nothing.
+  GridInfo noK0 = utmInfo("utm");
+  noK0.placement.scaleFactor.reset();
+  const fs::path q = scratch("utm-nok0.h5");
+  const std::vector<GridSource> grids{source(noK0, crater)};
+  EXPECT_THROW(writeStore(q, grids), InvalidArgument);
+  EXPECT_FALSE(fs::exists(q));
+}

@@ -6,6 +6,8 @@ variable REGOLITH_WRITE_FIXTURE_STORE), then reads the store it wrote with h5py 
 ONLY, following docs/store-format.md: attributes, level datasets, chunk shapes, nodata,
 scale/offset and pixel-centre geometry. Every value is checked against the analytic formulas
 of tests/store/write_fixture_store.cpp. Any mismatch raises and the script exits non-zero.
+For the transverse Mercator grid (utm.h5) PROJ, through GDAL's osr, turns the documented
+placement attributes into each sample centre's longitude/latitude.
 
     /usr/bin/python3 tests/store/test_store_h5py.py build/tests/store/write_fixture_store
 """
@@ -282,6 +284,41 @@ def check_tiled(path):
         check_close(a, mean, "tiled level1 vs 2x2 means")
 
 
+def check_utm(path):
+    """docs/store-format.md, transverse_mercator: the heights written are a function of each
+    sample centre's latitude/longitude, which PROJ computes here from the attributes."""
+    from osgeo import osr
+
+    with h5py.File(path, "r") as f:
+        check(list(f.attrs["format_version"]) == [1, 2], "utm: root format_version")
+        g = f["grids/utm"]
+        a = g.attrs
+        check(list(a["format_version"]) == [1, 2], "utm: grid format_version")
+        check(a["placement"] == "transverse_mercator", "utm: placement")
+        check(float(a["scale_factor"]) == 0.9996, "utm: scale_factor")
+        check(float(a["false_northing"]) == 10000000.0, "utm: false_northing")
+        for absent in ("pole", "lat_true_scale_deg", "projection_radius", "origin_lat_deg"):
+            check(absent not in a, f"utm: no {absent}")
+        ellps = f"+a={a['equatorial_radius']!r} +b={a['polar_radius']!r}"
+        tm = (f"+proj=tmerc +lon_0={a['lon_centre_deg']!r} +lat_0={a['lat_origin_deg']!r} "
+              f"+k_0={a['scale_factor']!r} +x_0={a['false_easting']!r} "
+              f"+y_0={a['false_northing']!r} {ellps}")
+        rows, cols = int(a["rows"]), int(a["cols"])
+        dx, dy = a["spacing"]
+        x, y = np.meshgrid(a["x0"] + np.arange(cols) * dx, a["y0"] - np.arange(rows) * dy)
+        h = heights(g, 0)
+    src, dst = osr.SpatialReference(), osr.SpatialReference()
+    src.ImportFromProj4(tm)
+    dst.ImportFromProj4(f"+proj=longlat {ellps}")
+    dst.SetAxisMappingStrategy(osr.OAMS_TRADITIONAL_GIS_ORDER)
+    ct = osr.CoordinateTransformation(src, dst)
+    lonlat = np.array(ct.TransformPoints(np.column_stack([x.ravel(), y.ravel()])))
+    lon, lat = lonlat[:, 0].reshape(rows, cols), lonlat[:, 1].reshape(rows, cols)
+    check(abs(lat.mean() + 43.0) < 0.2 and abs(lon.mean() + 124.3) < 0.2, "utm: where it is")
+    want = 1e6 * (lat + 43.0) + 1e6 * np.cos(np.radians(43.0)) * (lon + 124.5)
+    check_close(h, want, "utm level0 vs PROJ's positions", rtol=0.0, atol=0.01)
+
+
 def main():
     binary = sys.argv[1] if len(sys.argv) > 1 else os.environ.get("REGOLITH_WRITE_FIXTURE_STORE")
     if not binary:
@@ -291,7 +328,7 @@ def main():
         path = os.path.join(tmp, "fixture.h5")
         subprocess.run([binary, path], check=True)
         check(os.path.exists(path), "the store exists")
-        check(sorted(os.listdir(tmp)) == ["fixture.h5", "tiled.h5", "tiled_ext.h5"],
+        check(sorted(os.listdir(tmp)) == ["fixture.h5", "tiled.h5", "tiled_ext.h5", "utm.h5"],
               "no temporary file left")
         with h5py.File(path, "r") as f:
             check(f.attrs["regolith_store"].startswith("Regolith terrain store"), "marker")
@@ -301,6 +338,7 @@ def main():
             check_mars(f["grids/mars"])
             check_tilt(f["grids/tilt"])
         check_tiled(os.path.join(tmp, "tiled.h5"))
+        check_utm(os.path.join(tmp, "utm.h5"))
     print(f"test_store_h5py: OK ({CHECKS} checks, h5py {h5py.__version__}, "
           f"numpy {np.__version__})")
 

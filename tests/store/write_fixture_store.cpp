@@ -7,7 +7,10 @@
 // Beside it, in the same directory, it writes a tiled grid (docs/store-format.md, "Tiled
 // grids"): tiled.h5 with grid "mosaic", 150 × 130 samples, from two internal tiles and one
 // external tile (grid "ext" of tiled_ext.h5, referenced by relative path); rows 130–149 are
-// covered by no tile.
+// covered by no tile. And utm.h5 with grid "utm" (format 1.2): a transverse Mercator DEM
+// whose heights are a function of each sample centre's latitude/longitude, which the script
+// recomputes with PROJ (GDAL's osr) from the documented attributes.
+#include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
@@ -150,6 +153,45 @@ void writeTiled(const std::filesystem::path& dir, const WriteOptions& o) {
   writeStore(dir / "tiled.h5", std::span<const GridSource>(&mosaic, 1), o);
 }
 
+/// "utm": 40 × 50 samples of 250 × 200 m in a UTM-like zone south of the equator on Clarke
+/// 1866 (λ0 = 123°W, φ0 = −10°, k0 = 0.9996, false easting 500 km, false northing 10,000 km),
+/// about 1.3° west of the central meridian near 43°S. Height = 1e6 m per degree of latitude
+/// and of longitude (scaled by cos 43°) from 43°S 124.5°W: a 1e-8° error in a sample's
+/// position moves its height by 0.01 m, above float32's rounding (at most 0.004 m here).
+void writeUtm(const std::filesystem::path& dir, const WriteOptions& o) {
+  GridInfo g;
+  g.name = "utm";
+  g.kind = GridKind::Dem;
+  g.rows = 40;
+  g.cols = 50;
+  g.x0 = 393000.0;
+  g.y0 = 6345000.0;
+  g.spacingX = 250.0;
+  g.spacingY = 200.0;
+  g.bodyName = "Earth";
+  g.equatorialRadius = 6378206.4;
+  g.polarRadius = 6356583.8;
+  g.latitudeType = topo::LatitudeType::Planetodetic;
+  g.placement.kind = PlacementInfo::Kind::TransverseMercator;
+  g.placement.lonCentreDeg = -123.0;
+  g.placement.latOriginDeg = -10.0;
+  g.placement.scaleFactor = 0.9996;
+  g.placement.falseEasting = 500000.0;
+  g.placement.falseNorthing = 10000000.0;
+  const topo::Placement pl = placementOf(g);
+  auto samples =
+      topo::InMemorySamples::fromFunction(g.rows, g.cols, [&](std::size_t r, std::size_t c) {
+        const double x = g.x0 + static_cast<double>(c) * g.spacingX;
+        const double y = g.y0 - static_cast<double>(r) * g.spacingY;
+        const topo::Geodetic p = pl.toGeodetic(x, y, 0.0);
+        return static_cast<float>(1e6 * (p.latDeg + 43.0) +
+                                  1e6 * std::cos(43.0 * std::acos(-1.0) / 180.0) *
+                                      (p.lonDeg + 124.5));
+      });
+  const GridSource src{g, samples};
+  writeStore(dir / "utm.h5", std::span<const GridSource>(&src, 1), o);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -166,6 +208,7 @@ int main(int argc, char** argv) {
     std::filesystem::path dir = std::filesystem::path(argv[1]).parent_path();
     if (dir.empty()) dir = ".";
     writeTiled(dir, o);
+    writeUtm(dir, o);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "write_fixture_store: %s\n", e.what());
     return 1;

@@ -418,6 +418,7 @@ def summary_field(stdout, name):
     ("Shoemaker_1k.tif", "Shoemaker_1k", "dem", False),
     ("S11E119.hgt", "S11E119", "planet", False),
     ("dem_unfinished.tif", "dem_unfinished", "planet", True),
+    ("dem_nodata.dem", "dem_nodata", "dem", False),  # NAD27 / UTM zone 10N
 ])
 def test_import_matches_gdal(work, name, grid, kind, void_marker):
     src = dem_fixture(name)
@@ -590,15 +591,28 @@ def sinusoidal_tif(path):
     ds = None
 
 
+def lambert_conformal_conic_tif(path):
+    ds = gdal.GetDriverByName("GTiff").Create(str(path), 20, 10, 1, gdal.GDT_Float32)
+    srs = osr.SpatialReference()
+    srs.ImportFromProj4("+proj=lcc +lat_1=33 +lat_2=45 +lat_0=39 +lon_0=-96 +x_0=0 +y_0=0 "
+                        "+ellps=GRS80 +units=m +no_defs")
+    ds.SetProjection(srs.ExportToWkt())
+    ds.SetGeoTransform([100000.0, 100.0, 0.0, 50000.0, 0.0, -100.0])
+    ds.GetRasterBand(1).WriteArray(np.ones((10, 20), dtype=np.float32))
+    ds = None
+
+
 def test_import_errors(work):
     junk = work / "junk.tif"
     junk.write_bytes(b"II*\0 this is not really a TIFF")
     sinu = work / "sinusoidal.tif"
     sinusoidal_tif(sinu)
+    lcc = work / "lcc.tif"
+    lambert_conformal_conic_tif(lcc)
     cases = [
         (junk, "GDAL cannot open it as a raster"),
         (sinu, "unsupported projection"),
-        (dem_fixture("dem_nodata.dem"), "unsupported projection NAD27 / UTM zone 10N"),
+        (lcc, "unsupported projection unknown (Lambert_Conformal_Conic_2SP)"),
         (work / "no-such.tif", "no such file"),
     ]
     for src, needle in cases:
@@ -622,6 +636,64 @@ def test_import_errors(work):
     assert p.returncode != 0
     assert p.stderr == (f"regolith: error: import: --out {work / 'no' / 'such' / 'x.h5'}:"
                         f" folder {work / 'no' / 'such'} does not exist\n")
+
+
+def test_utm_import_info_and_lonlat_query(work):
+    """The NAD27 / UTM 10N fixture imports as a transverse Mercator DEM; `info` shows the
+    placement as h5py reads it; `query --coords lonlat` at the NAD27 longitude/latitude that
+    gdaltransform gives for pixel centres returns GDAL's sample values there."""
+    src = dem_fixture("dem_nodata.dem")
+    out = work / "utm.h5"
+    run("import", src, "--out", out)
+    info = json.loads(run("info", out, "--json").stdout)
+    assert info["format_version"] == [1, 2]
+    g = info["grids"][0]
+    assert g["placement"] == {"kind": "transverse_mercator", "lon_centre_deg": -123.0,
+                              "lat_origin_deg": 0.0, "scale_factor": 0.9996,
+                              "false_easting": 500000.0, "false_northing": 0.0}
+    with h5py.File(out, "r") as f:
+        a = f["grids/dem_nodata"].attrs
+        assert list(a["format_version"]) == [1, 2] and list(f.attrs["format_version"]) == [1, 2]
+        assert a["placement"] == "transverse_mercator"
+        for key in ("lon_centre_deg", "lat_origin_deg", "scale_factor", "false_easting",
+                    "false_northing"):
+            assert float(a[key]) == g["placement"][key], key
+        assert float(a["equatorial_radius"]) == 6378206.4  # Clarke 1866, from the CRS
+    text = run("info", out).stdout
+    assert ("placement:      transverse_mercator, central meridian -123 deg, origin lat 0 deg, "
+            "scale factor 0.9996, false easting 5e+05 m, false northing 0 m") in text
+
+    ds = gdal.Open(src)
+    values = ds.GetRasterBand(1).ReadAsArray().astype(np.float64)
+    nodata = ds.GetRasterBand(1).GetNoDataValue()
+    # Interior pixels (the normal's stencil needs valid neighbours), and nodata pixels.
+    pixels = [(r, c) for r in (2, 7, 31, 50, 62) for c in (3, 13, 40, 61)]
+    pixels += [tuple(int(v) for v in rc) for rc in np.argwhere(values == nodata)[:3]]
+    p = subprocess.run(["gdaltransform", "-t_srs", "EPSG:4267", src],
+                       input="".join(f"{c + 0.5} {r + 0.5}\n" for r, c in pixels),
+                       capture_output=True, text=True, check=True)
+    lonlat = [line.split()[:2] for line in p.stdout.strip().split("\n")]
+    assert len(lonlat) == len(pixels)
+    points = [f"{lon},{lat}" for lon, lat in lonlat]
+    _, rows = parse_csv(run("query", out, "--interp", "nearest", "--", *points).stdout)
+    _, body = parse_csv(run("query", out, "--interp", "nearest", "--frame", "body", "--",
+                            *points).stdout)
+    checked = 0
+    for (r, c), row, brow, (lon, lat) in zip(pixels, rows, body, lonlat):
+        if values[r, c] == nodata:
+            assert row[6] == 0 and math.isnan(row[2]), (r, c)
+            continue
+        if (values[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2] == nodata).any():
+            continue  # next to a hole: no normal, so the point may be reported invalid
+        checked += 1
+        assert row[6] == 1 and row[2] == values[r, c], (r, c, row)
+        # The body-frame normal is a unit vector pointing up, near the ellipsoid normal.
+        n = np.array(brow[3:6])
+        phi, lam = math.radians(float(lat)), math.radians(float(lon))
+        up = np.array([math.cos(phi) * math.cos(lam), math.cos(phi) * math.sin(lam),
+                       math.sin(phi)])
+        assert abs(np.linalg.norm(n) - 1.0) < 1e-9 and float(n @ up) > 0.5, (r, c, n)
+    assert checked >= 15
 
 
 def read_pty(master, timeout=60):

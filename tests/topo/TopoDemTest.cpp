@@ -324,6 +324,10 @@ TEST_P(PlacedDemNormal, BodyFixedNormalMatchesFiniteDifferencesOfPositions) {
       pl = Placement(mars, Equirectangular(3396190.0, 12.6, 0.0), LatitudeType::Planetocentric);
       x0 = 2.108e6, y0 = 0.746e6;  // near Marth crater, 35.57°E 12.6°N
       break;
+    case 3:  // a UTM-like zone on Mars, 3.3° east of its central meridian at 40°N
+      pl = Placement(mars, TransverseMercator(mars, 30.0, 0.0, 0.9996, 500000.0, 0.0));
+      x0 = 700000.0, y0 = 2.37e6;
+      break;
   }
   const TopoGrid g(64, 64, x0, y0, 2.0, 2.0);
   auto f = [&](double x, double y) {
@@ -349,7 +353,7 @@ TEST_P(PlacedDemNormal, BodyFixedNormalMatchesFiniteDifferencesOfPositions) {
     EXPECT_GT(glm::dot(s.normal, glm::normalize(P(x, y))), 0.8);  // slopes reach ~0.55
   }
 }
-INSTANTIATE_TEST_SUITE_P(Placements, PlacedDemNormal, ::testing::Values(0, 1, 2));
+INSTANTIATE_TEST_SUITE_P(Placements, PlacedDemNormal, ::testing::Values(0, 1, 2, 3));
 
 TEST(TopoDem, ABlockSourceGivesTheSameAnswersAndRunsOfQueriesStayInOneBlock) {
   const TopoGrid g(30, 25, 100.0, 200.0, 2.0, 2.0, -1.0f);

@@ -3,6 +3,9 @@
 
 #include <glm/geometric.hpp>
 
+#include <cmath>
+#include <string>
+
 namespace regolith::topo {
 
 Placement::Placement(LocalTangentPlane plane)
@@ -14,11 +17,28 @@ Placement::Placement(const Body& body, PolarStereographic projection)
 Placement::Placement(const Body& body, Equirectangular projection, LatitudeType latitudeType)
     : body_(body), latType_(latitudeType), proj_(projection) {}
 
+Placement::Placement(const Body& body, TransverseMercator projection)
+    : body_(body), latType_(LatitudeType::Planetodetic), proj_(projection) {
+  // The projection's latitudes are planetodetic on its own ellipsoid: another body would put
+  // every sample somewhere else.
+  const double a = body.equatorialRadius(), e2 = body.eccentricitySquared();
+  if (std::abs(projection.equatorialRadius() - a) > 1e-9 * a ||
+      std::abs(projection.eccentricitySquared() - e2) > 1e-12) {
+    throw InvalidArgument(
+        "Placement(): the transverse Mercator projection is on an ellipsoid of "
+        "a = " +
+        std::to_string(projection.equatorialRadius()) + " m, e^2 = " +
+        std::to_string(projection.eccentricitySquared()) + ", expected the body's (" + body.name() +
+        ": a = " + std::to_string(a) + " m, e^2 = " + std::to_string(e2) + ")");
+  }
+}
+
 Placement::Kind Placement::kind() const noexcept {
   switch (proj_.index()) {
     case 0: return Kind::LocalTangentPlane;
     case 1: return Kind::PolarStereographic;
-    default: return Kind::Equirectangular;
+    case 2: return Kind::Equirectangular;
+    default: return Kind::TransverseMercator;
   }
 }
 
@@ -31,12 +51,17 @@ const PolarStereographic* Placement::polarStereographic() const noexcept {
 const Equirectangular* Placement::equirectangular() const noexcept {
   return std::get_if<Equirectangular>(&proj_);
 }
+const TransverseMercator* Placement::transverseMercator() const noexcept {
+  return std::get_if<TransverseMercator>(&proj_);
+}
 
 Geodetic Placement::toGeodetic(double x, double y, double h) const {
   if (const auto* ltp = localTangentPlane()) return ltp->inverse({x, y, h});
   LatLon ll;
   if (const auto* ps = polarStereographic()) {
     ll = ps->inverse({x, y});
+  } else if (const auto* tm = transverseMercator()) {
+    ll = tm->inverse({x, y});
   } else {
     ll = equirectangular()->inverse({x, y});
     ll.latDeg = body_.toPlanetodetic(ll.latDeg, latType_);
@@ -59,6 +84,8 @@ glm::dvec3 Placement::fromGeodetic(const Geodetic& g) const {
   glm::dvec2 xy;
   if (const auto* ps = polarStereographic()) {
     xy = ps->forward({g.latDeg, g.lonDeg});
+  } else if (const auto* tm = transverseMercator()) {
+    xy = tm->forward({g.latDeg, g.lonDeg});
   } else {
     xy = equirectangular()->forward({body_.fromPlanetodetic(g.latDeg, latType_), g.lonDeg});
   }

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
+#include <limits>
 #include <numbers>
 #include <string>
 
@@ -189,6 +191,155 @@ double PolarStereographic::scaleFactor(double latDeg) const {
   const double s = std::sin(phi);
   const double m = std::cos(phi) / std::sqrt(1.0 - e_ * e_ * s * s);
   return rhoFactor_ * stereoT(phi, e_) / (a_ * m);
+}
+
+// ---- TransverseMercator ----------------------------------------------------------------
+//
+// Karney (2011), "Transverse Mercator with an accuracy of a few nanometers". Written out here
+// (no PROJ dependency in topo: it depends on GLM only); PROJ `tmerc` is the oracle in the tests.
+
+namespace {
+/// τ' = tan χ (χ the conformal latitude) of τ = tan φ: Karney eqs. (7)–(9), accurate near
+/// the poles too (no tan(π/4 + φ/2) forms).
+double conformalTan(double tau, double e) {
+  if (e == 0.0) return tau;
+  const double sigma = std::sinh(e * std::atanh(e * tau / std::hypot(1.0, tau)));
+  return tau * std::hypot(1.0, sigma) - sigma * std::hypot(1.0, tau);
+}
+
+/// τ = tan φ of τ' = tan χ: Newton's method on conformalTan, Karney eqs. (19)–(21); two or
+/// three steps reach full double precision for any planet's eccentricity.
+double geodeticTan(double taup, double e) {
+  if (e == 0.0 || !std::isfinite(taup)) return taup;  // a pole stays a pole
+  const double e2m = 1.0 - e * e;
+  double tau = taup / e2m;
+  const double tol = 4.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(taup));
+  for (int i = 0; i < 10; ++i) {
+    const double tp = conformalTan(tau, e);
+    const double dtau =
+        (taup - tp) * (1.0 + e2m * tau * tau) / (e2m * std::hypot(1.0, tau) * std::hypot(1.0, tp));
+    tau += dtau;
+    if (!(std::abs(dtau) >= tol)) break;
+  }
+  return tau;
+}
+}  // namespace
+
+TransverseMercator::TransverseMercator(const Body& body, double lonCentreDeg, double latOriginDeg,
+                                       double scaleFactor, double falseEasting,
+                                       double falseNorthing)
+    : a_(body.equatorialRadius()),
+      e2_(body.eccentricitySquared()),
+      e_(std::sqrt(body.eccentricitySquared())),
+      lon0Deg_(lonCentreDeg),
+      lat0Deg_(latOriginDeg),
+      k0_(scaleFactor),
+      fe_(falseEasting),
+      fn_(falseNorthing) {
+  constexpr const char* op = "TransverseMercator()";
+  requireFinite(lonCentreDeg, op, "central meridian");
+  requireLatitude(latOriginDeg, op);
+  requireFinite(scaleFactor, op, "scale factor");
+  requireFinite(falseEasting, op, "false easting");
+  requireFinite(falseNorthing, op, "false northing");
+  if (scaleFactor <= 0.0) {
+    throw InvalidArgument(std::string(op) + ": scale factor is " + std::to_string(scaleFactor) +
+                          ", expected > 0");
+  }
+  const double f = body.flattening();
+  const double n = f / (2.0 - f);
+  const double n2 = n * n, n3 = n2 * n, n4 = n3 * n, n5 = n4 * n, n6 = n5 * n;
+  // Rectifying radius, Karney eq. (14).
+  const double A = a_ / (1.0 + n) * (1.0 + n2 / 4.0 + n4 / 64.0 + n6 / 256.0);
+  kA_ = k0_ * A;
+  // Karney eq. (35): conformal (χ) → rectifying (ξ) coordinates.
+  alpha_ = {
+      n / 2.0 - 2.0 * n2 / 3.0 + 5.0 * n3 / 16.0 + 41.0 * n4 / 180.0 - 127.0 * n5 / 288.0 +
+          7891.0 * n6 / 37800.0,
+      13.0 * n2 / 48.0 - 3.0 * n3 / 5.0 + 557.0 * n4 / 1440.0 + 281.0 * n5 / 630.0 -
+          1983433.0 * n6 / 1935360.0,
+      61.0 * n3 / 240.0 - 103.0 * n4 / 140.0 + 15061.0 * n5 / 26880.0 + 167603.0 * n6 / 181440.0,
+      49561.0 * n4 / 161280.0 - 179.0 * n5 / 168.0 + 6601661.0 * n6 / 7257600.0,
+      34729.0 * n5 / 80640.0 - 3418889.0 * n6 / 1995840.0,
+      212378941.0 * n6 / 319334400.0};
+  // Karney eq. (36): rectifying → conformal.
+  beta_ = {
+      n / 2.0 - 2.0 * n2 / 3.0 + 37.0 * n3 / 96.0 - n4 / 360.0 - 81.0 * n5 / 512.0 +
+          96199.0 * n6 / 604800.0,
+      n2 / 48.0 + n3 / 15.0 - 437.0 * n4 / 1440.0 + 46.0 * n5 / 105.0 - 1118711.0 * n6 / 3870720.0,
+      17.0 * n3 / 480.0 - 37.0 * n4 / 840.0 - 209.0 * n5 / 4480.0 + 5569.0 * n6 / 90720.0,
+      4397.0 * n4 / 161280.0 - 11.0 * n5 / 504.0 - 830251.0 * n6 / 7257600.0,
+      4583.0 * n5 / 161280.0 - 108847.0 * n6 / 3991680.0,
+      20648693.0 * n6 / 638668800.0};
+  xi0_ = conformalMap(latOriginDeg * kDeg, 0.0).x;
+}
+
+TransverseMercator TransverseMercator::utm(const Body& body, int zone, bool north) {
+  if (zone < 1 || zone > 60) {
+    throw InvalidArgument("TransverseMercator::utm(): zone is " + std::to_string(zone) +
+                          ", expected 1 to 60");
+  }
+  return {body, 6.0 * zone - 183.0, 0.0, 0.9996, 500000.0, north ? 0.0 : 10000000.0};
+}
+
+glm::dvec2 TransverseMercator::conformalMap(double phi, double lambda) const {
+  // Karney eqs. (9)–(11): conformal latitude, then the spherical transverse Mercator in
+  // (ξ', η'); at the poles τ is huge but finite in double and ξ' = ±π/2 as it should.
+  const double tau = std::abs(phi) == kHalfPi ? std::copysign(1e300, phi) : std::tan(phi);
+  const double taup = conformalTan(tau, e_);
+  const double cl = std::cos(lambda);
+  const double xip = std::atan2(taup, cl);
+  const double etap = std::asinh(std::sin(lambda) / std::hypot(taup, cl));
+  // Karney eq. (11): ζ = ζ' + Σ αj sin(2j ζ'), with ζ = ξ + iη.
+  const std::complex<double> zp(xip, etap);
+  std::complex<double> z = zp;
+  for (std::size_t j = 0; j < alpha_.size(); ++j) {
+    z += alpha_[j] * std::sin(2.0 * static_cast<double>(j + 1) * zp);
+  }
+  return {z.real(), z.imag()};
+}
+
+glm::dvec2 TransverseMercator::forward(const LatLon& ll) const {
+  constexpr const char* op = "TransverseMercator::forward()";
+  requireLatitude(ll.latDeg, op);
+  requireFinite(ll.lonDeg, op, "longitude");
+  const double dl = wrapLongitude180(ll.lonDeg - lon0Deg_);
+  if (std::abs(dl) >= 90.0 && std::abs(ll.latDeg) != 90.0) {
+    throw DomainError(std::string(op) + ": longitude " + std::to_string(ll.lonDeg) + " deg is " +
+                      std::to_string(std::abs(dl)) + " deg from the central meridian " +
+                      std::to_string(lon0Deg_) + " deg, expected less than 90");
+  }
+  const glm::dvec2 z = conformalMap(ll.latDeg * kDeg, dl * kDeg);
+  return {fe_ + kA_ * z.y, fn_ + kA_ * (z.x - xi0_)};
+}
+
+LatLon TransverseMercator::inverse(const glm::dvec2& xy) const {
+  constexpr const char* op = "TransverseMercator::inverse()";
+  requireFinite(xy.x, op, "x");
+  requireFinite(xy.y, op, "y");
+  const double xi = (xy.y - fn_) / kA_ + xi0_;
+  const double eta = (xy.x - fe_) / kA_;
+  // Karney eq. (11) inverted with the β series: ζ' = ζ − Σ βj sin(2j ζ).
+  const std::complex<double> z(xi, eta);
+  std::complex<double> zp = z;
+  for (std::size_t j = 0; j < beta_.size(); ++j) {
+    zp -= beta_[j] * std::sin(2.0 * static_cast<double>(j + 1) * z);
+  }
+  const double xip = zp.real(), etap = zp.imag();
+  const double c = std::max(0.0, std::cos(xip)), sh = std::sinh(etap);
+  const double cRaw = std::cos(xip);
+  // cos ξ' < 0 (or |ξ'| > π): beyond the poles' images, where the points more than 90° from
+  // the central meridian would map; forward() does not go there either.
+  if (!std::isfinite(sh) || cRaw < -1e-12 || std::abs(xip) > std::numbers::pi) {
+    throw DomainError(std::string(op) + ": (" + std::to_string(xy.x) + ", " + std::to_string(xy.y) +
+                      ") m maps 90 deg or more from the central meridian, outside the "
+                      "projection's domain");
+  }
+  // Karney eqs. (18)–(21).
+  const double taup = std::sin(xip) / std::hypot(sh, c);
+  const double lambda = std::atan2(sh, c);
+  const double phi = std::atan(geodeticTan(taup, e_));
+  return {phi / kDeg, wrapLongitude180(lon0Deg_ + lambda / kDeg)};
 }
 
 // ---- LocalTangentPlane -----------------------------------------------------------------

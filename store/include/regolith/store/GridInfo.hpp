@@ -18,7 +18,7 @@ enum class GridKind { Dem, Planet };
 
 /// How a DEM is placed on its body (mirrors topo::Placement, as plain values).
 struct PlacementInfo {
-  enum class Kind { LocalTangentPlane, PolarStereographic, Equirectangular };
+  enum class Kind { LocalTangentPlane, PolarStereographic, Equirectangular, TransverseMercator };
   Kind kind = Kind::LocalTangentPlane;
   // LocalTangentPlane: origin (planetodetic degrees, metres) and heading (degrees from north).
   double originLatDeg = 0.0, originLonDeg = 0.0, originHeight = 0.0, headingDeg = 0.0;
@@ -30,6 +30,9 @@ struct PlacementInfo {
   double lonCentreDeg = 0.0, falseEasting = 0.0, falseNorthing = 0.0;
   // Equirectangular: sphere radius of the projection, latitude of true scale, latitude of
   // origin (lonCentreDeg above is its centre longitude).
+  // TransverseMercator (UTM among them), on the grid's body: central meridian lonCentreDeg,
+  // latitude of origin latOriginDeg, scale factor k0 on the central meridian scaleFactor
+  // (required), falseEasting, falseNorthing.
   double projectionRadius = 0.0, latOriginDeg = 0.0;
 };
 

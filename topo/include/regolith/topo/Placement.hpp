@@ -17,29 +17,34 @@ namespace regolith::topo {
 ///
 /// - LocalTangentPlane: (x, y, h) are coordinates in the plane's frame; h is measured along
 ///   the plane's normal (a flat-earth DEM, as SimScape's local DEMs).
-/// - PolarStereographic / Equirectangular: (x, y) are projected map metres; h is the height
+/// - PolarStereographic / Equirectangular / TransverseMercator: (x, y) are projected map
+///   metres (false easting/northing included); h is the height
 ///   above the body's reference surface along its normal at the inverse-projected point.
 ///   For Equirectangular the placement also says how the projection's latitude is read.
 ///
 /// Immutable and thread-safe.
 class Placement {
  public:
-  enum class Kind { LocalTangentPlane, PolarStereographic, Equirectangular };
+  enum class Kind { LocalTangentPlane, PolarStereographic, Equirectangular, TransverseMercator };
 
   explicit Placement(LocalTangentPlane plane);
   Placement(const Body& body, PolarStereographic projection);
   Placement(const Body& body, Equirectangular projection,
             LatitudeType latitudeType = LatitudeType::Planetocentric);
+  /// `projection` must be made on `body` (its latitudes are planetodetic on that ellipsoid);
+  /// throws InvalidArgument if its radius or eccentricity differ.
+  Placement(const Body& body, TransverseMercator projection);
 
   [[nodiscard]] Kind kind() const noexcept;
   [[nodiscard]] const Body& body() const noexcept { return body_; }
   /// The latitude type the projection's latitudes are read as (planetodetic for polar
-  /// stereographic and the tangent plane).
+  /// stereographic, transverse Mercator and the tangent plane).
   [[nodiscard]] LatitudeType latitudeType() const noexcept { return latType_; }
 
   [[nodiscard]] const LocalTangentPlane* localTangentPlane() const noexcept;
   [[nodiscard]] const PolarStereographic* polarStereographic() const noexcept;
   [[nodiscard]] const Equirectangular* equirectangular() const noexcept;
+  [[nodiscard]] const TransverseMercator* transverseMercator() const noexcept;
 
   /// Body-fixed position of grid point (x, y) at height h.
   [[nodiscard]] glm::dvec3 toBodyFixed(double x, double y, double h) const;
@@ -61,7 +66,7 @@ class Placement {
  private:
   Body body_;
   LatitudeType latType_;
-  std::variant<LocalTangentPlane, PolarStereographic, Equirectangular> proj_;
+  std::variant<LocalTangentPlane, PolarStereographic, Equirectangular, TransverseMercator> proj_;
 };
 
 }  // namespace regolith::topo
