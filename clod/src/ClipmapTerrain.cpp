@@ -1,8 +1,12 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/GlError.hpp>
+#include <regolith/clod/TextureClipmap.hpp>
+#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/topo/Error.hpp>
 
+#include "ClipmapEffectState.hpp"
 #include "ClipmapLevel.hpp"
+#include "EffectShaders.hpp"
 #include "Shaders.hpp"
 
 #include <glm/geometric.hpp>
@@ -21,14 +25,10 @@
 
 namespace regolith::clod {
 
-namespace {
-
-Program makeProgram() {
-  return Program("clipmap", ShaderSources{shaders::kClipmapVertex, shaders::kDropNodataGeometry,
-                                          shaders::kLitFragment});
+ShaderSources ClipmapTerrain::bareSources() {
+  return ShaderSources{shaders::kClipmapVertex, shaders::kDropNodataGeometry,
+                       shaders::kLitFragment};
 }
-
-}  // namespace
 
 struct ClipmapTerrain::Job {
   std::size_t level = 0;
@@ -49,7 +49,10 @@ struct ClipmapTerrain::Loader {
 };
 
 ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, ClipmapOptions options)
-    : pyramid_(std::move(pyramid)), options_(options), program_(makeProgram()) {
+    : pyramid_(std::move(pyramid)),
+      options_(std::move(options)),
+      sources_(composeClipmapSources(options_.effects)),
+      program_("clipmap", sources_) {
   if (!pyramid_) throw InvalidArgument("ClipmapTerrain(): pyramid is null");
   const int n = options_.size;
   if (n < 15 || n > 2047 || n % 2 == 0)
@@ -93,6 +96,7 @@ ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, Cli
   // sit up to 0.75 cell off this level's centre; one more cell of overlap for safety.
   hole_ = static_cast<int>(std::floor((n - 1) / 4.0 - 0.75)) - 1;
   buildMesh();
+  initEffects();
 }
 
 ClipmapTerrain::~ClipmapTerrain() {
@@ -124,6 +128,7 @@ void ClipmapTerrain::requestFocus(const glm::dvec3& focus) {
     const std::lock_guard lock(loader_->mutex);
     loader_->target = focus;
   }
+  updateEffects(focus);
   schedule();
 }
 
@@ -232,6 +237,12 @@ void ClipmapTerrain::setOptions(const ClipmapOptions& options) {
     throw InvalidArgument(
         "ClipmapTerrain::setOptions(): size and levels are fixed at "
         "construction");
+  if (options.effects.declared() != options_.effects.declared() ||
+      options.effects.tracks != options_.effects.tracks ||
+      options.trackWindow != options_.trackWindow)
+    throw InvalidArgument(
+        "ClipmapTerrain::setOptions(): the declared effects (and their track layer and "
+        "textures) are fixed at construction; build a new terrain to change them");
   options_ = options;
 }
 
@@ -302,6 +313,7 @@ std::size_t ClipmapTerrain::setFocus(const glm::dvec3& focus) {
   std::size_t count = 0;
   for (auto& level : levels_) count += level->moveTo(g.x, g.y, polar);
   uploaded_ += count;
+  updateEffects(focus);
   return count;
 }
 
@@ -345,6 +357,7 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
   program_.set("uLight", glm::normalize(options_.lightDirection));
   program_.set("uAlbedo", options_.albedo);
   program_.set("uAmbient", options_.ambient);
+  if (effects_) setEffectUniforms(camera, frame);
   glBindVertexArray(vao_.id());
   glDisable(GL_CULL_FACE);
   for (std::size_t k = first; k < first + count; ++k) {
@@ -374,7 +387,9 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
     if (k > first) finer = glm::vec4(levels_[k - 1]->footprintIn(l));
     program_.set("uFinerRect", finer);
     program_.set("uDepthPush", options_.overlapDepthPush);
+    if (effects_) setLevelUniforms(k);
     glBindTextureUnit(0, l.texture());
+    ++frame.textureBinds;
     const std::size_t start = k == first ? 0 : holeIndices_;
     const std::size_t n = holeIndices_ + ringIndices_ + skirtIndices_ - start;
     glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(n), GL_UNSIGNED_INT,

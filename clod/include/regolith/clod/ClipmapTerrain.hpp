@@ -3,6 +3,7 @@
 /// Geometry-clipmap terrain over a plane (DEM) or a spheroid (planet).
 
 #include <regolith/clod/Camera.hpp>
+#include <regolith/clod/Effects.hpp>
 #include <regolith/clod/GlObjects.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/Program.hpp>
@@ -11,6 +12,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace regolith::clod {
@@ -39,6 +41,14 @@ struct ClipmapOptions {
   /// the depth buffer no longer holds the exact geometry in those bands (off by default;
   /// the viewer uses 0.02).
   float overlapDepthPush = 0.0F;
+  /// Effects the scene declares (docs/overlays.md). Which ones are declared is fixed at
+  /// construction (each is compiled into the program); their parameters may change through
+  /// setOptions(). None: the bare pipeline.
+  Effects effects;
+  /// Tracks: GPU window of the TrackLayer around the focus, texels per side (256..8192).
+  int trackWindow = 2048;
+  /// Tracks: relative darkening of the albedo inside a rut (compacted soil).
+  float trackDarkening = 0.15F;
 };
 
 /// What one draw() did.
@@ -46,6 +56,7 @@ struct ClipmapFrame {
   std::size_t firstLevel = 0;   ///< innermost level drawn (it draws its centre)
   std::size_t levelsDrawn = 0;  ///< levels drawn, from firstLevel outward
   std::size_t vertices = 0;     ///< vertices submitted (indices drawn)
+  std::size_t textureBinds = 0; ///< glBindTextureUnit calls (one per level without effects)
 };
 
 /// Geometry clipmaps (Losasso & Hoppe 2004; Asirvatham & Hoppe, GPU Gems 2 ch. 2): nested
@@ -73,6 +84,9 @@ class ClipmapTerrain {
  public:
   /// Throws InvalidArgument for a size that is even or out of range, or more levels than
   /// the pyramid has.
+  /// Effects: throws InvalidArgument for lat/lon lines on a plane without placement, tracks
+  /// on a planet (their grid is not metric), a track window outside 256..8192, or a draped
+  /// texture TextureClipmap rejects.
   ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, ClipmapOptions options = {});
   ClipmapTerrain(const ClipmapTerrain&) = delete;
   ClipmapTerrain& operator=(const ClipmapTerrain&) = delete;
@@ -116,6 +130,24 @@ class ClipmapTerrain {
   /// Grid cells in the centre hole of a coarser level (half-width, in that level's cells).
   [[nodiscard]] int holeHalfWidth() const noexcept { return hole_; }
 
+  /// The sources the program was built from: the bare clipmap shaders plus one snippet per
+  /// declared effect (identical to bareSources() when none is declared).
+  [[nodiscard]] const ShaderSources& programSources() const noexcept { return sources_; }
+  /// The program (to inspect its active uniforms).
+  [[nodiscard]] const Program& program() const noexcept { return program_; }
+  /// The clipmap program without any effect: the pipeline before effects existed.
+  [[nodiscard]] static ShaderSources bareSources();
+  /// The GPU work a frame does, in order: "terrain" always; "albedo-clipmap",
+  /// "overlay-clipmap" (texture windows following the focus) and "track-upload" (new ruts)
+  /// only when those effects are declared.
+  [[nodiscard]] std::vector<std::string> passes() const;
+  /// Degrees between lat/lon lines for this camera (LatLonLines::spacingDegrees if set, else
+  /// adapted to the camera's height above the body). Throws InvalidArgument if lat/lon
+  /// lines are not declared.
+  [[nodiscard]] double latLonSpacing(const Camera& camera) const;
+  /// The grid point the frame's effect coordinates are relative to (the last focus).
+  [[nodiscard]] glm::dvec2 gridOrigin() const noexcept { return gridOrigin_; }
+
  private:
   void buildMesh();
   void schedule();
@@ -125,10 +157,16 @@ class ClipmapTerrain {
 
   struct Job;
   struct Loader;
+  struct EffectState;
+  void initEffects();
+  void updateEffects(const glm::dvec3& focus);
+  void setEffectUniforms(const Camera& camera, ClipmapFrame& frame) const;
+  void setLevelUniforms(std::size_t level) const;
 
   std::shared_ptr<const HeightPyramid> pyramid_;
   ClipmapOptions options_;
   std::vector<std::unique_ptr<ClipmapLevel>> levels_;
+  ShaderSources sources_;
   Program program_;
   VertexArray vao_;
   Buffer vertices_, indices_;
@@ -136,6 +174,8 @@ class ClipmapTerrain {
   int hole_ = 0;
   std::size_t uploaded_ = 0;
   std::unique_ptr<Loader> loader_;
+  std::unique_ptr<EffectState> effects_;  // null without effects
+  glm::dvec2 gridOrigin_{0.0};
 };
 
 }  // namespace regolith::clod
