@@ -37,7 +37,7 @@ const char* glyph(char c) {
     case '/': return "..#..#.#..#.#..";
     case 'A': return "####.#####.##.#";
     case 'L': return "#..#..#..#..###";
-    case 'M': return "#.####.##.##.##";
+    case 'M': return "#.#######.##.##";
     case 'N': return "####.##.##.##.#";
     case 'O': return "####.##.##.####";
     case 'T': return "###.#..#..#..#.";
