@@ -113,12 +113,12 @@ float fbm(vec2 g) {  // in [0, 1]
 }
 )";
 constexpr const char* kNoiseMain = R"(  if (all(greaterThanEqual(fGrid, uNoiseRegion.xy)) && all(lessThanEqual(fGrid, uNoiseRegion.zw))) {
+    // Forward differences over a quarter of the finest octave: three evaluations a pixel.
     float e = uNoiseWave * exp2(-float(uNoiseOctaves)) * 0.5;
-    float nx = fbm(fGrid + vec2(e, 0.0)) - fbm(fGrid - vec2(e, 0.0));
-    float ny = fbm(fGrid + vec2(0.0, e)) - fbm(fGrid - vec2(0.0, e));
-    vec2 slope = 2.0 * uNoiseAmp * vec2(nx, ny) / (2.0 * e);
+    float f0 = fbm(fGrid);
+    vec2 slope = 2.0 * uNoiseAmp * vec2(fbm(fGrid + vec2(e, 0.0)) - f0, fbm(fGrid + vec2(0.0, e)) - f0) / e;
     n = normalize(n - slope.x * uAxisX - slope.y * uAxisY);
-    albedo *= 1.0 + uNoiseAlbedo * (2.0 * fbm(fGrid) - 1.0);
+    albedo *= 1.0 + uNoiseAlbedo * (2.0 * f0 - 1.0);
   }
 )";
 

@@ -37,12 +37,11 @@ const char* glyph(char c) {
     case '/': return "..#..#.#..#.#..";
     case 'A': return "####.#####.##.#";
     case 'L': return "#..#..#..#..###";
-    case 'M': return "#.#######.##.##";
+    case 'M': return "#.########.##.#";
     case 'N': return "####.##.##.##.#";
     case 'O': return "####.##.##.####";
     case 'T': return "###.#..#..#..#.";
-    case 'D': return "##.#.##.##.###.";  // "°" is written as a raised small o
-    case 'o': return "###.#.###......";
+    case 'o': return "####.####......";
     default: return "...............";
   }
 }

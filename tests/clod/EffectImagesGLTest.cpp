@@ -4,6 +4,7 @@
 
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/Legend.hpp>
+#include <regolith/clod/Render.hpp>
 #include <regolith/clod/TrackLayer.hpp>
 #include <regolith/topo/Placement.hpp>
 
@@ -93,6 +94,35 @@ TEST(EffectImagesGLTest, HeightColoursMatchTheLegendAtSampledPixels) {
   std::filesystem::remove(path);
   EXPECT_NE(text.str().find("\"min\": -1460"), std::string::npos) << text.str();
   EXPECT_NE(text.str().find("\"max\": -1370"), std::string::npos) << text.str();
+}
+
+TEST(EffectImagesGLTest, RenderToPngDrawsTheLegendAndWritesItBeside) {
+  test::glContext();
+  const auto pyramid = test::planePyramid(test::centredGrid(129, 129, 1.0), test::hills);
+  RenderRequest req;
+  req.camera = test::downCamera({0.0, 0.0, -1400.0}, 150.0, 320, 200, 50.0);
+  req.clipmap.size = 31;
+  req.clipmap.effects.heightColours = HeightColours{-1460.0F, -1370.0F, false};
+  const auto path = (std::filesystem::temp_directory_path() / "regolith_legend_render.png").string();
+  renderToPng(pyramid, req, path);
+  const RgbaImage img = readPng(path);
+  std::ifstream in(path + ".legend.json");
+  ASSERT_TRUE(in.good());
+  std::stringstream text;
+  text << in.rdbuf();
+  std::filesystem::remove(path);
+  std::filesystem::remove(path + ".legend.json");
+  EXPECT_EQ(text.str(), Legend(req.clipmap.effects.heightColours, std::nullopt).json());
+  // The legend sits in the top-right corner: its bar's top row is the ramp's last stop.
+  const Legend legend(req.clipmap.effects.heightColours, std::nullopt);
+  const RgbaImage key = legend.image();
+  const int x0 = img.width - key.width - 8, y0 = 8;
+  const auto b = legend.bar();
+  for (int y = b.y0; y < b.y1; y += 9) {
+    const auto* want = key.pixel(b.x0 + 2, y);
+    EXPECT_TRUE(img.is(x0 + b.x0 + 2, y0 + y, want[0], want[1], want[2])) << y;
+  }
+  test::savePng("effects_render_with_legend", img);
 }
 
 // ---- Lat/lon lines -----------------------------------------------------------------------
