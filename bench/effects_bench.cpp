@@ -51,8 +51,7 @@ topo::TopoGrid centred(std::size_t side, double spacing) {
 }
 
 std::shared_ptr<const HeightPyramid> planePyramid(std::size_t side, double spacing,
-                                                  double (*f)(double, double),
-                                                  bool placed) {
+                                                  double (*f)(double, double), bool placed) {
   const topo::TopoGrid grid = centred(side, spacing);
   auto samples = topo::InMemorySamples::fromFunction(side, side, [&](std::size_t r, std::size_t c) {
     const auto p = grid.sampleCentre(static_cast<double>(r), static_cast<double>(c));
@@ -95,7 +94,8 @@ Effects effects(const std::string& name) {
     for (int s = 0; s < 400; ++s) {  // 100 m of traverse through the view
       std::vector<WheelContact> wheels;
       for (double y : {-0.6, 0.6})
-        for (double dx : {-0.5, 0.0, 0.5}) wheels.push_back({{-50.0 + 0.25 * s + dx, 20.0 + y}, 0.3, 0.03});
+        for (double dx : {-0.5, 0.0, 0.5})
+          wheels.push_back({{-50.0 + 0.25 * s + dx, 20.0 + y}, 0.3, 0.03});
       layer->step(wheels);
     }
     e.tracks = layer;
@@ -151,9 +151,11 @@ void effectFrame(benchmark::State& state, const std::string& name) {
 
 int main(int argc, char** argv) {
   const HeadlessContext context;  // one GL context for every case
-  for (const char* name : {"none", "albedo", "tracks", "noise", "heightColours", "latLon", "overlay"})
-    benchmark::RegisterBenchmark((std::string("effects/") + name).c_str(),
-                                 [n = std::string(name)](benchmark::State& s) { effectFrame(s, n); })
+  for (const char* name :
+       {"none", "albedo", "tracks", "noise", "heightColours", "latLon", "overlay"})
+    benchmark::RegisterBenchmark(
+        (std::string("effects/") + name).c_str(),
+        [n = std::string(name)](benchmark::State& s) { effectFrame(s, n); })
         ->Unit(benchmark::kMillisecond)
         ->MinWarmUpTime(0.0);
   benchmark::Initialize(&argc, argv);

@@ -32,11 +32,10 @@ std::vector<std::string> Effects::declared() const {
 }
 
 glm::vec3 heightColour(const HeightColours& c, double h) noexcept {
-  const double t =
-      std::clamp((h - static_cast<double>(c.minHeight)) /
-                     static_cast<double>(c.maxHeight - c.minHeight),
-                 0.0, 1.0) *
-      4.0;
+  const double t = std::clamp((h - static_cast<double>(c.minHeight)) /
+                                  static_cast<double>(c.maxHeight - c.minHeight),
+                              0.0, 1.0) *
+                   4.0;
   const int k = std::min(static_cast<int>(std::floor(t)), 3);
   const auto f = static_cast<float>(t - k);
   const auto uk = static_cast<std::size_t>(k);
@@ -68,24 +67,22 @@ void ClipmapTerrain::initEffects() {
   if (e.latLon && !(e.latLon->spacingDegrees >= 0.0 && e.latLon->minPixelSpacing > 0.0))
     throw InvalidArgument("ClipmapTerrain(): effects.latLon: spacing " +
                           std::to_string(e.latLon->spacingDegrees) + "°, min pixel spacing " +
-                          std::to_string(e.latLon->minPixelSpacing) +
-                          ", expected ≥ 0 and > 0");
+                          std::to_string(e.latLon->minPixelSpacing) + ", expected ≥ 0 and > 0");
   if (e.tracks && pyramid_->kind() == SurfaceKind::Planet)
     throw InvalidArgument(
         "ClipmapTerrain(): effects.tracks: a planet's grid is longitude/latitude; tracks "
         "need a metric grid (a plane DEM or a DEM placed on the planet)");
   if (e.tracks && (options_.trackWindow < 256 || options_.trackWindow > 8192))
-    throw InvalidArgument("ClipmapTerrain(): trackWindow " +
-                          std::to_string(options_.trackWindow) + ", expected 256..8192");
+    throw InvalidArgument("ClipmapTerrain(): trackWindow " + std::to_string(options_.trackWindow) +
+                          ", expected 256..8192");
   if (e.noise && (e.noise->octaves < 1 || e.noise->octaves > 8 || !(e.noise->wavelength > 0.0)))
-    throw InvalidArgument("ClipmapTerrain(): effects.noise: " +
-                          std::to_string(e.noise->octaves) + " octaves, wavelength " +
-                          std::to_string(e.noise->wavelength) + ", expected 1..8 and > 0");
+    throw InvalidArgument("ClipmapTerrain(): effects.noise: " + std::to_string(e.noise->octaves) +
+                          " octaves, wavelength " + std::to_string(e.noise->wavelength) +
+                          ", expected 1..8 and > 0");
   if (e.heightColours && !(e.heightColours->maxHeight > e.heightColours->minHeight))
     throw InvalidArgument("ClipmapTerrain(): effects.heightColours: range [" +
                           std::to_string(e.heightColours->minHeight) + ", " +
-                          std::to_string(e.heightColours->maxHeight) +
-                          "] m, expected min < max");
+                          std::to_string(e.heightColours->maxHeight) + "] m, expected min < max");
   effects_ = std::make_unique<EffectState>();
   effects_->needs = EffectNeeds::of(e);
   if (e.albedo) effects_->albedo = std::make_unique<TextureClipmap>(*e.albedo, "effects.albedo");
@@ -180,12 +177,15 @@ void ClipmapTerrain::setEffectUniforms(const Camera& camera, ClipmapFrame& frame
     program_.set("uNoiseOctaves", nz.octaves);
     program_.set("uNoiseAlbedo", nz.albedoVariation);
     // The lattice is periodic (256 cells), so only (origin / wavelength) mod 256 matters.
-    const auto wrap = [&](double v) { return static_cast<float>(std::fmod(v / nz.wavelength, 256.0) + (v < 0 ? 256.0 : 0.0)); };
+    const auto wrap = [&](double v) {
+      return static_cast<float>(std::fmod(v / nz.wavelength, 256.0) + (v < 0 ? 256.0 : 0.0));
+    };
     program_.set("uNoiseOffset", glm::vec2(wrap(o.x), wrap(o.y)));
     glm::vec4 region(-1e30F, -1e30F, 1e30F, 1e30F);
     if (nz.region)
-      region = glm::vec4(static_cast<float>(nz.region->x - o.x), static_cast<float>(nz.region->y - o.y),
-                         static_cast<float>(nz.region->z - o.x), static_cast<float>(nz.region->w - o.y));
+      region =
+          glm::vec4(static_cast<float>(nz.region->x - o.x), static_cast<float>(nz.region->y - o.y),
+                    static_cast<float>(nz.region->z - o.x), static_cast<float>(nz.region->w - o.y));
     program_.set("uNoiseRegion", region);
   }
   if (e.tracks) {
@@ -196,7 +196,8 @@ void ClipmapTerrain::setEffectUniforms(const Camera& camera, ClipmapFrame& frame
     const auto cy = static_cast<std::int64_t>(std::floor(o.y / texel)) - n / 2;
     const std::uint64_t version = layer.version();
     std::vector<float> buf;
-    if (!st.trackLoaded || std::llabs(cx - st.trackTx0) > n / 4 || std::llabs(cy - st.trackTy0) > n / 4) {
+    if (!st.trackLoaded || std::llabs(cx - st.trackTx0) > n / 4 ||
+        std::llabs(cy - st.trackTy0) > n / 4) {
       st.trackTx0 = cx;
       st.trackTy0 = cy;
       buf.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
@@ -248,7 +249,8 @@ void ClipmapTerrain::setLevelUniforms(std::size_t k) const {
   if (!effects_->needs.grid) return;
   const ClipmapLevel& l = *levels_[k];
   const auto& g = pyramid_->level(k).grid;
-  const glm::dvec2 p0 = g.sampleCentre(static_cast<double>(l.row0()), static_cast<double>(l.col0()));
+  const glm::dvec2 p0 =
+      g.sampleCentre(static_cast<double>(l.row0()), static_cast<double>(l.col0()));
   program_.set("uGrid0", glm::vec2(glm::dvec2(p0.x - gridOrigin_.x, p0.y - gridOrigin_.y)));
   program_.set("uGridStep", glm::vec2(glm::dvec2(g.spacingX(), g.spacingY())));
   program_.set("uGridFromBody", l.polar() != 0 ? 1 : 0);

@@ -42,7 +42,8 @@ std::string replaceAll(const std::string& s, const std::string& from, const std:
 
 // ---- Vertex ----------------------------------------------------------------------------
 
-constexpr const char* kGridVertexDecl = R"(uniform vec2 uGrid0;      // grid point of window vertex (0, 0) − frame grid origin
+constexpr const char* kGridVertexDecl =
+    R"(uniform vec2 uGrid0;      // grid point of window vertex (0, 0) − frame grid origin
 uniform vec2 uGridStep;   // grid units per vertex step (x: +i, y: −j)
 uniform int uGridFromBody;  // planets on a polar lattice: grid from the position
 uniform vec2 uGridOrigin;   // the frame's grid origin (degrees) for that case
@@ -59,7 +60,8 @@ constexpr const char* kGridVertexMain = R"(  if (uGridFromBody != 0) {
 
 // ---- Fragment --------------------------------------------------------------------------
 
-constexpr const char* kAxesDecl = R"(uniform vec3 uAxisX;  // scene vector per grid unit along +x, divided by its length squared
+constexpr const char* kAxesDecl =
+    R"(uniform vec3 uAxisX;  // scene vector per grid unit along +x, divided by its length squared
 uniform vec3 uAxisY;
 )";
 
@@ -112,7 +114,8 @@ float fbm(vec2 g) {  // in [0, 1]
   return s / t;
 }
 )";
-constexpr const char* kNoiseMain = R"(  if (all(greaterThanEqual(fGrid, uNoiseRegion.xy)) && all(lessThanEqual(fGrid, uNoiseRegion.zw))) {
+constexpr const char* kNoiseMain =
+    R"(  if (all(greaterThanEqual(fGrid, uNoiseRegion.xy)) && all(lessThanEqual(fGrid, uNoiseRegion.zw))) {
     // Forward differences over a quarter of the finest octave: three evaluations a pixel.
     float e = uNoiseWave * exp2(-float(uNoiseOctaves)) * 0.5;
     float f0 = fbm(fGrid);
@@ -122,7 +125,8 @@ constexpr const char* kNoiseMain = R"(  if (all(greaterThanEqual(fGrid, uNoiseRe
   }
 )";
 
-constexpr const char* kTracksDecl = R"(layout(binding = 1) uniform sampler2D uTracks;  // rut depth, metres
+constexpr const char* kTracksDecl =
+    R"(layout(binding = 1) uniform sampler2D uTracks;  // rut depth, metres
 uniform vec2 uTrackOrigin;   // grid point of the window's south-west corner − grid origin
 uniform float uTrackExtent;  // window side, grid units
 uniform float uTrackTexel;

@@ -14,7 +14,7 @@ namespace regolith::clod {
 
 namespace {
 
-constexpr int kScale = 2;     // font pixels per glyph pixel
+constexpr int kScale = 2;  // font pixels per glyph pixel
 constexpr int kPad = 8;
 constexpr int kBarW = 16, kBarH = 128;
 constexpr int kLine = 7 * kScale;  // text line height
@@ -48,8 +48,9 @@ const char* glyph(char c) {
 
 void put(RgbaImage& img, int x, int y, std::array<std::uint8_t, 4> c) {
   if (x < 0 || y < 0 || x >= img.width || y >= img.height) return;
-  auto* p = img.rgba.data() + 4 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(img.width) +
-                                   static_cast<std::size_t>(x));
+  auto* p =
+      img.rgba.data() + 4 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(img.width) +
+                             static_cast<std::size_t>(x));
   std::copy(c.begin(), c.end(), p);
 }
 
@@ -124,11 +125,13 @@ RgbaImage Legend::image() const {
     const Bar b = bar();
     for (int r = b.y0; r < b.y1; ++r) {
       const glm::vec3 c = heightColour(*heights_, heightAtRow(r));
-      for (int x = b.x0; x < b.x1; ++x) put(img, x, r, {unorm8(c.r), unorm8(c.g), unorm8(c.b), 255});
+      for (int x = b.x0; x < b.x1; ++x)
+        put(img, x, r, {unorm8(c.r), unorm8(c.g), unorm8(c.b), 255});
     }
     const int tx = b.x1 + 6;
     text(img, tx, b.y0, number(heights_->maxHeight) + " M");
-    text(img, tx, (b.y0 + b.y1) / 2 - 5, number(0.5 * static_cast<double>(heights_->minHeight + heights_->maxHeight)) + " M");
+    text(img, tx, (b.y0 + b.y1) / 2 - 5,
+         number(0.5 * static_cast<double>(heights_->minHeight + heights_->maxHeight)) + " M");
     text(img, tx, b.y1 - 10, number(heights_->minHeight) + " M");
     y = b.y1 + kPad;
   }
@@ -163,7 +166,8 @@ std::string Legend::json() const {
   }
   if (latLon_) {
     char buf[64];
-    std::snprintf(buf, sizeof buf, "%s\"latLonSpacingDegrees\": %.10g", heights_ ? ", " : "", *latLon_);
+    std::snprintf(buf, sizeof buf, "%s\"latLonSpacingDegrees\": %.10g", heights_ ? ", " : "",
+                  *latLon_);
     s += buf;
   }
   return s + "}\n";
@@ -175,7 +179,8 @@ void Legend::writeJson(const std::string& path) const {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out << json();
     out.flush();
-    if (!out) throw Error("Legend::writeJson(): " + path + ": cannot write the temporary file " + tmp);
+    if (!out)
+      throw Error("Legend::writeJson(): " + path + ": cannot write the temporary file " + tmp);
   }
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);

@@ -48,8 +48,8 @@ TextureClipmap::TextureClipmap(const DrapedTexture& texture, std::string name)
     bool same = p.levelCount() == p0.levelCount();
     for (std::size_t l = 0; same && l < p.levelCount(); ++l) {
       const auto &a = p.level(l).grid, &b = p0.level(l).grid;
-      same = a.rows() == b.rows() && a.cols() == b.cols() && a.x0() == b.x0() &&
-             a.y0() == b.y0() && a.spacingX() == b.spacingX() && a.spacingY() == b.spacingY();
+      same = a.rows() == b.rows() && a.cols() == b.cols() && a.x0() == b.x0() && a.y0() == b.y0() &&
+             a.spacingX() == b.spacingX() && a.spacingY() == b.spacingY();
     }
     if (!same) fail("channel " + std::to_string(c) + " has other grids than channel 0");
   }
@@ -97,8 +97,10 @@ void TextureClipmap::load(std::size_t level, std::int64_t row0, std::int64_t col
   // The part of the window inside the grid.
   const std::int64_t r0 = std::max<std::int64_t>(row0, 0);
   const std::int64_t c0 = std::max<std::int64_t>(col0, 0);
-  const std::int64_t r1 = std::min<std::int64_t>(row0 + window_, static_cast<std::int64_t>(g.rows()));
-  const std::int64_t c1 = std::min<std::int64_t>(col0 + window_, static_cast<std::int64_t>(g.cols()));
+  const std::int64_t r1 =
+      std::min<std::int64_t>(row0 + window_, static_cast<std::int64_t>(g.rows()));
+  const std::int64_t c1 =
+      std::min<std::int64_t>(col0 + window_, static_cast<std::int64_t>(g.cols()));
   if (r1 > r0 && c1 > c0) {
     const auto h = static_cast<std::size_t>(r1 - r0), w = static_cast<std::size_t>(c1 - c0);
     std::vector<float> values(h * w);
@@ -109,8 +111,9 @@ void TextureClipmap::load(std::size_t level, std::int64_t row0, std::int64_t col
       for (std::size_t y = 0; y < h; ++y)
         for (std::size_t x = 0; x < w; ++x) {
           const float v = values[y * w + x];
-          const std::size_t at =
-              ((static_cast<std::size_t>(r0 - row0) + y) * n + static_cast<std::size_t>(c0 - col0) + x) * 4;
+          const std::size_t at = ((static_cast<std::size_t>(r0 - row0) + y) * n +
+                                  static_cast<std::size_t>(c0 - col0) + x) *
+                                 4;
           const bool missing = lvl.grid.isNodata(v);
           if (nc == 1) {
             rgba[at] = rgba[at + 1] = rgba[at + 2] = missing ? 0 : unorm8(v);

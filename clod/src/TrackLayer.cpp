@@ -85,8 +85,12 @@ void TrackLayer::press(glm::dvec2 a, glm::dvec2 b, double width, double depth) {
   const double lo[2] = {std::min(a.x, b.x) - half, std::min(a.y, b.y) - half};
   const double hi[2] = {std::max(a.x, b.x) + half, std::max(a.y, b.y) + half};
   // Texel (tx, ty) has its centre at ((tx + ½)·texel, (ty + ½)·texel).
-  const auto first = [&](double v) { return static_cast<std::int64_t>(std::ceil(v / texel_ - 0.5)); };
-  const auto last = [&](double v) { return static_cast<std::int64_t>(std::floor(v / texel_ - 0.5)); };
+  const auto first = [&](double v) {
+    return static_cast<std::int64_t>(std::ceil(v / texel_ - 0.5));
+  };
+  const auto last = [&](double v) {
+    return static_cast<std::int64_t>(std::floor(v / texel_ - 0.5));
+  };
   const std::int64_t tx0 = first(lo[0]), tx1 = last(hi[0]);
   const std::int64_t ty0 = first(lo[1]), ty1 = last(hi[1]);
   const glm::dvec2 ab = b - a;
@@ -145,8 +149,8 @@ void TrackLayer::read(std::int64_t tx0, std::int64_t ty0, int w, int h,
       const std::int64_t x0 = std::max(tx0, kx * kTile), x1 = std::min(tx0 + w, (kx + 1) * kTile);
       const std::int64_t y0 = std::max(ty0, ky * kTile), y1 = std::min(ty0 + h, (ky + 1) * kTile);
       for (std::int64_t y = y0; y < y1; ++y) {
-        const float* src = it->second.data() + static_cast<std::size_t>((y - ky * kTile) * kTile +
-                                                                        (x0 - kx * kTile));
+        const float* src = it->second.data() +
+                           static_cast<std::size_t>((y - ky * kTile) * kTile + (x0 - kx * kTile));
         float* dst = out.data() + static_cast<std::size_t>((y - ty0) * w + (x0 - tx0));
         std::copy(src, src + (x1 - x0), dst);
       }

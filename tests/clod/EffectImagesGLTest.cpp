@@ -103,7 +103,8 @@ TEST(EffectImagesGLTest, RenderToPngDrawsTheLegendAndWritesItBeside) {
   req.camera = test::downCamera({0.0, 0.0, -1400.0}, 150.0, 320, 200, 50.0);
   req.clipmap.size = 31;
   req.clipmap.effects.heightColours = HeightColours{-1460.0F, -1370.0F, false};
-  const auto path = (std::filesystem::temp_directory_path() / "regolith_legend_render.png").string();
+  const auto path =
+      (std::filesystem::temp_directory_path() / "regolith_legend_render.png").string();
   renderToPng(pyramid, req, path);
   const RgbaImage img = readPng(path);
   std::ifstream in(path + ".legend.json");
@@ -220,7 +221,8 @@ TEST(EffectImagesGLTest, LatLonLinesOnADemPlacedOnAPlanet) {
   const topo::LocalTangentPlane plane(mars, {0.0, 0.0, 0.0}, 0.0);
   const topo::Placement placement(plane);
   const auto grid = test::centredGrid(257, 257, 8.0);  // 2 km square at the equator
-  auto zero = std::make_shared<topo::InMemorySamples>(257, 257, std::vector<float>(257 * 257, 0.0F));
+  auto zero =
+      std::make_shared<topo::InMemorySamples>(257, 257, std::vector<float>(257 * 257, 0.0F));
   const auto pyramid =
       std::make_shared<const HeightPyramid>(HeightPyramid::fromSamples(grid, zero, placement));
   ClipmapOptions opt;
@@ -286,7 +288,8 @@ TEST(EffectImagesGLTest, TracksAppearExactlyWhereTheWheelsTouched) {
   const test::Shot empty = test::renderShot(terrain, cam);
   int emptyDiff = 0;
   for (int y = 0; y < cam.height; ++y)
-    for (int x = 0; x < cam.width; ++x) emptyDiff = std::max(emptyDiff, test::pixelDiff(before.color, empty.color, x, y));
+    for (int x = 0; x < cam.width; ++x)
+      emptyDiff = std::max(emptyDiff, test::pixelDiff(before.color, empty.color, x, y));
   EXPECT_LE(emptyDiff, 1);
   // A rover drives north-east with a curve: three wheels a side, 0.3 m wide, 2.5 cm ruts.
   std::vector<std::pair<glm::dvec2, glm::dvec2>> paths;
@@ -298,7 +301,8 @@ TEST(EffectImagesGLTest, TracksAppearExactlyWhereTheWheelsTouched) {
     const glm::dvec2 side{-dir.y, dir.x};
     std::vector<WheelContact> wheels;
     for (double s : {-1.0, 1.0})
-      for (double along : {-0.5, 0.0, 0.5}) wheels.push_back({c + side * (s * half) + dir * along, width, 0.025});
+      for (double along : {-0.5, 0.0, 0.5})
+        wheels.push_back({c + side * (s * half) + dir * along, width, 0.025});
     tracks->step(wheels);
   }
   // Where the ruts are, as line segments of the left and right wheel paths.
@@ -306,7 +310,9 @@ TEST(EffectImagesGLTest, TracksAppearExactlyWhereTheWheelsTouched) {
     for (int step = 0; step < 39; ++step)
       for (double along : {-0.5, 0.0, 0.5}) {
         const auto at = [&](int k) {
-          const auto centre = [](double q) { return glm::dvec2(-3.0 + 0.15 * q, -2.0 + 0.002 * q * q); };
+          const auto centre = [](double q) {
+            return glm::dvec2(-3.0 + 0.15 * q, -2.0 + 0.002 * q * q);
+          };
           const glm::dvec2 c = centre(k);
           const glm::dvec2 dir = glm::normalize(centre(k + 1) - c);
           return c + glm::dvec2(-dir.y, dir.x) * (s * half) + dir * along;
@@ -349,7 +355,8 @@ TEST(EffectImagesGLTest, TracksAppearExactlyWhereTheWheelsTouched) {
 TEST(EffectImagesGLTest, NoiseChangesTheImageOnlyWhereDeclared) {
   test::glContext();
   const auto grid = test::centredGrid(257, 257, 1.0);
-  const auto pyramid = test::planePyramid(grid, [](double x, double y) { return 2.0 * std::sin(x / 30.0) * std::cos(y / 40.0); });
+  const auto pyramid = test::planePyramid(
+      grid, [](double x, double y) { return 2.0 * std::sin(x / 30.0) * std::cos(y / 40.0); });
   ClipmapOptions opt;
   opt.size = 63;
   opt.lightDirection = {0.6F, 0.2F, 0.77F};
@@ -373,8 +380,10 @@ TEST(EffectImagesGLTest, NoiseChangesTheImageOnlyWhereDeclared) {
       const auto g = test::groundAt(b, cam, x, y);
       ASSERT_TRUE(g);
       const bool changed = test::pixelDiff(a.color, b.color, x, y) > 0;
-      const bool inside = g->x > -40.0 + pixel && g->x < 5.0 - pixel && g->y > -25.0 + pixel && g->y < 30.0 - pixel;
-      const bool outside = g->x < -40.0 - pixel || g->x > 5.0 + pixel || g->y < -25.0 - pixel || g->y > 30.0 + pixel;
+      const bool inside =
+          g->x > -40.0 + pixel && g->x < 5.0 - pixel && g->y > -25.0 + pixel && g->y < 30.0 - pixel;
+      const bool outside =
+          g->x < -40.0 - pixel || g->x > 5.0 + pixel || g->y < -25.0 - pixel || g->y > 30.0 + pixel;
       if (inside) {
         ++in;
         inChanged += changed ? 1 : 0;
@@ -391,7 +400,8 @@ TEST(EffectImagesGLTest, NoiseChangesTheImageOnlyWhereDeclared) {
   const test::Shot c = test::renderShot(moved, cam);
   int differ = 0;
   for (int y = 0; y < cam.height; ++y)
-    for (int x = 0; x < cam.width; ++x) differ += test::pixelDiff(b.color, c.color, x, y) > 8 ? 1 : 0;
+    for (int x = 0; x < cam.width; ++x)
+      differ += test::pixelDiff(b.color, c.color, x, y) > 8 ? 1 : 0;
   EXPECT_LT(differ, cam.width * cam.height / 100);
 }
 

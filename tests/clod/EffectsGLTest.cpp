@@ -62,12 +62,9 @@ DrapedTexture smallTexture(std::size_t channels) {
 // The uniforms and code words that belong to each effect alone.
 const std::map<std::string, std::vector<std::string>>& effectWords() {
   static const std::map<std::string, std::vector<std::string>> words{
-      {"albedo", {"uAlbedoTex", "uAlbedoWin"}},
-      {"tracks", {"uTracks", "uTrackOrigin"}},
-      {"noise", {"uNoiseAmp", "fbm("}},
-      {"heightColours", {"uHeightRange", "heightRamp("}},
-      {"latLon", {"uLatLonSpacing", "fBody"}},
-      {"overlay", {"uOverlayTex", "uOverlayOpacity"}}};
+      {"albedo", {"uAlbedoTex", "uAlbedoWin"}}, {"tracks", {"uTracks", "uTrackOrigin"}},
+      {"noise", {"uNoiseAmp", "fbm("}},         {"heightColours", {"uHeightRange", "heightRamp("}},
+      {"latLon", {"uLatLonSpacing", "fBody"}},  {"overlay", {"uOverlayTex", "uOverlayOpacity"}}};
   return words;
 }
 
@@ -118,13 +115,15 @@ TEST(EffectsGLTest, NoEffectIsTheBarePipeline) {
 TEST(EffectsGLTest, EachEffectAddsOnlyItsOwnCodeUniformsBindsAndPasses) {
   test::glContext();
   const auto pyramid = placedHills();
-  const std::set<std::string> bareUniforms = activeUniforms(
-      Program("bare", ClipmapTerrain::bareSources()).id());
+  const std::set<std::string> bareUniforms =
+      activeUniforms(Program("bare", ClipmapTerrain::bareSources()).id());
   const std::map<std::string, std::size_t> extraBinds{{"albedo", 1}, {"tracks", 1},
                                                       {"noise", 0},  {"heightColours", 0},
                                                       {"latLon", 0}, {"overlay", 1}};
   const std::map<std::string, std::vector<std::string>> extraPasses{
-      {"albedo", {"albedo-clipmap"}}, {"tracks", {"track-upload"}}, {"overlay", {"overlay-clipmap"}}};
+      {"albedo", {"albedo-clipmap"}},
+      {"tracks", {"track-upload"}},
+      {"overlay", {"overlay-clipmap"}}};
   for (const auto& [name, words] : effectWords()) {
     SCOPED_TRACE(name);
     ClipmapOptions opt;
@@ -150,8 +149,8 @@ TEST(EffectsGLTest, EachEffectAddsOnlyItsOwnCodeUniformsBindsAndPasses) {
     // replaced), except the albedo colour that height colours paint over.
     for (const auto& u : bareUniforms)
       EXPECT_EQ(uniforms.count(u), name == "heightColours" && u == "uAlbedo" ? 0U : 1U) << u;
-    std::vector<std::string> passes = extraPasses.count(name) ? extraPasses.at(name)
-                                                              : std::vector<std::string>{};
+    std::vector<std::string> passes =
+        extraPasses.count(name) ? extraPasses.at(name) : std::vector<std::string>{};
     passes.emplace_back("terrain");
     EXPECT_EQ(terrain.passes(), passes);
     const Camera cam = placedCamera(*pyramid);

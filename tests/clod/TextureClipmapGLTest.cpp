@@ -22,9 +22,9 @@ namespace regolith::clod {
 namespace {
 
 constexpr std::size_t kCols = 16384, kRows = 256;
-constexpr double kTexel = 0.25;                          // metres
-constexpr double kWest = -0.5 * kCols * kTexel;          // −2048 m
-constexpr double kNorth = 0.5 * kRows * kTexel;          // 32 m
+constexpr double kTexel = 0.25;                  // metres
+constexpr double kWest = -0.5 * kCols * kTexel;  // −2048 m
+constexpr double kNorth = 0.5 * kRows * kTexel;  // 32 m
 
 // Albedo: a ramp from west to east plus stripes 1 m apart (4 texels), which average out at
 // any level coarser than level 1.
@@ -40,9 +40,10 @@ std::shared_ptr<const HeightPyramid> albedoStore() {
   info.y0 = kNorth - 0.5 * kTexel;
   info.spacingX = info.spacingY = kTexel;
   info.units = "1";
-  const auto samples = topo::InMemorySamples::fromFunction(kRows, kCols, [&](std::size_t, std::size_t c) {
-    return static_cast<float>(albedo(info.x0 + static_cast<double>(c) * kTexel));
-  });
+  const auto samples =
+      topo::InMemorySamples::fromFunction(kRows, kCols, [&](std::size_t, std::size_t c) {
+        return static_cast<float>(albedo(info.x0 + static_cast<double>(c) * kTexel));
+      });
   const auto path = test::scratchFile("TextureClipmapGLTest", "albedo16k.h5");
   const store::GridSource src{info, samples};
   store::WriteOptions w;
@@ -75,7 +76,8 @@ TEST(TextureClipmapGLTest, AnAlbedoStore16KWideIsDrawnAtTheResolutionTheViewNeed
   GLint maxSize = 0;
   glGetIntegerv(GL_MAX_TEXTURE_SIZE, &maxSize);
   // Flat ground under the whole strip, heights 8 m apart.
-  const auto ground = test::planePyramid(test::centredGrid(17, 513, 8.0), [](double, double) { return 0.0; });
+  const auto ground =
+      test::planePyramid(test::centredGrid(17, 513, 8.0), [](double, double) { return 0.0; });
   ClipmapOptions opt;
   opt.size = 63;
   opt.lightDirection = {0.0F, 0.0F, 1.0F};  // straight down: colour = albedo
@@ -122,21 +124,25 @@ TEST(TextureClipmapGLTest, AnAlbedoStore16KWideIsDrawnAtTheResolutionTheViewNeed
 
   // The GPU holds 512² windows, never the 16K source.
   TextureClipmap direct(DrapedTexture{{texture}, 512, 1.0F}, "albedo");
-  EXPECT_EQ(direct.update({x, 0.0}), std::size_t{512} * 512 * static_cast<std::size_t>(direct.levels()));
+  EXPECT_EQ(direct.update({x, 0.0}),
+            std::size_t{512} * 512 * static_cast<std::size_t>(direct.levels()));
   GLint w = 0;
   glGetTextureLevelParameteriv(direct.texture(), 0, GL_TEXTURE_WIDTH, &w);
   EXPECT_EQ(w, 512);
   EXPECT_LT(w, maxSize);
-  EXPECT_EQ(direct.update({x + 10.0, 0.0}), 0U);  // a small move: no window moves
+  EXPECT_EQ(direct.update({x + 10.0, 0.0}), 0U);   // a small move: no window moves
   EXPECT_GT(direct.update({x - 100.0, 0.0}), 0U);  // 400 texels: level 0 (and 1) follow
 }
 
 TEST(TextureClipmapGLTest, RejectsBadTextures) {
   test::glContext();
-  const auto a = test::planePyramid(test::centredGrid(64, 64, 1.0), [](double, double) { return 0.5; });
-  const auto b = test::planePyramid(test::centredGrid(64, 32, 1.0), [](double, double) { return 0.5; });
+  const auto a =
+      test::planePyramid(test::centredGrid(64, 64, 1.0), [](double, double) { return 0.5; });
+  const auto b =
+      test::planePyramid(test::centredGrid(64, 32, 1.0), [](double, double) { return 0.5; });
   EXPECT_THROW(TextureClipmap(DrapedTexture{{a, b, a}, 512, 1.0F}, "overlay"), InvalidArgument);
-  EXPECT_THROW(TextureClipmap(DrapedTexture{{a, nullptr, a}, 512, 1.0F}, "overlay"), InvalidArgument);
+  EXPECT_THROW(TextureClipmap(DrapedTexture{{a, nullptr, a}, 512, 1.0F}, "overlay"),
+               InvalidArgument);
   EXPECT_THROW(TextureClipmap(DrapedTexture{{a}, 32, 1.0F}, "overlay"), InvalidArgument);
   EXPECT_THROW(TextureClipmap(DrapedTexture{{}, 512, 1.0F}, "overlay"), InvalidArgument);
 }

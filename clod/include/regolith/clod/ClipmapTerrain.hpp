@@ -53,10 +53,10 @@ struct ClipmapOptions {
 
 /// What one draw() did.
 struct ClipmapFrame {
-  std::size_t firstLevel = 0;   ///< innermost level drawn (it draws its centre)
-  std::size_t levelsDrawn = 0;  ///< levels drawn, from firstLevel outward
-  std::size_t vertices = 0;     ///< vertices submitted (indices drawn)
-  std::size_t textureBinds = 0; ///< glBindTextureUnit calls (one per level without effects)
+  std::size_t firstLevel = 0;    ///< innermost level drawn (it draws its centre)
+  std::size_t levelsDrawn = 0;   ///< levels drawn, from firstLevel outward
+  std::size_t vertices = 0;      ///< vertices submitted (indices drawn)
+  std::size_t textureBinds = 0;  ///< glBindTextureUnit calls (one per level without effects)
 };
 
 /// Geometry clipmaps (Losasso & Hoppe 2004; Asirvatham & Hoppe, GPU Gems 2 ch. 2): nested

@@ -43,9 +43,9 @@ struct LatLonLines {
 /// small-scale roughness on low-resolution terrain. Lengths in grid units (metres on a DEM,
 /// degrees on a planet). Deterministic: the pattern is tied to the grid, not to the view.
 struct StructuredNoise {
-  double amplitude = 0.05;   ///< height of the bumps, metres
-  double wavelength = 0.5;   ///< of the coarsest octave, grid units
-  int octaves = 4;           ///< 1..8, each half the wavelength of the one before
+  double amplitude = 0.05;        ///< height of the bumps, metres
+  double wavelength = 0.5;        ///< of the coarsest octave, grid units
+  int octaves = 4;                ///< 1..8, each half the wavelength of the one before
   float albedoVariation = 0.15F;  ///< relative albedo change at full noise
   /// Grid rectangle (xmin, ymin, xmax, ymax) the noise applies to; everywhere if unset.
   std::optional<glm::dvec4> region;
@@ -58,8 +58,8 @@ struct StructuredNoise {
 /// per pixel from the resolution the view needs. Larger than any GPU texture is fine.
 struct DrapedTexture {
   std::vector<std::shared_ptr<const HeightPyramid>> channels;
-  int window = 512;       ///< texels per side of each level's window (64..4096)
-  float opacity = 1.0F;   ///< overlays: blend factor (times the alpha channel if any)
+  int window = 512;      ///< texels per side of each level's window (64..4096)
+  float opacity = 1.0F;  ///< overlays: blend factor (times the alpha channel if any)
 };
 
 /// The effects of one terrain. An unset member is not simulated: no shader code, no
@@ -82,9 +82,8 @@ struct Effects {
 
 /// The height ramp's stops, first to last (a perceptual blue → green → yellow → red ramp).
 inline constexpr std::array<glm::vec3, 5> kHeightRamp{
-    glm::vec3{0.19F, 0.21F, 0.58F}, glm::vec3{0.13F, 0.57F, 0.55F},
-    glm::vec3{0.37F, 0.79F, 0.38F}, glm::vec3{0.99F, 0.91F, 0.15F},
-    glm::vec3{0.85F, 0.16F, 0.12F}};
+    glm::vec3{0.19F, 0.21F, 0.58F}, glm::vec3{0.13F, 0.57F, 0.55F}, glm::vec3{0.37F, 0.79F, 0.38F},
+    glm::vec3{0.99F, 0.91F, 0.15F}, glm::vec3{0.85F, 0.16F, 0.12F}};
 
 /// The colour HeightColours gives height h (clamped to the range), as the shader computes it.
 [[nodiscard]] glm::vec3 heightColour(const HeightColours& colours, double h) noexcept;

@@ -45,8 +45,7 @@ class TrackLayer {
   /// < 0 (or non-finite).
   void stamp(glm::dvec2 gridXY, double wheelWidthMetres, double depthMetres);
   /// The wheel's path from `from` to `to` (same checks).
-  void stampSegment(glm::dvec2 from, glm::dvec2 to, double wheelWidthMetres,
-                    double depthMetres);
+  void stampSegment(glm::dvec2 from, glm::dvec2 to, double wheelWidthMetres, double depthMetres);
   /// A rover step: each wheel's path from its previous contact to this one (the previous
   /// contacts of the same wheel index, kept per layer; the first step stamps discs).
   void step(std::span<const WheelContact> wheels);
