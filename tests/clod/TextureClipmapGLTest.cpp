@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace regolith::clod {
@@ -132,6 +133,45 @@ TEST(TextureClipmapGLTest, AnAlbedoStore16KWideIsDrawnAtTheResolutionTheViewNeed
   EXPECT_LT(w, maxSize);
   EXPECT_EQ(direct.update({x + 10.0, 0.0}), 0U);   // a small move: no window moves
   EXPECT_GT(direct.update({x - 100.0, 0.0}), 0U);  // 400 texels: level 0 (and 1) follow
+}
+
+TEST(TextureClipmapGLTest, AColourOverlayBlendsOverTheLitTerrainWhereItHasData) {
+  test::glContext();
+  const auto ground =
+      test::planePyramid(test::centredGrid(65, 65, 1.0), [](double, double) { return 0.0; });
+  // A science map with data west of x = 0 only (NaN east of it): RGB (0.1, 0.8, 0.3).
+  DrapedTexture map;
+  for (double v : {0.1, 0.8, 0.3})
+    map.channels.push_back(test::planePyramid(
+        test::centredGrid(128, 128, 0.5),
+        [v](double x, double) { return x < 0.0 ? v : std::numeric_limits<double>::quiet_NaN(); }));
+  map.window = 64;
+  map.opacity = 0.5F;
+  ClipmapOptions opt;
+  opt.size = 31;
+  opt.lightDirection = {0.0F, 0.0F, 1.0F};
+  opt.ambient = 0.0F;
+  opt.effects.overlay = map;
+  ClipmapTerrain terrain(ground, opt);
+  const Camera cam = test::downCamera({0.0, 0.0, 0.0}, 40.0, 120, 80, 40.0);
+  terrain.setFocus(cam.target);
+  const test::Shot shot = test::renderShot(terrain, cam);
+  test::savePng("overlay_science_map", shot.color);
+  const glm::vec3 lit = opt.albedo, ov{0.1F, 0.8F, 0.3F};
+  int west = 0, east = 0;
+  for (int y = 5; y < cam.height - 5; y += 5)
+    for (int x = 2; x < cam.width - 2; x += 3) {
+      const auto g = test::groundAt(shot, cam, x, y);
+      ASSERT_TRUE(g);
+      if (std::abs(g->x) < 1.0 || std::abs(g->x) > 30.0 || std::abs(g->y) > 30.0) continue;
+      const glm::vec3 want = g->x < 0.0 ? 0.5F * lit + 0.5F * ov : lit;
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(shot.color.pixel(x, y)[c] / 255.0, static_cast<double>(want[c]), 2.5 / 255.0)
+            << x << "," << y;
+      (g->x < 0.0 ? west : east) += 1;
+    }
+  EXPECT_GT(west, 100);
+  EXPECT_GT(east, 100);
 }
 
 TEST(TextureClipmapGLTest, RejectsBadTextures) {
