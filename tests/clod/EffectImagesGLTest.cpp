@@ -350,6 +350,37 @@ TEST(EffectImagesGLTest, TracksAppearExactlyWhereTheWheelsTouched) {
   EXPECT_EQ(outsideChanged, 0);
 }
 
+TEST(EffectImagesGLTest, TracksPersistAlongTheTraverseAndFollowTheFocus) {
+  test::glContext();
+  const auto grid = test::centredGrid(129, 129, 0.5);  // 64 m of flat ground
+  const auto pyramid = test::planePyramid(grid, [](double, double) { return 0.0; });
+  auto tracks = std::make_shared<TrackLayer>(0.02);
+  ClipmapOptions opt;
+  opt.size = 63;
+  opt.lightDirection = {0.8F, 0.1F, 0.35F};
+  ClipmapOptions plain = opt;
+  opt.trackWindow = 256;  // 5.12 m: the window must follow the focus
+  opt.effects.tracks = tracks;
+  ClipmapTerrain bare(pyramid, plain), terrain(pyramid, opt);
+  tracks->stampSegment({-25.0, 0.0}, {25.0, 0.0}, 0.3, 0.03);  // a 50 m traverse
+  const auto changedPixels = [&](double x) {
+    const Camera cam = test::downCamera({x, 0.0, 0.0}, 4.0, 80, 80, 50.0);
+    bare.setFocus(cam.target);
+    const test::Shot a = test::renderShot(bare, cam);
+    const test::Shot b = test::renderShot(terrain, cam);
+    int n = 0;
+    for (int y = 0; y < cam.height; ++y)
+      for (int px = 0; px < cam.width; ++px) n += test::pixelDiff(a.color, b.color, px, y) > 2;
+    return n;
+  };
+  terrain.setFocus({0.0, 0.0, 0.0});
+  EXPECT_EQ(changedPixels(20.0), 0);     // 20 m from the focus: outside the track window
+  for (double x : {20.0, -20.0, 0.0}) {  // the focus follows: the tracks are there
+    terrain.setFocus({x, 0.0, 0.0});
+    EXPECT_GT(changedPixels(x), 80 * 3) << x;  // a 0.3 m rut across an 3.7 m view
+  }
+}
+
 // ---- Noise -------------------------------------------------------------------------------
 
 TEST(EffectImagesGLTest, NoiseChangesTheImageOnlyWhereDeclared) {
