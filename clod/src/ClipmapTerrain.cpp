@@ -1,7 +1,5 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/GlError.hpp>
-#include <regolith/clod/TextureClipmap.hpp>
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/topo/Error.hpp>
 
 #include "ClipmapEffectState.hpp"

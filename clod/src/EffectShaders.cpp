@@ -96,19 +96,26 @@ float noiseHash(ivec2 q) {
   h ^= h >> 15; h *= 0x2c1b3c6du; h ^= h >> 12; h *= 0x297a2d39u; h ^= h >> 15;
   return float(h & 0xffffffu) / 16777215.0;
 }
-float valueNoise(vec2 x) {
-  vec2 i = floor(x), f = x - i, u = f * f * (3.0 - 2.0 * f);
+// Value noise and its gradient (d/dx, d/dy) in one pass.
+vec3 valueNoise(vec2 x) {
+  vec2 i = floor(x), f = x - i;
+  vec2 u = f * f * (3.0 - 2.0 * f), du = 6.0 * f * (1.0 - f);
   ivec2 k = ivec2(i);
-  return mix(mix(noiseHash(k), noiseHash(k + ivec2(1, 0)), u.x),
-             mix(noiseHash(k + ivec2(0, 1)), noiseHash(k + ivec2(1, 1)), u.x), u.y);
+  float a = noiseHash(k), b = noiseHash(k + ivec2(1, 0));
+  float c = noiseHash(k + ivec2(0, 1)), d = noiseHash(k + ivec2(1, 1));
+  float v = a + (b - a) * u.x + (c - a) * u.y + (a - b - c + d) * u.x * u.y;
+  return vec3(v, du * (vec2(b - a, c - a) + (a - b - c + d) * u.yx));
 }
-float fbm(vec2 g) {  // in [0, 1]
+vec3 fbm(vec2 g) {  // value in [0, 1], gradient per grid unit
   vec2 x = g / uNoiseWave + uNoiseOffset;
-  float s = 0.0, a = 0.5, t = 0.0;
+  float a = 0.5, t = 0.0, scale = 1.0 / uNoiseWave;
+  vec3 s = vec3(0.0);
   for (int o = 0; o < uNoiseOctaves; ++o) {
-    s += a * valueNoise(x);
+    vec3 n = valueNoise(x);
+    s += a * vec3(n.x, n.yz * scale);
     t += a;
     a *= 0.5;
+    scale *= 2.0;
     x = x * 2.0 + vec2(37.0, 17.0);
   }
   return s / t;
@@ -116,12 +123,10 @@ float fbm(vec2 g) {  // in [0, 1]
 )";
 constexpr const char* kNoiseMain =
     R"(  if (all(greaterThanEqual(fGrid, uNoiseRegion.xy)) && all(lessThanEqual(fGrid, uNoiseRegion.zw))) {
-    // Forward differences over a quarter of the finest octave: three evaluations a pixel.
-    float e = uNoiseWave * exp2(-float(uNoiseOctaves)) * 0.5;
-    float f0 = fbm(fGrid);
-    vec2 slope = 2.0 * uNoiseAmp * vec2(fbm(fGrid + vec2(e, 0.0)) - f0, fbm(fGrid + vec2(0.0, e)) - f0) / e;
+    vec3 f = fbm(fGrid);
+    vec2 slope = 2.0 * uNoiseAmp * f.yz;  // metres per grid unit
     n = normalize(n - slope.x * uAxisX - slope.y * uAxisY);
-    albedo *= 1.0 + uNoiseAlbedo * (2.0 * f0 - 1.0);
+    albedo *= 1.0 + uNoiseAlbedo * (2.0 * f.x - 1.0);
   }
 )";
 
@@ -136,12 +141,15 @@ constexpr const char* kTracksMain = R"(  {
     vec2 uv = (fGrid - uTrackOrigin) / uTrackExtent;
     float du = uTrackTexel / uTrackExtent;
     float d = texture(uTracks, uv).r;
-    float ddx = (texture(uTracks, uv + vec2(du, 0.0)).r - texture(uTracks, uv - vec2(du, 0.0)).r) /
-                (2.0 * uTrackTexel);
-    float ddy = (texture(uTracks, uv + vec2(0.0, du)).r - texture(uTracks, uv - vec2(0.0, du)).r) /
-                (2.0 * uTrackTexel);
-    n = normalize(n + ddx * uAxisX + ddy * uAxisY);  // the surface is lowered by d
-    albedo *= 1.0 - uTrackDarken * smoothstep(0.0, 0.002, d);
+    // A rut's cos² profile is flat at its edge: where the depth is 0 the gradient is too.
+    if (d > 0.0) {
+      float ddx = (texture(uTracks, uv + vec2(du, 0.0)).r - texture(uTracks, uv - vec2(du, 0.0)).r) /
+                  (2.0 * uTrackTexel);
+      float ddy = (texture(uTracks, uv + vec2(0.0, du)).r - texture(uTracks, uv - vec2(0.0, du)).r) /
+                  (2.0 * uTrackTexel);
+      n = normalize(n + ddx * uAxisX + ddy * uAxisY);  // the surface is lowered by d
+      albedo *= 1.0 - uTrackDarken * smoothstep(0.0, 0.002, d);
+    }
   }
 )";
 
