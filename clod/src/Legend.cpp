@@ -76,6 +76,12 @@ std::string number(double v) {
   return buf;
 }
 
+std::string exact(double v) {  // JSON: every digit a float or a double has
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
 std::uint8_t unorm8(float v) {
   return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0F, 1.0F) * 255.0F));
 }
@@ -153,11 +159,11 @@ void Legend::drawInto(RgbaImage& target) const {
 std::string Legend::json() const {
   std::string s = "{";
   if (heights_) {
-    s += "\"heightColours\": {\"min\": " + number(heights_->minHeight) +
-         ", \"max\": " + number(heights_->maxHeight) + ", \"stops\": [";
+    s += "\"heightColours\": {\"min\": " + exact(static_cast<double>(heights_->minHeight)) +
+         ", \"max\": " + exact(static_cast<double>(heights_->maxHeight)) + ", \"stops\": [";
     for (std::size_t k = 0; k < kHeightRamp.size(); ++k) {
       char buf[96];
-      std::snprintf(buf, sizeof buf, "%s[%.3f, %.3f, %.3f]", k ? ", " : "",
+      std::snprintf(buf, sizeof buf, "%s[%.9g, %.9g, %.9g]", k ? ", " : "",
                     static_cast<double>(kHeightRamp[k].r), static_cast<double>(kHeightRamp[k].g),
                     static_cast<double>(kHeightRamp[k].b));
       s += buf;
@@ -166,7 +172,7 @@ std::string Legend::json() const {
   }
   if (latLon_) {
     char buf[64];
-    std::snprintf(buf, sizeof buf, "%s\"latLonSpacingDegrees\": %.10g", heights_ ? ", " : "",
+    std::snprintf(buf, sizeof buf, "%s\"latLonSpacingDegrees\": %.17g", heights_ ? ", " : "",
                   *latLon_);
     s += buf;
   }

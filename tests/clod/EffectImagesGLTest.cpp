@@ -381,6 +381,57 @@ TEST(EffectImagesGLTest, TracksPersistAlongTheTraverseAndFollowTheFocus) {
   }
 }
 
+TEST(EffectImagesGLTest, TracksOnADemPlacedOnAPlanetFollowItsGridFrame) {
+  test::glContext();
+  const topo::LocalTangentPlane plane(topo::Body::marsSphere(), {-14.6, 175.4, -2000.0}, 30.0);
+  const topo::Placement placement(plane);
+  const auto grid = test::centredGrid(65, 65, 0.5);
+  auto zero = std::make_shared<topo::InMemorySamples>(65, 65, std::vector<float>(65 * 65, 0.0F));
+  const auto pyramid =
+      std::make_shared<const HeightPyramid>(HeightPyramid::fromSamples(grid, zero, placement));
+  auto tracks = std::make_shared<TrackLayer>(0.02);
+  ClipmapOptions opt;
+  opt.size = 31;
+  opt.trackWindow = 512;
+  // A low sun from the grid's east, in body-fixed coordinates.
+  const glm::dvec3 o = placement.toBodyFixed(0.0, 0.0, 0.0);
+  opt.lightDirection = glm::vec3(glm::normalize(0.8 * (placement.toBodyFixed(1.0, 0.0, 0.0) - o) +
+                                                0.35 * (placement.toBodyFixed(0.0, 0.0, 1.0) - o)));
+  ClipmapOptions plain = opt;
+  opt.effects.tracks = tracks;
+  ClipmapTerrain bare(pyramid, plain), terrain(pyramid, opt);
+  const glm::dvec2 a{-3.0, -1.0}, b{3.0, 1.5};  // grid metres
+  tracks->stampSegment(a, b, 0.3, 0.03);
+  Camera cam;
+  cam.position = placement.toBodyFixed(0.0, 0.0, 8.0);
+  cam.target = o;
+  cam.up = placement.toBodyFixed(0.0, 1.0, 0.0) - o;
+  cam.width = cam.height = 120;
+  cam.near = 0.1;
+  bare.setFocus(o);
+  terrain.setFocus(o);
+  const test::Shot before = test::renderShot(bare, cam);
+  const test::Shot after = test::renderShot(terrain, cam);
+  test::savePng("effects_tracks_placed_dem", after.color);
+  int floor = 0, floorChanged = 0, farChanged = 0;
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x) {
+      const auto p = test::groundAt(after, cam, x, y);
+      ASSERT_TRUE(p);
+      const glm::dvec3 g = placement.fromBodyFixed(*p);
+      const double d = segmentDistance({g.x, g.y}, a, b);
+      const bool changed = test::pixelDiff(before.color, after.color, x, y) > 2;
+      if (d < 0.03) {
+        ++floor;
+        floorChanged += changed ? 1 : 0;
+      }
+      if (d > 0.15 + 0.04 + 0.07 && changed) ++farChanged;  // half width, a texel, a pixel
+    }
+  EXPECT_GT(floor, 40);
+  EXPECT_EQ(floorChanged, floor);
+  EXPECT_EQ(farChanged, 0);
+}
+
 // ---- Noise -------------------------------------------------------------------------------
 
 TEST(EffectImagesGLTest, NoiseChangesTheImageOnlyWhereDeclared) {
