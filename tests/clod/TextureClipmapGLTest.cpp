@@ -174,6 +174,64 @@ TEST(TextureClipmapGLTest, AColourOverlayBlendsOverTheLitTerrainWhereItHasData) 
   EXPECT_GT(east, 100);
 }
 
+// On a planet the grid is longitude/latitude: the albedo drapes in degrees, on the lat/lon
+// lattice and on the polar lattice near a pole (grid point from the position there).
+TEST(TextureClipmapGLTest, AnAlbedoDrapesOverAPlanetInLongitudeAndLatitude) {
+  test::glContext();
+  const double r = topo::Body::marsSphere().equatorialRadius();
+  const topo::TopoGrid grid(90, 180, -179.0, 89.0, 2.0, 2.0);
+  auto zero = std::make_shared<topo::InMemorySamples>(90, 180, std::vector<float>(90 * 180, 0.0F));
+  const auto planet = std::make_shared<const HeightPyramid>(
+      HeightPyramid::fromSamples(grid, zero, SurfaceKind::Planet, topo::Body::marsSphere()));
+  // Albedo: waves 8° by 10° long, 0.2° samples (bilinear filtering is then exact to 0.001).
+  const auto a = [](double lon, double lat) {
+    return 0.5 + 0.35 * std::sin(2.0 * M_PI * lon / 8.0) * std::cos(2.0 * M_PI * lat / 10.0);
+  };
+  const topo::TopoGrid tgrid(900, 1800, -179.9, 89.9, 0.2, 0.2);
+  auto samples =
+      topo::InMemorySamples::fromFunction(900, 1800, [&](std::size_t row, std::size_t col) {
+        const auto p = tgrid.sampleCentre(static_cast<double>(row), static_cast<double>(col));
+        return static_cast<float>(a(p.x, p.y));
+      });
+  const auto texture = std::make_shared<const HeightPyramid>(
+      HeightPyramid::fromSamples(tgrid, samples, SurfaceKind::Plane));
+  ClipmapOptions opt;
+  opt.size = 31;
+  opt.ambient = 1.0F;  // colour = albedo, whatever the normal
+  opt.effects.albedo = DrapedTexture{{texture}, 256, 1.0F};
+  ClipmapTerrain terrain(planet, opt);
+  for (const auto& [lat, lon] : {std::pair{10.0, 30.0}, std::pair{70.0, -100.0}}) {
+    SCOPED_TRACE(lat);
+    const double la = lat * M_PI / 180.0, lo = lon * M_PI / 180.0;
+    const glm::dvec3 u{std::cos(la) * std::cos(lo), std::cos(la) * std::sin(lo), std::sin(la)};
+    Camera cam;
+    cam.position = u * (r + 600e3);
+    cam.target = u * r;
+    cam.up = {0.0, 0.0, 1.0};
+    cam.width = cam.height = 96;
+    cam.near = 100.0;
+    terrain.setFocus(cam.target);
+    const test::Shot shot = test::renderShot(terrain, cam);
+    test::savePng("texture_clipmap_planet_" + std::to_string(static_cast<int>(lat)), shot.color);
+    int sampled = 0;
+    double worst = 0.0;
+    for (int y = 4; y < cam.height - 4; y += 6)
+      for (int x = 4; x < cam.width - 4; x += 6) {
+        const auto p = test::groundAt(shot, cam, x, y);
+        ASSERT_TRUE(p);
+        const double plon = std::atan2(p->y, p->x) * 180.0 / M_PI;
+        const double plat = std::asin(p->z / glm::length(*p)) * 180.0 / M_PI;
+        worst = std::max(worst, std::abs(shot.color.pixel(x, y)[0] / 255.0 - a(plon, plat)));
+        ++sampled;
+      }
+    EXPECT_GT(sampled, 150);
+    // Lat/lon lattice: the grid point is linear across each cell, exact. Polar lattice: the
+    // longitude/latitude computed at the vertices is interpolated linearly across cells
+    // 2° wide, off by up to ~0.1° of longitude at 70° (0.03 of this albedo's steepest slope).
+    EXPECT_LT(worst, lat < 50.0 ? 0.01 : 0.04);
+  }
+}
+
 TEST(TextureClipmapGLTest, RejectsBadTextures) {
   test::glContext();
   const auto a =
