@@ -103,11 +103,29 @@ void ClipmapTerrain::initEffects() {
   }
 }
 
-void ClipmapTerrain::updateEffects(const glm::dvec3& focus) {
+void ClipmapTerrain::updateEffects(const glm::dvec3& focus, bool background) {
   gridOrigin_ = pyramid_->gridPoint(focus);
   if (!effects_) return;
-  if (effects_->albedo) effects_->albedo->update(gridOrigin_);
-  if (effects_->overlay) effects_->overlay->update(gridOrigin_);
+  for (TextureClipmap* t : {effects_->albedo.get(), effects_->overlay.get()}) {
+    if (t == nullptr) continue;
+    if (background)
+      t->request(gridOrigin_);
+    else
+      (void)t->update(gridOrigin_);
+  }
+}
+
+std::size_t ClipmapTerrain::pollEffects(bool wait) {
+  std::size_t count = 0;
+  for (TextureClipmap* t : {effects_->albedo.get(), effects_->overlay.get()})
+    if (t != nullptr) count += t->poll(wait);
+  return count;
+}
+
+bool ClipmapTerrain::effectsLoading() const noexcept {
+  for (const TextureClipmap* t : {effects_->albedo.get(), effects_->overlay.get()})
+    if (t != nullptr && t->loading()) return true;
+  return false;
 }
 
 std::vector<std::string> ClipmapTerrain::passes() const {

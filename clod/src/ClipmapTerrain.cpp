@@ -126,7 +126,7 @@ void ClipmapTerrain::requestFocus(const glm::dvec3& focus) {
     const std::lock_guard lock(loader_->mutex);
     loader_->target = focus;
   }
-  updateEffects(focus);
+  updateEffects(focus, true);
   schedule();
 }
 
@@ -197,6 +197,7 @@ std::size_t ClipmapTerrain::update(bool wait) {
     if (job.error) std::rethrow_exception(job.error);  // e.g. a store read that failed
     count += levels_[job.level]->apply(job.plan);
   }
+  if (effects_) (void)pollEffects(wait && ready.empty());  // texture windows: counted apart
   uploaded_ += count;
   schedule();
   return count;
@@ -204,6 +205,7 @@ std::size_t ClipmapTerrain::update(bool wait) {
 
 bool ClipmapTerrain::loading() const {
   if (!loader_) return false;
+  if (effects_ && effectsLoading()) return true;
   const std::lock_guard lock(loader_->mutex);
   return std::any_of(loader_->busy.begin(), loader_->busy.end(), [](bool b) { return b; });
 }

@@ -4,6 +4,7 @@
 #include <regolith/topo/Error.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -72,26 +73,68 @@ double TextureClipmap::spacing0() const noexcept {
   return source_.channels[0]->level(0).grid.spacingX();
 }
 
-std::size_t TextureClipmap::update(glm::dvec2 focus) {
-  const std::size_t before = uploaded_;
+std::vector<TextureClipmap::Layer> TextureClipmap::plan(glm::dvec2 focus) const {
+  std::vector<Layer> out;
   const HeightPyramid& p0 = *source_.channels[0];
   for (std::size_t l = 0; l < windows_.size(); ++l) {
     const auto& g = p0.level(l).grid;
     const glm::dvec2 f = g.fractionalIndex(focus.x, focus.y);  // (col, row)
     const auto col0 = static_cast<std::int64_t>(std::lround(f.x)) - window_ / 2;
     const auto row0 = static_cast<std::int64_t>(std::lround(f.y)) - window_ / 2;
-    Window& w = windows_[l];
+    const Window& w = windows_[l];
     const std::int64_t quarter = window_ / 4;
     if (w.loaded && std::llabs(row0 - w.row0) < quarter && std::llabs(col0 - w.col0) < quarter)
       continue;
-    load(l, row0, col0);
+    out.push_back(Layer{l, row0, col0, {}});
   }
-  return uploaded_ - before;
+  return out;
 }
 
-void TextureClipmap::load(std::size_t level, std::int64_t row0, std::int64_t col0) {
+std::size_t TextureClipmap::update(glm::dvec2 focus) {
+  poll(true);  // a background read finishes first, so windows never go back in time
+  std::vector<Layer> layers = plan(focus);
+  std::size_t count = 0;
+  for (Layer& layer : layers) {
+    read(layer);
+    upload(layer);
+    count += layer.rgba.size() / 4;
+  }
+  return count;
+}
+
+void TextureClipmap::request(glm::dvec2 focus) {
+  if (job_.valid()) {
+    pending_ = focus;
+    return;
+  }
+  pending_.reset();
+  std::vector<Layer> layers = plan(focus);
+  if (layers.empty()) return;
+  job_ = std::async(std::launch::async, [this, layers = std::move(layers)]() mutable {
+    for (Layer& layer : layers) read(layer);
+    return std::move(layers);
+  });
+}
+
+std::size_t TextureClipmap::poll(bool wait) {
+  if (!job_.valid()) return 0;
+  if (!wait && job_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return 0;
+  const std::vector<Layer> layers = job_.get();  // rethrows a read error
+  std::size_t count = 0;
+  for (const Layer& layer : layers) {
+    upload(layer);
+    count += layer.rgba.size() / 4;
+  }
+  if (pending_) request(*pending_);
+  return count;
+}
+
+void TextureClipmap::read(Layer& layer) const {
+  const std::size_t level = layer.level;
+  const std::int64_t row0 = layer.row0, col0 = layer.col0;
   const auto n = static_cast<std::size_t>(window_);
-  std::vector<std::uint8_t> rgba(n * n * 4, 0);
+  std::vector<std::uint8_t>& rgba = layer.rgba;
+  rgba.assign(n * n * 4, 0);
   const std::size_t nc = source_.channels.size();
   const auto& g = source_.channels[0]->level(level).grid;
   // The part of the window inside the grid.
@@ -126,11 +169,14 @@ void TextureClipmap::load(std::size_t level, std::int64_t row0, std::int64_t col
         }
     }
   }
-  glTextureSubImage3D(texture_.id(), 0, 0, 0, static_cast<GLint>(level), window_, window_, 1,
-                      GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
-  checkGl("TextureClipmap::update()");
-  windows_[level] = Window{row0, col0, true};
-  uploaded_ += n * n;
+}
+
+void TextureClipmap::upload(const Layer& layer) {
+  glTextureSubImage3D(texture_.id(), 0, 0, 0, static_cast<GLint>(layer.level), window_, window_, 1,
+                      GL_RGBA, GL_UNSIGNED_BYTE, layer.rgba.data());
+  checkGl("TextureClipmap: upload");
+  windows_[layer.level] = Window{layer.row0, layer.col0, true};
+  uploaded_ += layer.rgba.size() / 4;
 }
 
 std::vector<glm::vec4> TextureClipmap::windowRects(glm::dvec2 origin) const {

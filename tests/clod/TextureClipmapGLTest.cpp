@@ -133,6 +133,25 @@ TEST(TextureClipmapGLTest, AnAlbedoStore16KWideIsDrawnAtTheResolutionTheViewNeed
   EXPECT_LT(w, maxSize);
   EXPECT_EQ(direct.update({x + 10.0, 0.0}), 0U);   // a small move: no window moves
   EXPECT_GT(direct.update({x - 100.0, 0.0}), 0U);  // 400 texels: level 0 (and 1) follow
+
+  // Background loading: requestFocus() returns before the texture windows are read; until
+  // they are uploaded the old windows draw; finishLoading() gives the same frame as a
+  // synchronous setFocus().
+  const Camera west = test::downCamera({-1500.0, 0.0, 0.0}, 5.0, 160, 120, 40.0);
+  terrain.setFocus(cam.target);
+  terrain.requestFocus(west.target);
+  EXPECT_TRUE(terrain.loading());
+  terrain.finishLoading();
+  EXPECT_FALSE(terrain.loading());
+  const test::Shot background = test::renderShot(terrain, west);
+  ClipmapTerrain direct2(ground, opt);
+  direct2.setFocus(west.target);
+  const test::Shot sync = test::renderShot(direct2, west);
+  EXPECT_EQ(background.color.rgba, sync.color.rgba);
+  // And it shows the albedo of that place, not the old window's edge.
+  const auto g = test::groundAt(sync, west, 80, 60);
+  ASSERT_TRUE(g);
+  EXPECT_NEAR(sync.color.pixel(80, 60)[0] / 255.0, bilinearAlbedo(g->x), 0.03);
 }
 
 TEST(TextureClipmapGLTest, AColourOverlayBlendsOverTheLitTerrainWhereItHasData) {

@@ -102,7 +102,8 @@ class ClipmapTerrain {
   /// finer one) out and the next coarser consistent level draws its centre, so a frame
   /// never waits for I/O and never shows a gap.
   void requestFocus(const glm::dvec3& focus);
-  /// Uploads finished background work and schedules more (render thread). With
+  /// Uploads finished background work (height rows and columns, and the windows of draped
+  /// textures) and schedules more (render thread). With
   /// `wait` it first blocks until some job finishes, if one is running (tests, tools; a
   /// frame loop passes false). Returns the texels uploaded. An error the worker met while
   /// reading (a store I/O error) is rethrown here; that level is then asked again.
@@ -159,7 +160,9 @@ class ClipmapTerrain {
   struct Loader;
   struct EffectState;
   void initEffects();
-  void updateEffects(const glm::dvec3& focus);
+  void updateEffects(const glm::dvec3& focus, bool background = false);
+  std::size_t pollEffects(bool wait);
+  [[nodiscard]] bool effectsLoading() const noexcept;
   void setEffectUniforms(const Camera& camera, ClipmapFrame& frame) const;
   void setLevelUniforms(std::size_t level) const;
 

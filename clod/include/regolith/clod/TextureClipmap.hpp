@@ -11,6 +11,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <future>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,8 +29,10 @@ namespace regolith::clod {
 /// Sources: DrapedTexture::channels, one HeightPyramid per channel (the store's pyramid
 /// through store::Pager, or fromSamples()). Levels stop at the first one the window covers.
 /// A window moves when the focus drifts a quarter window from its centre; the layer is then
-/// read again (on the calling thread) and uploaded whole. Outside the source or over NaN the
-/// alpha is 0 (the terrain's own albedo shows).
+/// read again and uploaded whole: on the calling thread (update()), or on a worker thread
+/// (request(), then poll() uploads on the render thread), while the old windows keep drawing
+/// (a pixel outside every window falls back to the terrain's own albedo). Outside the source or
+/// over NaN the alpha is 0 (the terrain's own albedo shows).
 ///
 /// Needs a current GL 4.5 context; belongs to its thread.
 class TextureClipmap {
@@ -40,6 +44,14 @@ class TextureClipmap {
   /// Centres the windows on grid point `focus` (the terrain's grid coordinates). Returns the
   /// texels uploaded (0 if no window had to move).
   std::size_t update(glm::dvec2 focus);
+  /// Background loading: reads the windows that must move on a worker thread and returns at
+  /// once; a request while one is running is kept (the latest) and started after it.
+  void request(glm::dvec2 focus);
+  /// Uploads finished background reads (render thread); with `wait`, first blocks until the
+  /// running read finishes. Returns the texels uploaded. Rethrows a read error (store I/O).
+  std::size_t poll(bool wait = false);
+  /// True while a background read is running or waiting.
+  [[nodiscard]] bool loading() const noexcept { return job_.valid() || pending_.has_value(); }
 
   [[nodiscard]] GLuint texture() const noexcept { return texture_.id(); }
   [[nodiscard]] int levels() const noexcept { return static_cast<int>(windows_.size()); }
@@ -57,7 +69,16 @@ class TextureClipmap {
     std::int64_t row0 = 0, col0 = 0;
     bool loaded = false;
   };
-  void load(std::size_t level, std::int64_t row0, std::int64_t col0);
+  struct Layer {
+    std::size_t level;
+    std::int64_t row0, col0;
+    std::vector<std::uint8_t> rgba;
+  };
+  /// Windows that must move for `focus`, not yet read.
+  [[nodiscard]] std::vector<Layer> plan(glm::dvec2 focus) const;
+  /// Reads a layer's texels from the sources (any thread: reads only the sources).
+  void read(Layer& layer) const;
+  void upload(const Layer& layer);
 
   DrapedTexture source_;
   std::string name_;
@@ -65,6 +86,8 @@ class TextureClipmap {
   std::vector<Window> windows_;
   Texture texture_;
   std::size_t uploaded_ = 0;
+  std::future<std::vector<Layer>> job_;
+  std::optional<glm::dvec2> pending_;
 };
 
 }  // namespace regolith::clod
