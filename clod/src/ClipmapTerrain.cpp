@@ -237,9 +237,16 @@ void ClipmapTerrain::setOptions(const ClipmapOptions& options) {
     throw InvalidArgument(
         "ClipmapTerrain::setOptions(): size and levels are fixed at "
         "construction");
+  const auto sameTexture = [](const std::optional<DrapedTexture>& a,
+                              const std::optional<DrapedTexture>& b) {
+    return a.has_value() == b.has_value() &&
+           (!a || (a->channels == b->channels && a->window == b->window));
+  };
   if (options.effects.declared() != options_.effects.declared() ||
       options.effects.tracks != options_.effects.tracks ||
-      options.trackWindow != options_.trackWindow)
+      options.trackWindow != options_.trackWindow ||
+      !sameTexture(options.effects.albedo, options_.effects.albedo) ||
+      !sameTexture(options.effects.overlay, options_.effects.overlay))
     throw InvalidArgument(
         "ClipmapTerrain::setOptions(): the declared effects (and their track layer and "
         "textures) are fixed at construction; build a new terrain to change them");

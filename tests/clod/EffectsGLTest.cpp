@@ -186,6 +186,15 @@ TEST(EffectsGLTest, EffectsThatCannotApplyAreRejectedAtConstruction) {
   EXPECT_NO_THROW(terrain.setOptions(changed));
   changed.effects.heightColours = HeightColours{};
   EXPECT_THROW(terrain.setOptions(changed), InvalidArgument);
+  // A draped texture's sources are part of the declaration, its opacity is a parameter.
+  ClipmapOptions draped = opt;
+  draped.effects.overlay = smallTexture(3);
+  ClipmapTerrain withOverlay(plane, draped);
+  ClipmapOptions other = draped;
+  other.effects.overlay->opacity = 0.3F;
+  EXPECT_NO_THROW(withOverlay.setOptions(other));
+  other.effects.overlay = smallTexture(3);  // new pyramids
+  EXPECT_THROW(withOverlay.setOptions(other), InvalidArgument);
 }
 
 }  // namespace
