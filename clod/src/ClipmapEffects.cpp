@@ -84,7 +84,7 @@ void ClipmapTerrain::initEffects() {
                           std::to_string(e.heightColours->minHeight) + ", " +
                           std::to_string(e.heightColours->maxHeight) + "] m, expected min < max");
   effects_ = std::make_unique<EffectState>();
-  effects_->needs = EffectNeeds::of(e);
+  effects_->needs = EffectNeeds::of(e, pyramid_->kind() == SurfaceKind::Planet);
   if (e.albedo) effects_->albedo = std::make_unique<TextureClipmap>(*e.albedo, "effects.albedo");
   if (e.overlay)
     effects_->overlay = std::make_unique<TextureClipmap>(*e.overlay, "effects.overlay");
@@ -273,6 +273,13 @@ void ClipmapTerrain::setLevelUniforms(std::size_t k) const {
   program_.set("uGridStep", glm::vec2(glm::dvec2(g.spacingX(), g.spacingY())));
   program_.set("uGridFromBody", l.polar() != 0 ? 1 : 0);
   program_.set("uGridOrigin", glm::vec2(gridOrigin_));
+  double ratio2 = 1.0;
+  if (pyramid_->kind() == SurfaceKind::Planet &&
+      pyramid_->latitudeType() == topo::LatitudeType::Planetodetic) {
+    const double q = pyramid_->body()->equatorialRadius() / pyramid_->body()->polarRadius();
+    ratio2 = q * q;
+  }
+  program_.set("uGridLatRatio2", static_cast<float>(ratio2));
 }
 
 }  // namespace regolith::clod

@@ -49,7 +49,8 @@ struct ClipmapTerrain::Loader {
 ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, ClipmapOptions options)
     : pyramid_(std::move(pyramid)),
       options_(std::move(options)),
-      sources_(composeClipmapSources(options_.effects)),
+      sources_(composeClipmapSources(options_.effects,
+                                     pyramid_ && pyramid_->kind() == SurfaceKind::Planet)),
       program_("clipmap", sources_) {
   if (!pyramid_) throw InvalidArgument("ClipmapTerrain(): pyramid is null");
   const int n = options_.size;

@@ -47,10 +47,27 @@ constexpr const char* kGridVertexDecl =
 uniform vec2 uGridStep;   // grid units per vertex step (x: +i, y: −j)
 uniform int uGridFromBody;  // planets on a polar lattice: grid from the position
 uniform vec2 uGridOrigin;   // the frame's grid origin (degrees) for that case
+uniform float uGridLatRatio2;  // a²/b² for a planetodetic grid, 1 for planetocentric
+)";
+
+// Planets: on the polar lattice the grid point is computed per fragment from the position
+// (a varying interpolated across large polar cells would be off by a fraction of a cell).
+constexpr const char* kGridFragmentDecl = R"(in vec2 fGridV;
+uniform int uGridFromBody;
+uniform vec2 uGridOrigin;
+uniform float uGridLatRatio2;
+vec2 fGrid;
+)";
+constexpr const char* kGridFragmentMain = R"(  fGrid = fGridV;
+  if (uGridFromBody != 0) {
+    fGrid = vec2(degrees(atan(fBody.y, fBody.x)),
+                 degrees(atan(uGridLatRatio2 * fBody.z, length(fBody.xy)))) - uGridOrigin;
+    fGrid.x = mod(fGrid.x + 180.0, 360.0) - 180.0;
+  }
 )";
 constexpr const char* kGridVertexMain = R"(  if (uGridFromBody != 0) {
     vec3 b = c.xyz + uAnchorFromCentre;
-    vsOut.grid = vec2(degrees(atan(b.y, b.x)), degrees(asin(clamp(b.z / length(b), -1.0, 1.0)))) -
+    vsOut.grid = vec2(degrees(atan(b.y, b.x)), degrees(atan(uGridLatRatio2 * b.z, length(b.xy)))) -
                  uGridOrigin;
     vsOut.grid.x = mod(vsOut.grid.x + 180.0, 360.0) - 180.0;
   } else {
@@ -208,18 +225,19 @@ std::string drapeDecl(const std::string& name, int binding) {
 
 }  // namespace
 
-EffectNeeds EffectNeeds::of(const Effects& e) noexcept {
+EffectNeeds EffectNeeds::of(const Effects& e, bool planet) noexcept {
   EffectNeeds n;
   n.grid = e.albedo || e.overlay || e.tracks || e.noise;
   n.height = e.heightColours.has_value();
-  n.body = e.latLon.has_value();
+  n.body = e.latLon.has_value() || (planet && n.grid);
   n.axes = e.tracks || e.noise;
   return n;
 }
 
-ShaderSources composeClipmapSources(const Effects& e) {
+ShaderSources composeClipmapSources(const Effects& e, bool planet) {
   ShaderSources s{shaders::kClipmapVertex, shaders::kDropNodataGeometry, shaders::kLitFragment};
-  const EffectNeeds need = EffectNeeds::of(e);
+  const EffectNeeds need = EffectNeeds::of(e, planet);
+  const bool gridPerFragment = planet && need.grid;
   const bool surface = e.albedo || e.noise || e.tracks;
   if (!need.grid && !need.height && !need.body) return s;  // no effect: the bare pipeline
 
@@ -229,9 +247,10 @@ ShaderSources composeClipmapSources(const Effects& e) {
     fields += " vec2 grid;";
     vsDecl += kGridVertexDecl;
     vsMain += kGridVertexMain;
-    gsOut += "out vec2 fGrid;\n";
-    gsCopy += "    fGrid = gsIn[i].grid;\n";
-    fsIn += "in vec2 fGrid;\n";
+    // Planets: the geometry shader's output is fGridV and fGrid a per-fragment global.
+    gsOut += gridPerFragment ? "out vec2 fGridV;\n" : "out vec2 fGrid;\n";
+    gsCopy += gridPerFragment ? "    fGridV = gsIn[i].grid;\n" : "    fGrid = gsIn[i].grid;\n";
+    if (!gridPerFragment) fsIn += "in vec2 fGrid;\n";
   }
   if (need.height) {
     fields += " float height;";
@@ -255,6 +274,7 @@ ShaderSources composeClipmapSources(const Effects& e) {
   insertAt(s.geometry, "geometry", "    fNormal = gsIn[i].normal;\n", gsCopy);
 
   std::string fsDecl = fsIn, fsSurface, fsColour;
+  if (gridPerFragment) fsDecl += kGridFragmentDecl;
   if (need.axes) fsDecl += kAxesDecl;
   if (e.albedo) {
     fsDecl += drapeDecl("Albedo", 2);
@@ -282,6 +302,8 @@ ShaderSources composeClipmapSources(const Effects& e) {
     fsColour += kLatLonMain;
   }
   insertAt(s.fragment, "fragment", "out vec4 color;\n", fsDecl, true);
+  if (gridPerFragment)
+    insertAt(s.fragment, "fragment", "  vec3 n = normalize(fNormal);\n", kGridFragmentMain, true);
   if (surface) {
     insertAt(s.fragment, "fragment", "  vec3 n = normalize(fNormal);\n",
              "  vec3 albedo = uAlbedo;\n" + fsSurface);
