@@ -328,7 +328,12 @@ TEST(EffectImagesGLTest, TracksAppearExactlyWhereTheWheelsTouched) {
       const auto g = test::groundAt(after, cam, x, y);
       ASSERT_TRUE(g);
       double d = 1e9;
-      for (const auto& [a, b] : paths) d = std::min(d, segmentDistance({g->x, g->y}, a, b));
+      for (const auto& [a, b] : paths) {
+        // Segments are 0.15 m long: those more than a metre away cannot be the nearest
+        // within the distances below (a shortcut, for the sanitizer builds).
+        if (std::abs(g->x - a.x) > 1.0 || std::abs(g->y - a.y) > 1.0) continue;
+        d = std::min(d, segmentDistance({g->x, g->y}, a, b));
+      }
       const bool changed = test::pixelDiff(before.color, after.color, x, y) > 2;
       // The rut's floor (flat: the darkening shows whatever the light); its walls tilt
       // towards or away from the sun, and where a wall faces the sun the brighter slope may
