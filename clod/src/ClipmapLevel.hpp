@@ -67,6 +67,8 @@ class ClipmapLevel {
   [[nodiscard]] std::int64_t row0() const noexcept { return row0_; }
   [[nodiscard]] std::int64_t col0() const noexcept { return col0_; }
   [[nodiscard]] bool valid() const noexcept { return valid_; }
+  /// The lattice: 0 latitude/longitude (or plane) rows and columns, ±1 polar stereographic.
+  [[nodiscard]] int polar() const noexcept { return polar_; }
   [[nodiscard]] const glm::dvec3& anchor() const noexcept { return anchor_; }
   [[nodiscard]] GLuint texture() const noexcept { return texture_.id(); }
   /// Scene position of the window's centre sample at height 0.

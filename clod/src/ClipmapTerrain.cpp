@@ -2,8 +2,10 @@
 #include <regolith/clod/GlError.hpp>
 #include <regolith/topo/Error.hpp>
 
+#include "ClipmapEffectState.hpp"
 #include "ClipmapLevel.hpp"
 #include "CutOutShader.hpp"
+#include "EffectShaders.hpp"
 #include "Shaders.hpp"
 
 #include <glm/geometric.hpp>
@@ -22,16 +24,18 @@
 
 namespace regolith::clod {
 
-namespace {
-
-Program makeProgram() {
-  // Scene graph (issue 6): the fragment stage also carries the cut-out test (CutOutShader.hpp;
-  // inert unless SceneRenderer sets uCutCount), so a planet gives way where a DEM has data.
-  return Program("clipmap", ShaderSources{shaders::kClipmapVertex, shaders::kDropNodataGeometry,
-                                          shaders::withCutOuts(shaders::kLitFragment)});
+ShaderSources ClipmapTerrain::bareSources() {
+  return ShaderSources{shaders::kClipmapVertex, shaders::kDropNodataGeometry,
+                       shaders::kLitFragment};
 }
 
-}  // namespace
+ShaderSources ClipmapTerrain::programSourcesFor(const ClipmapOptions& options, bool planet) {
+  ShaderSources s = composeClipmapSources(options.effects, planet);
+  // Scene graph: the cut-out test (CutOutShader.hpp) only where a DEM may win over this
+  // terrain; inert until SceneRenderer sets its uniforms.
+  if (options.cutOuts) s.fragment = shaders::withCutOuts(s.fragment);
+  return s;
+}
 
 struct ClipmapTerrain::Job {
   std::size_t level = 0;
@@ -52,7 +56,10 @@ struct ClipmapTerrain::Loader {
 };
 
 ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, ClipmapOptions options)
-    : pyramid_(std::move(pyramid)), options_(options), program_(makeProgram()) {
+    : pyramid_(std::move(pyramid)),
+      options_(std::move(options)),
+      sources_(programSourcesFor(options_, pyramid_ && pyramid_->kind() == SurfaceKind::Planet)),
+      program_("clipmap", sources_) {
   if (!pyramid_) throw InvalidArgument("ClipmapTerrain(): pyramid is null");
   const int n = options_.size;
   if (n < 15 || n > 2047 || n % 2 == 0)
@@ -99,6 +106,7 @@ ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, Cli
   // sit up to 0.75 cell off this level's centre; one more cell of overlap for safety.
   hole_ = static_cast<int>(std::floor((n - 1) / 4.0 - 0.75)) - 1;
   buildMesh();
+  initEffects();
 }
 
 ClipmapTerrain::~ClipmapTerrain() {
@@ -130,6 +138,7 @@ void ClipmapTerrain::requestFocus(const glm::dvec3& focus) {
     const std::lock_guard lock(loader_->mutex);
     loader_->target = focus;
   }
+  updateEffects(focus, true);
   schedule();
 }
 
@@ -200,6 +209,7 @@ std::size_t ClipmapTerrain::update(bool wait) {
     if (job.error) std::rethrow_exception(job.error);  // e.g. a store read that failed
     count += levels_[job.level]->apply(job.plan);
   }
+  if (effects_) (void)pollEffects(wait && ready.empty());  // texture windows: counted apart
   uploaded_ += count;
   schedule();
   return count;
@@ -207,6 +217,7 @@ std::size_t ClipmapTerrain::update(bool wait) {
 
 bool ClipmapTerrain::loading() const {
   if (!loader_) return false;
+  if (effects_ && effectsLoading()) return true;
   const std::lock_guard lock(loader_->mutex);
   return std::any_of(loader_->busy.begin(), loader_->busy.end(), [](bool b) { return b; });
 }
@@ -238,6 +249,19 @@ void ClipmapTerrain::setOptions(const ClipmapOptions& options) {
     throw InvalidArgument(
         "ClipmapTerrain::setOptions(): size and levels are fixed at "
         "construction");
+  const auto sameTexture = [](const std::optional<DrapedTexture>& a,
+                              const std::optional<DrapedTexture>& b) {
+    return a.has_value() == b.has_value() &&
+           (!a || (a->channels == b->channels && a->window == b->window));
+  };
+  if (options.effects.declared() != options_.effects.declared() ||
+      options.cutOuts != options_.cutOuts || options.effects.tracks != options_.effects.tracks ||
+      options.trackWindow != options_.trackWindow ||
+      !sameTexture(options.effects.albedo, options_.effects.albedo) ||
+      !sameTexture(options.effects.overlay, options_.effects.overlay))
+    throw InvalidArgument(
+        "ClipmapTerrain::setOptions(): the declared effects (and their track layer and "
+        "textures) are fixed at construction; build a new terrain to change them");
   options_ = options;
 }
 
@@ -308,6 +332,7 @@ std::size_t ClipmapTerrain::setFocus(const glm::dvec3& focus) {
   std::size_t count = 0;
   for (auto& level : levels_) count += level->moveTo(g.x, g.y, polar);
   uploaded_ += count;
+  updateEffects(focus);
   return count;
 }
 
@@ -351,6 +376,7 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
   program_.set("uLight", glm::normalize(options_.lightDirection));
   program_.set("uAlbedo", options_.albedo);
   program_.set("uAmbient", options_.ambient);
+  if (effects_) setEffectUniforms(camera, frame);
   glBindVertexArray(vao_.id());
   glDisable(GL_CULL_FACE);
   for (std::size_t k = first; k < first + count; ++k) {
@@ -380,7 +406,9 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
     if (k > first) finer = glm::vec4(levels_[k - 1]->footprintIn(l));
     program_.set("uFinerRect", finer);
     program_.set("uDepthPush", options_.overlapDepthPush);
+    if (effects_) setLevelUniforms(k);
     glBindTextureUnit(0, l.texture());
+    ++frame.textureBinds;
     const std::size_t start = k == first ? 0 : holeIndices_;
     const std::size_t n = holeIndices_ + ringIndices_ + skirtIndices_ - start;
     glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(n), GL_UNSIGNED_INT,

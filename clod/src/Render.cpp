@@ -1,4 +1,5 @@
 #include <regolith/clod/HeadlessContext.hpp>
+#include <regolith/clod/Legend.hpp>
 #include <regolith/clod/Render.hpp>
 #include <regolith/clod/RenderTarget.hpp>
 #include <regolith/topo/Error.hpp>
@@ -86,7 +87,10 @@ Camera cameraLookingAt(const HeightPyramid& pyramid, const glm::dvec3& target,
   return cam;
 }
 
-RgbaImage renderImage(std::shared_ptr<const HeightPyramid> pyramid, const RenderRequest& request) {
+namespace {
+
+RgbaImage render(std::shared_ptr<const HeightPyramid> pyramid, const RenderRequest& request,
+                 std::optional<Legend>* legendOut) {
   if (!pyramid) throw InvalidArgument("renderImage(): pyramid is null");
   const Camera& cam = request.camera;
   if (!(cam.fovYDegrees > 0.0 && cam.fovYDegrees < 180.0))
@@ -105,13 +109,26 @@ RgbaImage renderImage(std::shared_ptr<const HeightPyramid> pyramid, const Render
     target.clear(request.background);
     terrain.draw(cam);
     image = target.readColor();
+    const Legend legend = Legend::of(terrain, cam);
+    if (!legend.empty()) {
+      if (request.legendInImage) legend.drawInto(image);
+      if (legendOut != nullptr) *legendOut = legend;
+    }
   }  // GL objects go before the context
   return image;
 }
 
+}  // namespace
+
+RgbaImage renderImage(std::shared_ptr<const HeightPyramid> pyramid, const RenderRequest& request) {
+  return render(std::move(pyramid), request, nullptr);
+}
+
 void renderToPng(std::shared_ptr<const HeightPyramid> pyramid, const RenderRequest& request,
                  const std::string& path) {
-  writePng(path, renderImage(std::move(pyramid), request));
+  std::optional<Legend> legend;
+  writePng(path, render(std::move(pyramid), request, &legend));
+  if (legend) legend->writeJson(path + ".legend.json");
 }
 
 }  // namespace regolith::clod

@@ -220,6 +220,11 @@ void SceneRenderer::addCutOut(int planet, int dem) {
     throw InvalidArgument("SceneRenderer::addCutOut(): planet " + std::to_string(planet) +
                           " already has " + std::to_string(shaders::kMaxCutOuts) + " DEMs");
   p->second->cutBy.push_back(dem);
+  if (!p->second->options.cutOuts) {
+    // The planet's program gains the cut-out test (only planets that DEMs cut carry it).
+    p->second->options.cutOuts = true;
+    p->second->clipmap = std::make_unique<ClipmapTerrain>(p->second->pyramid, p->second->options);
+  }
   if (t.mask) return;  // already cuts another planet
 
   // The finest level's samples, its cell mask (a cell has data if its four corners do) and

@@ -478,5 +478,21 @@ TEST_F(SceneRendererGLTest, RejectsBadRegistrations) {
   EXPECT_THROW(r.draw(RenderList{}, bad), InvalidArgument);
 }
 
+TEST_F(SceneRendererGLTest, OnlyAPlanetThatADemCutsCarriesTheCutOutTest) {
+  // The cut-out test is shader code like an effect: a planet compiles it only once a DEM is
+  // registered to win over it; until then (and for DEMs) the program is the bare one.
+  test::glContext();
+  clod::SceneRenderer r;
+  r.addTerrain(0, scene_->mars());
+  r.addTerrain(1, scene_->victoria());
+  const auto fragment = [&](int key) { return r.terrain(key)->programSources().fragment; };
+  EXPECT_EQ(fragment(0), clod::ClipmapTerrain::bareSources().fragment);
+  EXPECT_EQ(fragment(1), clod::ClipmapTerrain::bareSources().fragment);
+  r.addCutOut(0, 1);
+  EXPECT_NE(fragment(0).find("regolithCutOut"), std::string::npos);
+  EXPECT_TRUE(r.terrain(0)->options().cutOuts);
+  EXPECT_EQ(fragment(1), clod::ClipmapTerrain::bareSources().fragment);
+}
+
 }  // namespace
 }  // namespace regolith::scenegraph

@@ -3,6 +3,7 @@
 /// Geometry-clipmap terrain over a plane (DEM) or a spheroid (planet).
 
 #include <regolith/clod/Camera.hpp>
+#include <regolith/clod/Effects.hpp>
 #include <regolith/clod/GlObjects.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/Program.hpp>
@@ -11,6 +12,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace regolith::clod {
@@ -39,13 +41,26 @@ struct ClipmapOptions {
   /// the depth buffer no longer holds the exact geometry in those bands (off by default;
   /// the viewer uses 0.02).
   float overlapDepthPush = 0.0F;
+  /// Effects the scene declares (docs/overlays.md). Which ones are declared is fixed at
+  /// construction (each is compiled into the program); their parameters may change through
+  /// setOptions(). None: the bare pipeline.
+  Effects effects;
+  /// Tracks: GPU window of the TrackLayer around the focus, texels per side (256..8192).
+  int trackWindow = 2048;
+  /// Compile in the cut-out test, so that DEMs drawn over this planet can win where they
+  /// have data (SceneRenderer::addCutOut() rebuilds the planet's terrain with it). Inert until
+  /// SceneRenderer sets its uniforms; fixed at construction like the effects.
+  bool cutOuts = false;
+  /// Tracks: relative darkening of the albedo inside a rut (compacted soil).
+  float trackDarkening = 0.15F;
 };
 
 /// What one draw() did.
 struct ClipmapFrame {
-  std::size_t firstLevel = 0;   ///< innermost level drawn (it draws its centre)
-  std::size_t levelsDrawn = 0;  ///< levels drawn, from firstLevel outward
-  std::size_t vertices = 0;     ///< vertices submitted (indices drawn)
+  std::size_t firstLevel = 0;    ///< innermost level drawn (it draws its centre)
+  std::size_t levelsDrawn = 0;   ///< levels drawn, from firstLevel outward
+  std::size_t vertices = 0;      ///< vertices submitted (indices drawn)
+  std::size_t textureBinds = 0;  ///< glBindTextureUnit calls (one per level without effects)
 };
 
 /// Geometry clipmaps (Losasso & Hoppe 2004; Asirvatham & Hoppe, GPU Gems 2 ch. 2): nested
@@ -73,6 +88,9 @@ class ClipmapTerrain {
  public:
   /// Throws InvalidArgument for a size that is even or out of range, or more levels than
   /// the pyramid has.
+  /// Effects: throws InvalidArgument for lat/lon lines on a plane without placement, tracks
+  /// on a planet (their grid is not metric), a track window outside 256..8192, or a draped
+  /// texture TextureClipmap rejects.
   ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, ClipmapOptions options = {});
   ClipmapTerrain(const ClipmapTerrain&) = delete;
   ClipmapTerrain& operator=(const ClipmapTerrain&) = delete;
@@ -88,7 +106,8 @@ class ClipmapTerrain {
   /// finer one) out and the next coarser consistent level draws its centre, so a frame
   /// never waits for I/O and never shows a gap.
   void requestFocus(const glm::dvec3& focus);
-  /// Uploads finished background work and schedules more (render thread). With
+  /// Uploads finished background work (height rows and columns, and the windows of draped
+  /// textures) and schedules more (render thread). With
   /// `wait` it first blocks until some job finishes, if one is running (tests, tools; a
   /// frame loop passes false). Returns the texels uploaded. An error the worker met while
   /// reading (a store I/O error) is rethrown here; that level is then asked again.
@@ -117,9 +136,27 @@ class ClipmapTerrain {
   [[nodiscard]] int holeHalfWidth() const noexcept { return hole_; }
   /// The pyramid drawn.
   [[nodiscard]] const HeightPyramid& pyramid() const noexcept { return *pyramid_; }
-  /// The GL program (scene graph: SceneRenderer sets the cut-out uniforms on it, which keep
-  /// their values across draw() calls).
+  /// The GL program: to inspect its active uniforms; SceneRenderer sets the cut-out
+  /// uniforms on it, which keep their values across draw() calls.
   [[nodiscard]] const Program& program() const noexcept { return program_; }
+
+  /// The sources the program was built from: the bare clipmap shaders plus one snippet per
+  /// declared effect (identical to bareSources() when none is declared).
+  [[nodiscard]] const ShaderSources& programSources() const noexcept { return sources_; }
+  /// The clipmap program without any effect: the pipeline before effects existed.
+  [[nodiscard]] static ShaderSources bareSources();
+  /// The sources a terrain with these options compiles (effects, cut-outs).
+  [[nodiscard]] static ShaderSources programSourcesFor(const ClipmapOptions& options, bool planet);
+  /// The GPU work a frame does, in order: "terrain" always; "albedo-clipmap",
+  /// "overlay-clipmap" (texture windows following the focus) and "track-upload" (new ruts)
+  /// only when those effects are declared.
+  [[nodiscard]] std::vector<std::string> passes() const;
+  /// Degrees between lat/lon lines for this camera (LatLonLines::spacingDegrees if set, else
+  /// adapted to the camera's height above the body). Throws InvalidArgument if lat/lon
+  /// lines are not declared.
+  [[nodiscard]] double latLonSpacing(const Camera& camera) const;
+  /// The grid point the frame's effect coordinates are relative to (the last focus).
+  [[nodiscard]] glm::dvec2 gridOrigin() const noexcept { return gridOrigin_; }
 
  private:
   void buildMesh();
@@ -130,10 +167,18 @@ class ClipmapTerrain {
 
   struct Job;
   struct Loader;
+  struct EffectState;
+  void initEffects();
+  void updateEffects(const glm::dvec3& focus, bool background = false);
+  std::size_t pollEffects(bool wait);
+  [[nodiscard]] bool effectsLoading() const noexcept;
+  void setEffectUniforms(const Camera& camera, ClipmapFrame& frame) const;
+  void setLevelUniforms(std::size_t level) const;
 
   std::shared_ptr<const HeightPyramid> pyramid_;
   ClipmapOptions options_;
   std::vector<std::unique_ptr<ClipmapLevel>> levels_;
+  ShaderSources sources_;
   Program program_;
   VertexArray vao_;
   Buffer vertices_, indices_;
@@ -141,6 +186,8 @@ class ClipmapTerrain {
   int hole_ = 0;
   std::size_t uploaded_ = 0;
   std::unique_ptr<Loader> loader_;
+  std::unique_ptr<EffectState> effects_;  // null without effects
+  glm::dvec2 gridOrigin_{0.0};
 };
 
 }  // namespace regolith::clod

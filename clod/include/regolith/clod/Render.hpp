@@ -24,6 +24,10 @@ struct RenderRequest {
   glm::vec4 background{0.02F, 0.02F, 0.04F, 1.0F};
   /// Clipmap focus; the camera's look-at point if unset.
   std::optional<glm::dvec3> focus;
+  /// With height colours or lat/lon lines declared (clipmap.effects): draw their Legend into
+  /// the image's top-right corner. renderToPng() also writes it beside the PNG as
+  /// `<path>.legend.json` either way.
+  bool legendInImage = true;
 };
 
 /// A camera at `position` looking along a heading (degrees clockwise from north: +y on a
