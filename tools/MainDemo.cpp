@@ -1,5 +1,7 @@
 #include "MainDemo.hpp"
 
+#include <regolith/clod/Image.hpp>
+#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/rover/Traverse.hpp>
 #include <regolith/scenegraph/MarsVictoria.hpp>
 #include <regolith/store/Generate.hpp>
@@ -10,7 +12,10 @@
 #include "CancelOnSignal.hpp"
 #include "TerminalProgress.hpp"
 
+#include <glm/geometric.hpp>
+
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -163,6 +168,55 @@ TraverseRun runTraverse(const MainDemoOptions& o, const fs::path& victoria, std:
   return run;
 }
 
+struct RoverViews {
+  fs::path mast, chase;
+  std::size_t imprints = 0, trackTiles = 0;
+};
+
+/// Presses the traverse's wheel contacts into a track layer and renders the scene with it
+/// from the rover's mast (looking back along its tracks) and from a chase camera ahead of
+/// the rover (looking back at it and its tracks).
+RoverViews renderRoverViews(const MainDemoOptions& o, const scenegraph::MarsVictoriaOptions& scene,
+                            const TraverseRun& trav, std::ostream& out) {
+  constexpr double kWheelWidth = 0.40, kRutDepth = 0.03;  // m
+  auto tracks = std::make_shared<clod::TrackLayer>(0.05);
+  std::array<clod::WheelContact, rover::kWheels> step;
+  RoverViews v;
+  for (std::size_t i = 0; i + rover::kWheels <= trav.trackContacts.size(); i += rover::kWheels) {
+    for (std::size_t w = 0; w < rover::kWheels; ++w) {
+      const rover::WheelContact& c = trav.trackContacts[i + w];
+      step[w] = clod::WheelContact{{c.x, c.y}, kWheelWidth, kRutDepth};
+    }
+    tracks->step(step);
+    ++v.imprints;
+  }
+  v.trackTiles = tracks->tiles();
+
+  scenegraph::SceneViewOptions view;
+  view.scene = scene;
+  view.scene.victoriaEffects.tracks = tracks;
+  view.roverX = trav.last.x;
+  view.roverY = trav.last.y;
+  view.roverHeadingDeg = trav.last.heading * 180.0 / M_PI;
+  view.width = o.width;
+  view.height = o.height;
+  const glm::dvec3 p{trav.last.x, trav.last.y, trav.last.height};
+  const glm::dvec3 fwd{std::sin(trav.last.heading), std::cos(trav.last.heading), 0.0};
+  const glm::dvec3 up{0.0, 0.0, 1.0};
+  // Mast: 2.1 m up, looking back along the tracks and down at the ground 15 m behind.
+  view.camera = scenegraph::Pose::lookAt(p + 2.1 * up + 0.4 * fwd, p - 15.0 * fwd, up);
+  v.mast = o.outDir / "rover_view.png";
+  clod::writePng(v.mast.string(), scenegraph::renderSceneView(view));
+  out << "  " << v.mast.string() << std::endl;
+  // Chase: 9 m ahead and 3.5 m up, looking back at the rover.
+  view.camera = scenegraph::Pose::lookAt(p + 9.0 * fwd + 3.5 * up, p - 4.0 * fwd + 0.5 * up, up);
+  view.near = 0.1;
+  v.chase = o.outDir / "rover_chase.png";
+  clod::writePng(v.chase.string(), scenegraph::renderSceneView(view));
+  out << "  " << v.chase.string() << std::endl;
+  return v;
+}
+
 }  // namespace
 
 void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
@@ -200,6 +254,11 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
   };
   const scenegraph::FlyoverSummary flyover = scenegraph::renderFlyover(fly);
 
+  out << "[4/4] The rover's view back along its tracks, and a chase view" << std::endl;
+  const auto t4 = Clock::now();
+  const RoverViews views = renderRoverViews(o, fly.scene, trav, out);
+  const double viewSeconds = secondsSince(t4);
+
   out << "\n==== Summary (" << std::fixed << std::setprecision(1) << secondsSince(start) << " s)\n";
   out << "Traverse: " << r.steps << " steps, " << std::setprecision(0) << r.distance
       << " m driven, " << r.queries << " wheel queries at " << std::setprecision(1)
@@ -215,6 +274,9 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
       << " s in all; " << std::setprecision(0) << flyover.startDistance / 1e3 << " km to "
       << std::setprecision(1) << flyover.endDistance
       << " m from the rover, focus Mars → Victoria at frame " << flyover.focusSwitchFrame << ")\n";
+  out << "Rover views: " << views.mast.string() << " and " << views.chase.string() << " ("
+      << views.imprints << " six-wheel imprints pressed into " << views.trackTiles
+      << " track tiles, " << std::setprecision(1) << viewSeconds << " s)\n";
 }
 
 }  // namespace regolith::tools

@@ -112,14 +112,21 @@ void appendBox(std::vector<MeshVertex>& out, const glm::vec3& lo, const glm::vec
   quad({0, 0, -1}, {l.x, h.y, l.z}, {h.x, h.y, l.z}, {h.x, l.y, l.z}, {l.x, l.y, l.z});
 }
 
-std::vector<MeshVertex> roverMesh() {
+std::vector<MeshVertex> roverMesh(const RoverShape& shape) {
   std::vector<MeshVertex> v;
-  appendBox(v, {-0.8F, -0.55F, 0.45F}, {0.8F, 0.55F, 0.8F});  // body
-  appendBox(v, {0.2F, -0.08F, 0.8F}, {0.36F, 0.08F, 1.4F});   // mast
-  appendBox(v, {0.15F, -0.25F, 1.4F}, {0.45F, 0.25F, 1.6F});  // head
-  for (const float x : {-0.65F, 0.0F, 0.65F})
-    for (const float y : {-0.62F, 0.62F})
-      appendBox(v, {x - 0.13F, y - 0.1F, 0.0F}, {x + 0.13F, y + 0.1F, 0.26F});  // wheels
+  const float front = shape.axleOffsets[0], rear = shape.axleOffsets[2];
+  const float halfTrack = 0.5F * shape.trackWidth, halfWheel = 0.5F * shape.wheelWidth;
+  const float r = shape.wheelRadius;
+  // Body between the wheels, a little above them; mast and head near the front.
+  const float bodyHalfWidth = std::max(0.2F, halfTrack - halfWheel - 0.05F);
+  appendBox(v, {rear - 0.1F, -bodyHalfWidth, 2.0F * r + 0.1F},
+            {front + 0.1F, bodyHalfWidth, 2.0F * r + 0.5F});
+  const float mastX = rear + 0.75F * (front - rear);
+  appendBox(v, {mastX - 0.08F, -0.08F, 2.0F * r + 0.5F}, {mastX + 0.08F, 0.08F, 2.0F});
+  appendBox(v, {mastX - 0.15F, -0.25F, 2.0F}, {mastX + 0.15F, 0.25F, 2.2F});  // head
+  for (const float x : shape.axleOffsets)
+    for (const float y : {-halfTrack, halfTrack})
+      appendBox(v, {x - r, y - halfWheel, 0.0F}, {x + r, y + halfWheel, 2.0F * r});  // wheels
   return v;
 }
 

@@ -183,7 +183,9 @@ void MarsVictoriaScene::registerWith(clod::SceneRenderer& renderer) const {
   clod::ClipmapOptions dem = planet;
   dem.albedo = options_.demAlbedo.value_or(kDemAlbedo);
   renderer.addTerrain(kDrawMars, mars_, planet);
-  renderer.addTerrain(kDrawVictoria, victoria_, dem);
+  clod::ClipmapOptions victoria = dem;
+  victoria.effects = options_.victoriaEffects;
+  renderer.addTerrain(kDrawVictoria, victoria_, victoria);
   renderer.addCutOut(kDrawMars, kDrawVictoria);
   if (second_) {
     renderer.addTerrain(kDrawSecondDem, second_, dem);
@@ -214,6 +216,35 @@ Pose flyoverCamera(double t, const glm::dvec3& rover) {
   const glm::dvec3 up =
       glm::normalize(glm::mix(glm::dvec3(0.0, 1.0, 0.0), glm::dvec3(0.0, 0.0, 1.0), tilt));
   return Pose::lookAt(target + dist * dir, target, up);
+}
+
+clod::RgbaImage renderSceneView(const SceneViewOptions& options) {
+  if (options.width < 1 || options.height < 1)
+    throw InvalidArgument("renderSceneView(): image " + std::to_string(options.width) + "×" +
+                          std::to_string(options.height) + ", expected a non-empty image");
+  std::unique_ptr<clod::HeadlessContext> context;
+  if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<clod::HeadlessContext>();
+  clod::RgbaImage image;
+  {
+    MarsVictoriaScene scene(options.scene);
+    scene.placeRover(options.roverX, options.roverY, options.roverHeadingDeg);
+    SceneGraph& g = scene.graph();
+    const PaperSceneNodes& n = scene.nodes();
+    const NodeId cam = g.add(n.victoria, "view_camera", options.camera, NodeKind::Camera);
+    clod::SceneRenderer renderer;
+    scene.registerWith(renderer);
+    clod::RenderTarget target(options.width, options.height);
+    clod::SceneView view;
+    view.fovYDegrees = options.fovYDegrees;
+    view.near = options.near;
+    view.width = options.width;
+    view.height = options.height;
+    view.lightInFocus = scene.lightInFocus(n.victoria);
+    target.clear({0.02F, 0.02F, 0.04F, 1.0F});
+    renderer.draw(g.renderList(n.victoria, cam), view);
+    image = target.readColor();
+  }  // GL objects go before the context
+  return image;
 }
 
 FlyoverSummary renderFlyover(const FlyoverOptions& options) {

@@ -12,6 +12,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <cstddef>
 #include <map>
 #include <memory>
@@ -27,9 +28,18 @@ struct MeshVertex {
 
 /// The 36 vertices (12 triangles, outward normals) of the box [lo, hi], appended to `out`.
 void appendBox(std::vector<MeshVertex>& out, const glm::vec3& lo, const glm::vec3& hi);
-/// A rover-sized model in the rover frame (x forward, y left, z up; origin on the ground
-/// under the body centre): body, mast and head, six wheels. About 1.6 m × 1.2 m × 1.6 m.
-[[nodiscard]] std::vector<MeshVertex> roverMesh();
+/// Where a rover model's wheels are, in metres: the defaults are rover::RoverGeometry's
+/// (Curiosity-like), so the wheels drawn stand where a traverse's wheel contacts (and the
+/// tracks pressed from them) are.
+struct RoverShape {
+  std::array<float, 3> axleOffsets{1.10F, 0.0F, -1.00F};  ///< front, middle, rear (forward)
+  float trackWidth = 2.20F;                               ///< between wheel centres
+  float wheelWidth = 0.40F, wheelRadius = 0.25F;
+};
+
+/// A rover model in the rover frame (x forward, y left, z up; origin on the ground under the
+/// body centre): body, mast and head, six wheels at `shape`'s positions.
+[[nodiscard]] std::vector<MeshVertex> roverMesh(const RoverShape& shape = {});
 
 /// Camera intrinsics and the viewport a render list is drawn into. The camera's pose comes
 /// from the render list (GL eye convention).

@@ -3,7 +3,9 @@
 /// The paper's example scene with data (generated Mars, Victoria-like DEMs, a rover, Earth),
 /// ready to render, and the headless fly-over from orbit down to the rover.
 
+#include <regolith/clod/Effects.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/clod/Image.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/scenegraph/PaperScene.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
@@ -44,6 +46,9 @@ struct MarsVictoriaOptions {
   /// The DEMs' albedo; unset: MarsVictoriaScene::kDemAlbedo (greener than the planet, so
   /// tests can tell the two apart).
   std::optional<glm::vec3> demAlbedo;
+  /// Effects declared on the Victoria DEM (e.g. the wheel tracks of a traverse); none by
+  /// default (the bare pipeline).
+  clod::Effects victoriaEffects;
 };
 
 /// The scene: graph (buildPaperScene), data and what each drawable key draws. Building it
@@ -121,6 +126,23 @@ struct FlyoverSummary {
 /// Throws InvalidArgument for fewer than 2 frames or an empty image, GlError without GL,
 /// regolith::Error if a PNG cannot be written.
 FlyoverSummary renderFlyover(const FlyoverOptions& options);
+
+/// One view of the scene, for a single image.
+struct SceneViewOptions {
+  MarsVictoriaOptions scene{};
+  /// The rover on the Victoria DEM: grid x, y (on the surface) and heading (degrees
+  /// clockwise from +y).
+  double roverX = 0.0, roverY = -395.0, roverHeadingDeg = 0.0;
+  /// The camera's pose in the Victoria DEM's frame (GL eye convention: it looks along its
+  /// −z, e.g. Pose::lookAt()).
+  Pose camera;
+  int width = 960, height = 540;
+  double fovYDegrees = 45.0, near = 0.05;
+};
+
+/// Renders one view headless (an EGL context is made if none is current), focus on
+/// Victoria. Throws InvalidArgument for an empty image, GlError without GL.
+clod::RgbaImage renderSceneView(const SceneViewOptions& options);
 
 /// The fly-over camera's pose in the Victoria DEM frame at t ∈ [0, 1] for a rover at `rover`.
 [[nodiscard]] Pose flyoverCamera(double t, const glm::dvec3& rover);
