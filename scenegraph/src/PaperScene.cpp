@@ -63,12 +63,14 @@ PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layou
                   NodeKind::Terrain, kDrawSecondDem);
   n.rover = graph.add(n.victoria, "rover", roverPose(layout.roverInDem, layout.roverHeadingDeg),
                       NodeKind::Object, kDrawRover);
-  // Rover frame: x forward, y left, z up. Mast camera 1.5 m up, looking 15° down ahead.
-  n.mastCamera = graph.add(
-      n.rover, "mast_camera",
-      Pose::lookAt({0.6, 0.0, 1.5}, {0.6 + std::cos(15.0 * kDeg), 0.0, 1.5 - std::sin(15.0 * kDeg)},
-                   {0.0, 0.0, 1.0}),
-      NodeKind::Camera);
+  // Rover frame: x forward, y left, z up. Mast camera 2.1 m up, just ahead of the mast head
+  // of clod::roverMesh(), looking 15° down ahead.
+  n.mastCamera =
+      graph.add(n.rover, "mast_camera",
+                Pose::lookAt({0.85, 0.0, 2.1},
+                             {0.85 + std::cos(15.0 * kDeg), 0.0, 2.1 - std::sin(15.0 * kDeg)},
+                             {0.0, 0.0, 1.0}),
+                NodeKind::Camera);
   n.chaseCamera =
       graph.add(n.rover, "chase_camera",
                 Pose::lookAt({-8.0, 0.0, 3.0}, {0.0, 0.0, 0.5}, {0.0, 0.0, 1.0}), NodeKind::Camera);

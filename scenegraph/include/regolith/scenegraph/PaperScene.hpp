@@ -44,7 +44,7 @@ struct PaperSceneLayout {
 struct PaperSceneNodes {
   NodeId sun = 0, earth = 0, mars = 0, victoria = 0, secondDem = 0, rover = 0;
   /// Cameras: one 20 km over Victoria looking down (child of Mars), the rover's mast camera
-  /// (child of the rover, 1.5 m up in front of the mast head, looking ahead and 15° down), a chase
+  /// (child of the rover, 2.1 m up in front of the mast head, looking ahead and 15° down), a chase
   /// camera behind the rover.
   NodeId orbitCamera = 0, mastCamera = 0, chaseCamera = 0;
 };
