@@ -45,8 +45,9 @@ def dem_fixture(name):
 NO_LEAK_CHECK = {"ASAN_OPTIONS": os.environ.get("ASAN_OPTIONS", "") + ":detect_leaks=0"}
 
 
-def run(*args, stdin=None, check=True):
-    env = {**os.environ, **NO_LEAK_CHECK} if args and args[0] == "render" else None
+def run(*args, stdin=None, check=True, env_render=False):
+    renders = env_render or (args and args[0] == "render")
+    env = {**os.environ, **NO_LEAK_CHECK} if renders else None
     p = subprocess.run([BIN, *map(str, args)], input=stdin, capture_output=True, text=True,
                        timeout=300, env=env)
     if check and p.returncode != 0:
@@ -1079,3 +1080,34 @@ def test_render_needs_a_grid_choice(work, fixture_stores):
     path, _ = fixture_stores
     p = run("render", path, "-o", work / "bad.png", check=False)
     assert p.returncode != 0 and "choose one with --grid" in p.stderr, p.stderr
+
+
+# ---- demo -----------------------------------------------------------------------------------
+
+def test_demo_generates_then_reuses_its_data_and_writes_every_image(work):
+    out = work / "demo"
+    args = ["demo", "--quick", "--frames", 3, "--width", 160, "--height", 90, "--out", out]
+    first = run(*args, env_render=True)
+    assert "generated in" in first.stdout and "==== Summary" in first.stdout
+    for name in ["mars.h5", "victoria.h5"]:
+        assert (out / "data" / name).exists()
+    # The DEM sits on the planet: its placement's origin height is Mars's surface there
+    # (h5py reads both; bilinear in the planet's level 0 at the planetocentric latitude).
+    a = attrs(out / "data" / "victoria.h5", "victoria")
+    m = attrs(out / "data" / "mars.h5", "mars")
+    lat_d, lon = float(a["origin_lat_deg"]), float(a["origin_lon_deg"])
+    ae, ap = float(m["equatorial_radius"]), float(m["polar_radius"])
+    lat_c = math.degrees(math.atan((ap / ae) ** 2 * math.tan(math.radians(lat_d))))
+    dx, dy = (float(v) for v in m["spacing"])
+    h, _ = bilinear(level0(out / "data" / "mars.h5", "mars"), float(m["x0"]), float(m["y0"]),
+                    dx, dy, lon, lat_c)
+    assert float(a["origin_height"]) == pytest.approx(h, abs=1e-6)
+    images = sorted((out / "flyover").glob("frame_*.png"))
+    assert len(images) == 3 and (out / "flyover" / "multiview.png").exists()
+    for path in [*images, out / "rover_view.png", out / "rover_chase.png"]:
+        assert read_png(path).shape == (90, 160, 3), path
+    # The first frame shows Mars whole: space in the corners, the planet in the middle.
+    first_frame = terrain_mask(read_png(images[0]))
+    assert first_frame[45, 80] and not first_frame[0, 0] and not first_frame[-1, -1]
+    second = run(*args, env_render=True)
+    assert second.stdout.count("reused") == 2 and "generated in" not in second.stdout
