@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The README's first command: installs what is missing, builds, and runs the main job.
 #
-#   bash scripts/demo.sh [extra arguments for `regolith demo`, e.g. --size 2001]
+#   bash scripts/demo.sh [extra arguments for `regolith demo`, e.g. --cache-mb 1 --frames 48]
 #
 # The configure options match scripts/test-all.sh, so both share one build folder.
 set -euo pipefail
