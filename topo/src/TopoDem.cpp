@@ -159,6 +159,21 @@ namespace {
 /// Batch queries prefetch the cell of the point this many ahead (random points: the memory
 /// misses of several points overlap instead of being paid one after another).
 constexpr std::size_t kPrefetchAhead = 8;
+/// Whether a batch jumps around the grid (random access, where prefetching pays), judged on
+/// its first points: most of them more than a few cells from the one before. Along a path (a
+/// rover's wheels) the cells are in cache already, and a loop that even checks for
+/// prefetching ran a third slower (store_bench rover_batch), so such batches take a loop
+/// without it.
+template <class ToU, class ToV>
+bool scattered(std::span<const double> xs, std::span<const double> ys, ToU toU, ToV toV) {
+  const std::size_t k = std::min<std::size_t>(xs.size(), 17);
+  std::size_t jumps = 0;
+  for (std::size_t i = 1; i < k; ++i) {
+    const double du = toU(xs[i]) - toU(xs[i - 1]), dv = toV(ys[i]) - toV(ys[i - 1]);
+    jumps += std::abs(du) + std::abs(dv) > 4.0 ? 1U : 0U;
+  }
+  return k > 1 && 2 * jumps > k - 1;
+}
 }  // namespace
 
 void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, std::span<double> out,
@@ -177,17 +192,20 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
     const detail::ResidentBilinear f = fast_;
     // Specialised on the spacing's reciprocal being exact and on whether status is wanted,
     // so the loop body has no branches but the bounds and missing-sample tests.
-    auto loop = [&](auto recip, auto wantStatus) {
+    auto loop = [&](auto recip, auto wantStatus, auto prefetch) {
       for (std::size_t i = 0; i < n; ++i) {
-        if (i + kPrefetchAhead < n) {
-          // The cell of a point a few ahead: its memory miss overlaps this point's work.
-          const std::size_t j = i + kPrefetchAhead;
-          const double uj = recip ? (xs[j] - m.x0) * m.idx : (xs[j] - m.x0) / m.dx;
-          const double vj = recip ? (m.y0 - ys[j]) * m.idy : (m.y0 - ys[j]) / m.dy;
-          if (uj >= 0.0 && vj >= 0.0 && uj < f.uMax && vj < f.vMax) {
-            const float* p = f.data + static_cast<long>(vj) * f.cols + static_cast<long>(uj);
-            __builtin_prefetch(p);
-            __builtin_prefetch(p + f.cols);
+        if constexpr (prefetch) {
+          if (i + kPrefetchAhead < n) {
+            // Random access: fetch the cell of a point a few ahead, so its memory miss
+            // overlaps this point's work.
+            const std::size_t j = i + kPrefetchAhead;
+            const double uj = recip ? (xs[j] - m.x0) * m.idx : (xs[j] - m.x0) / m.dx;
+            const double vj = recip ? (m.y0 - ys[j]) * m.idy : (m.y0 - ys[j]) / m.dy;
+            if (uj >= 0.0 && vj >= 0.0 && uj < f.uMax && vj < f.vMax) {
+              const float* p = f.data + static_cast<long>(vj) * f.cols + static_cast<long>(uj);
+              __builtin_prefetch(p);
+              __builtin_prefetch(p + f.cols);
+            }
           }
         }
         const double u = recip ? (xs[i] - m.x0) * m.idx : (xs[i] - m.x0) / m.dx;
@@ -205,10 +223,18 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
     };
     using Yes = std::true_type;
     using No = std::false_type;
-    if (m.recip) {
-      status.empty() ? loop(Yes{}, No{}) : loop(Yes{}, Yes{});
+    const auto run = [&](auto prefetch) {
+      if (m.recip) {
+        status.empty() ? loop(Yes{}, No{}, prefetch) : loop(Yes{}, Yes{}, prefetch);
+      } else {
+        status.empty() ? loop(No{}, No{}, prefetch) : loop(No{}, Yes{}, prefetch);
+      }
+    };
+    if (scattered(
+            xs, ys, [&](double x) { return m.u(x); }, [&](double y) { return m.v(y); })) {
+      run(Yes{});
     } else {
-      status.empty() ? loop(No{}, No{}) : loop(No{}, Yes{});
+      run(No{});
     }
     return;
   }
@@ -220,27 +246,35 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
     const detail::ResidentBilinear f = fast_;
     const BlockTable* table = table_;
     const std::uint64_t id = sourceId_;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (table != nullptr && i + kPrefetchAhead < n) {
-        // The cell of a point a few ahead, unless it is in the thread's block (a run, as on
-        // a rover path, where everything is in cache already).
-        const std::size_t j = i + kPrefetchAhead;
-        const double uj = m.u(xs[j]), vj = m.v(ys[j]);
-        const detail::ThreadBlock& tb = detail::tlBlock;
-        const bool inThreadBlock =
-            tb.source == id && uj >= tb.uLo && uj < tb.uHi && vj >= tb.vLo && vj < tb.vHi;
-        if (!inThreadBlock && uj >= 0.0 && vj >= 0.0 && uj < f.uMax && vj < f.vMax)
-          table->prefetchCell(static_cast<std::size_t>(vj), static_cast<std::size_t>(uj));
+    auto loop = [&](auto prefetch) {
+      for (std::size_t i = 0; i < n; ++i) {
+        if constexpr (prefetch) {
+          if (i + kPrefetchAhead < n) {
+            // Random access: fetch the cell of a point a few ahead (its block's data through
+            // the table's hints), so its memory miss overlaps this point's work.
+            const std::size_t j = i + kPrefetchAhead;
+            const double uj = m.u(xs[j]), vj = m.v(ys[j]);
+            if (uj >= 0.0 && vj >= 0.0 && uj < f.uMax && vj < f.vMax)
+              table->prefetchCell(static_cast<std::size_t>(vj), static_cast<std::size_t>(uj));
+          }
+        }
+        double h = 0.0;
+        if (detail::pagedBilinear(f, table, id, m.u(xs[i]), m.v(ys[i]), h)) [[likely]] {
+          out[i] = h;
+          if (!status.empty()) status[i] = QueryStatus::Ok;
+          continue;
+        }
+        const HeightSample s = heightGeneric(xs[i], ys[i], interp);
+        out[i] = s.height;
+        if (!status.empty()) status[i] = s.status;
       }
-      double h = 0.0;
-      if (detail::pagedBilinear(f, table, id, m.u(xs[i]), m.v(ys[i]), h)) [[likely]] {
-        out[i] = h;
-        if (!status.empty()) status[i] = QueryStatus::Ok;
-        continue;
-      }
-      const HeightSample s = heightGeneric(xs[i], ys[i], interp);
-      out[i] = s.height;
-      if (!status.empty()) status[i] = s.status;
+    };
+    if (table != nullptr &&
+        scattered(
+            xs, ys, [&](double x) { return m.u(x); }, [&](double y) { return m.v(y); })) {
+      loop(std::true_type{});
+    } else {
+      loop(std::false_type{});
     }
     return;
   }
