@@ -20,6 +20,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
+#include <memory>
 #include <ostream>
 #include <sstream>
 #include <string>
@@ -131,11 +132,15 @@ DefaultData ensureData(const MainDemoOptions& o, const fs::path& dir, std::ostre
   return d;
 }
 
-/// The traverse and what the renders need from it: the wheel contacts along the way.
+constexpr double kWheelWidth = 0.40, kRutDepth = 0.03;  // m: the ruts a wheel presses
+
+/// The traverse and what the renders need from it: the wheel tracks it left.
 struct TraverseRun {
   rover::TraverseResult result;
-  std::vector<rover::WheelContact> trackContacts;  // every few centimetres of travel
-  rover::ChassisPose last;                         // where the rover stopped
+  /// The overlay the rover presses its six wheels into as it drives (every 5 cm of travel).
+  std::shared_ptr<clod::TrackLayer> tracks = std::make_shared<clod::TrackLayer>(0.05);
+  std::size_t imprints = 0;
+  rover::ChassisPose last;  // where the rover stopped
   rover::GroundPose lastGround;
 };
 
@@ -147,9 +152,13 @@ TraverseRun runTraverse(const MainDemoOptions& o, const fs::path& victoria, std:
   TraverseRun run;
   double nextStamp = 0.0;
   double nextReport = 0.0;
+  std::array<clod::WheelContact, rover::kWheels> imprint;
   run.result = rover::runTraverse(t, [&](const rover::StepState& s) {
     if (s.distance >= nextStamp) {  // tracks: one imprint of all six wheels every 5 cm
-      run.trackContacts.insert(run.trackContacts.end(), s.wheels.begin(), s.wheels.end());
+      for (std::size_t w = 0; w < rover::kWheels; ++w)
+        imprint[w] = clod::WheelContact{{s.wheels[w].x, s.wheels[w].y}, kWheelWidth, kRutDepth};
+      run.tracks->step(imprint);
+      ++run.imprints;
       nextStamp = s.distance + 0.05;
     }
     if (s.distance >= nextReport) {
@@ -173,28 +182,17 @@ struct RoverViews {
   std::size_t imprints = 0, trackTiles = 0;
 };
 
-/// Presses the traverse's wheel contacts into a track layer and renders the scene with it
-/// from the rover's mast (looking back along its tracks) and from a chase camera ahead of
-/// the rover (looking back at it and its tracks).
+/// Renders the scene with the tracks the traverse left from the rover's mast (looking back
+/// along its tracks) and from a chase camera ahead of the rover (looking back at it).
 RoverViews renderRoverViews(const MainDemoOptions& o, const scenegraph::MarsVictoriaOptions& scene,
                             const TraverseRun& trav, std::ostream& out) {
-  constexpr double kWheelWidth = 0.40, kRutDepth = 0.03;  // m
-  auto tracks = std::make_shared<clod::TrackLayer>(0.05);
-  std::array<clod::WheelContact, rover::kWheels> step;
   RoverViews v;
-  for (std::size_t i = 0; i + rover::kWheels <= trav.trackContacts.size(); i += rover::kWheels) {
-    for (std::size_t w = 0; w < rover::kWheels; ++w) {
-      const rover::WheelContact& c = trav.trackContacts[i + w];
-      step[w] = clod::WheelContact{{c.x, c.y}, kWheelWidth, kRutDepth};
-    }
-    tracks->step(step);
-    ++v.imprints;
-  }
-  v.trackTiles = tracks->tiles();
+  v.imprints = trav.imprints;
+  v.trackTiles = trav.tracks->tiles();
 
   scenegraph::SceneViewOptions view;
   view.scene = scene;
-  view.scene.victoriaEffects.tracks = tracks;
+  view.scene.victoriaEffects.tracks = trav.tracks;
   view.roverX = trav.last.x;
   view.roverY = trav.last.y;
   view.roverHeadingDeg = trav.last.heading * 180.0 / M_PI;

@@ -354,3 +354,148 @@ def test_traverse_uses_the_given_rover(victoria):
     r = regolith.run_traverse(victoria, speed=100.0, max_steps=1, record_every=1, rover=narrow)
     w = r["record"]["wheels"][0]
     assert np.linalg.norm(w[0, :2] - w[1, :2]) == pytest.approx(1.0, abs=1e-12)
+
+
+# ---- the paper's scene: graph and headless renders ------------------------------------------
+
+MARS_A, MARS_B = 3396190.0, 3376200.0  # IAU Mars ellipsoid (topo::Body::marsEllipsoid)
+
+
+def geodetic_frame(lat_deg, lon_deg, h, a=MARS_A, b=MARS_B):
+    """Body-fixed position and east, north, up axes of a planetodetic point (textbook ECEF)."""
+    lat, lon = math.radians(lat_deg), math.radians(lon_deg)
+    e2 = 1.0 - (b * b) / (a * a)
+    n = a / math.sqrt(1.0 - e2 * math.sin(lat) ** 2)
+    p = np.array([(n + h) * math.cos(lat) * math.cos(lon), (n + h) * math.cos(lat) * math.sin(lon),
+                  (n * (1.0 - e2) + h) * math.sin(lat)])
+    east = np.array([-math.sin(lon), math.cos(lon), 0.0])
+    up = np.array([math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon), math.sin(lat)])
+    return p, east, np.cross(up, east), up
+
+
+def as_matrix(pose):
+    m = np.eye(4)
+    m[:3, :3], m[:3, 3] = pose["rotation"], pose["translation"]
+    return m
+
+
+def test_paper_scene_tree_has_the_papers_nodes():
+    s = regolith.paper_scene()
+    names = s.names()
+    assert names[0] == "sun" and s.parent("sun") is None
+    assert set(names) == {"sun", "earth", "mars", "victoria", "rover", "mast_camera",
+                          "chase_camera", "orbit_camera"}
+    assert [s.parent(n) for n in ("earth", "mars", "victoria", "rover", "mast_camera",
+                                  "orbit_camera")] == ["sun", "sun", "mars", "victoria", "rover",
+                                                       "mars"]
+    assert [s.kind(n) for n in ("mars", "victoria", "rover", "mast_camera")] == [
+        "terrain", "terrain", "object", "camera"]
+    two = regolith.paper_scene(second_dem=True)
+    assert two.parent("second_dem") == "mars" and two.kind("second_dem") == "terrain"
+    with pytest.raises(regolith.InvalidArgument, match="phobos"):
+        s.relative("mars", "phobos")
+
+
+def test_victoria_sits_where_planetodetic_geodesy_puts_it():
+    s = regolith.paper_scene()
+    pose = s.relative("mars", "victoria")
+    p, east, north, up = geodetic_frame(-2.05, -5.5, -1400.0)
+    np.testing.assert_allclose(pose["translation"], p, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(pose["rotation"], np.column_stack([east, north, up]), atol=1e-12)
+    # The orbit camera hangs 20 km over the site, looking down (its -z along -up).
+    cam = s.relative("mars", "orbit_camera")
+    np.testing.assert_allclose(cam["translation"], p + 20e3 * up, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(-cam["rotation"][:, 2], -up, atol=1e-9)
+
+
+def test_relative_poses_compose_along_the_tree_and_invert():
+    s = regolith.paper_scene()
+    s.place_rover(10.0, 20.0, 3.0, heading_deg=90.0)
+    local = s.relative("victoria", "rover")
+    np.testing.assert_allclose(local["translation"], [10.0, 20.0, 3.0], atol=1e-12)
+    # Heading 90° clockwise from north: the rover's forward (x) is east, its left (y) north.
+    np.testing.assert_allclose(local["rotation"][:, 0], [1.0, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(local["rotation"][:, 1], [0.0, 1.0, 0.0], atol=1e-12)
+    chain = (as_matrix(s.relative("sun", "mars")) @ as_matrix(s.relative("mars", "victoria"))
+             @ as_matrix(local))
+    direct = as_matrix(s.relative("sun", "rover"))
+    # Heliocentric metres (2.3e11): composed in double, agreement to a few tens of µm.
+    np.testing.assert_allclose(direct[:3, 3], chain[:3, 3], rtol=0, atol=1e-4)
+    np.testing.assert_allclose(direct[:3, :3], chain[:3, :3], atol=1e-12)
+    back = as_matrix(s.relative("rover", "sun"))
+    np.testing.assert_allclose(back @ direct, np.eye(4), atol=1e-4)
+    # Between two nodes on different branches, through their common ancestor (Mars).
+    cam_in_rover = as_matrix(s.relative("rover", "orbit_camera"))
+    expect = np.linalg.inv(as_matrix(s.relative("mars", "rover"))) @ as_matrix(
+        s.relative("mars", "orbit_camera"))
+    np.testing.assert_allclose(cam_in_rover, expect, atol=1e-6)
+
+
+# Small generated data so each render takes a fraction of a second.
+SMALL_SCENE = dict(width=160, height=90, planet_rows=120, dem_size=201, dem_spacing=6.0,
+                   clipmap_size=63)
+
+
+def test_render_scene_draws_the_dem_close_up_and_mars_from_afar():
+    near = regolith.render_scene(eye=(0.0, -300.0, 400.0), look_at=(0.0, 0.0, 0.0), **SMALL_SCENE)
+    assert near.shape == (90, 160, 4) and near.dtype == np.uint8
+    assert (near[..., 3] == 255).all()
+    # The DEM is drawn greener than the planet (MarsVictoriaScene::kDemAlbedo vs kPlanetAlbedo).
+    r, g = near[35:55, 70:90, 0].astype(int), near[35:55, 70:90, 1].astype(int)
+    assert (g > r).mean() > 0.9
+    # 15,000 km up the site's vertical, looking at Mars's centre: a reddish disc in the middle
+    # with black space around it.
+    far = regolith.render_scene(eye=(0.0, 0.0, 1.5e7), look_at=(0.0, 0.0, -3.39e6), up=(0.0, 1.0, 0.0),
+                                **SMALL_SCENE)
+    centre = far[40:50, 75:85].astype(int)
+    assert (centre[..., 0] > centre[..., 1]).all()
+    assert far[0, 0, :3].max() < 30 and far[-1, -1, :3].max() < 30
+    with pytest.raises(regolith.InvalidArgument, match="up is parallel to the view direction"):
+        regolith.render_scene(eye=(0.0, 0.0, 1.5e7), look_at=(0.0, 0.0, -3.39e6), **SMALL_SCENE)
+
+
+def test_render_scene_draws_the_rover_where_it_is_placed():
+    view = dict(eye=(0.0, -415.0, 25.0), look_at=(0.0, -395.0, 5.0), **SMALL_SCENE)
+    here = regolith.render_scene(rover=(0.0, -395.0, 0.0), **view).astype(int)
+    away = regolith.render_scene(rover=(150.0, -395.0, 0.0), **view).astype(int)
+    changed = np.abs(here[..., :3] - away[..., :3]).max(axis=2) > 8
+    assert changed.sum() > 50
+    rows, cols = np.nonzero(changed)
+    # The rover is in the middle of the view when it stands at the look-at point.
+    assert abs(rows.mean() - 45) < 20 and abs(cols.mean() - 80) < 20
+
+
+def test_render_scene_presses_tracks_and_checks_their_shape():
+    y = np.arange(-420.0, -396.0, 0.05)
+    offsets = np.array([[-1.3, 1.1], [1.3, 1.1], [-1.3, 0.0], [1.3, 0.0], [-1.3, -1.0],
+                        [1.3, -1.0]])
+    tracks = np.stack([np.stack([offsets[:, 0], yy + offsets[:, 1]], axis=1) for yy in y])
+    view = dict(eye=(0.0, -425.0, 12.0), look_at=(0.0, -405.0, 5.0), rover=(0.0, -395.0, 0.0),
+                **SMALL_SCENE)
+    plain = regolith.render_scene(**view).astype(int)
+    tracked = regolith.render_scene(tracks=tracks, **view).astype(int)
+    changed = np.abs(plain[..., :3] - tracked[..., :3]).max(axis=2) > 4
+    assert changed.sum() > 100
+    # Ruts are darker where they are pressed.
+    assert tracked[changed, :3].sum() < plain[changed, :3].sum()
+    with pytest.raises(regolith.InvalidArgument, match=r"tracks has shape \(10, 4, 2\)"):
+        regolith.render_scene(tracks=np.zeros((10, 4, 2)), **view)
+
+
+def test_render_flyover_writes_every_frame(tmp_path):
+    from PIL import Image
+
+    s = regolith.render_flyover(tmp_path / "fly", frames=3, width=96, height=54,
+                                **{k: SMALL_SCENE[k] for k in ("planet_rows", "dem_size",
+                                                               "dem_spacing", "clipmap_size")})
+    files = [str(f) for f in s["files"]]
+    assert [f.rsplit("/", 1)[1] for f in files] == ["frame_0000.png", "frame_0001.png",
+                                                    "frame_0002.png", "multiview.png"]
+    for f in files[:3]:
+        with Image.open(f) as im:
+            assert im.size == (96, 54)
+    assert s["start_distance"] > 1e6 > 100.0 > s["end_distance"] > 0.0
+    assert 0 < s["focus_switch_frame"] <= 2
+    assert 0.0 < s["render_seconds"] <= s["seconds"]
+    with pytest.raises(regolith.InvalidArgument, match="frames"):
+        regolith.render_flyover(tmp_path / "none", frames=1)

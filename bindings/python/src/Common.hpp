@@ -48,5 +48,7 @@ void bindQueries(py::module_& m);
 void bindRender(py::class_<DemTerrain, std::shared_ptr<DemTerrain>>& dem,
                 py::class_<PlanetTerrain, std::shared_ptr<PlanetTerrain>>& planet);
 void bindRover(py::module_& m);
+/// The paper's example scene: paper_scene(), render_scene(), render_flyover().
+void bindScene(py::module_& m);
 
 }  // namespace regolith::python

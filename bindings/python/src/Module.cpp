@@ -10,4 +10,5 @@ PYBIND11_MODULE(regolith, m) {
   bindStore(m);
   bindQueries(m);
   bindRover(m);
+  bindScene(m);
 }

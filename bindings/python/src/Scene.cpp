@@ -1,0 +1,231 @@
+// The paper's example scene from Python: the scene graph (poses only) and headless renders
+// of the Mars/Victoria scene with data (scenegraph/demo) into numpy images.
+#include <regolith/clod/TrackLayer.hpp>
+#include <regolith/scenegraph/MarsVictoria.hpp>
+#include <regolith/scenegraph/PaperScene.hpp>
+#include <regolith/topo/Error.hpp>
+
+#include "Common.hpp"
+
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <array>
+#include <cstring>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace regolith::python {
+
+namespace {
+
+using scenegraph::SceneGraph;
+
+/// A built paper scene: the graph and the ids of its named nodes.
+struct PyScene {
+  SceneGraph graph{"sun"};
+  scenegraph::PaperSceneNodes nodes;
+};
+
+const char* kindName(scenegraph::NodeKind k) {
+  switch (k) {
+    case scenegraph::NodeKind::Frame: return "frame";
+    case scenegraph::NodeKind::Terrain: return "terrain";
+    case scenegraph::NodeKind::Object: return "object";
+    case scenegraph::NodeKind::Camera: return "camera";
+  }
+  return "frame";
+}
+
+/// {"translation": (3,), "rotation": (3, 3)}: p_to_frame = rotation · p + translation.
+py::dict poseDict(const scenegraph::Pose& p) {
+  py::array_t<double> t(3), r({3, 3});
+  auto tm = t.mutable_unchecked<1>();
+  auto rm = r.mutable_unchecked<2>();
+  const glm::dmat3 m = p.matrix();
+  for (py::ssize_t i = 0; i < 3; ++i) {
+    tm(i) = p.translation[static_cast<glm::length_t>(i)];
+    for (py::ssize_t j = 0; j < 3; ++j)
+      rm(i, j) = m[static_cast<glm::length_t>(j)][static_cast<glm::length_t>(i)];  // column j
+  }
+  py::dict d;
+  d["translation"] = t;
+  d["rotation"] = r;
+  return d;
+}
+
+scenegraph::MarsVictoriaOptions sceneOptions(const std::optional<std::filesystem::path>& mars,
+                                             const std::optional<std::filesystem::path>& victoria,
+                                             std::size_t planetRows, std::size_t demSize,
+                                             double demSpacing, int clipmapSize) {
+  scenegraph::MarsVictoriaOptions o;
+  o.planetRows = planetRows;
+  o.demSize = demSize;
+  o.demSpacing = demSpacing;
+  o.clipmapSize = clipmapSize;
+  if (mars) o.marsStore = *mars;
+  if (victoria) o.victoriaStore = *victoria;
+  return o;
+}
+
+py::array_t<std::uint8_t> toNumpy(const clod::RgbaImage& img) {
+  py::array_t<std::uint8_t> out(
+      {static_cast<py::ssize_t>(img.height), static_cast<py::ssize_t>(img.width), py::ssize_t{4}});
+  std::memcpy(out.mutable_data(), img.rgba.data(), img.rgba.size());
+  return out;
+}
+
+}  // namespace
+
+void bindScene(py::module_& m) {
+  py::class_<PyScene, std::shared_ptr<PyScene>>(
+      m, "SceneGraph",
+      "The JPL paper's example scene as a tree of frames (poses in double, metres): Sun → "
+      "Earth, Sun → Mars → Victoria (a DEM's local tangent plane at 2.05°S, 5.5°W) → rover → "
+      "mast and chase cameras, Mars → orbit camera (and a second DEM if asked). No data and no "
+      "GL: poses only. Build it with regolith.paper_scene().")
+      .def(
+          "names",
+          [](const PyScene& s) {
+            std::vector<std::string> names;
+            for (std::size_t i = 0; i < s.graph.size(); ++i) names.push_back(s.graph.node(i).name);
+            return names;
+          },
+          "The node names, root (the Sun) first.")
+      .def(
+          "parent",
+          [](const PyScene& s, const std::string& name) -> std::optional<std::string> {
+            const auto& n = s.graph.node(s.graph.at(name));
+            if (!n.parent) return std::nullopt;
+            return s.graph.node(*n.parent).name;
+          },
+          py::arg("name"), "The parent's name (None for the root).")
+      .def(
+          "kind",
+          [](const PyScene& s, const std::string& name) {
+            return std::string(kindName(s.graph.node(s.graph.at(name)).kind));
+          },
+          py::arg("name"), "'frame', 'terrain', 'object' or 'camera'.")
+      .def(
+          "relative",
+          [](const PyScene& s, const std::string& frame, const std::string& node) {
+            return poseDict(s.graph.relative(s.graph.at(frame), s.graph.at(node)));
+          },
+          py::arg("frame"), py::arg("node"),
+          "The pose of `node` in `frame`, composed along the tree through their common "
+          "ancestor: {'translation': (3,), 'rotation': (3, 3)} with p_frame = rotation @ p_node "
+          "+ translation. Raises InvalidArgument for an unknown name.")
+      .def(
+          "place_rover",
+          [](PyScene& s, double x, double y, double z, double headingDeg) {
+            s.graph.setLocal(s.nodes.rover, scenegraph::roverPose({x, y, z}, headingDeg));
+          },
+          py::arg("x"), py::arg("y"), py::arg("z"), py::arg("heading_deg") = 0.0,
+          "Puts the rover at (x, y, z) in the Victoria DEM's frame, heading clockwise from +y.");
+
+  m.def(
+      "paper_scene",
+      [](bool secondDem) {
+        auto s = std::make_shared<PyScene>();
+        scenegraph::PaperSceneLayout layout;
+        layout.secondDem = secondDem;
+        s->nodes = scenegraph::buildPaperScene(s->graph, layout);
+        return s;
+      },
+      py::arg("second_dem") = false,
+      "Builds the paper's example scene (scenegraph::buildPaperScene) and returns its SceneGraph.");
+
+  m.def(
+      "render_scene",
+      [](std::array<double, 3> eye, std::array<double, 3> lookAt, std::array<double, 3> rover,
+         std::optional<std::filesystem::path> marsStore,
+         std::optional<std::filesystem::path> victoriaStore, std::optional<DoubleArray> tracks,
+         int width, int height, double fov, std::size_t planetRows, std::size_t demSize,
+         double demSpacing, int clipmapSize, std::array<double, 3> up) {
+        scenegraph::SceneViewOptions v;
+        v.scene =
+            sceneOptions(marsStore, victoriaStore, planetRows, demSize, demSpacing, clipmapSize);
+        v.roverX = rover[0];
+        v.roverY = rover[1];
+        v.roverHeadingDeg = rover[2];
+        v.width = width;
+        v.height = height;
+        v.fovYDegrees = fov;
+        const glm::dvec3 e{eye[0], eye[1], eye[2]}, t{lookAt[0], lookAt[1], lookAt[2]};
+        v.camera = scenegraph::Pose::lookAt(e, t, {up[0], up[1], up[2]});
+        if (tracks) {
+          // (steps, 6, 2) grid x, y of the six wheels at each step, as run_traverse records.
+          const auto a = tracks->unchecked<3>();
+          if (a.shape(1) != 6 || a.shape(2) < 2)
+            throw InvalidArgument("regolith.render_scene(): tracks has shape (" +
+                                  std::to_string(a.shape(0)) + ", " + std::to_string(a.shape(1)) +
+                                  ", " + std::to_string(a.shape(2)) +
+                                  "), expected (steps, 6, 2 or more): wheel x, y per step");
+          auto layer = std::make_shared<clod::TrackLayer>(0.05);
+          std::array<clod::WheelContact, 6> step;
+          for (py::ssize_t i = 0; i < a.shape(0); ++i) {
+            for (py::ssize_t w = 0; w < 6; ++w)
+              step[static_cast<std::size_t>(w)] = {{a(i, w, 0), a(i, w, 1)}, 0.4, 0.03};
+            layer->step(step);
+          }
+          v.scene.victoriaEffects.tracks = layer;
+        }
+        clod::RgbaImage img;
+        {
+          const py::gil_scoped_release release;
+          img = scenegraph::renderSceneView(v);
+        }
+        return toNumpy(img);
+      },
+      py::arg("eye"), py::arg("look_at"),
+      py::arg("rover") = std::array<double, 3>{0.0, -395.0, 0.0},
+      py::arg("mars_store") = py::none(), py::arg("victoria_store") = py::none(),
+      py::arg("tracks") = py::none(), py::arg("width") = 640, py::arg("height") = 360,
+      py::arg("fov_deg") = 45.0, py::arg("planet_rows") = 360, py::arg("dem_size") = 601,
+      py::arg("dem_spacing") = 2.0, py::arg("clipmap_size") = 127,
+      py::arg("up") = std::array<double, 3>{0.0, 0.0, 1.0},
+      "Builds the Mars/Victoria scene with data (generated in memory, or the given mars and "
+      "victoria stores, as `regolith demo` writes them) and renders one view headless into a "
+      "(height, width, 4) uint8 RGBA array. eye and look_at are in the Victoria DEM's frame "
+      "(x east, y north, z up, metres), and up is the direction that is up in the image (it must "
+      "not be parallel to the view); rover is (x, y, heading_deg) on the DEM. tracks: wheel "
+      "contacts (steps, 6, 2), e.g. run_traverse(...)['record']['wheels'], pressed as ruts.");
+
+  m.def(
+      "render_flyover",
+      [](const std::filesystem::path& outDir, int frames, int width, int height,
+         std::optional<std::filesystem::path> marsStore,
+         std::optional<std::filesystem::path> victoriaStore, std::size_t planetRows,
+         std::size_t demSize, double demSpacing, int clipmapSize) {
+        scenegraph::FlyoverOptions o;
+        o.outputDir = outDir;
+        o.frames = frames;
+        o.width = width;
+        o.height = height;
+        o.scene =
+            sceneOptions(marsStore, victoriaStore, planetRows, demSize, demSpacing, clipmapSize);
+        scenegraph::FlyoverSummary s;
+        {
+          const py::gil_scoped_release release;
+          s = scenegraph::renderFlyover(o);
+        }
+        py::dict d;
+        std::vector<std::filesystem::path> files(s.files.begin(), s.files.end());
+        d["files"] = files;
+        d["seconds"] = s.seconds;
+        d["render_seconds"] = s.renderSeconds;
+        d["focus_switch_frame"] = s.focusSwitchFrame;
+        d["start_distance"] = s.startDistance;
+        d["end_distance"] = s.endDistance;
+        return d;
+      },
+      py::arg("out_dir"), py::arg("frames") = 24, py::arg("width") = 480, py::arg("height") = 270,
+      py::arg("mars_store") = py::none(), py::arg("victoria_store") = py::none(),
+      py::arg("planet_rows") = 360, py::arg("dem_size") = 601, py::arg("dem_spacing") = 2.0,
+      py::arg("clipmap_size") = 127,
+      "Renders the fly-over from orbit down to the rover (scenegraph::renderFlyover) as "
+      "frame_NNNN.png files and multiview.png in out_dir; returns a summary dict.");
+}
+
+}  // namespace regolith::python
