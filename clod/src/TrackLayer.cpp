@@ -122,6 +122,9 @@ float TrackLayer::texel(std::int64_t tx, std::int64_t ty) const {
 }
 
 double TrackLayer::depthAt(glm::dvec2 g) const {
+  if (!std::isfinite(g.x) || !std::isfinite(g.y))
+    throw InvalidArgument("TrackLayer::depthAt(): point (" + std::to_string(g.x) + ", " +
+                          std::to_string(g.y) + "), expected finite grid coordinates");
   const double fx = g.x / texel_ - 0.5, fy = g.y / texel_ - 0.5;
   const double x0 = std::floor(fx), y0 = std::floor(fy);
   const double u = fx - x0, v = fy - y0;

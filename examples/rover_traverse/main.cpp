@@ -1,21 +1,32 @@
 // rover_traverse: a six-wheel rover drives a path across the Victoria-like DEM placed on Mars,
 // querying height and normal under every wheel at every 1 ms step through the pager, with a
-// cache budget set on the command line. Writes the wheel tracks as CSV if asked.
+// cache budget set on the command line. As it drives it presses its wheels into a track
+// overlay (clod::TrackLayer) every few centimetres; --image renders the DEM with those tracks
+// from behind the rover's last position. Writes the wheel contacts as CSV if asked.
 //
 //   rover_traverse --cache-mb 4 --path "-560,-90 -430,-20 -300,250" --tracks tracks.csv
+//                  --image tracks.png
 //
-// Public API only (regolith::rover, regolith::store).
+// Public API only (regolith::rover, regolith::store, regolith::clod).
+#include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/clod/Render.hpp>
+#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/rover/Traverse.hpp>
 #include <regolith/store/Generate.hpp>
+#include <regolith/store/GridInfo.hpp>
+#include <regolith/store/Pager.hpp>
+#include <regolith/store/Store.hpp>
 #include <regolith/topo/Error.hpp>
 
 #include <CLI/CLI.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <numbers>
 #include <sstream>
 #include <string>
@@ -61,12 +72,38 @@ store::CachePolicy parsePolicy(const std::string& name) {
 
 double mib(double bytes) { return bytes / 1048576.0; }
 
+/// Renders the DEM with the traverse's tracks, headless, from 9 m ahead of the rover's last
+/// position and 3.5 m up, looking back along its tracks.
+void renderTracks(const rover::TraverseOptions& o, const rover::ChassisPose& last,
+                  std::shared_ptr<clod::TrackLayer> tracks, const std::string& png) {
+  auto st = std::make_shared<const store::Store>(store::Store::open(o.store));
+  const store::GridInfo& info = st->grid(o.grid);
+  const store::Pager pager(st, std::make_shared<store::PatchCache>(std::size_t{64} << 20U));
+  std::vector<clod::HeightPyramid::Level> levels;
+  for (std::size_t l = 0; l < info.levels; ++l)
+    levels.push_back({store::topoGridOf(info, l), pager.source(o.grid, l)});
+  auto pyramid =
+      std::make_shared<const clod::HeightPyramid>(std::move(levels), clod::SurfaceKind::Plane);
+  const glm::dvec3 p{last.x, last.y, last.height};
+  const glm::dvec3 fwd{std::sin(last.heading), std::cos(last.heading), 0.0}, up{0.0, 0.0, 1.0};
+  clod::RenderRequest req;
+  req.camera.position = p + 9.0 * fwd + 3.5 * up;
+  req.camera.target = p - 12.0 * fwd;
+  req.camera.up = up;
+  req.camera.fovYDegrees = 50.0;
+  req.camera.width = 960;
+  req.camera.height = 540;
+  req.camera.near = 0.1;
+  req.clipmap.effects.tracks = std::move(tracks);
+  clod::renderToPng(pyramid, req, png);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
   CLI::App app{"A six-wheel rover drives a path across the Victoria-like DEM on Mars at 1 kHz"};
-  std::string storePath = "out/rover/victoria.h5", grid = "victoria", pathText, tracks;
-  double cacheMb = 16.0, speed = 1.0, stepMs = 1.0;
+  std::string storePath = "out/rover/victoria.h5", grid = "victoria", pathText, tracks, image;
+  double cacheMb = 16.0, speed = 1.0, stepMs = 1.0, trackSpacing = 0.05;
   std::size_t maxSteps = 0, trackEvery = 10, size = 1201;
   std::string policy = "lru";
   app.add_option("--store", storePath,
@@ -85,6 +122,11 @@ int main(int argc, char** argv) try {
   app.add_option("--size", size, "Samples per side when generating the DEM")->capture_default_str();
   app.add_option("--tracks", tracks, "Write the wheel contacts every --track-every steps as CSV");
   app.add_option("--track-every", trackEvery, "Steps between track rows")->capture_default_str();
+  app.add_option("--track-spacing", trackSpacing,
+                 "Metres driven between imprints of the six wheels in the track overlay (> 0)")
+      ->capture_default_str();
+  app.add_option("--image", image,
+                 "Render the DEM with the tracks to this PNG (headless), looking back at them");
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -102,6 +144,10 @@ int main(int argc, char** argv) try {
     o.step = stepMs / 1000.0;
     o.maxSteps = maxSteps;
     if (trackEvery == 0) throw InvalidArgument("rover_traverse: --track-every is 0, expected > 0");
+    if (!(std::isfinite(trackSpacing) && trackSpacing > 0.0)) {
+      throw InvalidArgument("rover_traverse: --track-spacing is " + std::to_string(trackSpacing) +
+                            ", expected a distance > 0 m");
+    }
 
     if (!std::filesystem::exists(o.store)) {
       std::cout << "Generating the Victoria-like DEM (" << size << " x " << size << " at 1 m) into "
@@ -121,7 +167,21 @@ int main(int argc, char** argv) try {
       csv.precision(10);
     }
     constexpr double kDeg = 180.0 / std::numbers::pi;
+    constexpr double kWheelWidth = 0.40, kRutDepth = 0.03;  // m
+    auto overlay = std::make_shared<clod::TrackLayer>(0.05);
+    std::array<clod::WheelContact, rover::kWheels> imprint;
+    std::size_t imprints = 0;
+    double nextImprint = 0.0;
+    rover::ChassisPose last;
     const rover::TraverseResult r = rover::runTraverse(o, [&](const rover::StepState& s) {
+      if (s.distance >= nextImprint) {  // the wheels press their ruts into the overlay
+        for (std::size_t i = 0; i < rover::kWheels; ++i)
+          imprint[i] = {{s.wheels[i].x, s.wheels[i].y}, kWheelWidth, kRutDepth};
+        overlay->step(imprint);
+        ++imprints;
+        nextImprint = s.distance + trackSpacing;
+      }
+      last = s.chassis;
       if (csv.is_open() && s.step % trackEvery == 0) {
         for (std::size_t i = 0; i < rover::kWheels; ++i) {
           const auto& w = s.wheels[i];
@@ -159,7 +219,13 @@ int main(int argc, char** argv) try {
                 r.peakResidentBytes <= r.budgetBytes ? "within budget" : "OVER BUDGET");
     std::printf("  chassis          max tilt %.2f deg, max contact residual %.4f m\n",
                 r.maxTilt * kDeg, r.maxResidual);
+    std::printf("  track overlay    %zu imprints of the six wheels (every %.3g m), %zu tiles\n",
+                imprints, trackSpacing, overlay->tiles());
     if (!tracks.empty()) std::printf("  tracks           %s\n", tracks.c_str());
+    if (!image.empty()) {
+      renderTracks(o, last, overlay, image);
+      std::printf("  image            %s\n", image.c_str());
+    }
     return 0;
   } catch (const regolith::Error& e) {
     std::fprintf(stderr, "%s\n", e.what());

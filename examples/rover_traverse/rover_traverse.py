@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
 """The rover traverse through the Python module: a six-wheel rover drives a path across the
 Victoria-like DEM placed on Mars at 1 kHz, paged through a cache whose budget is an option.
-Prints query throughput and cache statistics, and optionally saves the wheel tracks (.npz)
-and a plot of the chassis pitch/roll (needs matplotlib).
+As it drives, the rover presses its wheels into a track overlay (regolith.TrackLayer) every
+few centimetres. Prints query throughput and cache statistics, and optionally saves the wheel
+contacts (.npz), a plot of the chassis pitch/roll (needs matplotlib) and a headless render of
+the DEM with the tracks.
 
     PYTHONPATH=build/bindings/python/package /usr/bin/python3 \\
-        examples/rover_traverse/rover_traverse.py --cache-mb 4 --tracks out/rover/tracks.npz
+        examples/rover_traverse/rover_traverse.py --cache-mb 4 --tracks out/rover/tracks.npz \\
+        --image out/rover/tracks.png
 """
 
 import argparse
@@ -44,7 +47,12 @@ def main():
     ap.add_argument("--tracks", help="save every --track-every-th step's contacts to this .npz")
     ap.add_argument("--track-every", type=int, default=10)
     ap.add_argument("--plot", help="save a PNG plot of the track and the chassis attitude")
+    ap.add_argument("--track-spacing", type=float, default=0.05,
+                    help="metres driven between imprints in the track overlay")
+    ap.add_argument("--image", help="render the DEM with the tracks to this PNG (headless)")
     a = ap.parse_args()
+    if not a.track_spacing > 0:
+        sys.exit(f"rover_traverse.py: --track-spacing is {a.track_spacing}, expected > 0 m")
 
     if not os.path.exists(a.store):
         print(f"Generating the Victoria-like DEM ({a.size} x {a.size} at 1 m) into {a.store} ...")
@@ -52,11 +60,22 @@ def main():
         regolith.generate_victoria(a.store, size=a.size, grid=a.grid)
 
     path = parse_path(a.path) if a.path else regolith.default_victoria_path()
+    overlay = regolith.TrackLayer(texel_metres=0.05)
+    last = {}
+
+    def press(state):
+        # Called every few steps (one imprint per --track-spacing metres driven).
+        overlay.step(state["wheels"], width=0.4, depth=0.03)
+        last.update(ground=state["ground"], height=state["chassis"]["height"])
+        return True
+
+    every = max(1, round(a.track_spacing / (a.speed * a.step_ms / 1000.0)))
     try:
         r = regolith.run_traverse(
             a.store, path=path, grid=a.grid, cache_bytes=int(a.cache_mb * 1048576),
             policy=a.policy, speed=a.speed, step=a.step_ms / 1000.0, max_steps=a.max_steps,
-            record_every=a.track_every if (a.tracks or a.plot) else 0)
+            record_every=a.track_every if (a.tracks or a.plot) else 0,
+            callback=press, callback_every=every)
     except regolith.Error as e:
         sys.exit(str(e))
 
@@ -76,6 +95,26 @@ def main():
           f"{r['peak_resident_bytes'] / mib:.2f} MiB peak, budget {r['budget_bytes'] / mib:.2f} MiB")
     print(f"  chassis          max tilt {math.degrees(r['max_tilt']):.2f} deg, "
           f"max contact residual {r['max_residual']:.4f} m")
+
+    imprints = (r["steps"] + every - 1) // every
+    print(f"  track overlay    {imprints} imprints of the six wheels (every {every} steps), "
+          f"{overlay.tiles} tiles")
+
+    if a.image:
+        x, y, heading = last["ground"]
+        p = np.array([x, y, last["height"]])
+        fwd = np.array([math.sin(heading), math.cos(heading), 0.0])
+        up = np.array([0.0, 0.0, 1.0])
+        dem = regolith.open(a.store, grid=a.grid, cache_bytes=64 << 20)
+        img = dem.render(position=tuple(p + 9.0 * fwd + 3.5 * up),
+                         look_at=tuple(p - 12.0 * fwd), fov_deg=50.0, width=960, height=540,
+                         tracks=overlay)
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        os.makedirs(os.path.dirname(a.image) or ".", exist_ok=True)
+        plt.imsave(a.image, img)
+        print(f"  image            {a.image}")
 
     if a.tracks:
         np.savez_compressed(a.tracks, **r["record"])

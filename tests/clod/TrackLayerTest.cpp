@@ -82,6 +82,10 @@ TEST(TrackLayerTest, BadContactsAreRejectedWithTheirValue) {
     EXPECT_NE(std::string(e.what()).find("wheel width -2"), std::string::npos) << e.what();
   }
   EXPECT_EQ(layer.version(), 0U);  // nothing was pressed
+  // A NaN or infinite query point is an error, not an undefined cast to a texel index.
+  EXPECT_THROW((void)layer.depthAt({nan, 0.0}), InvalidArgument);
+  EXPECT_THROW((void)layer.depthAt({0.0, std::numeric_limits<double>::infinity()}),
+               InvalidArgument);
 }
 
 }  // namespace

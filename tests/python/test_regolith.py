@@ -480,6 +480,57 @@ def test_render_scene_presses_tracks_and_checks_their_shape():
     assert tracked[changed, :3].sum() < plain[changed, :3].sum()
     with pytest.raises(regolith.InvalidArgument, match=r"tracks has shape \(10, 4, 2\)"):
         regolith.render_scene(tracks=np.zeros((10, 4, 2)), **view)
+    # A TrackLayer pressed with the same steps draws exactly the same ruts.
+    layer = regolith.TrackLayer(texel_metres=0.05)
+    for step in tracks:
+        layer.step(step, width=0.4, depth=0.03)
+    np.testing.assert_array_equal(regolith.render_scene(tracks=layer, **view), tracked)
+
+
+def test_track_layer_presses_cosine_squared_ruts_where_the_wheels_went():
+    layer = regolith.TrackLayer(texel_metres=0.05)
+    assert layer.tiles == 0 and layer.texel_metres == 0.05
+    for y in np.arange(0.0, 5.0, 0.05):
+        layer.step(np.array([[1.0, y, 7.0], [3.0, y, 7.0]]), width=0.4, depth=0.03)
+    assert layer.tiles >= 1
+    # At texel centres ((k + 1/2)·0.05) bilinear interpolation returns the texel itself:
+    # depth·cos²(π·d/width), d the distance from the wheel's path (x = 1 or 3).
+    x = np.array([1.025, 1.125, 2.975, 3.175, 1.275, 2.025])
+    d = layer.depth_at(x, np.full(6, 2.525))
+    dist = np.minimum(np.abs(x - 1.0), np.abs(x - 3.0))
+    expect = np.where(dist < 0.2, 0.03 * np.cos(np.pi * dist / 0.4) ** 2, 0.0)
+    np.testing.assert_allclose(d, expect, rtol=0, atol=1e-7)
+    assert d.shape == (6,) and d[0] > 0.028 and d[4] == 0.0 and d[5] == 0.0
+    # Driving over the same ground again keeps the deeper rut: it does not dig deeper.
+    layer.step(np.array([[1.0, 2.0], [3.0, 2.0]]))
+    layer.step(np.array([[1.0, 3.0], [3.0, 3.0]]))
+    np.testing.assert_allclose(layer.depth_at(x, np.full(6, 2.525)), d, rtol=0, atol=0)
+    with pytest.raises(regolith.InvalidArgument, match=r"wheels has shape \(3,\)"):
+        layer.step(np.zeros(3))
+    with pytest.raises(regolith.InvalidArgument, match="wheel width"):
+        layer.step(np.zeros((6, 2)), width=0.0)
+    with pytest.raises(regolith.InvalidArgument, match=r"depthAt\(\): point \(nan"):
+        layer.depth_at([np.nan], [0.0])
+    layer.clear()
+    assert layer.depth_at([1.025], [2.525])[0] == 0.0
+
+
+def test_dem_render_draws_a_track_layer_as_darker_ruts(victoria):
+    dem = regolith.open(victoria)
+    h = float(dem.heights(np.array([0.0]), np.array([-400.0]))[0])
+    layer = regolith.TrackLayer()
+    for y in np.arange(-430.0, -400.0, 0.05):
+        layer.step(np.array([[-1.3, y], [1.3, y]]))
+    view = dict(position=(0.0, -440.0, h + 6.0), look_at=(0.0, -415.0, h), width=160, height=90,
+                fov_deg=50.0)
+    plain = dem.render(**view).astype(int)
+    tracked = dem.render(tracks=layer, **view).astype(int)
+    changed = np.abs(plain[..., :3] - tracked[..., :3]).max(axis=2) > 4
+    assert changed.sum() > 50
+    assert tracked[changed, :3].sum() < plain[changed, :3].sum()
+    # Both ruts show: changed pixels on either side of the image's vertical centre line.
+    cols = np.nonzero(changed)[1]
+    assert (cols < 75).sum() > 10 and (cols > 85).sum() > 10
 
 
 def test_render_flyover_writes_every_frame(tmp_path):

@@ -1,5 +1,6 @@
 // Headless rendering into a numpy image (clod::renderImage).
 #include <regolith/clod/Render.hpp>
+#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/topo/Error.hpp>
@@ -10,6 +11,7 @@
 
 #include <array>
 #include <cstring>
+#include <memory>
 #include <optional>
 
 namespace regolith::python {
@@ -39,7 +41,8 @@ py::array_t<std::uint8_t> render(const Terrain& t, const std::array<double, 3>& 
                                  const std::optional<std::array<double, 3>>& lookAt,
                                  std::optional<double> heading, std::optional<double> pitch,
                                  double fov, int width, int height, double near, int clipmapSize,
-                                 const std::array<float, 4>& background) {
+                                 const std::array<float, 4>& background,
+                                 std::shared_ptr<clod::TrackLayer> tracks) {
   const char* op = "regolith.render()";
   if (lookAt.has_value() == (heading.has_value() || pitch.has_value())) {
     throw InvalidArgument(std::string(op) +
@@ -52,6 +55,7 @@ py::array_t<std::uint8_t> render(const Terrain& t, const std::array<double, 3>& 
   auto pyramid = pyramidOf(t);
   clod::RenderRequest req;
   req.clipmap.size = clipmapSize;
+  req.clipmap.effects.tracks = std::move(tracks);
   req.background = {background[0], background[1], background[2], background[3]};
   const glm::dvec3 eye = vec3(position);
   if (lookAt) {
@@ -87,7 +91,8 @@ void bindRender(py::class_<DemTerrain, std::shared_ptr<DemTerrain>>& dem,
       "scene frame: a DEM's grid frame (x east, y north, z height, metres), a planet's "
       "body-fixed frame (metres). Aim it with look_at=(x, y, z), or with heading_deg "
       "(clockwise from north) and pitch_deg (negative looks down). Every stored pyramid level "
-      "is drawn through the terrain's cache. Raises GlError if no GL 4.5 context can be made.";
+      "is drawn through the terrain's cache. tracks: a TrackLayer whose ruts are drawn on a DEM "
+      "(InvalidArgument on a planet). Raises GlError if no GL 4.5 context can be made.";
   const auto def = [&](auto& cls) {
     cls.def(
         "render",
@@ -95,14 +100,16 @@ void bindRender(py::class_<DemTerrain, std::shared_ptr<DemTerrain>>& dem,
            const std::array<double, 3>& position,
            const std::optional<std::array<double, 3>>& lookAt, std::optional<double> heading,
            std::optional<double> pitch, double fov, int width, int height, double near,
-           int clipmapSize, const std::array<float, 4>& background) {
+           int clipmapSize, const std::array<float, 4>& background,
+           std::shared_ptr<clod::TrackLayer> tracks) {
           return render(t, position, lookAt, heading, pitch, fov, width, height, near, clipmapSize,
-                        background);
+                        background, std::move(tracks));
         },
         py::arg("position"), py::arg("look_at") = py::none(), py::arg("heading_deg") = py::none(),
         py::arg("pitch_deg") = py::none(), py::arg("fov_deg") = 45.0, py::arg("width") = 640,
         py::arg("height") = 480, py::arg("near") = 0.1, py::arg("clipmap_size") = 255,
-        py::arg("background") = std::array<float, 4>{0.02F, 0.02F, 0.04F, 1.0F}, doc);
+        py::arg("background") = std::array<float, 4>{0.02F, 0.02F, 0.04F, 1.0F},
+        py::arg("tracks") = py::none(), doc);
   };
   def(dem);
   def(planet);

@@ -13,8 +13,10 @@
 #include <array>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace regolith::python {
 
@@ -76,9 +78,95 @@ py::array_t<std::uint8_t> toNumpy(const clod::RgbaImage& img) {
   return out;
 }
 
+/// "(2, 3)": an array's shape as Python prints it.
+std::string shapeOf(const py::array& a) {
+  std::string s = "(";
+  for (py::ssize_t d = 0; d < a.ndim(); ++d) {
+    if (d > 0) s += ", ";
+    s += std::to_string(a.shape(d));
+  }
+  if (a.ndim() == 1) s += ",";
+  return s + ")";
+}
+
+/// The wheels of one rover step as contacts: a (wheels, 2 or more) array of grid x, y.
+std::vector<clod::WheelContact> contactsOf(const DoubleArray& wheels, double width, double depth,
+                                           const char* op) {
+  if (wheels.ndim() != 2 || wheels.shape(1) < 2 || wheels.shape(0) < 1) {
+    throw InvalidArgument(std::string(op) + ": wheels has shape " + shapeOf(wheels) +
+                          ", expected (wheels, 2 or more): grid x, y of each wheel");
+  }
+  const auto a = wheels.unchecked<2>();
+  std::vector<clod::WheelContact> c(static_cast<std::size_t>(a.shape(0)));
+  for (py::ssize_t w = 0; w < a.shape(0); ++w)
+    c[static_cast<std::size_t>(w)] = {{a(w, 0), a(w, 1)}, width, depth};
+  return c;
+}
+
+/// render_scene()'s tracks: a TrackLayer as it is, or wheel contacts (steps, 6, 2 or more)
+/// pressed step by step into a new layer.
+std::shared_ptr<clod::TrackLayer> trackLayerOf(const py::object& tracks) {
+  if (py::isinstance<clod::TrackLayer>(tracks))
+    return tracks.cast<std::shared_ptr<clod::TrackLayer>>();
+  const auto arr = tracks.cast<DoubleArray>();
+  if (arr.ndim() != 3 || arr.shape(1) != 6 || arr.shape(2) < 2) {
+    throw InvalidArgument("regolith.render_scene(): tracks has shape " + shapeOf(arr) +
+                          ", expected (steps, 6, 2 or more): wheel x, y per step, or a TrackLayer");
+  }
+  const auto a = arr.unchecked<3>();
+  auto layer = std::make_shared<clod::TrackLayer>(0.05);
+  std::array<clod::WheelContact, 6> step;
+  for (py::ssize_t i = 0; i < a.shape(0); ++i) {
+    for (py::ssize_t w = 0; w < 6; ++w)
+      step[static_cast<std::size_t>(w)] = {{a(i, w, 0), a(i, w, 1)}, 0.4, 0.03};
+    layer->step(step);
+  }
+  return layer;
+}
+
 }  // namespace
 
 void bindScene(py::module_& m) {
+  py::class_<clod::TrackLayer, std::shared_ptr<clod::TrackLayer>>(
+      m, "TrackLayer",
+      "Wheel tracks a traverse leaves (clod::TrackLayer): a sparse rut-depth field in a DEM's "
+      "grid frame (metres), pressed step by step and drawn by render_scene(tracks=...) and "
+      "Dem.render(tracks=...) as ruts. Thread-safe.")
+      .def(py::init<double>(), py::arg("texel_metres") = 0.05,
+           "texel_metres: the field's resolution (> 0).")
+      .def(
+          "step",
+          [](clod::TrackLayer& l, const DoubleArray& wheels, double width, double depth) {
+            const auto c = contactsOf(wheels, width, depth, "regolith.TrackLayer.step()");
+            l.step(c);
+          },
+          py::arg("wheels"), py::arg("width") = 0.4, py::arg("depth") = 0.03,
+          "Presses one rover step: wheels is (wheels, 2 or more), each wheel's grid x, y (e.g. a "
+          "run_traverse callback's state['wheels']); each wheel's rut runs from its previous "
+          "contact to this one, depth·cos²(π·d/width) across, the deeper rut winning where they "
+          "overlap.")
+      .def(
+          "depth_at",
+          [](const clod::TrackLayer& l, const DoubleArray& xs, const DoubleArray& ys) {
+            if (xs.size() != ys.size())
+              throw InvalidArgument("regolith.TrackLayer.depth_at(): x has " +
+                                    std::to_string(xs.size()) + " values and y " +
+                                    std::to_string(ys.size()) + ", expected the same number");
+            py::array_t<double> out(xs.request().shape);
+            const double* x = xs.data();
+            const double* y = ys.data();
+            double* o = out.mutable_data();
+            for (py::ssize_t i = 0; i < xs.size(); ++i) o[i] = l.depthAt({x[i], y[i]});
+            return out;
+          },
+          py::arg("x"), py::arg("y"),
+          "Rut depth (metres, ≥ 0) at grid points, bilinear between texel centres; the shape "
+          "of x.")
+      .def_property_readonly("texel_metres", &clod::TrackLayer::texelMetres)
+      .def_property_readonly("tiles", &clod::TrackLayer::tiles,
+                             "Tiles of 512² texels allocated so far.")
+      .def("clear", &clod::TrackLayer::clear, "Forgets every track.");
+
   py::class_<PyScene, std::shared_ptr<PyScene>>(
       m, "SceneGraph",
       "The JPL paper's example scene as a tree of frames (poses in double, metres): Sun → "
@@ -140,9 +228,9 @@ void bindScene(py::module_& m) {
       "render_scene",
       [](std::array<double, 3> eye, std::array<double, 3> lookAt, std::array<double, 3> rover,
          std::optional<std::filesystem::path> marsStore,
-         std::optional<std::filesystem::path> victoriaStore, std::optional<DoubleArray> tracks,
-         int width, int height, double fov, std::size_t planetRows, std::size_t demSize,
-         double demSpacing, int clipmapSize, std::array<double, 3> up) {
+         std::optional<std::filesystem::path> victoriaStore, const py::object& tracks, int width,
+         int height, double fov, std::size_t planetRows, std::size_t demSize, double demSpacing,
+         int clipmapSize, std::array<double, 3> up) {
         scenegraph::SceneViewOptions v;
         v.scene =
             sceneOptions(marsStore, victoriaStore, planetRows, demSize, demSpacing, clipmapSize);
@@ -154,23 +242,7 @@ void bindScene(py::module_& m) {
         v.fovYDegrees = fov;
         const glm::dvec3 e{eye[0], eye[1], eye[2]}, t{lookAt[0], lookAt[1], lookAt[2]};
         v.camera = scenegraph::Pose::lookAt(e, t, {up[0], up[1], up[2]});
-        if (tracks) {
-          // (steps, 6, 2) grid x, y of the six wheels at each step, as run_traverse records.
-          const auto a = tracks->unchecked<3>();
-          if (a.shape(1) != 6 || a.shape(2) < 2)
-            throw InvalidArgument("regolith.render_scene(): tracks has shape (" +
-                                  std::to_string(a.shape(0)) + ", " + std::to_string(a.shape(1)) +
-                                  ", " + std::to_string(a.shape(2)) +
-                                  "), expected (steps, 6, 2 or more): wheel x, y per step");
-          auto layer = std::make_shared<clod::TrackLayer>(0.05);
-          std::array<clod::WheelContact, 6> step;
-          for (py::ssize_t i = 0; i < a.shape(0); ++i) {
-            for (py::ssize_t w = 0; w < 6; ++w)
-              step[static_cast<std::size_t>(w)] = {{a(i, w, 0), a(i, w, 1)}, 0.4, 0.03};
-            layer->step(step);
-          }
-          v.scene.victoriaEffects.tracks = layer;
-        }
+        if (!tracks.is_none()) v.scene.victoriaEffects.tracks = trackLayerOf(tracks);
         clod::RgbaImage img;
         {
           const py::gil_scoped_release release;
@@ -190,7 +262,8 @@ void bindScene(py::module_& m) {
       "(height, width, 4) uint8 RGBA array. eye and look_at are in the Victoria DEM's frame "
       "(x east, y north, z up, metres), and up is the direction that is up in the image (it must "
       "not be parallel to the view); rover is (x, y, heading_deg) on the DEM. tracks: wheel "
-      "contacts (steps, 6, 2), e.g. run_traverse(...)['record']['wheels'], pressed as ruts.");
+      "contacts (steps, 6, 2), e.g. run_traverse(...)['record']['wheels'], pressed as ruts, or "
+      "a TrackLayer a traverse stamped.");
 
   m.def(
       "render_flyover",

@@ -51,7 +51,8 @@ class TrackLayer {
   void step(std::span<const WheelContact> wheels);
 
   [[nodiscard]] double texelMetres() const noexcept { return texel_; }
-  /// Rut depth (metres, ≥ 0) at a grid point, bilinear between texel centres.
+  /// Rut depth (metres, ≥ 0) at a grid point, bilinear between texel centres. Throws
+  /// InvalidArgument for a non-finite point.
   [[nodiscard]] double depthAt(glm::dvec2 gridXY) const;
   /// Depth of texel (tx, ty): the texel centred at ((tx + ½)·texel, (ty + ½)·texel).
   [[nodiscard]] float texel(std::int64_t tx, std::int64_t ty) const;

@@ -51,7 +51,8 @@ struct ResidentBilinear {
     const auto c = static_cast<long>(u), r = static_cast<long>(v);
     const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
     const float* p = data + r * cols + c;
-    const double a = p[0], b = p[1], cc = p[cols], d = p[cols + 1];
+    const auto a = static_cast<double>(p[0]), b = static_cast<double>(p[1]);
+    const auto cc = static_cast<double>(p[cols]), d = static_cast<double>(p[cols + 1]);
     const double top = a + tu * (b - a), bottom = cc + tu * (d - cc);
     h = top + tv * (bottom - top);
     return h == h &&
@@ -124,7 +125,8 @@ inline bool blockBilinear(const Block& b, double u, double v, double nodata, boo
   const auto c = static_cast<std::size_t>(u), r = static_cast<std::size_t>(v);
   const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
   const float* p = b.data + (r - b.row0) * b.stride + (c - b.col0);
-  const double a = p[0], bb = p[1], cc = p[b.stride], d = p[b.stride + 1];
+  const auto a = static_cast<double>(p[0]), bb = static_cast<double>(p[1]);
+  const auto cc = static_cast<double>(p[b.stride]), d = static_cast<double>(p[b.stride + 1]);
   const double top = a + tu * (bb - a), bottom = cc + tu * (d - cc);
   h = top + tv * (bottom - top);
   return h == h &&
