@@ -245,6 +245,9 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
   fly.scene.victoriaStore = data.victoria;
   fly.scene.clipmapSize = 127;
   fly.scene.demAlbedo = glm::vec3{0.86F, 0.60F, 0.46F};  // a lighter tone of the planet's
+  // The fly-over ends where the traverse stopped, with the tracks it left.
+  fly.rover = glm::dvec3{trav.last.x, trav.last.y, trav.last.heading * 180.0 / M_PI};
+  fly.scene.victoriaEffects.tracks = trav.tracks;
   fly.progress = [&out, every = std::max<std::size_t>(1, o.frames / 6)](int done, int all,
                                                                         const fs::path& path) {
     if (static_cast<std::size_t>(done) % every == 0 || done == all)

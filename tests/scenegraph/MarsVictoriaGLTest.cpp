@@ -1,6 +1,7 @@
 // scenegraph::MarsVictoriaScene and scenegraph::renderFlyover(): the fly-over writes readable PNGs
 // from Mars whole down to the rover, switching the focus on the way.
 #include <regolith/clod/Image.hpp>
+#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/scenegraph/MarsVictoria.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/topo/Error.hpp>
@@ -10,8 +11,10 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
+#include <memory>
 #include <string>
 
 namespace regolith::scenegraph {
@@ -66,6 +69,51 @@ TEST(MarsVictoriaGLTest, FlyoverGoesFromMarsWholeToTheRover) {
   // Its surroundings are the DEM (green over red).
   const auto* ground = last.pixel(48, 60);
   EXPECT_GT(ground[1], ground[0]);
+  std::filesystem::remove_all(dir);
+}
+
+// With a rover position given (where a traverse stopped), the fly-over ends there: the ruts
+// pressed only around that position show in the last frame, which they could not if the
+// camera descended on the layout's rover 250 m away.
+TEST(MarsVictoriaGLTest, FlyoverEndsAtTheGivenRoverWithItsTracks) {
+  test::glContext();
+  const auto dir = std::filesystem::path(::testing::TempDir()) / "regolith_flyover_rover_test";
+  std::filesystem::remove_all(dir);
+  auto tracks = std::make_shared<clod::TrackLayer>(0.05);
+  std::array<clod::WheelContact, 6> step;
+  for (double y = -253.0; y <= -225.0; y += 0.05) {  // northwards, under the rover and ahead
+    for (std::size_t w = 0; w < 6; ++w)
+      step[w] = {{120.0 + (w % 2 == 0 ? -1.1 : 1.1), y + 1.1 - 1.05 * static_cast<double>(w / 2)},
+                 0.4,
+                 0.05};
+    tracks->step(step);
+  }
+  FlyoverOptions o;
+  o.frames = 3;
+  o.width = 96;
+  o.height = 64;
+  o.multiView = false;
+  o.scene = small();
+  o.rover = glm::dvec3{120.0, -250.0, 0.0};
+  o.outputDir = dir / "plain";
+  const FlyoverSummary plain = renderFlyover(o);
+  o.outputDir = dir / "tracks";
+  o.scene.victoriaEffects.tracks = tracks;
+  const FlyoverSummary tracked = renderFlyover(o);
+  ASSERT_EQ(plain.files.size(), 3U);
+  ASSERT_EQ(tracked.files.size(), 3U);
+  EXPECT_NEAR(tracked.endDistance, 6.0, 0.5);
+  const clod::RgbaImage a = clod::readPng(plain.files.back().string());
+  const clod::RgbaImage b = clod::readPng(tracked.files.back().string());
+  const auto* centre = a.pixel(48, 32);  // the rover, grey
+  EXPECT_NEAR(centre[0], centre[1], 8);
+  EXPECT_NEAR(centre[1], centre[2], 8);
+  int darker = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) darker += b.pixel(x, y)[1] + 4 < a.pixel(x, y)[1] ? 1 : 0;
+  EXPECT_GT(darker, 20);  // the ruts, darker than the bare ground
+  o.rover = glm::dvec3{std::nan(""), 0.0, 0.0};
+  EXPECT_THROW((void)renderFlyover(o), InvalidArgument);
   std::filesystem::remove_all(dir);
 }
 

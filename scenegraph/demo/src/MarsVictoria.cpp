@@ -254,6 +254,12 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
   if (options.width < 1 || options.height < 1)
     throw InvalidArgument("renderFlyover(): image " + std::to_string(options.width) + "×" +
                           std::to_string(options.height) + ", expected a non-empty image");
+  if (options.rover && !(std::isfinite(options.rover->x) && std::isfinite(options.rover->y) &&
+                         std::isfinite(options.rover->z)))
+    throw InvalidArgument("renderFlyover(): rover (" + std::to_string(options.rover->x) + ", " +
+                          std::to_string(options.rover->y) + ", " +
+                          std::to_string(options.rover->z) +
+                          "), expected a finite grid x, y and heading");
   const auto t0 = std::chrono::steady_clock::now();
   FlyoverSummary summary;
   std::filesystem::create_directories(options.outputDir);
@@ -261,6 +267,7 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
   if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<clod::HeadlessContext>();
   {
     MarsVictoriaScene scene(options.scene);
+    if (options.rover) scene.placeRover(options.rover->x, options.rover->y, options.rover->z);
     SceneGraph& g = scene.graph();
     const PaperSceneNodes& n = scene.nodes();
     const glm::dvec3 rover = g.relative(n.victoria, n.rover).translation;

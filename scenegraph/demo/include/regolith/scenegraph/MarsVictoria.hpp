@@ -102,6 +102,10 @@ struct FlyoverOptions {
   int frames = 72;
   int width = 480, height = 270;
   MarsVictoriaOptions scene{};
+  /// Where the fly-over ends: the rover at grid (x, y) on the Victoria DEM (on its surface),
+  /// heading in degrees clockwise from +y, e.g. where a traverse stopped. Unset: the paper
+  /// layout's rover on the southern rim. InvalidArgument if not finite.
+  std::optional<glm::dvec3> rover;
   /// Also write a frame of the rover's mast camera and of the orbit camera (one PNG with
   /// both as viewports) after the fly-over.
   bool multiView = true;
