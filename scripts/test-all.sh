@@ -4,16 +4,17 @@
 #   2. clang-format check                  (scripts/check-format.sh)
 #   3. Release build with -Werror           -> build/
 #   4. clang-tidy over that build           (scripts/run-clang-tidy.sh)
-#   5. ASan+UBSan build and its tests       -> build-asan/ (libraries, Python module, their
-#                                             tests; no tool, examples or benchmarks)
+#   5. ASan+UBSan build of the core (topo, store, rover) and its tests -> build-asan/
+#      (REGOLITH_FULL_CHECKS=1: everything, with every test)
 #   6. TSan build of the store tests (pager, patch cache: the concurrent code) -> build-tsan/
 #   7. the Release tests, last, so the output ends with ctest's summary
 #
 #   bash scripts/test-all.sh
 #
 # Environment (all optional): BUILD_DIR (default build), ASAN_BUILD_DIR (default
-# build-asan), REGOLITH_CMAKE_ARGS (extra arguments for both configure steps, split on
-# spaces). Real-data fixtures come from ../shared/fixtures/dem unless REGOLITH_FIXTURES_DIR
+# build-asan), TSAN_BUILD_DIR (default build-tsan), REGOLITH_CMAKE_ARGS (extra arguments for
+# every configure step, split on spaces), REGOLITH_FULL_CHECKS=1 (sanitize and test every
+# module, and run clang-tidy's analyzer on every directory: longer than CI allows). Real-data fixtures come from ../shared/fixtures/dem unless REGOLITH_FIXTURES_DIR
 # says otherwise.
 set -euo pipefail
 
@@ -46,23 +47,61 @@ cmake --build "$build_dir" -j"$jobs"
 section "clang-tidy (scripts/run-clang-tidy.sh $build_dir)"
 bash scripts/run-clang-tidy.sh "$build_dir"
 
-# Debug for the clearest reports. -Werror stays with the Release build: GCC's sanitizer
-# instrumentation can raise false -Wmaybe-uninitialized / -Wstringop-* warnings.
-# The sanitized build covers the libraries and the Python module (their own suites); the
-# command-line tool and the examples, thin front ends over the same libraries, are built
-# and tested in the Release build only: under ASan their builds and end-to-end runs took
-# about 3 of CI's 29 minutes (2026-12-01: some 190 s of compiling and 160 s of tests, on 2
-# cores) for code the library suites already run.
+# Runs a GoogleTest executable as $jobs shards side by side (gtest sharding: every test runs
+# in exactly one shard), one per core, with the given VAR=value environment; each shard's
+# output is printed whole when it ends, and any failing shard fails the run.
+run_shards() {
+  local name=$1 exe=$2
+  shift 2
+  local pids=() status=0 shard
+  for ((shard = 0; shard < jobs; ++shard)); do
+    env "$@" GTEST_TOTAL_SHARDS="$jobs" GTEST_SHARD_INDEX="$shard" \
+      "$exe" --gtest_brief=1 >"$exe.shard$shard.log" 2>&1 &
+    pids+=($!)
+  done
+  for ((shard = 0; shard < jobs; ++shard)); do
+    wait "${pids[shard]}" || status=1
+    echo "-- $name: shard $shard of $jobs"
+    cat "$exe.shard$shard.log"
+  done
+  if ((status != 0)); then
+    echo "test-all: $name failed (its output is above)" >&2
+    exit 1
+  fi
+}
+
+# Sanitizers cover the core, where memory and threading errors hide: topo (queries, the
+# lock-free block table and hazard records), store (pager, patch cache, prefetcher, HDF5
+# reads and crash-safe writes, GDAL import) and rover. The GL renderer, the scene, the
+# Python module, the command-line tool and the examples are built and tested in the Release
+# build. That keeps CI within its 20 minutes: the full sanitized build and all its tests
+# took 9.5 of CI's 28 minutes (2026-12-01, 2 cores). REGOLITH_FULL_CHECKS=1 sanitizes and
+# tests everything (and runs clang-tidy's analyzer everywhere).
+full=${REGOLITH_FULL_CHECKS:-0}
+asan_env=(ASAN_OPTIONS=halt_on_error=1:print_stacktrace=1:detect_leaks=1
+  UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1)
+
+# Debug for the clearest reports, with -g1 (line tables: reports keep their file:line, and
+# the build is a tenth faster than with -g). -Werror stays with the Release build: GCC's
+# sanitizer instrumentation can raise false -Wmaybe-uninitialized / -Wstringop-* warnings.
 section "ASan+UBSan build and tests ($asan_dir)"
-# -g1 (line tables only): reports keep their file:line, and the build is a tenth faster
-# than with full -g.
-cmake -S . -B "$asan_dir" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-g1 \
-  -DCMAKE_C_FLAGS_DEBUG=-g1 -DREGOLITH_WERROR=OFF -DREGOLITH_SANITIZE=address,undefined \
-  -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=OFF -DREGOLITH_BUILD_EXAMPLES=OFF -DREGOLITH_BUILD_BENCH=OFF "${extra_args[@]}"
-cmake --build "$asan_dir" -j"$jobs"
-ASAN_OPTIONS=halt_on_error=1:print_stacktrace=1:detect_leaks=1 \
-UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-  ctest --test-dir "$asan_dir" --output-on-failure --no-tests=error -j"$jobs"
+if [[ $full == 1 ]]; then
+  cmake -S . -B "$asan_dir" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-g1 \
+    -DCMAKE_C_FLAGS_DEBUG=-g1 -DREGOLITH_WERROR=OFF -DREGOLITH_SANITIZE=address,undefined \
+    -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=ON -DREGOLITH_BUILD_EXAMPLES=ON \
+    -DREGOLITH_BUILD_PYTHON=ON -DREGOLITH_BUILD_BENCH=OFF "${extra_args[@]}"
+  cmake --build "$asan_dir" -j"$jobs"
+  env "${asan_env[@]}" ctest --test-dir "$asan_dir" --output-on-failure --no-tests=error -j"$jobs"
+else
+  cmake -S . -B "$asan_dir" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-g1 \
+    -DCMAKE_C_FLAGS_DEBUG=-g1 -DREGOLITH_WERROR=OFF -DREGOLITH_SANITIZE=address,undefined \
+    -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=OFF -DREGOLITH_BUILD_EXAMPLES=OFF \
+    -DREGOLITH_BUILD_PYTHON=OFF -DREGOLITH_BUILD_BENCH=OFF "${extra_args[@]}"
+  cmake --build "$asan_dir" -j"$jobs" --target topo_tests store_tests rover_tests
+  run_shards "ASan+UBSan topo_tests" "$asan_dir/tests/topo_tests" "${asan_env[@]}"
+  run_shards "ASan+UBSan store_tests" "$asan_dir/tests/store/store_tests" "${asan_env[@]}"
+  run_shards "ASan+UBSan rover_tests" "$asan_dir/tests/rover/rover_tests" "${asan_env[@]}"
+fi
 
 # ThreadSanitizer on the concurrent code: the store tests (pager, cache, lock-free block
 # table, prefetcher, threaded writer and import). tests/tsan.supp silences one lock-order
@@ -70,27 +109,11 @@ UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 section "TSan build and store tests ($tsan_dir)"
 cmake -S . -B "$tsan_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DREGOLITH_WERROR=OFF \
   -DREGOLITH_SANITIZE=thread -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=OFF \
-  -DREGOLITH_BUILD_BENCH=OFF "${extra_args[@]}"
+  -DREGOLITH_BUILD_EXAMPLES=OFF -DREGOLITH_BUILD_PYTHON=OFF -DREGOLITH_BUILD_BENCH=OFF \
+  "${extra_args[@]}"
 cmake --build "$tsan_dir" -j"$jobs" --target store_tests
-# Two shards of the suite side by side (gtest sharding: every test runs in exactly one), one
-# per core; each shard's output is printed whole when it ends.
-tsan_pids=()
-for ((shard = 0; shard < jobs; ++shard)); do
-  TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$root/tests/tsan.supp" \
-  GTEST_TOTAL_SHARDS=$jobs GTEST_SHARD_INDEX=$shard \
-    "$tsan_dir/tests/store/store_tests" --gtest_brief=1 >"$tsan_dir/shard$shard.log" 2>&1 &
-  tsan_pids+=($!)
-done
-tsan_status=0
-for ((shard = 0; shard < jobs; ++shard)); do
-  wait "${tsan_pids[shard]}" || tsan_status=1
-  echo "-- TSan shard $shard of $jobs"
-  cat "$tsan_dir/shard$shard.log"
-done
-if ((tsan_status != 0)); then
-  echo "test-all: a TSan shard of store_tests failed (its output is above)" >&2
-  exit 1
-fi
+run_shards "TSan store_tests" "$tsan_dir/tests/store/store_tests" \
+  "TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$root/tests/tsan.supp"
 
 section "Release tests ($build_dir)"
 ctest --test-dir "$build_dir" --output-on-failure --no-tests=error -j"$jobs"

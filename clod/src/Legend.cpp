@@ -135,10 +135,10 @@ RgbaImage Legend::image() const {
         put(img, x, r, {unorm8(c.r), unorm8(c.g), unorm8(c.b), 255});
     }
     const int tx = b.x1 + 6;
-    text(img, tx, b.y0, number(heights_->maxHeight) + " M");
+    text(img, tx, b.y0, number(static_cast<double>(heights_->maxHeight)) + " M");
     text(img, tx, (b.y0 + b.y1) / 2 - 5,
          number(0.5 * static_cast<double>(heights_->minHeight + heights_->maxHeight)) + " M");
-    text(img, tx, b.y1 - 10, number(heights_->minHeight) + " M");
+    text(img, tx, b.y1 - 10, number(static_cast<double>(heights_->minHeight)) + " M");
     y = b.y1 + kPad;
   }
   if (latLon_) text(img, kPad, y, "LAT/LON " + number(*latLon_) + "o");
