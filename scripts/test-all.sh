@@ -107,7 +107,10 @@ fi
 # table, prefetcher, threaded writer and import). tests/tsan.supp silences one lock-order
 # report inside GDAL's driver registration.
 section "TSan build and store tests ($tsan_dir)"
-cmake -S . -B "$tsan_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DREGOLITH_WERROR=OFF \
+# -g1 here too: line tables are all TSan's reports need.
+cmake -S . -B "$tsan_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" \
+  -DREGOLITH_WERROR=OFF \
   -DREGOLITH_SANITIZE=thread -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=OFF \
   -DREGOLITH_BUILD_EXAMPLES=OFF -DREGOLITH_BUILD_PYTHON=OFF -DREGOLITH_BUILD_BENCH=OFF \
   "${extra_args[@]}"

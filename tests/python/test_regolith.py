@@ -480,6 +480,8 @@ def test_render_scene_presses_tracks_and_checks_their_shape():
     assert tracked[changed, :3].sum() < plain[changed, :3].sum()
     with pytest.raises(regolith.InvalidArgument, match=r"tracks has shape \(10, 4, 2\)"):
         regolith.render_scene(tracks=np.zeros((10, 4, 2)), **view)
+    with pytest.raises(regolith.InvalidArgument, match="tracks is a dict, expected a TrackLayer"):
+        regolith.render_scene(tracks={"wheels": 1}, **view)
     # A TrackLayer pressed with the same steps draws exactly the same ruts.
     layer = regolith.TrackLayer(texel_metres=0.05)
     for step in tracks:

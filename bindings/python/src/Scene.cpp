@@ -108,7 +108,20 @@ std::vector<clod::WheelContact> contactsOf(const DoubleArray& wheels, double wid
 std::shared_ptr<clod::TrackLayer> trackLayerOf(const py::object& tracks) {
   if (py::isinstance<clod::TrackLayer>(tracks))
     return tracks.cast<std::shared_ptr<clod::TrackLayer>>();
-  const auto arr = tracks.cast<DoubleArray>();
+  const auto notContacts = [&] {
+    return InvalidArgument("regolith.render_scene(): tracks is a " +
+                           std::string(py::str(py::type::of(tracks).attr("__name__"))) +
+                           ", expected a TrackLayer or wheel contacts (steps, 6, 2 or more)");
+  };
+  DoubleArray arr;
+  try {
+    arr = tracks.cast<DoubleArray>();
+  } catch (const py::cast_error&) {
+    throw notContacts();
+  } catch (const py::error_already_set& e) {  // numpy could not convert it
+    if (!e.matches(PyExc_TypeError) && !e.matches(PyExc_ValueError)) throw;
+    throw notContacts();
+  }
   if (arr.ndim() != 3 || arr.shape(1) != 6 || arr.shape(2) < 2) {
     throw InvalidArgument("regolith.render_scene(): tracks has shape " + shapeOf(arr) +
                           ", expected (steps, 6, 2 or more): wheel x, y per step, or a TrackLayer");
