@@ -15,9 +15,11 @@
 // count their hit in the patch's own counters without the lock (topo/BlockTable.hpp). The
 // index then lags behind those counters; eviction corrects it lazily: while the first
 // element's live (hits, lastUse) is newer than its indexed key, it is re-ranked with the live
-// key and the next first element examined. Keys only grow within one thread, so the victim is
-// the one an eager index would choose (across threads, recency ticks are reserved in runs
-// of 64 and the order is approximate). Each lock-free hit costs at most one re-rank, so
+// key and the next first element examined. Keys only grow, so the victim is the one an eager
+// index would choose. Recency: events under the lock take a tick of one process-wide clock
+// (exact order); a lock-free hit is stamped with the clock's current value without
+// advancing it (topo::hazard::now()), so lock-free hits between two locked events tie, and
+// ties go to the lower key. Each lock-free hit costs at most one re-rank, so
 // eviction stays O(log n) amortised. DecayingHitCount publishes nothing: its scores are
 // rescaled under the lock, so all its hits take the lock.
 //
@@ -54,6 +56,7 @@
 #include <mutex>
 #include <set>
 #include <string>
+#include <tuple>
 #include <unordered_map>
 #include <utility>
 
@@ -121,7 +124,11 @@ struct PatchCache::Impl {
   };
   struct RankLess {
     bool operator()(const Rank& a, const Rank& b) const noexcept {
-      return a.score < b.score || (a.score == b.score && a.lastUse < b.lastUse);
+      // The key breaks ties: lock-free hits between two locked events share a stamp.
+      if (a.score != b.score) return a.score < b.score;
+      if (a.lastUse != b.lastUse) return a.lastUse < b.lastUse;
+      return std::tie(a.key.grid, a.key.level, a.key.row, a.key.col) <
+             std::tie(b.key.grid, b.key.level, b.key.row, b.key.col);
     }
   };
   using RankIndex = std::set<Rank, RankLess>;
@@ -247,7 +254,7 @@ struct PatchCache::Impl {
     topo::PublishedBlock& b = e.res->block;
     ++e.res->lockedHits;
     const std::uint64_t hits = e.res->hits();
-    const std::uint64_t now = topo::hazard::tick(topo::hazard::acquire());
+    const std::uint64_t now = topo::hazard::tick();
     b.lastUse.store(now, relaxed);
     switch (policy) {
       case CachePolicy::Lru: rerank(e, 0.0, now); break;
@@ -321,6 +328,7 @@ struct PatchCache::Impl {
     b.uHi = d(b.col0 + b.cols) - 1.0;
     b.vLo = d(b.row0);
     b.vHi = d(b.row0 + b.rows) - 1.0;
+    b.origin = topo::originOf(b.data, b.row0, b.col0, b.stride);
     table.publish(key.row, key.col, &b);
     e.table = &table;
   }
@@ -334,7 +342,7 @@ struct PatchCache::Impl {
     makeRoom(bytes);
     auto res = std::make_unique<Resident>();
     res->patch = std::move(patch);
-    const std::uint64_t now = topo::hazard::tick(topo::hazard::acquire());
+    const std::uint64_t now = topo::hazard::tick();
     res->block.lastUse.store(now, std::memory_order_relaxed);
     const auto rank = ranks.insert(Rank{0.0, now, key}).first;
     Entry* e = nullptr;

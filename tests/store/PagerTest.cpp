@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <random>
 #include <thread>
+#include <vector>
 
 using namespace regolith;
 using namespace regolith::store;
@@ -234,6 +235,45 @@ TEST(Pager, QueriesJumpingBetweenResidentPatchesCountOneHitPerPatchEntered) {
   EXPECT_EQ(s.hits, 5u);
   EXPECT_EQ(s.misses, 0u);
   EXPECT_EQ(s.loads, 0u);
+}
+
+TEST(Pager, CellsAcrossPatchEdgesAreReadLockFreeAndExactly) {
+  // A bilinear cell whose samples lie in two or four resident patches (a rover crossing a
+  // patch edge) is read from the block table, not through the cache: a run of queries in it
+  // counts no further hit (each sample outside the thread's patch used to be a locked
+  // lookup), and the heights are the in-memory ones bit for bit.
+  Opened o = openFixture();
+  const TopoDem dem = o.pager.dem("dem");
+  const TopoDem mem = inMemoryDem();
+  for (int pr = 0; pr < 2; ++pr) {
+    for (int pc = 0; pc < 2; ++pc) (void)heightIn(dem, pr, pc);  // make them resident
+  }
+  // Cells (row, col) = (127, 127): four patches; (40, 127): two side by side; (127, 40): two
+  // one above the other.
+  for (const auto& [r, c] :
+       {std::pair{127.0, 127.0}, std::pair{40.0, 127.0}, std::pair{127.0, 40.0}}) {
+    (void)dem.height(-500.0 + c + 0.5, 400.0 - r - 0.5);  // the run begins
+    o.cache->resetStats();
+    for (int i = 0; i < 1000; ++i) {
+      const double x = -500.0 + c + 0.001 * i, y = 400.0 - r - 0.999 + 0.00093 * i;
+      const HeightSample a = mem.height(x, y), b = dem.height(x, y);
+      ASSERT_TRUE(b.valid()) << r << "," << c << " #" << i;
+      ASSERT_EQ(a.height, b.height) << r << "," << c << " #" << i;
+    }
+    const CacheStats s = o.cache->stats();
+    EXPECT_EQ(s.hits, 0u) << "cell " << r << "," << c;
+    EXPECT_EQ(s.misses, 0u);
+  }
+  // Batches take the same path.
+  std::vector<double> xs, ys, out(500);
+  for (int i = 0; i < 500; ++i) {
+    xs.push_back(-500.0 + 127.0 + 0.002 * i);
+    ys.push_back(400.0 - 127.0 - 0.002 * i);
+  }
+  o.cache->resetStats();
+  dem.heights(xs, ys, out, {});
+  for (std::size_t i = 0; i < xs.size(); ++i) ASSERT_EQ(out[i], mem.height(xs[i], ys[i]).height);
+  EXPECT_LE(o.cache->stats().hits, 1u);
 }
 
 TEST(Pager, LruEvictsTheLeastRecentPatchWhenHitsTookTheLockFreePath) {

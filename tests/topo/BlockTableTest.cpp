@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <thread>
 #include <vector>
 
@@ -111,16 +112,35 @@ TEST(Hazard, AThreadProtectsOneBlockUntilItMovesOnOrEnds) {
   EXPECT_FALSE(hazard::isProtected(&b));
 }
 
-TEST(Hazard, RecencyTicksIncreaseWithinAThreadAndDifferAcrossThreads) {
-  hazard::Record& rec = hazard::acquire();
-  std::uint64_t last = hazard::tick(rec);
-  for (int i = 0; i < 1000; ++i) {  // crosses several reserved runs of 64
-    const std::uint64_t t = hazard::tick(rec);
+TEST(Hazard, RecencyTicksAreUniqueAndIncreasingAcrossThreadsAndStampsAreNewer) {
+  std::uint64_t last = hazard::tick();
+  for (int i = 0; i < 1000; ++i) {
+    const std::uint64_t t = hazard::tick();
     ASSERT_GT(t, last);
     last = t;
   }
-  std::uint64_t other = 0;
-  std::thread([&] { other = hazard::tick(hazard::acquire()); }).join();
-  EXPECT_GT(other, 0u);
-  EXPECT_NE(other, last);
+  // A lock-free hit's stamp is newer than every tick handed out before it, and does not
+  // advance the clock.
+  EXPECT_GT(hazard::now(), last);
+  EXPECT_EQ(hazard::now(), hazard::now());
+  // Ticks of several threads at once: all distinct.
+  std::vector<std::uint64_t> ticks[4];
+  {
+    std::vector<std::thread> threads;
+    for (auto& v : ticks) {
+      threads.emplace_back([&v] {
+        for (int i = 0; i < 2000; ++i) v.push_back(hazard::tick());
+      });
+    }
+    for (std::thread& t : threads) t.join();
+  }
+  std::vector<std::uint64_t> all;
+  for (const auto& v : ticks) {
+    ASSERT_TRUE(std::is_sorted(v.begin(), v.end()));
+    all.insert(all.end(), v.begin(), v.end());
+  }
+  std::sort(all.begin(), all.end());
+  EXPECT_EQ(std::adjacent_find(all.begin(), all.end()), all.end());
+  EXPECT_GT(all.front(), last);
+  EXPECT_GT(hazard::now(), all.back());
 }

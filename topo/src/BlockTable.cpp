@@ -21,11 +21,11 @@ BlockTable::BlockTable(std::size_t rows, std::size_t cols, std::size_t blockRows
                           ", expected every size > 0");
   }
   blocksPerRow_ = (cols + blockCols - 1) / blockCols;
-  const auto shiftOf = [](std::size_t n) {
-    return std::has_single_bit(n) ? std::countr_zero(n) : -1;
-  };
-  rowShift_ = shiftOf(blockRows);
-  colShift_ = shiftOf(blockCols);
+  pow2_ = std::has_single_bit(blockRows) && std::has_single_bit(blockCols);
+  if (pow2_) {
+    rowShift_ = static_cast<unsigned>(std::countr_zero(blockRows));
+    colShift_ = static_cast<unsigned>(std::countr_zero(blockCols));
+  }
   const std::size_t n = ((rows + blockRows - 1) / blockRows) * blocksPerRow_;
   slots_ = std::make_unique<Slot[]>(n);
   for (std::size_t i = 0; i < n; ++i) slots_[i].store(nullptr, std::memory_order_relaxed);
@@ -64,6 +64,7 @@ struct Releaser {
     if (rec != nullptr) {
       rec->ptr.store(nullptr, std::memory_order_release);
       rec->inUse.store(false, std::memory_order_release);
+      tlRecord = tlFastRecord = nullptr;  // a later query in this thread registers anew
     }
   }
 };
@@ -93,9 +94,13 @@ Record& acquire() {
     } while (!gRecords.compare_exchange_weak(head, rec, std::memory_order_release,
                                              std::memory_order_relaxed));
   }
-  rec->tickNext = rec->tickEnd = 0;
   tlReleaser.rec = rec;
   tlRecord = rec;
+#if defined(__SANITIZE_THREAD__)
+  tlFastRecord = rec;
+#else
+  if (gAsymmetric.load(std::memory_order_relaxed)) tlFastRecord = rec;
+#endif
   return *rec;
 }
 

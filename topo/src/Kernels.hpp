@@ -88,7 +88,8 @@ inline const ThreadBlock& acquireBlock(const SampleSource& src, std::size_t r, s
             d(fresh.col0),
             d(fresh.col0 + fresh.cols) - 1.0,
             d(fresh.row0),
-            d(fresh.row0 + fresh.rows) - 1.0};
+            d(fresh.row0 + fresh.rows) - 1.0,
+            originOf(fresh.data, fresh.row0, fresh.col0, fresh.stride)};
       tlBlockOwner = std::move(fresh.owner);
     } else {
       tb = {};

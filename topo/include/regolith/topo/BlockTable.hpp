@@ -17,8 +17,10 @@
 /// if it is unchanged. The reclaimer retracts, runs a process-wide memory barrier
 /// (Linux membarrier(2), which makes every running thread execute a full fence), then frees
 /// a retracted block only if no thread's hazard record names it. The reader therefore needs
-/// no fence; where membarrier is unavailable (and under ThreadSanitizer, which does not model
-/// it) the reader uses a sequentially consistent store instead.
+/// no fence. Where membarrier is unavailable, queries do not use the table (tlFastRecord
+/// stays null) and enter new blocks through the cache's lock; protect() with a fence remains
+/// for other callers. Under ThreadSanitizer, which does not model membarrier, the reader
+/// uses a sequentially consistent store instead.
 
 #include <atomic>
 #include <cstddef>
@@ -26,6 +28,15 @@
 #include <memory>
 
 namespace regolith::topo {
+
+/// The address sample (0, 0) of the grid would have if a block's rows extended back to it,
+/// in integer arithmetic (as a pointer it could lie outside any object): a query then finds
+/// sample (r, c) at origin + (r·stride + c)·sizeof(float) with no subtraction of the
+/// block's first row and column (fewer instructions on the random-access path).
+[[nodiscard]] inline std::uintptr_t originOf(const float* data, std::size_t row0, std::size_t col0,
+                                             std::size_t stride) noexcept {
+  return reinterpret_cast<std::uintptr_t>(data) - (row0 * stride + col0) * sizeof(float);
+}
 
 /// A block as published in a BlockTable. Its samples and geometry are immutable while it is
 /// published and until its reclaimer frees it. The counters are the cache's per-block hit
@@ -36,6 +47,8 @@ struct PublishedBlock {
   std::size_t row0 = 0, col0 = 0, rows = 0, cols = 0, stride = 0;
   /// Fractional (u, v) whose whole bilinear cell lies in the block (as in a ThreadBlock).
   double uLo = 0.0, uHi = 0.0, vLo = 0.0, vHi = 0.0;
+  /// originOf(data, row0, col0, stride): sample (r, c) is at origin + (r·stride + c)·4.
+  std::uintptr_t origin = 0;
   mutable std::atomic<std::uint64_t> fastHits{0};  // hits taken through the table
   mutable std::atomic<std::uint64_t> lastUse{0};   // tick of the last hit
 };
@@ -56,12 +69,7 @@ class BlockTable {
   /// The slot of the block holding sample (r, c); load it with acquire. Requires
   /// r < rows(), c < cols().
   [[nodiscard]] const Slot& slot(std::size_t r, std::size_t c) const noexcept {
-    // Shifts for power-of-two blocks (the default 256): a 64-bit division is some 40
-    // micro-operations, and four of them per block switch kept the processor from
-    // overlapping the memory misses of consecutive random queries.
-    const std::size_t br = rowShift_ >= 0 ? r >> rowShift_ : r / blockRows_;
-    const std::size_t bc = colShift_ >= 0 ? c >> colShift_ : c / blockCols_;
-    return slots_[br * blocksPerRow_ + bc];
+    return slots_[index(r, c)];
   }
   /// The published block holding sample (r, c), or null. Requires r < rows(), c < cols().
   [[nodiscard]] const PublishedBlock* find(std::size_t r, std::size_t c) const noexcept {
@@ -92,8 +100,8 @@ class BlockTable {
   /// prefetch never faults). Batch queries issue it a few points ahead, so the memory misses
   /// of several random points overlap. Requires r < rows(), c < cols().
   void prefetchCell(std::size_t r, std::size_t c) const noexcept {
-    const std::size_t br = rowShift_ >= 0 ? r >> rowShift_ : r / blockRows_;
-    const std::size_t bc = colShift_ >= 0 ? c >> colShift_ : c / blockCols_;
+    const std::size_t br = pow2_ ? r >> rowShift_ : r / blockRows_;
+    const std::size_t bc = pow2_ ? c >> colShift_ : c / blockCols_;
     const std::size_t i = br * blocksPerRow_ + bc;
     const float* data = hints_[i].data.load(std::memory_order_relaxed);
     if (data == nullptr) return;
@@ -114,8 +122,18 @@ class BlockTable {
     std::atomic<std::size_t> stride{0};
   };
 
+  /// The slot index of sample (r, c). Shifts for power-of-two blocks (the default 256): a
+  /// 64-bit division is some 40 micro-operations, and four of them per block switch kept the
+  /// processor from overlapping the memory misses of consecutive random queries.
+  [[nodiscard]] std::size_t index(std::size_t r, std::size_t c) const noexcept {
+    if (pow2_) [[likely]]
+      return (r >> rowShift_) * blocksPerRow_ + (c >> colShift_);
+    return (r / blockRows_) * blocksPerRow_ + c / blockCols_;
+  }
+
   std::size_t rows_, cols_, blockRows_, blockCols_, blocksPerRow_;
-  int rowShift_ = -1, colShift_ = -1;  // log2 of the block size, or −1 if not a power of two
+  bool pow2_ = false;                     // both block sizes are powers of two
+  unsigned rowShift_ = 0, colShift_ = 0;  // their log2 when pow2_
   std::unique_ptr<Slot[]> slots_;
   std::unique_ptr<Hint[]> hints_;
 };
@@ -125,26 +143,43 @@ class BlockTable {
 namespace hazard {
 
 struct Record {
-  std::atomic<const void*> ptr{nullptr};    // the block this thread may be reading
-  std::atomic<bool> inUse{false};           // owned by a live thread
-  Record* next = nullptr;                   // registry list (records are never freed)
-  std::uint64_t tickNext = 0, tickEnd = 0;  // this thread's reserved recency ticks
+  std::atomic<const void*> ptr{nullptr};  // the block this thread may be reading
+  std::atomic<bool> inUse{false};         // owned by a live thread
+  Record* next = nullptr;                 // registry list (records are never freed)
 };
 
 /// The calling thread's record, or null before acquire().
 inline thread_local Record* tlRecord = nullptr;  // NOLINT
+/// The same record for the lock-free query path (enterBlock), or null: acquire() sets it
+/// only where readers need no fence (membarrier(2) registered; or under ThreadSanitizer,
+/// where readers store their hazards sequentially consistently), so that path carries no
+/// test of gAsymmetric. Elsewhere (an old kernel, a seccomp filter) queries entering a new
+/// block go through the source's block() under the cache's lock instead.
+inline thread_local Record* tlFastRecord = nullptr;  // NOLINT
 
 /// Set once, before the first record is handed out: membarrier(2) is registered, so readers
 /// may skip the fence.
 inline std::atomic<bool> gAsymmetric{false};  // NOLINT
-/// Source of recency ticks (0 means "never used").
-inline std::atomic<std::uint64_t> gClock{1};  // NOLINT
+/// Source of recency ticks (0 means "never used"), alone on its cache line: lock-free hits
+/// read it, and only events under a cache's lock write it.
+alignas(64) inline std::atomic<std::uint64_t> gClock{1};  // NOLINT
 
 /// The calling thread's record, registering one on first use (out of line, once per thread).
 Record& acquire();
 
 /// Announces that this thread is about to read `p` (then re-check that p is still
-/// published before using it).
+/// published before using it). For a record from tlFastRecord only: no fence at all.
+inline void protectFast(Record& rec, const void* p) noexcept {
+#if defined(__SANITIZE_THREAD__)
+  rec.ptr.store(p, std::memory_order_seq_cst);
+#else
+  rec.ptr.store(p, std::memory_order_release);
+  std::atomic_signal_fence(std::memory_order_seq_cst);  // compiler-only; membarrier pairs
+#endif
+}
+
+/// Announces that this thread is about to read `p` (then re-check that p is still
+/// published before using it). Any record.
 inline void protect(Record& rec, const void* p) noexcept {
 #if defined(__SANITIZE_THREAD__)
   rec.ptr.store(p, std::memory_order_seq_cst);
@@ -171,15 +206,15 @@ inline void protect(Record& rec, const void* p) noexcept {
 /// take a new block allocated there for one it has protected all along.
 void forget(const void* p) noexcept;
 
-/// A recency tick for the calling thread: strictly increasing within a thread; across
-/// threads, ticks are reserved in runs of 64, so their order is approximate.
-inline std::uint64_t tick(Record& rec) noexcept {
-  if (rec.tickNext == rec.tickEnd) {
-    rec.tickNext = gClock.fetch_add(64, std::memory_order_relaxed);
-    rec.tickEnd = rec.tickNext + 64;
-  }
-  return rec.tickNext++;
-}
+/// A recency tick for an event under a cache's lock (a miss, a locked hit): unique and
+/// increasing across all threads.
+inline std::uint64_t tick() noexcept { return gClock.fetch_add(1, std::memory_order_relaxed); }
+
+/// The recency stamp of a lock-free hit: the clock's current value, newer than every tick
+/// handed out before it, with no write to the shared clock (a read-modify-write per random
+/// query would be a locked instruction and a contended cache line). Lock-free hits between
+/// two ticks therefore tie with each other and with the next tick.
+inline std::uint64_t now() noexcept { return gClock.load(std::memory_order_relaxed); }
 
 }  // namespace hazard
 }  // namespace regolith::topo

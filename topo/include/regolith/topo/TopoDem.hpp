@@ -9,7 +9,12 @@
 
 #include <glm/vec3.hpp>
 
+#if defined(__x86_64__) || defined(_M_X64)
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -72,6 +77,7 @@ struct ThreadBlock {
   /// Fractional (u, v) whose whole bilinear cell lies in the block:
   /// uLo ≤ u < uHi and vLo ≤ v < vHi (empty when there is no block).
   double uLo = 0.0, uHi = 0.0, vLo = 0.0, vHi = 0.0;
+  std::uintptr_t origin = 0;  // originOf(data, row0, col0, stride) (BlockTable.hpp)
 
   [[nodiscard]] bool holds(std::size_t r, std::size_t c) const noexcept {
     return data != nullptr && r >= row0 && c >= col0 && r - row0 < rows && c - col0 < cols;
@@ -93,7 +99,7 @@ inline thread_local ThreadBlock
 /// `promote` sets the thread's block at once (callers that read it next).
 inline const PublishedBlock* enterBlock(const BlockTable& table, std::uint64_t source,
                                         std::size_t r, std::size_t c, bool promote) noexcept {
-  hazard::Record* rec = hazard::tlRecord;
+  hazard::Record* rec = hazard::tlFastRecord;
   if (rec == nullptr) return nullptr;
   const BlockTable::Slot& slot = table.slot(r, c);
   const PublishedBlock* b = slot.load(std::memory_order_acquire);
@@ -103,54 +109,92 @@ inline const PublishedBlock* enterBlock(const BlockTable& table, std::uint64_t s
   // run of queries in b has begun, and it was counted when it was entered.
   if (rec->ptr.load(relaxed) != b) {
     tlBlock.source = 0;  // the hazard leaves the thread's block
-    hazard::protect(*rec, b);
+    hazard::protectFast(*rec, b);
     // seq_cst: with a symmetric protect() this load must not pass the hazard store (on x86
     // it is a plain load either way).
     if (slot.load(std::memory_order_seq_cst) != b) return nullptr;  // retracted meanwhile
     b->fastHits.store(b->fastHits.load(relaxed) + 1, relaxed);
-    b->lastUse.store(hazard::tick(*rec), relaxed);
+    b->lastUse.store(hazard::now(), relaxed);
     if (!promote) return b;
   }
   tlBlock = {source,    b->data, b->row0, b->col0, b->rows, b->cols,
-             b->stride, b->uLo,  b->uHi,  b->vLo,  b->vHi};
+             b->stride, b->uLo,  b->uHi,  b->vLo,  b->vHi,  b->origin};
   return b;
 }
 
+/// ⌊x⌋ toward zero as a signed integer, or INT64_MIN for NaN and values beyond ±2^63, with
+/// no undefined behaviour and, on x86-64, in one instruction (the processor's own answer for
+/// those inputs). Random queries test the result as an unsigned index instead of four
+/// floating-point comparisons: every instruction on that path keeps the processor from
+/// overlapping the memory misses of consecutive queries (docs/paging.md).
+[[nodiscard]] inline std::int64_t truncIndex(double x) noexcept {
+#if defined(__x86_64__) || defined(_M_X64)
+  return _mm_cvttsd_si64(_mm_set_sd(x));
+#else
+  constexpr double lim = 9223372036854775808.0;  // 2^63
+  return x > -lim && x < lim ? static_cast<std::int64_t>(x)
+                             : std::numeric_limits<std::int64_t>::min();
+#endif
+}
+
+/// Bilinear height from a block whose whole cell (c, r) = (⌊u⌋, ⌊v⌋) holds (u, v), given
+/// c and r. False leaves the point to the generic kernel (also for NaN: it fails the bounds).
+template <class Block>
+inline bool cellBilinear(const Block& b, double u, double v, std::int64_t c, std::int64_t r,
+                         double nodata, bool hasNodata, double& h) noexcept {
+  if (!(u >= b.uLo && u < b.uHi && v >= b.vLo && v < b.vHi)) return false;
+  // The bounds above make c, r non-negative and inside the block. c and r arrive signed:
+  // unsigned conversions from double cost a branch each on x86-64.
+  const std::size_t stride = b.stride;
+  const auto* p = reinterpret_cast<const float*>(  // NOLINT(performance-no-int-to-ptr)
+      b.origin +
+      (static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(c)) * sizeof(float));
+  const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
+  const auto a = static_cast<double>(p[0]), bb = static_cast<double>(p[1]);
+  const auto cc = static_cast<double>(p[stride]), d = static_cast<double>(p[stride + 1]);
+  const double top = a + tu * (bb - a), bottom = cc + tu * (d - cc);
+  h = top + tv * (bottom - top);
+  return h == h &&
+         (!hasNodata || ((a != nodata) & (bb != nodata) & (cc != nodata) & (d != nodata)));
+}
 /// Bilinear height from a block when the whole cell of (u, v) lies in it (false for NaN).
 /// False leaves the point to the generic kernel.
 template <class Block>
 inline bool blockBilinear(const Block& b, double u, double v, double nodata, bool hasNodata,
                           double& h) noexcept {
   if (!(u >= b.uLo && u < b.uHi && v >= b.vLo && v < b.vHi)) return false;
-  const auto c = static_cast<std::size_t>(u), r = static_cast<std::size_t>(v);
-  const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
-  const float* p = b.data + (r - b.row0) * b.stride + (c - b.col0);
-  const auto a = static_cast<double>(p[0]), bb = static_cast<double>(p[1]);
-  const auto cc = static_cast<double>(p[b.stride]), d = static_cast<double>(p[b.stride + 1]);
-  const double top = a + tu * (bb - a), bottom = cc + tu * (d - cc);
-  h = top + tv * (bottom - top);
-  return h == h &&
-         (!hasNodata || ((a != nodata) & (bb != nodata) & (cc != nodata) & (d != nodata)));
+  return cellBilinear(b, u, v, static_cast<std::int64_t>(u), static_cast<std::int64_t>(v), nodata,
+                      hasNodata, h);
 }
-/// The same from a published block (BlockTable.hpp).
-inline bool publishedBilinear(const PublishedBlock& b, double u, double v, double nodata,
-                              bool hasNodata, double& h) noexcept {
-  return blockBilinear(b, u, v, nodata, hasNodata, h);
-}
+/// Bilinear height for a cell across a block edge (its samples in two or four published
+/// blocks), read lock-free: each sample from its block under the thread's hazard record, the
+/// block of the cell's first sample last, which then becomes the thread's block. Out of line
+/// (TopoDem.cpp). False leaves the point to the generic path.
+[[gnu::cold]] bool straddlingBilinear(const ResidentBilinear& f, const BlockTable& table,
+                                      std::uint64_t source, double u, double v, double& h) noexcept;
+
 /// Bilinear height on a paged source: from the thread's last block if it holds the cell,
-/// else from the block table (a lock-free switch, the random-access case). False leaves the
-/// point to the generic path (not resident, a cell across a block edge, missing samples,
-/// outside the sample centres).
+/// else from the block table (a lock-free switch, the random-access case), also for a cell
+/// across a block edge. False leaves the point to the generic path (not resident, missing
+/// samples, outside the sample centres).
 inline bool pagedBilinear(const ResidentBilinear& f, const BlockTable* table, std::uint64_t source,
                           double u, double v, double& h) noexcept {
   const ThreadBlock& tb = tlBlock;
   if (tb.source == source && blockBilinear(tb, u, v, f.nodata, f.hasNodata, h)) [[likely]] {
     return true;
   }
-  if (table == nullptr || !(u >= 0.0 && v >= 0.0 && u < f.uMax && v < f.vMax)) return false;
-  const PublishedBlock* b =
-      enterBlock(*table, source, static_cast<std::size_t>(v), static_cast<std::size_t>(u), false);
-  return b != nullptr && publishedBilinear(*b, u, v, f.nodata, f.hasNodata, h);
+  if (table == nullptr) return false;
+  // One unsigned test per axis keeps the table index inside the grid: NaN, infinities and
+  // negative values give huge unsigned values. A u in (−1, 0) truncates to column 0; the
+  // block's own bounds (uLo = 0) then reject it.
+  const std::int64_t c = truncIndex(u), r = truncIndex(v);
+  const auto uc = static_cast<std::uint64_t>(c), ur = static_cast<std::uint64_t>(r);
+  if (uc >= table->cols() || ur >= table->rows()) return false;
+  const PublishedBlock* b = enterBlock(*table, source, ur, uc, false);
+  if (b == nullptr) return false;
+  if (cellBilinear(*b, u, v, c, r, f.nodata, f.hasNodata, h)) [[likely]]
+    return true;
+  return straddlingBilinear(f, *table, source, u, v, h);
 }
 }  // namespace detail
 
