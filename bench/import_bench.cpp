@@ -3,6 +3,7 @@
 //   import/regolith      importRaster() of an 8192×8192 float32 GeoTIFF into a store with its
 //                        full pyramid (6 levels of 256×256 patches), deflate 6 after HDF5's
 //                        shuffle filter, 2 threads
+//   import/regolith_zfp  the same with the ZFP codec (reversible, HDF5 filter 32013)
 //   import/gdal_cog      GDALTranslate (the library behind gdal_translate) of the same input
 //                        with -of COG -co COMPRESS=DEFLATE -co PREDICTOR=YES
 //                        -co NUM_THREADS=2, which builds overviews too
@@ -122,12 +123,17 @@ fs::path input() {
   return p;
 }
 
+// Arg: the deflate level, or −1 for the ZFP codec (reversible).
 void ImportRegolith(benchmark::State& state) {
   const fs::path in = input();
   const fs::path out = benchDir() / "out.h5";
   for (auto _ : state) {
     store::ImportOptions o;
-    o.deflate = static_cast<int>(state.range(0));
+    if (state.range(0) < 0) {
+      o.codec = store::Codec::Zfp;
+    } else {
+      o.deflate = static_cast<int>(state.range(0));
+    }
     o.threads = 2;
     const store::ImportReport rep = store::importRaster(in, out, o);
     state.counters["levels"] = static_cast<double>(rep.info.levels);
@@ -164,6 +170,12 @@ void ImportGdalCog(benchmark::State& state) {
 BENCHMARK(ImportRegolith)
     ->Name("import/regolith")
     ->Arg(6)
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+BENCHMARK(ImportRegolith)
+    ->Name("import/regolith_zfp")
+    ->Arg(-1)
     ->Iterations(1)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();

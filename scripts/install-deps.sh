@@ -8,6 +8,9 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git clang-format clang-tidy
   # I/O: HDF5 stores, GDAL import, PROJ (also the projection oracle in tests)
   libhdf5-dev hdf5-tools libgdal-dev gdal-bin libproj-dev proj-bin libdeflate-dev
+  # the optional ZFP codec of stores: libzfp encodes chunks, the H5Z-ZFP plugin (filter
+  # 32013, in HDF5's default plugin directory) decodes them for every HDF5 reader
+  libzfp-dev hdf5-filter-plugin-zfp-serial
   # maths and rendering: GLM, OpenGL/EGL through Mesa (llvmpipe; clod links libglvnd's
   # libOpenGL from libopengl-dev, no GLX), GLFW windows, PNG
   libglm-dev libegl-dev libgl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev libpng-dev

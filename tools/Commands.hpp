@@ -10,6 +10,12 @@ class App;
 
 namespace regolith::tools {
 
+/// Help of the --compression option of `import` and `generate`.
+inline constexpr const char* kCompressionHelp =
+    "Chunk compression: deflate (HDF5's shuffle + deflate at --deflate; every HDF5 reader "
+    "decodes it) or zfp (ZFP reversible, lossless: about 14% smaller, slower to read; "
+    "readers need HDF5's ZFP filter plugin, Debian hdf5-filter-plugin-zfp-serial)";
+
 void addDemoCommand(CLI::App& app);
 void addGenerateCommand(CLI::App& app);
 void addImportCommand(CLI::App& app);

@@ -26,6 +26,7 @@ struct WriteArgs {
   std::size_t patch = 256;
   std::size_t levels = 0;
   int deflate = 0;
+  std::string compression = "deflate";
   std::string grid;
 };
 
@@ -44,6 +45,9 @@ void addWriteOptions(CLI::App& cmd, WriteArgs& w) {
   cmd.add_option("--deflate", w.deflate, "Deflate level 0-9 (0: uncompressed)")
       ->check(CLI::Range(0, 9))
       ->capture_default_str();
+  cmd.add_option("--compression", w.compression, kCompressionHelp)
+      ->check(CLI::IsMember({"deflate", "zfp"}))
+      ->capture_default_str();
 }
 
 store::WriteOptions writeOptions(const WriteArgs& w, TerminalProgress& progress) {
@@ -51,6 +55,7 @@ store::WriteOptions writeOptions(const WriteArgs& w, TerminalProgress& progress)
   o.patchRows = o.patchCols = w.patch;
   o.levels = w.levels;
   o.deflate = w.deflate;
+  o.codec = store::codecNamed(w.compression);
   o.progress = progress.callback();
   o.cancel = CancelOnSignal::flag();
   return o;

@@ -30,6 +30,7 @@ struct Args {
   std::size_t patch = 256;
   std::size_t levels = 0;
   int deflate = 0;
+  std::string compression = "deflate";
   unsigned threads = 0;
   double nodata = 0.0;
 };
@@ -93,6 +94,9 @@ void addImportCommand(CLI::App& app) {
   cmd->add_option("--deflate", a->deflate, "Deflate level 0-9 (0: uncompressed)")
       ->check(CLI::Range(0, 9))
       ->capture_default_str();
+  cmd->add_option("--compression", a->compression, kCompressionHelp)
+      ->check(CLI::IsMember({"deflate", "zfp"}))
+      ->capture_default_str();
   cmd->add_option("--threads", a->threads, "Threads building the pyramid (0: all cores)")
       ->capture_default_str();
   cmd->add_option("--nodata", a->nodata,
@@ -101,6 +105,7 @@ void addImportCommand(CLI::App& app) {
   cmd->footer(
       "Examples:\n"
       "  regolith import dtm.cub --out dtm.h5 --deflate 4\n"
+      "  regolith import dtm.cub --out dtm.h5 --compression zfp   (smaller, needs the ZFP plugin)\n"
       "  regolith import N00E010.hgt N00E011.hgt N01E010.hgt --out tiles.h5 --grid srtm\n"
       "  regolith info dtm.cub      (what an import would make of a raster)\n"
       "A summary goes to stdout. A progress bar is drawn on stderr when it is a terminal; "
@@ -112,6 +117,7 @@ void addImportCommand(CLI::App& app) {
     o.patchRows = o.patchCols = a->patch;
     o.levels = a->levels;
     o.deflate = a->deflate;
+    o.codec = store::codecNamed(a->compression);
     o.threads = a->threads;
     if (cmd->count("--nodata") > 0) o.nodata = a->nodata;
     TerminalProgress progress = TerminalProgress::forStderr();

@@ -74,6 +74,24 @@ void check(herr_t status, const Context& ctx, const std::string& what) {
   if (status < 0) failHdf5(ctx, what);
 }
 
+std::string missingFilterHint(int id) {
+  std::string dirs;
+  unsigned n = 0;
+  if (H5PLsize(&n) >= 0) {
+    for (unsigned i = 0; i < n; ++i) {
+      std::array<char, 1024> buf{};
+      if (H5PLget(i, buf.data(), buf.size()) <= 0) continue;
+      if (!dirs.empty()) dirs += ':';
+      dirs.append(buf.data());
+    }
+  }
+  std::string hint = "HDF5 looks for filter plugins in " +
+                     (dirs.empty() ? std::string("(none)") : dirs) +
+                     " (HDF5_PLUGIN_PATH replaces that list)";
+  if (id == 32013) hint += "; the ZFP filter (H5Z-ZFP) is Debian's hdf5-filter-plugin-zfp-serial";
+  return hint;
+}
+
 std::string formatNumber(double v) {
   std::array<char, 64> buf{};
   const auto res = std::to_chars(buf.data(), buf.data() + buf.size(), v);

@@ -114,6 +114,11 @@ hid_t check(hid_t id, const Context& ctx, const std::string& what);
 /// Throws failHdf5(ctx, what) if status < 0.
 void check(herr_t status, const Context& ctx, const std::string& what);
 
+/// Why filter `id` is not available and what to do about it, for messages: HDF5's plugin
+/// directories and, for the H5Z-ZFP filter, the Debian package that installs it. Call with
+/// the HDF5 lock held.
+[[nodiscard]] std::string missingFilterHint(int id);
+
 /// A number as a message shows it: shortest round-trip form, with ".0" on integral values
 /// ("-1.0", "0.25", "1e-300", "nan").
 [[nodiscard]] std::string formatNumber(double v);

@@ -20,6 +20,7 @@ WriteOptions writeOptionsOf(const ImportOptions& o) {
   w.patchCols = o.patchCols;
   w.levels = o.levels;
   w.deflate = o.deflate;
+  w.codec = o.codec;
   w.threads = o.threads;
   w.progress = o.progress;
   w.cancel = o.cancel;

@@ -307,8 +307,10 @@ hdf5::Dataset openDataset(hid_t g, const GridEntry& entry, const std::string& na
                                            fname.data(), &config);
     if (id < 0) failHdf5(ctx, "cannot read the filters of " + what);
     if (H5Zfilter_avail(id) <= 0) {
+      (void)hdf5::takeErrorStack();  // the failed plugin search
       fail(ctx, what + " needs HDF5 filter " + std::to_string(id) + " ('" +
-                    std::string(fname.data()) + "'), which this HDF5 library does not have");
+                    std::string(fname.data()) +
+                    "'), which this HDF5 library cannot load: " + hdf5::missingFilterHint(id));
     }
   }
   return ds;

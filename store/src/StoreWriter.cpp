@@ -8,6 +8,7 @@
 #include <fcntl.h>
 #include <libdeflate.h>
 #include <unistd.h>
+#include <zfp.h>
 
 #include <algorithm>
 #include <atomic>
@@ -47,6 +48,14 @@ void validateOptions(const WriteOptions& o, const Context& ctx) {
   }
   if (o.deflate < 0 || o.deflate > 9) {
     invalid(ctx, "deflate level " + std::to_string(o.deflate) + ", expected 0 to 9");
+  }
+  if (o.codec == Codec::Zfp && o.deflate != 0) {
+    invalid(ctx, "deflate level " + std::to_string(o.deflate) +
+                     " with the zfp codec, which has no level (expected 0)");
+  }
+  if (o.codec != Codec::Deflate && o.codec != Codec::Zfp) {
+    invalid(ctx, "codec " + std::to_string(static_cast<int>(o.codec)) +
+                     ", expected Codec::Deflate or Codec::Zfp");
   }
 }
 
@@ -359,7 +368,15 @@ class LevelWriter {
     hdf5::check(H5Pset_obj_track_times(dcpl.get(), 0), ctx, what);
     const float fill = Missing{info.nodata}.stored();
     hdf5::check(H5Pset_fill_value(dcpl.get(), H5T_NATIVE_FLOAT, &fill), ctx, what);
-    if (o.deflate > 0) {
+    if (o.codec == Codec::Zfp) {
+      // H5Z-ZFP's generic interface: mode 5 is reversible. At H5Dcreate the plugin turns
+      // these values into its stored form (its version and ZFP's header for this chunk
+      // shape), which is what decodes the chunks encodeChunk() writes.
+      const std::array<unsigned, 6> zfpReversible{5, 0, 0, 0, 0, 0};
+      hdf5::check(H5Pset_filter(dcpl.get(), kZfpFilterId, H5Z_FLAG_MANDATORY, zfpReversible.size(),
+                                zfpReversible.data()),
+                  ctx, what);
+    } else if (o.deflate > 0) {
       hdf5::check(H5Pset_shuffle(dcpl.get()), ctx, what);
       hdf5::check(H5Pset_deflate(dcpl.get(), static_cast<unsigned>(o.deflate)), ctx, what);
     }
@@ -525,16 +542,52 @@ void parallelFor(std::size_t n, unsigned threads, const std::function<void(std::
   if (error) std::rethrow_exception(error);
 }
 
-/// One chunk as HDF5 stores it: the block padded to the full chunk shape with `fill`, then,
-/// with deflate, byte-shuffled (H5Z_FILTER_SHUFFLE) and zlib-compressed (H5Z_FILTER_DEFLATE).
+/// A chunk of cr × cc floats as H5Z-ZFP (filter 32013) stores it in reversible mode: one bare
+/// ZFP stream, no header (the header is in the filter's stored values). Like the plugin, a
+/// chunk with a dimension of 1 is one-dimensional. Lossless for every float, NaN included.
+std::vector<unsigned char> zfpEncode(std::vector<float>& full, std::size_t cr, std::size_t cc) {
+  // Per thread, as for deflate below. zfp_stream_open allocates nothing but the stream.
+  struct Stream {
+    zfp_stream* z = zfp_stream_open(nullptr);
+    Stream() {
+      if (z != nullptr) zfp_stream_set_reversible(z);
+    }
+    Stream(const Stream&) = delete;
+    Stream& operator=(const Stream&) = delete;
+    Stream(Stream&&) = delete;
+    Stream& operator=(Stream&&) = delete;
+    ~Stream() { zfp_stream_close(z); }
+  };
+  thread_local Stream stream;
+  if (stream.z == nullptr) throw StoreError("store::writeStore(): cannot open a ZFP stream");
+  zfp_field* field = cr == 1 || cc == 1 ? zfp_field_1d(full.data(), zfp_type_float, cr * cc)
+                                        : zfp_field_2d(full.data(), zfp_type_float, cc, cr);
+  if (field == nullptr) throw StoreError("store::writeStore(): cannot describe a ZFP field");
+  std::vector<unsigned char> out(zfp_stream_maximum_size(stream.z, field));
+  bitstream* bits = stream_open(out.data(), out.size());
+  zfp_stream_set_bit_stream(stream.z, bits);
+  zfp_stream_rewind(stream.z);
+  const std::size_t size = zfp_compress(stream.z, field);
+  stream_close(bits);
+  zfp_field_free(field);
+  if (size == 0) throw StoreError("store::writeStore(): cannot compress a chunk with ZFP");
+  out.resize(size);
+  return out;
+}
+
+/// One chunk as HDF5 stores it: the block padded to the full chunk shape with `fill`, then
+/// ZFP-encoded (Codec::Zfp) or, with deflate, byte-shuffled (H5Z_FILTER_SHUFFLE) and
+/// zlib-compressed (H5Z_FILTER_DEFLATE).
 std::vector<unsigned char> encodeChunk(const float* block, std::size_t nr, std::size_t nc,
                                        const std::array<hsize_t, 2>& chunk, float fill,
-                                       int deflate) {
+                                       const WriteOptions& o) {
   const std::size_t cr = chunk[0], cc = chunk[1], n = cr * cc;
+  const int deflate = o.deflate;
   std::vector<float> full(n, fill);
   for (std::size_t r = 0; r < nr; ++r) {
     std::copy_n(block + r * nc, nc, full.begin() + static_cast<std::ptrdiff_t>(r * cc));
   }
+  if (o.codec == Codec::Zfp) return zfpEncode(full, cr, cc);
   std::vector<unsigned char> raw(n * sizeof(float));
   std::memcpy(raw.data(), full.data(), raw.size());
   if (deflate <= 0) return raw;
@@ -586,7 +639,7 @@ void writeBandChunks(
     std::vector<float> b;
     const std::size_t c0 = k * cc, nc = std::min(cc, cols - c0);
     block(c0, nc, b);
-    encoded[k] = encodeChunk(b.data(), nr, nc, chunk, fill, o.deflate);
+    encoded[k] = encodeChunk(b.data(), nr, nc, chunk, fill, o);
   });
   for (std::size_t k = 0; k < n; ++k) {
     writer.writeChunk(r0, k * cc, encoded[k]);
@@ -832,6 +885,16 @@ class TempFile {
 
 }  // namespace
 
+const char* codecName(Codec c) noexcept {
+  return c == Codec::Zfp ? "zfp" : c == Codec::Deflate ? "deflate" : "unknown";
+}
+
+Codec codecNamed(std::string_view name) {
+  if (name == "deflate") return Codec::Deflate;
+  if (name == "zfp") return Codec::Zfp;
+  throw InvalidArgument("codec '" + std::string(name) + "', expected deflate or zfp");
+}
+
 void writeStore(const std::filesystem::path& path, std::span<const GridSource> grids,
                 const WriteOptions& options) {
   const Context ctx("store::writeStore()", path);
@@ -856,11 +919,21 @@ void writeStore(const std::filesystem::path& path, std::span<const GridSource> g
       totalSamples += static_cast<double>(info.levelRows(k) * info.levelCols(k));
     }
   }
-  if (options.deflate > 0) {
+  if (options.codec == Codec::Deflate && options.deflate > 0) {
     const hdf5::Lock lock;
     if (H5Zfilter_avail(H5Z_FILTER_DEFLATE) <= 0) {
       fail(ctx, "deflate level " + std::to_string(options.deflate) +
                     " requested, but this HDF5 library has no deflate filter");
+    }
+  }
+  if (options.codec == Codec::Zfp) {
+    const hdf5::Lock lock;
+    if (H5Zfilter_avail(kZfpFilterId) <= 0) {
+      (void)hdf5::takeErrorStack();  // the failed plugin search; the message says what matters
+      fail(ctx,
+           "the zfp codec needs HDF5's ZFP filter (id 32013), which this HDF5 library "
+           "cannot load: " +
+               hdf5::missingFilterHint(kZfpFilterId));
     }
   }
   checkCancel(options, ctx);

@@ -216,6 +216,26 @@ def test_import_raster_gives_exact_plane_heights_and_normals(plane_tif, tmp_path
     np.testing.assert_allclose(n, np.broadcast_to(expect, n.shape), rtol=0, atol=1e-5)
 
 
+def test_import_raster_with_the_zfp_codec_reads_the_same_samples(plane_tif, tmp_path):
+    a, b = tmp_path / "deflate.h5", tmp_path / "zfp.h5"
+    regolith.import_raster(plane_tif, a, grid="plane", patch_size=64, deflate=4)
+    regolith.import_raster(plane_tif, b, grid="plane", patch_size=64, compression="zfp")
+    x = np.linspace(501.0, 659.0, 777)
+    y = np.linspace(1881.0, 1999.0, 777)
+    np.testing.assert_array_equal(regolith.open(a).heights(x, y), regolith.open(b).heights(x, y))
+    with h5py.File(b, "r") as f:  # HDF5 records the ZFP filter; h5py decodes it
+        plist = f["grids/plane/level0"].id.get_create_plist()
+        assert plist.get_nfilters() == 1 and plist.get_filter(0)[0] == 32013
+        with h5py.File(a, "r") as g:
+            np.testing.assert_array_equal(f["grids/plane/level0"][...],
+                                          g["grids/plane/level0"][...])
+    with pytest.raises(ValueError, match="codec 'lz4', expected deflate or zfp"):
+        regolith.import_raster(plane_tif, tmp_path / "x.h5", compression="lz4")
+    with pytest.raises(regolith.InvalidArgument, match="with the zfp codec"):
+        regolith.import_raster(plane_tif, tmp_path / "x.h5", compression="zfp", deflate=6)
+    assert not (tmp_path / "x.h5").exists()
+
+
 def test_import_of_a_non_raster_raises_raster_import_error(tmp_path):
     bad = tmp_path / "not-a-raster.tif"
     bad.write_text("hello")

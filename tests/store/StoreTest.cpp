@@ -406,6 +406,62 @@ TEST(StoreWriter, DeflateIsRecordedAsAFilterAndReadsBackTheSame) {
   expectSameHeights(readLevel(s, "crater", 0), tabulate(37, 53, crater), "level 0");
 }
 
+TEST(StoreWriter, ZfpCodecIsLosslessOnEveryLevelWithNanOddSizesAndThinGrids) {
+  // Every level of every grid reads back bit for bit as from an uncompressed store: NaN
+  // holes, odd sizes (partial chunks), and chunks with a dimension of 1, which H5Z-ZFP
+  // encodes as one-dimensional (1×40 and 23×1 grids in 16×8 patches).
+  const auto row = [](std::size_t, std::size_t c) { return 0.37f * static_cast<float>(c) - 3.0f; };
+  const auto col = [](std::size_t r, std::size_t) {
+    return r == 5 ? std::numeric_limits<float>::quiet_NaN()
+                  : 1000.0f + 0.001f * static_cast<float>(r);
+  };
+  const std::vector<GridSource> grids{
+      source(demInfo("crater", 37, 53), crater), source(planetInfo("moon", 45, 91), planetHeight),
+      source(demInfo("row", 1, 40), row), source(demInfo("col", 23, 1), col)};
+  WriteOptions o;
+  o.patchRows = 16;
+  o.patchCols = 8;
+  const fs::path plain = scratch("zfp_reference.h5"), zfp = scratch("zfp.h5");
+  writeStore(plain, grids, o);
+  o.codec = Codec::Zfp;
+  writeStore(zfp, grids, o);
+  {
+    const H5 file(H5Fopen(zfp.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+    const H5 ds(H5Dopen2(file, "/grids/crater/level0", H5P_DEFAULT), H5Dclose);
+    const H5 dcpl(H5Dget_create_plist(ds), H5Pclose);
+    ASSERT_EQ(H5Pget_nfilters(dcpl), 1);
+    unsigned flags = 0;
+    std::size_t n = 0;
+    EXPECT_EQ(H5Pget_filter2(dcpl, 0, &flags, &n, nullptr, 0, nullptr, nullptr), kZfpFilterId);
+    EXPECT_GT(H5Pall_filters_avail(dcpl), 0);
+  }
+  const Store a = Store::open(plain), b = Store::open(zfp);
+  for (const std::string name : {"crater", "moon", "row", "col"}) {
+    ASSERT_EQ(a.grid(name).levels, b.grid(name).levels) << name;
+    for (std::size_t k = 0; k < a.grid(name).levels; ++k) {
+      const std::vector<float> x = readLevel(a, name, k), y = readLevel(b, name, k);
+      ASSERT_EQ(x.size(), y.size());
+      EXPECT_EQ(std::memcmp(x.data(), y.data(), x.size() * sizeof(float)), 0)
+          << name << " level " << k;
+    }
+  }
+  EXPECT_LT(fs::file_size(zfp), fs::file_size(plain));
+  // ZFP has no level: a deflate level with it is refused, and nothing is written.
+  o.deflate = 6;
+  const fs::path refused = scratch("zfp_deflate.h5");
+  try {
+    writeStore(refused, grids, o);
+    FAIL() << "no exception";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("deflate level 6 with the zfp codec"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(fs::exists(refused));
+  EXPECT_EQ(codecNamed("zfp"), Codec::Zfp);
+  EXPECT_STREQ(codecName(Codec::Deflate), "deflate");
+  EXPECT_THROW((void)codecNamed("lz4"), InvalidArgument);
+}
+
 // ---- the reader, on files crafted with the raw HDF5 API -----------------------------------
 
 namespace {

@@ -319,26 +319,44 @@ def check_utm(path):
     check_close(h, want, "utm level0 vs PROJ's positions", rtol=0.0, atol=0.01)
 
 
+ZFP_FILTER = 32013  # H5Z-ZFP, the codec "zfp" (docs/store-format.md, "Compression")
+
+
+def filter_ids(ds):
+    """The HDF5 filter ids of a dataset's pipeline, in order."""
+    plist = ds.id.get_create_plist()
+    return [plist.get_filter(i)[0] for i in range(plist.get_nfilters())]
+
+
 def main():
     binary = sys.argv[1] if len(sys.argv) > 1 else os.environ.get("REGOLITH_WRITE_FIXTURE_STORE")
     if not binary:
         sys.exit("usage: test_store_h5py.py <write_fixture_store> "
                  "(or set REGOLITH_WRITE_FIXTURE_STORE)")
-    with tempfile.TemporaryDirectory(prefix="regolith-h5py-") as tmp:
-        path = os.path.join(tmp, "fixture.h5")
-        subprocess.run([binary, path], check=True)
-        check(os.path.exists(path), "the store exists")
-        check(sorted(os.listdir(tmp)) == ["fixture.h5", "tiled.h5", "tiled_ext.h5", "utm.h5"],
-              "no temporary file left")
-        with h5py.File(path, "r") as f:
-            check(f.attrs["regolith_store"].startswith("Regolith terrain store"), "marker")
-            check(list(f.attrs["format_version"]) == [1, 0], "root format_version")
-            check(sorted(f["grids"].keys()) == ["mars", "tilt", "victoria"], "grid names")
-            check_victoria(f["grids/victoria"])
-            check_mars(f["grids/mars"])
-            check_tilt(f["grids/tilt"])
-        check_tiled(os.path.join(tmp, "tiled.h5"))
-        check_utm(os.path.join(tmp, "utm.h5"))
+    # Uncompressed, then the ZFP codec (HDF5 filter 32013), which h5py decodes through the
+    # H5Z-ZFP plugin in HDF5's default plugin directory: no import beyond h5py and numpy.
+    for codec, filters in (("deflate", []), ("zfp", [ZFP_FILTER])):
+        with tempfile.TemporaryDirectory(prefix="regolith-h5py-") as tmp:
+            path = os.path.join(tmp, "fixture.h5")
+            subprocess.run([binary, path, codec], check=True)
+            check(os.path.exists(path), "the store exists")
+            check(sorted(os.listdir(tmp)) == ["fixture.h5", "tiled.h5", "tiled_ext.h5", "utm.h5"],
+                  "no temporary file left")
+            with h5py.File(path, "r") as f:
+                check(f.attrs["regolith_store"].startswith("Regolith terrain store"), "marker")
+                check(list(f.attrs["format_version"]) == [1, 0], "root format_version")
+                check(sorted(f["grids"].keys()) == ["mars", "tilt", "victoria"], "grid names")
+                for name in ("victoria", "mars", "tilt"):
+                    g = f["grids"][name]
+                    for level in range(int(g.attrs["levels"])):
+                        got = filter_ids(g[f"level{level}"])
+                        check(got == filters, f"{codec}: {name} level{level} filters {got}, "
+                              f"expected {filters}")
+                check_victoria(f["grids/victoria"])
+                check_mars(f["grids/mars"])
+                check_tilt(f["grids/tilt"])
+            check_tiled(os.path.join(tmp, "tiled.h5"))
+            check_utm(os.path.join(tmp, "utm.h5"))
     print(f"test_store_h5py: OK ({CHECKS} checks, h5py {h5py.__version__}, "
           f"numpy {np.__version__})")
 

@@ -195,8 +195,8 @@ void writeUtm(const std::filesystem::path& dir, const WriteOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 2) {
-    std::fprintf(stderr, "usage: write_fixture_store <output.h5>\n");
+  if (argc != 2 && argc != 3) {
+    std::fprintf(stderr, "usage: write_fixture_store <output.h5> [deflate|zfp]\n");
     return 2;
   }
   try {
@@ -204,6 +204,7 @@ int main(int argc, char** argv) {
     WriteOptions o;
     o.patchRows = 64;
     o.patchCols = 48;
+    if (argc == 3) o.codec = codecNamed(argv[2]);  // deflate: level 0, i.e. uncompressed
     writeStore(argv[1], grids, o);
     std::filesystem::path dir = std::filesystem::path(argv[1]).parent_path();
     if (dir.empty()) dir = ".";

@@ -415,16 +415,22 @@ def summary_field(stdout, name):
     raise AssertionError(f"no '{name}:' line in\n{stdout}")
 
 
+@pytest.mark.parametrize("compression", [["--deflate", 3], ["--compression", "zfp"]],
+                         ids=["deflate", "zfp"])
 @pytest.mark.parametrize("name,grid,kind,void_marker", [
     ("Shoemaker_1k.tif", "Shoemaker_1k", "dem", False),
     ("S11E119.hgt", "S11E119", "planet", False),
     ("dem_unfinished.tif", "dem_unfinished", "planet", True),
     ("dem_nodata.dem", "dem_nodata", "dem", False),  # NAD27 / UTM zone 10N
 ])
-def test_import_matches_gdal(work, name, grid, kind, void_marker):
+def test_import_matches_gdal(work, name, grid, kind, void_marker, compression):
     src = dem_fixture(name)
-    out = work / f"imported-{grid}.h5"
-    p = run("import", src, "--out", out, "--patch", 64, "--deflate", 3)
+    out = work / f"imported-{grid}-{compression[-1]}.h5"
+    p = run("import", src, "--out", out, "--patch", 64, *compression)
+    with h5py.File(out, "r") as f:  # the codec asked for is the one HDF5 records
+        plist = f[f"grids/{grid}/level0"].id.get_create_plist()
+        ids = [plist.get_filter(i)[0] for i in range(plist.get_nfilters())]
+        assert ids == ([32013] if "zfp" in compression else [2, 1])  # H5Z-ZFP; shuffle, deflate
     assert p.stderr == ""  # no progress bar: stderr is not a terminal
     expected = gdal_heights(src, void_marker)
     got = store_heights(out, grid)
@@ -456,6 +462,37 @@ def test_import_matches_gdal(work, name, grid, kind, void_marker):
     assert ("-32768 taken as missing" in corrections) == void_marker
     if not void_marker:
         assert corrections == "none"
+
+
+def test_zfp_without_its_plugin_is_a_clear_error(work):
+    # HDF5_PLUGIN_PATH replaces HDF5's plugin directories: here, with none that has H5Z-ZFP.
+    store = work / "victoria-zfp.h5"
+    run("generate", "victoria", "--out", store, "--size", 200, "--compression", "zfp")
+    q = run("query", store, "--coords", "grid", "10,10")  # readable with the plugin
+    assert parse_csv(q.stdout)[1][0][-1] == 1.0
+    env = {**os.environ, "HDF5_PLUGIN_PATH": str(work / "no-plugins-here")}
+
+    def without_plugin(*args):
+        return subprocess.run([BIN, *map(str, args)], capture_output=True, text=True,
+                              timeout=120, env=env)
+
+    for args in (["info", store], ["query", store, "--coords", "grid", "10,10"]):
+        p = without_plugin(*args)
+        assert p.returncode != 0, args
+        assert "32013" in p.stderr and "hdf5-filter-plugin-zfp-serial" in p.stderr, p.stderr
+        assert str(work / "no-plugins-here") in p.stderr  # where HDF5 looked
+    out = work / "zfp-refused.h5"
+    p = without_plugin("generate", "victoria", "--out", out, "--size", 100, "--compression", "zfp")
+    assert p.returncode != 0 and "hdf5-filter-plugin-zfp-serial" in p.stderr, p.stderr
+    assert not out.exists() and not list(work.glob("zfp-refused.h5.tmp*"))
+    # Bad choices are named.
+    p = run("generate", "victoria", "--out", out, "--size", 100, "--compression", "lz4",
+            check=False)
+    assert p.returncode != 0 and "lz4" in p.stderr
+    p = run("generate", "victoria", "--out", out, "--size", 100, "--compression", "zfp",
+            "--deflate", 4, check=False)
+    assert p.returncode != 0 and "deflate level 4 with the zfp codec" in p.stderr, p.stderr
+    assert not out.exists()
 
 
 def test_import_options_and_corrections(work):

@@ -223,12 +223,13 @@ void bindStore(py::module_& m) {
       "import_raster",
       [](const std::filesystem::path& raster, const std::filesystem::path& out,
          const std::string& grid, std::size_t levels, std::size_t patch, int deflate,
-         std::optional<double> nodata) {
+         std::optional<double> nodata, const std::string& compression) {
         store::ImportOptions o;
         o.gridName = grid;
         o.levels = levels;
         o.patchRows = o.patchCols = patch;
         o.deflate = deflate;
+        o.codec = store::codecNamed(compression);
         o.nodata = nodata;
         store::ImportReport r;
         {
@@ -239,9 +240,12 @@ void bindStore(py::module_& m) {
       },
       py::arg("raster"), py::arg("store"), py::arg("grid") = "", py::arg("levels") = 0,
       py::arg("patch_size") = 256, py::arg("deflate") = 0, py::arg("nodata") = py::none(),
+      py::arg("compression") = "deflate",
       "Imports a single-band raster GDAL reads (GeoTIFF, PDS3, PDS4, ISIS3...) as one grid of a "
-      "new store, written crash-safely. Returns the import report as a dict. Raises "
-      "RasterImportError or StoreError.");
+      "new store, written crash-safely. compression: 'deflate' (shuffle + deflate at `deflate`) "
+      "or 'zfp' (ZFP reversible, lossless and smaller; readers need HDF5's ZFP filter plugin, "
+      "and deflate must be 0). Returns the import report as a dict. Raises RasterImportError, "
+      "StoreError or ValueError (a bad option).");
 
   m.def(
       "generate_victoria",

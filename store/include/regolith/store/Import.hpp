@@ -31,6 +31,8 @@ struct ImportOptions {
   std::size_t patchRows = 256, patchCols = 256;
   std::size_t levels = 0;
   int deflate = 0;
+  /// Chunk compression (WriteOptions::codec); with Codec::Zfp, deflate must be 0.
+  Codec codec = Codec::Deflate;
   /// Threads building the pyramid (0: hardware concurrency).
   unsigned threads = 0;
   /// A source value (before scale/offset) that also means "missing", beside the ones the
