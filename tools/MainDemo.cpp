@@ -132,13 +132,12 @@ DefaultData ensureData(const MainDemoOptions& o, const fs::path& dir, std::ostre
   return d;
 }
 
-constexpr double kWheelWidth = 0.40, kRutDepth = 0.03;  // m: the ruts a wheel presses
-
 /// The traverse and what the renders need from it: the wheel tracks it left.
 struct TraverseRun {
   rover::TraverseResult result;
   /// The overlay the rover presses its six wheels into as it drives (every 5 cm of travel).
-  std::shared_ptr<clod::TrackLayer> tracks = std::make_shared<clod::TrackLayer>(0.05);
+  std::shared_ptr<clod::TrackLayer> tracks =
+      std::make_shared<clod::TrackLayer>(clod::RoverRuts::kTexelMetres);
   std::size_t imprints = 0;
   rover::ChassisPose last;  // where the rover stopped
   rover::GroundPose lastGround;
@@ -156,10 +155,12 @@ TraverseRun runTraverse(const MainDemoOptions& o, const fs::path& victoria, std:
   run.result = rover::runTraverse(t, [&](const rover::StepState& s) {
     if (s.distance >= nextStamp) {  // tracks: one imprint of all six wheels every 5 cm
       for (std::size_t w = 0; w < rover::kWheels; ++w)
-        imprint[w] = clod::WheelContact{{s.wheels[w].x, s.wheels[w].y}, kWheelWidth, kRutDepth};
+        imprint[w] = clod::WheelContact{{s.wheels[w].x, s.wheels[w].y},
+                                        clod::RoverRuts::kWheelWidthMetres,
+                                        clod::RoverRuts::kDepthMetres};
       run.tracks->step(imprint);
       ++run.imprints;
-      nextStamp = s.distance + 0.05;
+      nextStamp = s.distance + clod::RoverRuts::kSpacingMetres;
     }
     if (s.distance >= nextReport) {
       out << "  " << std::fixed << std::setprecision(0) << std::setw(4) << s.distance << " m  x "

@@ -1,11 +1,9 @@
 #pragma once
-// Helpers the subcommands share to pick a store's grid and hand it to the renderer.
-#include <regolith/clod/HeightPyramid.hpp>
-#include <regolith/store/Pager.hpp>
+// Helpers the subcommands share to pick a store's grid (the renderer's pyramid of a grid is
+// scenegraph::pyramidFromStore).
 #include <regolith/store/Store.hpp>
 
 #include <cstddef>
-#include <memory>
 #include <string>
 
 namespace CLI {
@@ -25,11 +23,5 @@ void addStoreGridOptions(CLI::App& cmd, std::string& store, std::string& grid, s
 /// one with --grid") if there are several.
 std::string chooseGrid(const store::Store& s, const std::string& requested,
                        const std::string& command);
-
-/// A store grid as the renderer's height pyramid: one level per stored pyramid level, each
-/// read through the pager (so rendering pages patches into the pager's cache). A DEM is
-/// drawn in its grid frame (x east, y north, z height), a planet in body-fixed metres.
-std::shared_ptr<const clod::HeightPyramid> pyramidFromStore(const store::Pager& pager,
-                                                            const std::string& grid);
 
 }  // namespace regolith::tools

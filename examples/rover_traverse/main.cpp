@@ -12,6 +12,7 @@
 #include <regolith/clod/Render.hpp>
 #include <regolith/clod/TrackLayer.hpp>
 #include <regolith/rover/Traverse.hpp>
+#include <regolith/scenegraph/StorePyramid.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Pager.hpp>
@@ -77,13 +78,8 @@ double mib(double bytes) { return bytes / 1048576.0; }
 void renderTracks(const rover::TraverseOptions& o, const rover::ChassisPose& last,
                   std::shared_ptr<clod::TrackLayer> tracks, const std::string& png) {
   auto st = std::make_shared<const store::Store>(store::Store::open(o.store));
-  const store::GridInfo& info = st->grid(o.grid);
   const store::Pager pager(st, std::make_shared<store::PatchCache>(std::size_t{64} << 20U));
-  std::vector<clod::HeightPyramid::Level> levels;
-  for (std::size_t l = 0; l < info.levels; ++l)
-    levels.push_back({store::topoGridOf(info, l), pager.source(o.grid, l)});
-  auto pyramid =
-      std::make_shared<const clod::HeightPyramid>(std::move(levels), clod::SurfaceKind::Plane);
+  auto pyramid = scenegraph::pyramidFromStore(pager, o.grid);
   const glm::dvec3 p{last.x, last.y, last.height};
   const glm::dvec3 fwd{std::sin(last.heading), std::cos(last.heading), 0.0}, up{0.0, 0.0, 1.0};
   clod::RenderRequest req;
@@ -103,7 +99,7 @@ void renderTracks(const rover::TraverseOptions& o, const rover::ChassisPose& las
 int main(int argc, char** argv) try {
   CLI::App app{"A six-wheel rover drives a path across the Victoria-like DEM on Mars at 1 kHz"};
   std::string storePath = "out/rover/victoria.h5", grid = "victoria", pathText, tracks, image;
-  double cacheMb = 16.0, speed = 1.0, stepMs = 1.0, trackSpacing = 0.05;
+  double cacheMb = 16.0, speed = 1.0, stepMs = 1.0, trackSpacing = clod::RoverRuts::kSpacingMetres;
   std::size_t maxSteps = 0, trackEvery = 10, size = 1201;
   std::string policy = "lru";
   app.add_option("--store", storePath,
@@ -167,8 +163,8 @@ int main(int argc, char** argv) try {
       csv.precision(10);
     }
     constexpr double kDeg = 180.0 / std::numbers::pi;
-    constexpr double kWheelWidth = 0.40, kRutDepth = 0.03;  // m
-    auto overlay = std::make_shared<clod::TrackLayer>(0.05);
+    using Ruts = clod::RoverRuts;
+    auto overlay = std::make_shared<clod::TrackLayer>(Ruts::kTexelMetres);
     std::array<clod::WheelContact, rover::kWheels> imprint;
     std::size_t imprints = 0;
     double nextImprint = 0.0;
@@ -176,7 +172,8 @@ int main(int argc, char** argv) try {
     const rover::TraverseResult r = rover::runTraverse(o, [&](const rover::StepState& s) {
       if (s.distance >= nextImprint) {  // the wheels press their ruts into the overlay
         for (std::size_t i = 0; i < rover::kWheels; ++i)
-          imprint[i] = {{s.wheels[i].x, s.wheels[i].y}, kWheelWidth, kRutDepth};
+          imprint[i] = {
+              {s.wheels[i].x, s.wheels[i].y}, Ruts::kWheelWidthMetres, Ruts::kDepthMetres};
         overlay->step(imprint);
         ++imprints;
         nextImprint = s.distance + trackSpacing;

@@ -15,6 +15,7 @@
 #include <regolith/clod/FocusController.hpp>
 #include <regolith/clod/Render.hpp>
 #include <regolith/clod/RenderTarget.hpp>
+#include <regolith/scenegraph/StorePyramid.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 
@@ -42,15 +43,7 @@ std::shared_ptr<const HeightPyramid> pyramidFromStore(const std::string& path,
                                                       const std::string& grid) {
   auto store = std::make_shared<const store::Store>(store::Store::open(path));
   auto cache = std::make_shared<store::PatchCache>(std::size_t{512} << 20);
-  const store::Pager pager(store, cache);
-  const store::GridInfo& info = store->grid(grid);
-  std::vector<HeightPyramid::Level> levels;
-  for (std::size_t l = 0; l < info.levels; ++l)
-    levels.push_back({store::topoGridOf(info, l), pager.source(grid, l)});
-  const bool planet = info.kind == store::GridKind::Planet;
-  return std::make_shared<const HeightPyramid>(
-      std::move(levels), planet ? SurfaceKind::Planet : SurfaceKind::Plane,
-      planet ? std::optional<topo::Body>(store::bodyOf(info)) : std::nullopt, info.latitudeType);
+  return scenegraph::pyramidFromStore(store::Pager(store, cache), grid);
 }
 
 std::shared_ptr<const HeightPyramid> syntheticDem() {

@@ -187,6 +187,19 @@ TEST(MarsVictoriaGLTest, SceneFromStoresEqualsTheGeneratedScene) {
       diff += std::abs(static_cast<int>(x.rgba[k]) - static_cast<int>(y.rgba[k]));
     EXPECT_LT(diff / static_cast<double>(x.rgba.size()), 1.0) << "frame " << i;
   }
+  // A DEM given as the planet is refused, naming the grid, the file and both kinds.
+  MarsVictoriaOptions swapped = fromStores;
+  swapped.marsStore = dir / "victoria.h5";
+  swapped.marsGrid = swapped.victoriaGrid;
+  try {
+    const MarsVictoriaScene s(swapped);
+    ADD_FAILURE() << "no exception";
+  } catch (const InvalidArgument& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("victoria.h5 grid '" + swapped.victoriaGrid + "' is not a planet grid"),
+              std::string::npos)
+        << m;
+  }
   std::filesystem::remove_all(dir);
 
   MarsVictoriaOptions half = mem;

@@ -1,6 +1,7 @@
 // Headless rendering into a numpy image (clod::renderImage).
 #include <regolith/clod/Render.hpp>
 #include <regolith/clod/TrackLayer.hpp>
+#include <regolith/scenegraph/StorePyramid.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/topo/Error.hpp>
@@ -22,17 +23,7 @@ namespace {
 /// terrain's own cache. DEMs are drawn in their grid frame (x east, y north, z height),
 /// planets body-fixed.
 std::shared_ptr<const clod::HeightPyramid> pyramidOf(const Terrain& t) {
-  const store::Pager pager(t.store, t.cache);
-  const store::GridInfo& info = t.store->grid(t.grid);
-  std::vector<clod::HeightPyramid::Level> levels;
-  for (std::size_t l = 0; l < info.levels; ++l) {
-    levels.push_back({store::topoGridOf(info, l), pager.source(t.grid, l)});
-  }
-  if (info.kind == store::GridKind::Dem) {
-    return std::make_shared<const clod::HeightPyramid>(std::move(levels), clod::SurfaceKind::Plane);
-  }
-  return std::make_shared<const clod::HeightPyramid>(std::move(levels), clod::SurfaceKind::Planet,
-                                                     store::bodyOf(info), info.latitudeType);
+  return scenegraph::pyramidFromStore(store::Pager(t.store, t.cache), t.grid);
 }
 
 glm::dvec3 vec3(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }

@@ -127,11 +127,13 @@ std::shared_ptr<clod::TrackLayer> trackLayerOf(const py::object& tracks) {
                           ", expected (steps, 6, 2 or more): wheel x, y per step, or a TrackLayer");
   }
   const auto a = arr.unchecked<3>();
-  auto layer = std::make_shared<clod::TrackLayer>(0.05);
+  using Ruts = clod::RoverRuts;
+  auto layer = std::make_shared<clod::TrackLayer>(Ruts::kTexelMetres);
   std::array<clod::WheelContact, 6> step;
   for (py::ssize_t i = 0; i < a.shape(0); ++i) {
     for (py::ssize_t w = 0; w < 6; ++w)
-      step[static_cast<std::size_t>(w)] = {{a(i, w, 0), a(i, w, 1)}, 0.4, 0.03};
+      step[static_cast<std::size_t>(w)] = {
+          {a(i, w, 0), a(i, w, 1)}, Ruts::kWheelWidthMetres, Ruts::kDepthMetres};
     layer->step(step);
   }
   return layer;
@@ -145,7 +147,7 @@ void bindScene(py::module_& m) {
       "Wheel tracks a traverse leaves (clod::TrackLayer): a sparse rut-depth field in a DEM's "
       "grid frame (metres), pressed step by step and drawn by render_scene(tracks=...) and "
       "Dem.render(tracks=...) as ruts. Thread-safe.")
-      .def(py::init<double>(), py::arg("texel_metres") = 0.05,
+      .def(py::init<double>(), py::arg("texel_metres") = clod::RoverRuts::kTexelMetres,
            "texel_metres: the field's resolution (> 0).")
       .def(
           "step",
@@ -153,7 +155,8 @@ void bindScene(py::module_& m) {
             const auto c = contactsOf(wheels, width, depth, "regolith.TrackLayer.step()");
             l.step(c);
           },
-          py::arg("wheels"), py::arg("width") = 0.4, py::arg("depth") = 0.03,
+          py::arg("wheels"), py::arg("width") = clod::RoverRuts::kWheelWidthMetres,
+          py::arg("depth") = clod::RoverRuts::kDepthMetres,
           "Presses one rover step: wheels is (wheels, 2 or more), each wheel's grid x, y (e.g. a "
           "run_traverse callback's state['wheels']); each wheel's rut runs from its previous "
           "contact to this one, depth·cos²(π·d/width) across, the deeper rut winning where they "

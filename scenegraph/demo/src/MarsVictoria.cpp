@@ -1,6 +1,7 @@
 #include <regolith/clod/HeadlessContext.hpp>
 #include <regolith/clod/RenderTarget.hpp>
 #include <regolith/scenegraph/MarsVictoria.hpp>
+#include <regolith/scenegraph/StorePyramid.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Pager.hpp>
@@ -67,20 +68,6 @@ std::shared_ptr<const clod::HeightPyramid> secondDemPyramid(const MarsVictoriaOp
   return demPyramid(store::VictoriaGenerator(so));
 }
 
-// One grid of a store as a pyramid paged through `pager` (every stored level).
-std::shared_ptr<const clod::HeightPyramid> storePyramid(const store::Pager& pager,
-                                                        const std::string& grid,
-                                                        clod::SurfaceKind kind) {
-  const store::GridInfo& info = pager.store().grid(grid);
-  std::vector<clod::HeightPyramid::Level> levels;
-  for (std::size_t l = 0; l < info.levels; ++l)
-    levels.push_back({store::topoGridOf(info, l), pager.source(grid, l)});
-  const bool planet = kind == clod::SurfaceKind::Planet;
-  return std::make_shared<const clod::HeightPyramid>(
-      std::move(levels), kind, planet ? std::optional(store::bodyOf(info)) : std::nullopt,
-      info.latitudeType);
-}
-
 }  // namespace
 
 MarsVictoriaScene::MarsVictoriaScene(const MarsVictoriaOptions& options) : options_(options) {
@@ -137,8 +124,10 @@ void MarsVictoriaScene::fromStores(const MarsVictoriaOptions& options) {
                           "' is not a DEM on a local tangent plane (placement)");
   auto marsPager = std::make_shared<store::Pager>(marsStore, cache);
   auto demPager = std::make_shared<store::Pager>(demStore, cache);
-  mars_ = storePyramid(*marsPager, options.marsGrid, clod::SurfaceKind::Planet);
-  victoria_ = storePyramid(*demPager, options.victoriaGrid, clod::SurfaceKind::Plane);
+  // The kinds were checked above: pyramidFromStore draws a planet grid on its body and a
+  // DEM as a plane.
+  mars_ = pyramidFromStore(*marsPager, options.marsGrid);
+  victoria_ = pyramidFromStore(*demPager, options.victoriaGrid);
   pager_ =
       std::make_shared<std::pair<std::shared_ptr<store::Pager>, std::shared_ptr<store::Pager>>>(
           marsPager, demPager);

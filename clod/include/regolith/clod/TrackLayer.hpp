@@ -16,6 +16,16 @@
 
 namespace regolith::clod {
 
+/// The ruts the project's rover presses (the main demo, the traverse examples, Python's
+/// defaults): a 0.40 m wide wheel, 3 cm deep at its centre, into a layer of 5 cm texels,
+/// one imprint of all wheels every 5 cm of travel.
+struct RoverRuts {
+  static constexpr double kWheelWidthMetres = 0.40;
+  static constexpr double kDepthMetres = 0.03;
+  static constexpr double kTexelMetres = 0.05;
+  static constexpr double kSpacingMetres = 0.05;
+};
+
 /// One wheel's contact with the ground, in the terrain's grid frame (x east, y north,
 /// metres: a plane DEM or a DEM placed on a planet).
 struct WheelContact {
