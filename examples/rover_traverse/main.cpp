@@ -7,14 +7,12 @@
 //   rover_traverse --cache-mb 4 --path "-560,-90 -430,-20 -300,250" --tracks tracks.csv
 //                  --image tracks.png
 //
-// Public API only (regolith::rover, regolith::store, regolith::clod).
-#include <regolith/clod/HeightPyramid.hpp>
+// Public API only (regolith::rover, regolith::store, regolith::clod, regolith::scenedemo).
 #include <regolith/clod/Render.hpp>
 #include <regolith/clod/TrackLayer.hpp>
 #include <regolith/rover/Traverse.hpp>
 #include <regolith/scenegraph/StorePyramid.hpp>
 #include <regolith/store/Generate.hpp>
-#include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/Error.hpp>

@@ -40,7 +40,7 @@ std::atomic<Record*> gRecords{nullptr};  // NOLINT: the registry; records are ne
 [[maybe_unused]] long membarrier(int cmd) { return syscall(__NR_membarrier, cmd, 0U, 0); }
 
 // Registers this process for expedited membarriers once. Failing that (an old kernel, a
-// seccomp filter), readers fence themselves.
+// seccomp filter), queries do not use the block tables (tlFastRecord stays null).
 void initOnce() {
   static std::once_flag once;
   std::call_once(once, [] {

@@ -112,7 +112,7 @@ bool straddlingBilinear(const ResidentBilinear& f, const BlockTable& table, std:
     if (b == nullptr) return false;
     if (rec->ptr.load(std::memory_order_relaxed) != b) {
       tlBlock.source = 0;  // the hazard leaves the thread's block
-      hazard::protectFast(*rec, b);
+      hazard::protect(*rec, b);
       if (slot.load(std::memory_order_seq_cst) != b) return false;  // retracted meanwhile
     }
     s[k] = static_cast<double>(b->data[(sr - b->row0) * b->stride + (sc - b->col0)]);

@@ -10,9 +10,14 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
+
+namespace regolith::clod {
+struct RgbaImage;
+}  // namespace regolith::clod
 
 namespace regolith::python {
 
@@ -40,6 +45,10 @@ using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecas
 [[nodiscard]] store::CachePolicy parsePolicy(const std::string& name);
 [[nodiscard]] std::string policyName(store::CachePolicy p);
 [[nodiscard]] py::dict statsDict(const store::CacheStats& s);
+/// "(2, 3)", "(5,)": an array's shape as Python prints it, for messages.
+[[nodiscard]] std::string shapeOf(const py::array& a);
+/// A rendered image as a (height, width, 4) uint8 RGBA array (a copy).
+[[nodiscard]] py::array_t<std::uint8_t> imageArray(const clod::RgbaImage& img);
 
 void bindErrors(py::module_& m);
 void bindStore(py::module_& m);

@@ -10,10 +10,6 @@
 
 namespace regolith::python {
 
-namespace {
-
-static_assert(sizeof(glm::dvec3) == 3 * sizeof(double), "glm::dvec3 must be three packed doubles");
-
 std::string shapeOf(const py::array& a) {
   std::string s = "(";
   for (py::ssize_t i = 0; i < a.ndim(); ++i) {
@@ -22,6 +18,10 @@ std::string shapeOf(const py::array& a) {
   }
   return s + ")";
 }
+
+namespace {
+
+static_assert(sizeof(glm::dvec3) == 3 * sizeof(double), "glm::dvec3 must be three packed doubles");
 
 /// Checks that a and b have one shape; returns it.
 std::vector<py::ssize_t> commonShape(const char* op, const char* na, const DoubleArray& a,

@@ -66,13 +66,17 @@ py::array_t<std::uint8_t> render(const Terrain& t, const std::array<double, 3>& 
     const py::gil_scoped_release release;
     img = clod::renderImage(pyramid, req);
   }
+  return imageArray(img);
+}
+
+}  // namespace
+
+py::array_t<std::uint8_t> imageArray(const clod::RgbaImage& img) {
   py::array_t<std::uint8_t> out(
       {static_cast<py::ssize_t>(img.height), static_cast<py::ssize_t>(img.width), py::ssize_t{4}});
   std::memcpy(out.mutable_data(), img.rgba.data(), img.rgba.size());
   return out;
 }
-
-}  // namespace
 
 void bindRender(py::class_<DemTerrain, std::shared_ptr<DemTerrain>>& dem,
                 py::class_<PlanetTerrain, std::shared_ptr<PlanetTerrain>>& planet) {

@@ -11,7 +11,6 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <array>
-#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -69,24 +68,6 @@ scenegraph::MarsVictoriaOptions sceneOptions(const std::optional<std::filesystem
   if (mars) o.marsStore = *mars;
   if (victoria) o.victoriaStore = *victoria;
   return o;
-}
-
-py::array_t<std::uint8_t> toNumpy(const clod::RgbaImage& img) {
-  py::array_t<std::uint8_t> out(
-      {static_cast<py::ssize_t>(img.height), static_cast<py::ssize_t>(img.width), py::ssize_t{4}});
-  std::memcpy(out.mutable_data(), img.rgba.data(), img.rgba.size());
-  return out;
-}
-
-/// "(2, 3)": an array's shape as Python prints it.
-std::string shapeOf(const py::array& a) {
-  std::string s = "(";
-  for (py::ssize_t d = 0; d < a.ndim(); ++d) {
-    if (d > 0) s += ", ";
-    s += std::to_string(a.shape(d));
-  }
-  if (a.ndim() == 1) s += ",";
-  return s + ")";
 }
 
 /// The wheels of one rover step as contacts: a (wheels, 2 or more) array of grid x, y.
@@ -264,7 +245,7 @@ void bindScene(py::module_& m) {
           const py::gil_scoped_release release;
           img = scenegraph::renderSceneView(v);
         }
-        return toNumpy(img);
+        return imageArray(img);
       },
       py::arg("eye"), py::arg("look_at"),
       py::arg("rover") = std::array<double, 3>{0.0, -395.0, 0.0},

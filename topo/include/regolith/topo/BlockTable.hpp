@@ -18,9 +18,8 @@
 /// (Linux membarrier(2), which makes every running thread execute a full fence), then frees
 /// a retracted block only if no thread's hazard record names it. The reader therefore needs
 /// no fence. Where membarrier is unavailable, queries do not use the table (tlFastRecord
-/// stays null) and enter new blocks through the cache's lock; protect() with a fence remains
-/// for other callers. Under ThreadSanitizer, which does not model membarrier, the reader
-/// uses a sequentially consistent store instead.
+/// stays null) and enter new blocks through the cache's lock. Under ThreadSanitizer, which does not
+/// model membarrier, the reader uses a sequentially consistent store instead.
 
 #include <atomic>
 #include <cstddef>
@@ -168,8 +167,10 @@ alignas(64) inline std::atomic<std::uint64_t> gClock{1};  // NOLINT
 Record& acquire();
 
 /// Announces that this thread is about to read `p` (then re-check that p is still
-/// published before using it). For a record from tlFastRecord only: no fence at all.
-inline void protectFast(Record& rec, const void* p) noexcept {
+/// published before using it). No fence: membarrier(2) on the reclaimer's side pairs with it,
+/// which is why queries use it only through tlFastRecord (set only where membarrier is
+/// registered, or under TSan, where the store is sequentially consistent instead).
+inline void protect(Record& rec, const void* p) noexcept {
 #if defined(__SANITIZE_THREAD__)
   rec.ptr.store(p, std::memory_order_seq_cst);
 #else
@@ -178,24 +179,10 @@ inline void protectFast(Record& rec, const void* p) noexcept {
 #endif
 }
 
-/// Announces that this thread is about to read `p` (then re-check that p is still
-/// published before using it). Any record.
-inline void protect(Record& rec, const void* p) noexcept {
-#if defined(__SANITIZE_THREAD__)
-  rec.ptr.store(p, std::memory_order_seq_cst);
-#else
-  rec.ptr.store(p, std::memory_order_release);
-  if (gAsymmetric.load(std::memory_order_relaxed)) {
-    std::atomic_signal_fence(std::memory_order_seq_cst);  // compiler-only; membarrier pairs
-  } else {
-    std::atomic_thread_fence(std::memory_order_seq_cst);
-  }
-#endif
-}
-
 /// Reclaimer side, after retracting: a full memory barrier on every thread of the process
-/// (membarrier), or a local full fence when readers fence themselves. False if the barrier
-/// could not be made; then nothing retracted may be freed yet.
+/// (membarrier), or a local full fence when membarrier is unavailable (then no query
+/// announces hazards: they do not use the tables). False if the barrier could not be made;
+/// then nothing retracted may be freed yet.
 [[nodiscard]] bool barrier() noexcept;
 
 /// True if some thread's record names p. Call after barrier().

@@ -109,8 +109,8 @@ inline const PublishedBlock* enterBlock(const BlockTable& table, std::uint64_t s
   // run of queries in b has begun, and it was counted when it was entered.
   if (rec->ptr.load(relaxed) != b) {
     tlBlock.source = 0;  // the hazard leaves the thread's block
-    hazard::protectFast(*rec, b);
-    // seq_cst: with a symmetric protect() this load must not pass the hazard store (on x86
+    hazard::protect(*rec, b);
+    // seq_cst: under TSan protect() is a seq_cst store that this load must not pass (on x86
     // it is a plain load either way).
     if (slot.load(std::memory_order_seq_cst) != b) return nullptr;  // retracted meanwhile
     b->fastHits.store(b->fastHits.load(relaxed) + 1, relaxed);
