@@ -15,6 +15,7 @@
 // The input is generated once into $TMPDIR/regolith-import-bench/input_8192.tif (256 MiB,
 // 256×256-tiled, uncompressed): fractal relief (8 octaves of value noise) plus craters, in
 // float32 metres, on a local equirectangular map of Mars.
+#include <regolith/core/AtomicFile.hpp>
 #include <regolith/store/Import.hpp>
 #include <regolith/store/Store.hpp>
 
@@ -91,33 +92,36 @@ fs::path input() {
     GDALAllRegister();
     const fs::path path = benchDir() / "input_8192.tif";
     if (fs::exists(path)) return path;
-    const fs::path tmp = benchDir() / "input_8192.tif.tmp";
-    char tiled[] = "TILED=YES", bx[] = "BLOCKXSIZE=256", by[] = "BLOCKYSIZE=256";
-    char* opts[] = {tiled, bx, by, nullptr};
-    GDALDatasetH ds =
-        GDALCreate(GDALGetDriverByName("GTiff"), tmp.c_str(), kSize, kSize, 1, GDT_Float32, opts);
-    if (ds == nullptr) throw std::runtime_error("cannot create " + tmp.string());
-    double gt[6] = {-4096.0, 1.0, 0.0, -121500.0, 0.0, -1.0};
-    GDALSetGeoTransform(ds, gt);
-    OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
-    OSRSetFromUserInput(srs, "+proj=eqc +lat_ts=0 +lon_0=354.5 +R=3396190 +units=m +no_defs");
-    GDALSetSpatialRef(ds, srs);
-    OSRDestroySpatialReference(srs);
-    std::vector<float> band(static_cast<std::size_t>(kSize) * 256);
-    for (int r0 = 0; r0 < kSize; r0 += 256) {
-      for (int r = 0; r < 256; ++r) {
-        for (int c = 0; c < kSize; ++c) {
-          band[static_cast<std::size_t>(r) * kSize + static_cast<std::size_t>(c)] =
-              height(r0 + r, c);
-        }
-      }
-      if (GDALRasterIO(GDALGetRasterBand(ds, 1), GF_Write, 0, r0, kSize, 256, band.data(), kSize,
-                       256, GDT_Float32, 0, 0) != CE_None) {
-        throw std::runtime_error("cannot write " + tmp.string());
-      }
-    }
-    GDALClose(ds);
-    fs::rename(tmp, path);
+    core::writeFileAtomically(
+        path,
+        [](const fs::path& tmp) {
+          char tiled[] = "TILED=YES", bx[] = "BLOCKXSIZE=256", by[] = "BLOCKYSIZE=256";
+          char* opts[] = {tiled, bx, by, nullptr};
+          GDALDatasetH ds = GDALCreate(GDALGetDriverByName("GTiff"), tmp.c_str(), kSize, kSize, 1,
+                                       GDT_Float32, opts);
+          if (ds == nullptr) throw std::runtime_error("cannot create " + tmp.string());
+          double gt[6] = {-4096.0, 1.0, 0.0, -121500.0, 0.0, -1.0};
+          GDALSetGeoTransform(ds, gt);
+          OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+          OSRSetFromUserInput(srs, "+proj=eqc +lat_ts=0 +lon_0=354.5 +R=3396190 +units=m +no_defs");
+          GDALSetSpatialRef(ds, srs);
+          OSRDestroySpatialReference(srs);
+          std::vector<float> band(static_cast<std::size_t>(kSize) * 256);
+          for (int r0 = 0; r0 < kSize; r0 += 256) {
+            for (int r = 0; r < 256; ++r) {
+              for (int c = 0; c < kSize; ++c) {
+                band[static_cast<std::size_t>(r) * kSize + static_cast<std::size_t>(c)] =
+                    height(r0 + r, c);
+              }
+            }
+            if (GDALRasterIO(GDALGetRasterBand(ds, 1), GF_Write, 0, r0, kSize, 256, band.data(),
+                             kSize, 256, GDT_Float32, 0, 0) != CE_None) {
+              throw std::runtime_error("cannot write " + tmp.string());
+            }
+          }
+          GDALClose(ds);
+        },
+        "import_bench input()");
     return path;
   }();
   return p;

@@ -1,6 +1,6 @@
 // `regolith generate mars-planet|victoria`: procedural stores (store/Generate.hpp).
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Generate.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "CancelOnSignal.hpp"
 #include "Commands.hpp"

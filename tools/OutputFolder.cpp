@@ -1,6 +1,6 @@
 #include "OutputFolder.hpp"
 
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include <filesystem>
 #include <system_error>

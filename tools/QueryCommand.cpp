@@ -1,7 +1,7 @@
 // `regolith query STORE [points...]`: heights and normals at points, as CSV (docs/cli.md).
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "Commands.hpp"
 #include "StoreGrid.hpp"

@@ -1,9 +1,8 @@
 // `regolith render STORE`: one headless clipmap image of a store's grid, as a PNG.
 #include <regolith/clod/Render.hpp>
-#include <regolith/scenegraph/StorePyramid.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "Commands.hpp"
 #include "StoreGrid.hpp"
@@ -62,7 +61,7 @@ void runRender(const Args& a) {
   const bool planet = info.kind == store::GridKind::Planet;
   auto cache = std::make_shared<store::PatchCache>(a.cacheMb << 20U);
   const store::Pager pager(store, cache);
-  const auto pyramid = scenegraph::pyramidFromStore(pager, gridName);
+  const auto pyramid = std::make_shared<const clod::HeightPyramid>(pager.pyramid(gridName));
 
   // A grid point given on the command line: checked, and lifted to the surface (the finest
   // level with data there; 0 m over nodata everywhere).

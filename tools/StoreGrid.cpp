@@ -1,6 +1,6 @@
 #include "StoreGrid.hpp"
 
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include <CLI/CLI.hpp>
 

@@ -1,6 +1,6 @@
 #pragma once
 // Helpers the subcommands share to pick a store's grid (the renderer's pyramid of a grid is
-// scenegraph::pyramidFromStore).
+// store::Pager::pyramid(), drawn by clod::HeightPyramid).
 #include <regolith/store/Store.hpp>
 
 #include <cstddef>

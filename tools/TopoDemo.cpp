@@ -1,10 +1,9 @@
 #include "TopoDemo.hpp"
 
+#include <regolith/core/AtomicFile.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/topo/Mesh.hpp>
 #include <regolith/topo/TopoDem.hpp>
-
-#include "AtomicFile.hpp"
 
 #include <glm/geometric.hpp>
 
@@ -192,8 +191,8 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
   const std::size_t row0 = (o.size - win) / 2;
   const TriangleMesh mesh = buildMesh(dem, {row0, 0, win, win}, MeshFrame::Grid);
   const auto path = o.outDir / "crater_west_rim.ply";
-  writeFileAtomically(
-      path, [&](std::ostream& s) { writePly(s, mesh); }, true);
+  core::writeStreamAtomically(
+      path, [&](std::ostream& s) { writePly(s, mesh); }, "regolith walkthrough");
   out << "\n[6/6] Wrote " << path.string() << ": " << mesh.vertices.size() << " vertices, "
       << mesh.triangles.size() << " triangles (binary PLY, grid frame, metres)\n";
 

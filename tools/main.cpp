@@ -1,5 +1,5 @@
 // The `regolith` command: one subcommand per file (*Command.cpp), registered here.
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include "Commands.hpp"
 

@@ -4,7 +4,7 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/GlError.hpp>
 #include <regolith/clod/TrackLayer.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include "ClipmapEffectState.hpp"
 #include "ClipmapLevel.hpp"

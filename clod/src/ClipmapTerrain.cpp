@@ -1,6 +1,6 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/GlError.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include "ClipmapEffectState.hpp"
 #include "ClipmapLevel.hpp"

@@ -7,7 +7,7 @@
 // row) by an affine map computed in double on the CPU), and discarded if that cell of the
 // DEM has data. With no cut-out (uCutCount = 0, the default) nothing changes.
 
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include <string>
 

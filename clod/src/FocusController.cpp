@@ -1,5 +1,5 @@
 #include <regolith/clod/FocusController.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include <glm/geometric.hpp>
 

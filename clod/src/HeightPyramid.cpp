@@ -1,5 +1,6 @@
 #include <regolith/clod/HeightPyramid.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/topo/Pyramid.hpp>
 
 #include <cmath>
 #include <limits>
@@ -36,6 +37,11 @@ HeightPyramid::HeightPyramid(std::vector<Level> levels, SurfaceKind kind,
   }
 }
 
+HeightPyramid::HeightPyramid(topo::GridPyramid pyramid)
+    : HeightPyramid(std::move(pyramid.levels),
+                    pyramid.planetBody ? SurfaceKind::Planet : SurfaceKind::Plane,
+                    std::move(pyramid.planetBody), pyramid.latitudeType) {}
+
 HeightPyramid::HeightPyramid(std::vector<Level> levels, topo::Placement placement)
     : HeightPyramid(std::move(levels), SurfaceKind::Plane, placement.body()) {
   placement_ = std::move(placement);
@@ -64,27 +70,12 @@ HeightPyramid HeightPyramid::fromSamples(const topo::TopoGrid& grid,
   const topo::TopoGrid* g = &grid;
   while ((levelCount == 0 && (rows > 2 || cols > 2)) ||
          (levelCount != 0 && levels.size() < levelCount)) {
-    const std::size_t r2 = (rows + 1) / 2, c2 = (cols + 1) / 2;
+    const topo::TopoGrid cg = topo::coarserGrid(*g);
+    const std::size_t r2 = cg.rows(), c2 = cg.cols();
     std::vector<float> coarse(r2 * c2);
-    for (std::size_t r = 0; r < r2; ++r)
-      for (std::size_t c = 0; c < c2; ++c) {
-        double sum = 0.0;
-        int n = 0;
-        for (std::size_t dr = 0; dr < 2; ++dr)
-          for (std::size_t dc = 0; dc < 2; ++dc) {
-            const std::size_t rr = std::min(2 * r + dr, rows - 1);
-            const std::size_t cc = std::min(2 * c + dc, cols - 1);
-            const float v = fine[rr * cols + cc];
-            if (!std::isnan(v)) {
-              sum += static_cast<double>(v);
-              ++n;
-            }
-          }
-        coarse[r * c2 + c] =
-            n == 0 ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(sum / n);
-      }
-    const topo::TopoGrid cg(r2, c2, g->x0() + 0.5 * g->spacingX(), g->y0() - 0.5 * g->spacingY(),
-                            2.0 * g->spacingX(), 2.0 * g->spacingY());
+    topo::downsample2x2(
+        fine.data(), rows, cols, coarse.data(), r2, c2, [](float v) { return std::isnan(v); },
+        std::numeric_limits<float>::quiet_NaN());
     levels.push_back({cg, std::make_shared<topo::InMemorySamples>(r2, c2, coarse)});
     g = &levels.back().grid;
     fine = std::move(coarse);

@@ -1,11 +1,13 @@
 #include <regolith/clod/Image.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/AtomicFile.hpp>
+#include <regolith/core/Error.hpp>
 
 #include <png.h>
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -88,27 +90,21 @@ void writePng(const std::string& path, const RgbaImage& image) {
     throw InvalidArgument("writePng(): " + path + ": image is " + std::to_string(image.width) +
                           " x " + std::to_string(image.height) + " with " +
                           std::to_string(image.rgba.size()) + " bytes, expected width·height·4");
-  const std::string tmp = path + ".tmp";
-  std::string error = "libpng failed";
-  {
-    File f(std::fopen(tmp.c_str(), "wb"));
-    if (!f)
-      throw Error("writePng(): " + tmp + ": cannot open for writing: " + std::strerror(errno));
-    if (!encode(f.get(), image, error)) {
-      f.reset();
-      std::remove(tmp.c_str());
-      throw Error("writePng(): " + path + ": " + error);
-    }
-    if (std::fflush(f.get()) != 0) {
-      f.reset();
-      std::remove(tmp.c_str());
-      throw Error("writePng(): " + path + ": write failed: " + std::strerror(errno));
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw Error("writePng(): " + path + ": rename failed: " + std::strerror(errno));
-  }
+  core::writeFileAtomically(
+      path,
+      [&](const std::filesystem::path& tmp) {
+        File f(std::fopen(tmp.c_str(), "wb"));
+        if (!f)
+          throw IoError("writePng(): " + tmp.string() +
+                        ": cannot open for writing: " + std::strerror(errno));
+        std::string error = "libpng failed";
+        if (!encode(f.get(), image, error)) throw IoError("writePng(): " + path + ": " + error);
+        if (std::fflush(f.get()) != 0)
+          throw IoError("writePng(): " + path + ": write failed: " + std::strerror(errno));
+        if (std::fclose(f.release()) != 0)
+          throw IoError("writePng(): " + path + ": write failed: " + std::strerror(errno));
+      },
+      "writePng()");
 }
 
 RgbaImage readPng(const std::string& path) {

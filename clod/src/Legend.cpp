@@ -1,6 +1,8 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/Legend.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/AtomicFile.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 
 #include <algorithm>
 #include <array>
@@ -76,11 +78,8 @@ std::string number(double v) {
   return buf;
 }
 
-std::string exact(double v) {  // JSON: every digit a float or a double has
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
+/// JSON numbers: the shortest text that reads back as the same double (exact).
+std::string exact(double v) { return core::number(v); }
 
 std::uint8_t unorm8(float v) {
   return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0F, 1.0F) * 255.0F));
@@ -180,20 +179,8 @@ std::string Legend::json() const {
 }
 
 void Legend::writeJson(const std::string& path) const {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << json();
-    out.flush();
-    if (!out)
-      throw Error("Legend::writeJson(): " + path + ": cannot write the temporary file " + tmp);
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw Error("Legend::writeJson(): " + path + ": cannot rename the temporary file into place");
-  }
+  core::writeStreamAtomically(
+      path, [this](std::ostream& out) { out << json(); }, "Legend::writeJson()");
 }
 
 }  // namespace regolith::clod

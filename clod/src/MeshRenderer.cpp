@@ -1,6 +1,6 @@
 #include <regolith/clod/GlError.hpp>
 #include <regolith/clod/MeshRenderer.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include "Shaders.hpp"
 

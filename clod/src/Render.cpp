@@ -2,7 +2,7 @@
 #include <regolith/clod/Legend.hpp>
 #include <regolith/clod/Render.hpp>
 #include <regolith/clod/RenderTarget.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include <EGL/egl.h>
 #include <glm/geometric.hpp>

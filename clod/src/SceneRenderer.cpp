@@ -1,7 +1,7 @@
 #include <regolith/clod/GlError.hpp>
 #include <regolith/clod/RenderTarget.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include "CutOutShader.hpp"
 

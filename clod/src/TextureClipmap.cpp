@@ -1,7 +1,7 @@
 #include <regolith/clod/GlError.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/TextureClipmap.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include <algorithm>
 #include <chrono>

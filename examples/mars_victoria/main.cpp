@@ -1,11 +1,11 @@
 // Renders the paper's Mars/Victoria scene headless as a PNG sequence, flying from orbit down
-// to the rover on the crater rim (scenegraph::renderFlyover), and prints the float32 jitter of the
+// to the rover on the crater rim (demo::renderFlyover), and prints the float32 jitter of the
 // rover moving in 1 mm steps for the naive and the re-rooted pipelines (--jitter).
 //
 //   mars_victoria [--out DIR] [--frames N] [--width W] [--height H] [--jitter]
+#include <regolith/core/Error.hpp>
+#include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/scenegraph/Jitter.hpp>
-#include <regolith/scenegraph/MarsVictoria.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -70,7 +70,7 @@ int jitter(std::size_t frames) {
 
 int main(int argc, char** argv) {
   try {
-    regolith::scenegraph::FlyoverOptions options;
+    regolith::demo::FlyoverOptions options;
     bool doJitter = false;
     std::size_t jitterFrames = 1000;
     for (int i = 1; i < argc; ++i) {
@@ -104,7 +104,7 @@ int main(int argc, char** argv) {
       std::printf("\r[%3d/%3d] %s", done, all, path.string().c_str());
       std::fflush(stdout);
     };
-    const auto s = regolith::scenegraph::renderFlyover(options);
+    const auto s = regolith::demo::renderFlyover(options);
     std::printf(
         "\n%zu PNGs in %s; %.1f s (%.1f s drawing), focus Mars → Victoria at frame %d, "
         "camera %.0f m → %.1f m from the rover\n",

@@ -15,7 +15,6 @@
 #include <regolith/clod/FocusController.hpp>
 #include <regolith/clod/Render.hpp>
 #include <regolith/clod/RenderTarget.hpp>
-#include <regolith/scenegraph/StorePyramid.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 
@@ -43,7 +42,7 @@ std::shared_ptr<const HeightPyramid> pyramidFromStore(const std::string& path,
                                                       const std::string& grid) {
   auto store = std::make_shared<const store::Store>(store::Store::open(path));
   auto cache = std::make_shared<store::PatchCache>(std::size_t{512} << 20);
-  return scenegraph::pyramidFromStore(store::Pager(store, cache), grid);
+  return std::make_shared<const HeightPyramid>(store::Pager(store, cache).pyramid(grid));
 }
 
 std::shared_ptr<const HeightPyramid> syntheticDem() {

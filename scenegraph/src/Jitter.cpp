@@ -1,5 +1,5 @@
+#include <regolith/core/Error.hpp>
 #include <regolith/scenegraph/Jitter.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>

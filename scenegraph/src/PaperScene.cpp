@@ -1,5 +1,5 @@
+#include <regolith/core/Error.hpp>
 #include <regolith/scenegraph/PaperScene.hpp>
-#include <regolith/topo/Error.hpp>
 #include <regolith/topo/Projection.hpp>
 
 #include <cmath>

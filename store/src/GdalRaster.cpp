@@ -2,7 +2,7 @@
 // read as heights in metres.
 #include "GdalRaster.hpp"
 
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include <cpl_conv.h>
 #include <cpl_error.h>

@@ -6,8 +6,9 @@
 // cell. Craters are drawn per cell from a hash of (seed, band, cell), so any window can
 // find the craters near it without a global list, and a sample's value depends only on its
 // own position: windows of any shape, and the point function height(), agree to the bit.
+#include <regolith/core/Error.hpp>
+#include <regolith/core/Executor.hpp>
 #include <regolith/store/Generate.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "GenerateNoise.hpp"
 
@@ -430,8 +431,10 @@ void MarsPlanetGenerator::Impl::evaluate(const Lattice& l, double* out) const {
 }
 
 void MarsPlanetGenerator::Impl::evaluateParallel(const Lattice& l, double* out) const {
-  std::size_t threads =
-      options.threads != 0 ? options.threads : std::thread::hardware_concurrency();
+  core::Executor* executor = options.write.executor;
+  std::size_t threads = options.threads != 0  ? options.threads
+                        : executor != nullptr ? executor->concurrency() + 1
+                                              : std::thread::hardware_concurrency();
   threads = std::clamp<std::size_t>(threads, 1, 64);
   threads = std::min(threads, std::max<std::size_t>(1, l.nr * l.nc / 4096));
   threads = std::min(threads, l.nr);
@@ -439,18 +442,20 @@ void MarsPlanetGenerator::Impl::evaluateParallel(const Lattice& l, double* out) 
     evaluate(l, out);
     return;
   }
-  std::vector<std::thread> workers;
-  workers.reserve(threads);
   const std::size_t per = (l.nr + threads - 1) / threads;
-  for (std::size_t k = 0; k < threads; ++k) {
-    const std::size_t first = k * per;
-    if (first >= l.nr) break;
-    Lattice part = l;
-    part.r0 = l.r0 + first;
-    part.nr = std::min(per, l.nr - first);
-    workers.emplace_back([this, part, p = out + first * l.nc] { evaluate(part, p); });
+  const std::size_t parts = (l.nr + per - 1) / per;
+  const auto part = [&](std::size_t k) {
+    Lattice p = l;
+    p.r0 = l.r0 + k * per;
+    p.nr = std::min(per, l.nr - k * per);
+    evaluate(p, out + k * per * l.nc);
+  };
+  if (executor != nullptr) {
+    core::parallelFor(*executor, parts, part, static_cast<unsigned>(threads));
+  } else {
+    core::ThreadPool pool(static_cast<unsigned>(threads - 1));
+    core::parallelFor(pool, parts, part, static_cast<unsigned>(threads));
   }
-  for (std::thread& w : workers) w.join();
 }
 
 namespace {

@@ -1,6 +1,6 @@
 // The Victoria-like crater: its analytic shape and the generator that places it on Mars.
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Generate.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "GenerateNoise.hpp"
 

@@ -92,14 +92,6 @@ std::string missingFilterHint(int id) {
   return hint;
 }
 
-std::string formatNumber(double v) {
-  std::array<char, 64> buf{};
-  const auto res = std::to_chars(buf.data(), buf.data() + buf.size(), v);
-  std::string s(buf.data(), res.ptr);
-  if (s.find_first_of(".en") == std::string::npos) s += ".0";
-  return s;
-}
-
 // ---- attributes ----------------------------------------------------------------------------
 
 bool hasAttribute(hid_t obj, const char* name, const Context& ctx) {

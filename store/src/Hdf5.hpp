@@ -119,10 +119,6 @@ void check(herr_t status, const Context& ctx, const std::string& what);
 /// the HDF5 lock held.
 [[nodiscard]] std::string missingFilterHint(int id);
 
-/// A number as a message shows it: shortest round-trip form, with ".0" on integral values
-/// ("-1.0", "0.25", "1e-300", "nan").
-[[nodiscard]] std::string formatNumber(double v);
-
 // ---- attributes ----------------------------------------------------------------------------
 // Readers take the object's description for messages ("grid 'victoria'" or "the root group")
 // and throw StoreError naming the attribute when it is missing or of the wrong class/shape.

@@ -14,19 +14,6 @@ namespace regolith::store {
 
 namespace {
 
-WriteOptions writeOptionsOf(const ImportOptions& o) {
-  WriteOptions w;
-  w.patchRows = o.patchRows;
-  w.patchCols = o.patchCols;
-  w.levels = o.levels;
-  w.deflate = o.deflate;
-  w.codec = o.codec;
-  w.threads = o.threads;
-  w.progress = o.progress;
-  w.cancel = o.cancel;
-  return w;
-}
-
 std::string number(double v) {
   std::ostringstream o;
   o.precision(12);
@@ -101,7 +88,7 @@ ImportReport importRaster(const std::filesystem::path& raster, const std::filesy
   auto r = std::make_shared<gdal::Raster>(raster, options, "store::importRaster()");
   ImportReport rep = reportOf(*r);
   const std::vector<GridSource> grids{GridSource{rep.info, r, {}}};
-  writeStore(store, grids, writeOptionsOf(options));
+  writeStore(store, grids, options);
   rep.missingSamples = r->missingRead();
   rep.info = writtenInfo(store, rep.info.name);
   rep.seconds = secondsSince(t0);
@@ -180,7 +167,7 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   rep.info = src.info;
   rep.tiles = rasters.size();
   const std::vector<GridSource> grids{src};
-  writeStore(store, grids, writeOptionsOf(options));
+  writeStore(store, grids, options);
   // Missing: what the tiles held as missing, plus the gaps no tile covers.
   std::size_t covered = 0;
   for (const auto& r : rasters) {

@@ -1,6 +1,6 @@
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/topo/BlockTable.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -157,6 +157,18 @@ topo::TopoPlanet Pager::planet(std::string_view grid, std::size_t level) const {
                      std::string(grid) + "' is a DEM, expected a planet grid");
   }
   return {topoGridOf(*e.info, level), bodyOf(*e.info), e.info->latitudeType, source(grid, level)};
+}
+
+topo::GridPyramid Pager::pyramid(std::string_view grid) const {
+  const GridEntry& e = entry(grid, 0, "store::Pager::pyramid()");
+  topo::GridPyramid p;
+  p.levels.reserve(e.info->levels);
+  for (std::size_t l = 0; l < e.info->levels; ++l) {
+    p.levels.push_back({topoGridOf(*e.info, l), source(grid, l)});
+  }
+  if (e.info->kind == GridKind::Planet) p.planetBody = bodyOf(*e.info);
+  p.latitudeType = e.info->latitudeType;
+  return p;
 }
 
 PatchKey Pager::keyOf(std::string_view grid, std::size_t level, std::size_t row,

@@ -1,5 +1,5 @@
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Prefetcher.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include <algorithm>
 #include <string>

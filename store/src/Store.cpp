@@ -1,4 +1,5 @@
 // Store: opens and validates a store file, and reads windows of its levels by hyperslab.
+#include <regolith/core/Message.hpp>
 #include <regolith/store/Store.hpp>
 
 #include "Hdf5.hpp"
@@ -86,7 +87,7 @@ bool typeMatches(hid_t type, SampleType t) {
 double finiteNumber(hid_t g, const char* name, const Context& ctx, const std::string& owner) {
   const double v = hdf5::readNumber(g, name, ctx, owner);
   if (!std::isfinite(v)) {
-    fail(ctx, owner + " has " + name + " " + hdf5::formatNumber(v) + ", expected a finite number");
+    fail(ctx, owner + " has " + name + " " + core::number(v) + ", expected a finite number");
   }
   return v;
 }
@@ -104,7 +105,7 @@ void readPlacement(hid_t g, GridInfo& info, const Context& ctx, const std::strin
     p.kind = PlacementInfo::Kind::PolarStereographic;
     const double pole = finiteNumber(g, format::kPole, ctx, owner);
     if (pole != 1.0 && pole != -1.0) {
-      fail(ctx, owner + " has pole " + hdf5::formatNumber(pole) + ", expected 1 or -1");
+      fail(ctx, owner + " has pole " + core::number(pole) + ", expected 1 or -1");
     }
     p.pole = pole > 0 ? 1 : -1;
     if (hdf5::hasAttribute(g, format::kLatTrueScale, ctx)) {
@@ -168,7 +169,7 @@ void readAttributes(hid_t g, GridEntry& entry, const Context& ctx, const std::st
   const std::vector<double> spacing = hdf5::readNumbers(g, format::kSpacing, 2, ctx, owner);
   const auto checkSpacing = [&](double s) {
     if (!(std::isfinite(s) && s > 0.0)) {
-      fail(ctx, owner + " has spacing " + hdf5::formatNumber(s) + unit + ", expected > 0");
+      fail(ctx, owner + " has spacing " + core::number(s) + unit + ", expected > 0");
     }
   };
   checkSpacing(spacing[0]);
@@ -190,7 +191,7 @@ void readAttributes(hid_t g, GridEntry& entry, const Context& ctx, const std::st
   if (hdf5::hasAttribute(g, format::kNodata, ctx)) {
     const double nodata = hdf5::readNumber(g, format::kNodata, ctx, owner);
     if (std::isinf(nodata)) {
-      fail(ctx, owner + " has nodata " + hdf5::formatNumber(nodata) +
+      fail(ctx, owner + " has nodata " + core::number(nodata) +
                     ", expected a finite "
                     "number or NaN");
     }
@@ -205,8 +206,8 @@ void readAttributes(hid_t g, GridEntry& entry, const Context& ctx, const std::st
   info.polarRadius = hdf5::readNumber(g, format::kPolarRadius, ctx, owner);
   if (!(std::isfinite(info.equatorialRadius) && std::isfinite(info.polarRadius) &&
         info.polarRadius > 0.0 && info.polarRadius <= info.equatorialRadius)) {
-    fail(ctx, owner + " has equatorial_radius " + hdf5::formatNumber(info.equatorialRadius) +
-                  " m and polar_radius " + hdf5::formatNumber(info.polarRadius) +
+    fail(ctx, owner + " has equatorial_radius " + core::number(info.equatorialRadius) +
+                  " m and polar_radius " + core::number(info.polarRadius) +
                   " m, expected 0 < polar_radius <= equatorial_radius");
   }
   const std::string lat = hdf5::readString(g, format::kLatitudeType, ctx, owner);

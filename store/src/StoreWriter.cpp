@@ -1,6 +1,10 @@
 // writeStore(): writes grids and their pyramids into a temporary file, then renames it into
 // place (docs/store-format.md, "Crash-safe writing").
+#include <regolith/core/AtomicFile.hpp>
+#include <regolith/core/Executor.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/store/Store.hpp>
+#include <regolith/topo/Pyramid.hpp>
 
 #include "Hdf5.hpp"
 #include "StoreFormat.hpp"
@@ -178,7 +182,7 @@ Prepared prepare(const GridSource& src, const WriteOptions& o,
   const std::string unit = info.kind == GridKind::Dem ? " m" : " deg";
   const auto checkSpacing = [&](double s) {
     if (!(std::isfinite(s) && s > 0.0)) {
-      invalid(ctx, owner + " has spacing " + hdf5::formatNumber(s) + unit + ", expected > 0");
+      invalid(ctx, owner + " has spacing " + core::number(s) + unit + ", expected > 0");
     }
   };
   checkSpacing(info.spacingX);
@@ -186,13 +190,12 @@ Prepared prepare(const GridSource& src, const WriteOptions& o,
   for (const auto& [name, v] : {std::pair{"x0", info.x0}, std::pair{"y0", info.y0},
                                 std::pair{"scale", info.scale}, std::pair{"offset", info.offset}}) {
     if (!std::isfinite(v)) {
-      invalid(ctx,
-              owner + " has " + name + " " + hdf5::formatNumber(v) + ", expected a finite number");
+      invalid(ctx, owner + " has " + name + " " + core::number(v) + ", expected a finite number");
     }
   }
   if (info.nodata && std::isnan(*info.nodata)) info.nodata.reset();
   if (info.nodata && std::isinf(*info.nodata)) {
-    invalid(ctx, owner + " has nodata " + hdf5::formatNumber(static_cast<double>(*info.nodata)) +
+    invalid(ctx, owner + " has nodata " + core::number(static_cast<double>(*info.nodata)) +
                      ", expected a finite number or none");
   }
   try {
@@ -429,14 +432,13 @@ void level0Block(const topo::SampleSource& src, const GridInfo& info, std::size_
     } else if (std::isinf(v)) {
       invalid(ctx, "grid '" + info.name + "' sample (" + std::to_string(r0 + i / nc) + ", " +
                        std::to_string(c0 + i % nc) + ") is " +
-                       hdf5::formatNumber(static_cast<double>(v)) +
-                       ", expected a finite height or NaN");
+                       core::number(static_cast<double>(v)) + ", expected a finite height or NaN");
     }
   }
 }
 
-/// Level k ≥ 1 of one chunk: 2×2 means of level k−1 (read back from the file), ignoring
-/// missing samples and samples beyond the edge; missing only if all of them are.
+/// Level k ≥ 1 of one chunk: topo::downsample2x2() of level k−1 (read back from the file),
+/// the one definition of the format's pyramid rule.
 using FineReader = std::function<void(std::size_t, std::size_t, std::size_t, std::size_t, float*)>;
 
 void coarseBlock(const FineReader& below, const GridInfo& info, std::size_t level, std::size_t r0,
@@ -450,22 +452,7 @@ void coarseBlock(const FineReader& below, const GridInfo& info, std::size_t leve
   below(fr0, fc0, fnr, fnc, fine.data());
   const Missing missing{info.nodata};
   out.resize(nr * nc);
-  for (std::size_t r = 0; r < nr; ++r) {
-    for (std::size_t c = 0; c < nc; ++c) {
-      double sum = 0.0;
-      int count = 0;
-      for (std::size_t dr = 0; dr < 2 && 2 * r + dr < fnr; ++dr) {
-        for (std::size_t dc = 0; dc < 2 && 2 * c + dc < fnc; ++dc) {
-          const float v = fine[(2 * r + dr) * fnc + 2 * c + dc];
-          if (!missing(v)) {
-            sum += static_cast<double>(v);
-            ++count;
-          }
-        }
-      }
-      out[r * nc + c] = count > 0 ? static_cast<float>(sum / count) : missing.stored();
-    }
-  }
+  topo::downsample2x2(fine.data(), fnr, fnc, out.data(), nr, nc, missing, missing.stored());
 }
 
 /// Level 0 of a tiled grid's block as stored: each tile's samples (missing as the stored
@@ -506,40 +493,26 @@ static_assert(std::endian::native == std::endian::little,
 
 unsigned threadCount(const WriteOptions& o) {
   if (o.threads > 0) return o.threads;
+  if (o.executor != nullptr) return o.executor->concurrency() + 1;
   return std::max(1U, std::thread::hardware_concurrency());
 }
 
-/// Runs f(0) … f(n − 1) on up to `threads` threads (the caller's included); rethrows the first
-/// exception once all have stopped.
-void parallelFor(std::size_t n, unsigned threads, const std::function<void(std::size_t)>& f) {
-  const std::size_t workers = std::min<std::size_t>(threads, n);
-  if (workers <= 1) {
+/// Runs f(0) … f(n − 1) on up to threadCount(o) threads, the caller's included: on the
+/// options' executor, or on a pool made for the call; rethrows the first exception once all
+/// have stopped.
+void parallelFor(std::size_t n, const WriteOptions& o, const std::function<void(std::size_t)>& f) {
+  const unsigned threads = threadCount(o);
+  if (o.executor != nullptr) {
+    core::parallelFor(*o.executor, n, f, threads);
+    return;
+  }
+  const std::size_t helpers = std::min<std::size_t>(threads, n);
+  if (helpers <= 1) {
     for (std::size_t i = 0; i < n; ++i) f(i);
     return;
   }
-  std::atomic<std::size_t> next{0};
-  std::atomic<bool> failed{false};
-  std::exception_ptr error;
-  std::mutex errorMutex;
-  const auto run = [&] {
-    for (;;) {
-      const std::size_t i = next.fetch_add(1);
-      if (i >= n || failed.load()) return;
-      try {
-        f(i);
-      } catch (...) {
-        const std::lock_guard lock(errorMutex);
-        if (!error) error = std::current_exception();
-        failed = true;
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  pool.reserve(workers - 1);
-  for (std::size_t t = 1; t < workers; ++t) pool.emplace_back(run);
-  run();
-  for (std::thread& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
+  core::ThreadPool pool(static_cast<unsigned>(helpers - 1));
+  core::parallelFor(pool, n, f, threads);
 }
 
 /// A chunk of cr × cc floats as H5Z-ZFP (filter 32013) stores it in reversible mode: one bare
@@ -634,7 +607,7 @@ void writeBandChunks(
   const std::size_t cc = chunk[1];
   const std::size_t n = (cols + cc - 1) / cc;
   std::vector<std::vector<unsigned char>> encoded(n);
-  parallelFor(n, threadCount(o), [&](std::size_t k) {
+  parallelFor(n, o, [&](std::size_t k) {
     checkCancel(o, ctx);  // before every chunk
     std::vector<float> b;
     const std::size_t c0 = k * cc, nc = std::min(cc, cols - c0);
@@ -693,7 +666,7 @@ class Pyramid {
     } else {
       // Tiled: level 0 lives in the tiles; the mosaic's band is only read for level 1.
       const std::size_t cc = info_.patchCols;
-      parallelFor((cols + cc - 1) / cc, threadCount(o_), [&](std::size_t k) {
+      parallelFor((cols + cc - 1) / cc, o_, [&](std::size_t k) {
         std::vector<float> b;
         fill(k * cc, std::min(cc, cols - k * cc), b);
       });
@@ -851,38 +824,6 @@ void writeGrid(hid_t grids, const GridSource& src, const Prepared& p, const Writ
   hdf5::check(H5Gclose(group.release()), ctx, "cannot close group '/grids/" + info.name + "'");
 }
 
-/// fsync() a file or directory; throws StoreError on failure.
-void syncPath(const std::filesystem::path& p, bool directory, const Context& ctx) {
-  const int fd = ::open(p.c_str(), directory ? (O_RDONLY | O_DIRECTORY) : O_RDONLY);
-  if (fd < 0) fail(ctx, "cannot open " + p.string() + " to sync it: " + std::strerror(errno));
-  const int rc = ::fsync(fd);
-  const int err = errno;
-  ::close(fd);
-  if (rc != 0) fail(ctx, "cannot sync " + p.string() + ": " + std::strerror(err));
-}
-
-/// Removes the temporary file unless the write committed (renamed it into place).
-class TempFile {
- public:
-  explicit TempFile(std::filesystem::path p) : path_(std::move(p)) {}
-  ~TempFile() {
-    if (!committed_) {
-      std::error_code ec;
-      std::filesystem::remove(path_, ec);
-    }
-  }
-  TempFile(const TempFile&) = delete;
-  TempFile& operator=(const TempFile&) = delete;
-  TempFile(TempFile&&) = delete;
-  TempFile& operator=(TempFile&&) = delete;
-  [[nodiscard]] const std::filesystem::path& path() const noexcept { return path_; }
-  void commit() noexcept { committed_ = true; }
-
- private:
-  std::filesystem::path path_;
-  bool committed_ = false;
-};
-
 }  // namespace
 
 const char* codecName(Codec c) noexcept {
@@ -892,7 +833,8 @@ const char* codecName(Codec c) noexcept {
 Codec codecNamed(std::string_view name) {
   if (name == "deflate") return Codec::Deflate;
   if (name == "zfp") return Codec::Zfp;
-  throw InvalidArgument("codec '" + std::string(name) + "', expected deflate or zfp");
+  throw InvalidArgument("store::codecNamed(): codec '" + std::string(name) +
+                        "', expected deflate or zfp");
 }
 
 void writeStore(const std::filesystem::path& path, std::span<const GridSource> grids,
@@ -938,20 +880,19 @@ void writeStore(const std::filesystem::path& path, std::span<const GridSource> g
   }
   checkCancel(options, ctx);
 
-  TempFile tmp(path.string() + ".tmp-" + std::to_string(::getpid()));
   Progress progress(options, std::max(totalSamples, 1.0));
-  {
+  const auto write = [&](const std::filesystem::path& tmp) {
     hdf5::File file;
     hdf5::Group gridsGroup;
     {
       const hdf5::Lock lock;
-      const std::string what = "cannot create the temporary file " + tmp.path().string();
+      const std::string what = "cannot create the temporary file " + tmp.string();
       // The HDF5 1.8 file format: checksummed metadata (corruption is reported, not
       // misread), readable by any HDF5 since 1.8.
       const hdf5::PropertyList fapl(hdf5::check(H5Pcreate(H5P_FILE_ACCESS), ctx, what));
       hdf5::check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18), ctx, what);
-      file = hdf5::File(hdf5::check(
-          H5Fcreate(tmp.path().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), ctx, what));
+      file = hdf5::File(
+          hdf5::check(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), ctx, what));
       const hdf5::Group root(
           hdf5::check(H5Gopen2(file.get(), "/", H5P_DEFAULT), ctx, "cannot open '/'"));
       hdf5::writeString(root.get(), format::kMarker, format::kMarkerValue, ctx);
@@ -962,22 +903,21 @@ void writeStore(const std::filesystem::path& path, std::span<const GridSource> g
       writeGrid(gridsGroup.get(), grids[i], prepared[i], options, progress, ctx);
     }
     checkCancel(options, ctx);
-    const hdf5::Lock lock;
-    hdf5::check(H5Gclose(gridsGroup.release()), ctx, "cannot close group '/grids'");
-    hdf5::check(H5Fflush(file.get(), H5F_SCOPE_GLOBAL), ctx, "cannot flush " + tmp.path().string());
-    hdf5::check(H5Fclose(file.release()), ctx, "cannot close " + tmp.path().string());
+    {
+      const hdf5::Lock lock;
+      hdf5::check(H5Gclose(gridsGroup.release()), ctx, "cannot close group '/grids'");
+      hdf5::check(H5Fflush(file.get(), H5F_SCOPE_GLOBAL), ctx, "cannot flush " + tmp.string());
+      hdf5::check(H5Fclose(file.release()), ctx, "cannot close " + tmp.string());
+    }
+    checkCancel(options, ctx);
+  };
+  // core::writeFileAtomically: a unique temporary beside the target, synced, renamed into
+  // place, then the folder synced (durable before visible).
+  try {
+    core::writeFileAtomically(path, write, "store::writeStore()");
+  } catch (const IoError& e) {
+    throw StoreError(e.what());
   }
-  // Durable before visible: the data reach the disk, then the rename publishes them, then
-  // the directory entry itself is synced.
-  syncPath(tmp.path(), false, ctx);
-  checkCancel(options, ctx);
-  std::error_code ec;
-  std::filesystem::rename(tmp.path(), path, ec);
-  if (ec) {
-    fail(ctx, "cannot rename " + tmp.path().string() + " into place: " + ec.message());
-  }
-  tmp.commit();
-  syncPath(dir, true, ctx);
   progress.finish();
 }
 

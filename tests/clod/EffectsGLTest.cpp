@@ -3,7 +3,7 @@
 
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/TrackLayer.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/topo/Placement.hpp>
 
 #include "EffectFixtures.hpp"

@@ -1,5 +1,5 @@
 #include <regolith/clod/Render.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include "GlContext.hpp"
 #include "TerrainFixtures.hpp"

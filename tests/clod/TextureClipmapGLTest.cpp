@@ -3,10 +3,10 @@
 
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/TextureClipmap.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/PatchCache.hpp>
 #include <regolith/store/Store.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "EffectFixtures.hpp"
 #include "GlContext.hpp"

@@ -1,5 +1,5 @@
+#include <regolith/core/Error.hpp>
 #include <regolith/scenegraph/Pose.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
+#include <regolith/core/Error.hpp>
 #include <regolith/scenegraph/PaperScene.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
-#include <regolith/topo/Error.hpp>
 #include <regolith/topo/Projection.hpp>
 
 #include <glm/geometric.hpp>

@@ -1,10 +1,10 @@
-// clod::SceneRenderer drawing the paper's scene (scenegraph::MarsVictoriaScene): the DEM wins over
+// clod::SceneRenderer drawing the paper's scene (demo::MarsVictoriaScene): the DEM wins over
 // the planet with no gap at the border, sits at its geodetic place and height, two DEMs on
 // one planet, several cameras, and a focus switch that changes nothing on screen.
 #include <regolith/clod/RenderTarget.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
-#include <regolith/scenegraph/MarsVictoria.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/topo/Projection.hpp>
 
 #include "clod/GlContext.hpp"
@@ -23,9 +23,14 @@
 namespace regolith::scenegraph {
 namespace {
 
+// The demo scene is this test's fixture until the scene-rendering layer has one of its own.
+using demo::flyoverCamera;
+using demo::MarsVictoriaOptions;
+using demo::MarsVictoriaScene;
+
 constexpr glm::vec4 kMagenta{1.0F, 0.0F, 1.0F, 1.0F};
 
-// Full: the fly-over's scene (scenegraph::renderFlyover's defaults: planet 0.5° samples,
+// Full: the fly-over's scene (demo::renderFlyover's defaults: planet 0.5° samples,
 // Victoria 601 × 601 at 2 m, a second DEM 201 × 201 at 2 m), for the border tests, so they
 // look at what the demo shows. Small (1° planet, 4 m DEMs) for the rest, to keep the suite
 // fast under sanitizers.

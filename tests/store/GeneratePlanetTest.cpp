@@ -1,9 +1,9 @@
 // MarsPlanetGenerator: the store it writes (read back with Store, not through the generator)
 // against its point function; determinism across seeds, patch sizes and threads; continuity
 // across the ±180° seam and at both poles; craters (power law, bowl, rim, ejecta); errors.
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/Pager.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "support/StoreScratch.hpp"
 

@@ -1,9 +1,9 @@
 // VictoriaGenerator: the store it writes, measured like a field geologist would from the
 // stored samples (paged TopoDem queries): rim diameter, raised rim, floor, scalloped wall
 // with its count of bays, dunes on the floor; placement on Mars; determinism; errors.
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/Pager.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "support/StoreScratch.hpp"
 

@@ -1,7 +1,7 @@
 // Pager: paged grids answer exactly like in-memory ones, load only the patches they touch,
 // stay within the cache budget, and give the same answers from many threads.
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Pager.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "store/PagerFixture.hpp"
 

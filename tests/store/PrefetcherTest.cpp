@@ -1,6 +1,6 @@
 // Prefetcher: background loading by priority, with cancellation.
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Prefetcher.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "store/PagerFixture.hpp"
 

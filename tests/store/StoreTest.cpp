@@ -3,8 +3,8 @@
 // raw API. Then round trips over every level, strided and edge windows, every bad-input error
 // with its message, crash safety under SIGKILL, cancellation and progress.
 // (tests/store/test_store_h5py.py checks the same layout with h5py as an outside oracle.)
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Store.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "support/StoreScratch.hpp"
 
@@ -816,13 +816,13 @@ TEST(Store, RejectsNonPositiveSpacing) {
     rawSetNumbers(g, "spacing", {-1.0, 2.0}, H5T_IEEE_F64LE);
   });
   EXPECT_EQ(openError(p),
-            "store::open(): " + p.string() + ": grid 'victoria' has spacing -1.0 m, expected > 0");
+            "store::open(): " + p.string() + ": grid 'victoria' has spacing -1 m, expected > 0");
   editRaw(p, [](hid_t f) {
     const H5 g(H5Gopen2(f, "/grids/victoria", H5P_DEFAULT), H5Gclose);
     rawSetNumbers(g, "spacing", {1.0, 0.0}, H5T_IEEE_F64LE);
   });
   EXPECT_EQ(openError(p),
-            "store::open(): " + p.string() + ": grid 'victoria' has spacing 0.0 m, expected > 0");
+            "store::open(): " + p.string() + ": grid 'victoria' has spacing 0 m, expected > 0");
 }
 
 TEST(Store, RejectsADatasetOfTheWrongRank) {
@@ -1075,7 +1075,7 @@ TEST(StoreWriter, RejectsInvalidGridsAndLeavesNoFile) {
   };
   GridInfo bad = demInfo("victoria", 4, 4);
   bad.spacingX = -1.0;
-  expectInvalid({source(bad, crater)}, "grid 'victoria' has spacing -1.0 m, expected > 0");
+  expectInvalid({source(bad, crater)}, "grid 'victoria' has spacing -1 m, expected > 0");
   GridSource mismatched = source(demInfo("crater", 4, 4), crater);
   mismatched.info.rows = 5;
   expectInvalid({mismatched}, "grid 'crater' describes 5x4 samples but its source holds 4x4");
@@ -1192,6 +1192,16 @@ TEST(StoreWriter, CancelStopsTheWriteRemovesTheTemporaryAndKeepsThePreviousStore
 
 namespace {
 
+/// The temporaries a writer with process id `pid` left beside `p` (`<p>.tmp-<pid>-<n>`).
+std::vector<fs::path> temporariesOf(const fs::path& p, pid_t pid) {
+  const std::string prefix = p.filename().string() + ".tmp-" + std::to_string(pid) + "-";
+  std::vector<fs::path> out;
+  for (const auto& e : fs::directory_iterator(p.parent_path())) {
+    if (e.path().filename().string().rfind(prefix, 0) == 0) out.push_back(e.path());
+  }
+  return out;
+}
+
 /// Forks a child that writes a 1536×1536 store over `p` and is SIGKILLed: once it reports
 /// `killAt` of the work done (it then waits inside the write to be killed), or after
 /// `delay` if killAt < 0 (wherever it happens to be, possibly already finished).
@@ -1254,9 +1264,9 @@ TEST(StoreWriter, ASigkilledWriterNeverLeavesAPartialFileUnderTheFinalName) {
   for (const double at : {0.0, 0.5, 0.99}) {
     const pid_t pid = killWriterMidWay(p, at, {});
     EXPECT_FALSE(fs::exists(p)) << "killed at " << at;
-    const fs::path tmp = p.string() + ".tmp-" + std::to_string(pid);
-    EXPECT_TRUE(fs::exists(tmp)) << "the partial write lives under " << tmp;
-    fs::remove(tmp);
+    const std::vector<fs::path> tmp = temporariesOf(p, pid);
+    EXPECT_EQ(tmp.size(), 1U) << "the partial write lives under " << p << ".tmp-" << pid << "-*";
+    for (const fs::path& t : tmp) fs::remove(t);
   }
 
   // A previous store: killed anywhere, the final name holds it, byte for byte.
@@ -1265,7 +1275,7 @@ TEST(StoreWriter, ASigkilledWriterNeverLeavesAPartialFileUnderTheFinalName) {
   for (const double at : {0.0, 0.02, 0.3, 0.6, 0.95, 0.999}) {
     const pid_t pid = killWriterMidWay(p, at, {});
     EXPECT_EQ(fileBytes(p), before) << "killed at " << at;
-    fs::remove(p.string() + ".tmp-" + std::to_string(pid));
+    for (const fs::path& t : temporariesOf(p, pid)) fs::remove(t);
   }
   const Store s = Store::open(p);
   std::vector<float> v(1);
@@ -1279,7 +1289,7 @@ TEST(StoreWriter, ASigkilledWriterNeverLeavesAPartialFileUnderTheFinalName) {
     writeStore(p, previous);
     const std::string previousBytes = fileBytes(p);
     const pid_t pid = killWriterMidWay(p, -1.0, std::chrono::microseconds(us));
-    fs::remove(p.string() + ".tmp-" + std::to_string(pid));
+    for (const fs::path& t : temporariesOf(p, pid)) fs::remove(t);
     if (fileBytes(p) == previousBytes) continue;
     ++replaced;
     const Store n = Store::open(p);  // must be complete

@@ -3,9 +3,9 @@
 // straddle 2 or 4 tiles are assembled correctly, with tile sizes (100×90, 37×113, ...) that do
 // not divide the 64×64 patch; gaps read NaN; coarse levels are 2×2 means across tile borders;
 // bad tilings are refused with errors naming the file and the field.
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
-#include <regolith/topo/Error.hpp>
 #include <regolith/topo/TopoDem.hpp>
 
 #include <gtest/gtest.h>

@@ -260,16 +260,16 @@ def test_generate_interrupted_leaves_no_file(work):
     p = subprocess.Popen([BIN, "generate", "mars-planet", "--out", str(out), "--size", "4096",
                           "--threads", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          text=True)
-    tmp = work / f"interrupted.h5.tmp-{p.pid}"
+    tmps = f"interrupted.h5.tmp-{p.pid}-*"  # core::writeFileAtomically's temporary
     deadline = time.monotonic() + 120
-    while not tmp.exists() and p.poll() is None and time.monotonic() < deadline:
+    while not list(work.glob(tmps)) and p.poll() is None and time.monotonic() < deadline:
         time.sleep(0.01)
-    assert tmp.exists(), "the write never started"
+    assert list(work.glob(tmps)), "the write never started"
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=120)
     assert p.returncode != 0
     assert err.startswith("regolith: error: ") and "cancelled" in err, err
-    assert not out.exists() and not tmp.exists()
+    assert not out.exists() and not list(work.glob(tmps))
 
 
 # ---- info -----------------------------------------------------------------------------------
@@ -789,11 +789,11 @@ def test_import_interrupted_leaves_no_file(work):
         p = subprocess.Popen([BIN, "import", str(src), "--out", str(out), "--deflate", "9",
                               "--threads", "1"], stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True)
-        tmp = work / f"interrupted-import.h5.tmp-{p.pid}"
+        tmps = f"interrupted-import.h5.tmp-{p.pid}-*"  # core::writeFileAtomically's
         deadline = time.monotonic() + 120
-        while not tmp.exists() and p.poll() is None and time.monotonic() < deadline:
+        while not list(work.glob(tmps)) and p.poll() is None and time.monotonic() < deadline:
             time.sleep(0.01)
-        assert tmp.exists(), "the write never started"
+        assert list(work.glob(tmps)), "the write never started"
         p.send_signal(signal.SIGINT)
         stdout, err = p.communicate(timeout=120)
     finally:
@@ -801,7 +801,7 @@ def test_import_interrupted_leaves_no_file(work):
     assert p.returncode != 0
     assert err.startswith("regolith: error: ") and "cancelled" in err, err
     assert stdout == ""
-    assert not out.exists() and not tmp.exists()
+    assert not out.exists() and not list(work.glob(tmps))
 
 
 # ---- query ----------------------------------------------------------------------------------

@@ -1,7 +1,7 @@
 // BlockTable (lock-free lookup of published blocks) and the hazard records that let a
 // reclaimer know which retracted blocks a thread may still be reading.
+#include <regolith/core/Error.hpp>
 #include <regolith/topo/BlockTable.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include <gtest/gtest.h>
 

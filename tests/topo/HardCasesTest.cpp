@@ -1,5 +1,5 @@
 // The hard cases, one test per case, each named after its case.
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/topo/Projection.hpp>
 #include <regolith/topo/TopoDem.hpp>
 #include <regolith/topo/TopoPlanet.hpp>

@@ -1,5 +1,5 @@
 // Triangle-mesh export (OBJ and binary PLY) of grid regions.
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/topo/Mesh.hpp>
 
 #include <glm/geometric.hpp>

@@ -1,5 +1,5 @@
 // Transforms between representations: planet region → tangent-plane DEM, and back.
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/topo/Resample.hpp>
 
 #include <glm/geometric.hpp>

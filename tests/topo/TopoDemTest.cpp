@@ -1,6 +1,6 @@
 // TopoDem queries against analytic surfaces: kernels, normals in both frames, nodata,
 // outside-grid results, batch = single, and a non-contiguous sample source.
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/topo/TopoDem.hpp>
 
 #include <glm/geometric.hpp>

@@ -1,5 +1,5 @@
 // TopoGrid geometry (pixel-centre convention) and the in-memory sample source.
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
 #include <gtest/gtest.h>

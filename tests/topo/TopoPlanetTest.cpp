@@ -1,5 +1,5 @@
 // TopoPlanet: lat/lon grids, longitude wrapping, polar caps, regional grids, normals.
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
 
 #include <glm/geometric.hpp>

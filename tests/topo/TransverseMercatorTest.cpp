@@ -6,8 +6,8 @@
 // The largest errors observed against PROJ are printed on stdout and recorded as test
 // properties (gtest --gtest_output=xml shows them).
 
+#include <regolith/core/Error.hpp>
 #include <regolith/topo/Body.hpp>
-#include <regolith/topo/Error.hpp>
 #include <regolith/topo/Placement.hpp>
 #include <regolith/topo/Projection.hpp>
 

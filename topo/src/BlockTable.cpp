@@ -1,5 +1,5 @@
+#include <regolith/core/Error.hpp>
 #include <regolith/topo/BlockTable.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include <linux/membarrier.h>
 #include <sys/syscall.h>

@@ -1,4 +1,4 @@
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/topo/Placement.hpp>
 
 #include <glm/geometric.hpp>

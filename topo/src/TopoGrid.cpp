@@ -1,5 +1,5 @@
+#include <regolith/core/Error.hpp>
 #include <regolith/topo/Body.hpp>
-#include <regolith/topo/Error.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
 #include <atomic>

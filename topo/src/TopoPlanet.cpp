@@ -1,4 +1,4 @@
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
 
 #include "Kernels.hpp"

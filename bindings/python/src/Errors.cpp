@@ -1,7 +1,7 @@
 // regolith::Error and its subclasses as Python exceptions that keep the C++ message.
 #include <regolith/clod/GlError.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Import.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "Common.hpp"
 
@@ -38,6 +38,10 @@ void bindErrors(py::module_& m) {
   static PyObject* const storeError = newException(
       m, "StoreError", py::make_tuple(py::handle(error), py::handle(PyExc_OSError)),
       "A store file is missing, unreadable, corrupt or lacks a grid (store::StoreError).");
+  static PyObject* const ioError = newException(
+      m, "IoError", py::make_tuple(py::handle(error), py::handle(PyExc_OSError)),
+      "The file system refused a write: a folder that cannot be created, a full disk, a "
+      "failed sync or rename (regolith::IoError).");
   static PyObject* const importError =
       newException(m, "RasterImportError", py::make_tuple(py::handle(storeError)),
                    "A raster GDAL cannot import as a DEM (store::ImportError).");
@@ -54,6 +58,8 @@ void bindErrors(py::module_& m) {
       PyErr_SetString(importError, e.what());
     } catch (const store::StoreError& e) {
       PyErr_SetString(storeError, e.what());
+    } catch (const IoError& e) {
+      PyErr_SetString(ioError, e.what());
     } catch (const clod::GlError& e) {
       PyErr_SetString(glError, e.what());
     } catch (const InvalidArgument& e) {

@@ -1,5 +1,5 @@
 // Batch height and normal queries: numpy arrays in and out, the GIL released in the batch.
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 #include "Common.hpp"
 

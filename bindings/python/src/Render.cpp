@@ -1,10 +1,9 @@
 // Headless rendering into a numpy image (clod::renderImage).
 #include <regolith/clod/Render.hpp>
 #include <regolith/clod/TrackLayer.hpp>
-#include <regolith/scenegraph/StorePyramid.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Pager.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "Common.hpp"
 
@@ -23,7 +22,8 @@ namespace {
 /// terrain's own cache. DEMs are drawn in their grid frame (x east, y north, z height),
 /// planets body-fixed.
 std::shared_ptr<const clod::HeightPyramid> pyramidOf(const Terrain& t) {
-  return scenegraph::pyramidFromStore(store::Pager(t.store, t.cache), t.grid);
+  return std::make_shared<const clod::HeightPyramid>(
+      store::Pager(t.store, t.cache).pyramid(t.grid));
 }
 
 glm::dvec3 vec3(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }

@@ -1,9 +1,9 @@
 // The paper's example scene from Python: the scene graph (poses only) and headless renders
-// of the Mars/Victoria scene with data (scenegraph/demo) into numpy images.
+// of the Mars/Victoria scene with data (regolith::demo) into numpy images.
 #include <regolith/clod/TrackLayer.hpp>
-#include <regolith/scenegraph/MarsVictoria.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/scenegraph/PaperScene.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "Common.hpp"
 
@@ -56,11 +56,11 @@ py::dict poseDict(const scenegraph::Pose& p) {
   return d;
 }
 
-scenegraph::MarsVictoriaOptions sceneOptions(const std::optional<std::filesystem::path>& mars,
-                                             const std::optional<std::filesystem::path>& victoria,
-                                             std::size_t planetRows, std::size_t demSize,
-                                             double demSpacing, int clipmapSize) {
-  scenegraph::MarsVictoriaOptions o;
+demo::MarsVictoriaOptions sceneOptions(const std::optional<std::filesystem::path>& mars,
+                                       const std::optional<std::filesystem::path>& victoria,
+                                       std::size_t planetRows, std::size_t demSize,
+                                       double demSpacing, int clipmapSize) {
+  demo::MarsVictoriaOptions o;
   o.planetRows = planetRows;
   o.demSize = demSize;
   o.demSpacing = demSpacing;
@@ -228,7 +228,7 @@ void bindScene(py::module_& m) {
          std::optional<std::filesystem::path> victoriaStore, const py::object& tracks, int width,
          int height, double fov, std::size_t planetRows, std::size_t demSize, double demSpacing,
          int clipmapSize, std::array<double, 3> up) {
-        scenegraph::SceneViewOptions v;
+        demo::SceneViewOptions v;
         v.scene =
             sceneOptions(marsStore, victoriaStore, planetRows, demSize, demSpacing, clipmapSize);
         v.roverX = rover[0];
@@ -243,7 +243,7 @@ void bindScene(py::module_& m) {
         clod::RgbaImage img;
         {
           const py::gil_scoped_release release;
-          img = scenegraph::renderSceneView(v);
+          img = demo::renderSceneView(v);
         }
         return imageArray(img);
       },
@@ -268,17 +268,17 @@ void bindScene(py::module_& m) {
          std::optional<std::filesystem::path> marsStore,
          std::optional<std::filesystem::path> victoriaStore, std::size_t planetRows,
          std::size_t demSize, double demSpacing, int clipmapSize) {
-        scenegraph::FlyoverOptions o;
+        demo::FlyoverOptions o;
         o.outputDir = outDir;
         o.frames = frames;
         o.width = width;
         o.height = height;
         o.scene =
             sceneOptions(marsStore, victoriaStore, planetRows, demSize, demSpacing, clipmapSize);
-        scenegraph::FlyoverSummary s;
+        demo::FlyoverSummary s;
         {
           const py::gil_scoped_release release;
-          s = scenegraph::renderFlyover(o);
+          s = demo::renderFlyover(o);
         }
         py::dict d;
         std::vector<std::filesystem::path> files(s.files.begin(), s.files.end());
@@ -294,7 +294,7 @@ void bindScene(py::module_& m) {
       py::arg("mars_store") = py::none(), py::arg("victoria_store") = py::none(),
       py::arg("planet_rows") = 360, py::arg("dem_size") = 601, py::arg("dem_spacing") = 2.0,
       py::arg("clipmap_size") = 127,
-      "Renders the fly-over from orbit down to the rover (scenegraph::renderFlyover) as "
+      "Renders the fly-over from orbit down to the rover (demo::renderFlyover) as "
       "frame_NNNN.png files and multiview.png in out_dir; returns a summary dict.");
 }
 

@@ -2,7 +2,7 @@
 /// \file
 /// The error type of the GL layer.
 
-#include <regolith/topo/Error.hpp>
+#include <regolith/core/Error.hpp>
 
 namespace regolith::clod {
 

@@ -4,6 +4,7 @@
 
 #include <regolith/topo/Body.hpp>
 #include <regolith/topo/Placement.hpp>
+#include <regolith/topo/Pyramid.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
 #include <glm/vec2.hpp>
@@ -28,17 +29,14 @@ enum class SurfaceKind { Plane, Planet };
 /// and a topo::SampleSource of its samples.
 ///
 /// This is the only way clod reads terrain, so the renderer never includes the store:
-/// in-memory grids use fromSamples() (2×2 means, as the store writes its pyramid), and a
-/// store fills one Level per pyramid level from store::Pager::source(grid, level).
+/// in-memory grids use fromSamples() (topo::downsample2x2(), the store's pyramid rule), and
+/// a store exports its grids as topo::GridPyramid (store::Pager::pyramid()).
 ///
 /// Immutable after construction; thread-safe as far as its sources are (SampleSource
 /// const members are thread-safe by contract).
 class HeightPyramid {
  public:
-  struct Level {
-    topo::TopoGrid grid;
-    std::shared_ptr<const topo::SampleSource> source;
-  };
+  using Level = topo::PyramidLevel;
 
   /// Throws InvalidArgument if `levels` is empty, a source is null or its size differs from
   /// its grid, a level's spacing is not twice the one below (to 1e-6 relative), or a Planet
@@ -46,6 +44,10 @@ class HeightPyramid {
   HeightPyramid(std::vector<Level> levels, SurfaceKind kind,
                 std::optional<topo::Body> body = std::nullopt,
                 topo::LatitudeType latitudeType = topo::LatitudeType::Planetocentric);
+
+  /// A grid pyramid in topo terms, as a store exports it (store::Pager::pyramid()): a
+  /// Planet pyramid on its body if it names one, else a Plane. Same checks as above.
+  explicit HeightPyramid(topo::GridPyramid pyramid);
 
   /// A planar DEM placed on its body (a topo::TopoDem's placement): grid coordinates
   /// (x, y, h) as for a Plane, but scene positions are body-fixed metres, so the DEM sits

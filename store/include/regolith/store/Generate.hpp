@@ -125,7 +125,9 @@ struct MarsPlanetOptions {
   std::string gridName = "mars";
   /// Multiplies the number of craters in every size band (0: no craters).
   double craterDensity = 1.0;
-  /// Threads computing each window (0: hardware concurrency). Does not change the samples.
+  /// Threads computing each window, the caller's included (0: write.executor's concurrency + 1,
+  /// or hardware concurrency without an executor), on write.executor or on a pool made for
+  /// the call. Does not change the samples.
   std::size_t threads = 0;
   WriteOptions write{};
 };

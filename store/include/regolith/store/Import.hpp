@@ -24,24 +24,15 @@ class ImportError : public StoreError {
   using StoreError::StoreError;
 };
 
-struct ImportOptions {
+/// What to import and how to write it: the store's WriteOptions (patch size, levels, codec,
+/// deflate level, threads and executor, progress, cancel; 0 levels: until a level fits one
+/// patch), and the import's own choices.
+struct ImportOptions : WriteOptions {
   /// Name of the grid written; empty: the file's stem (of the first tile).
-  std::string gridName;
-  /// Patch (HDF5 chunk) size, pyramid levels (0: until a level fits one patch), deflate level.
-  std::size_t patchRows = 256, patchCols = 256;
-  std::size_t levels = 0;
-  int deflate = 0;
-  /// Chunk compression (WriteOptions::codec); with Codec::Zfp, deflate must be 0.
-  Codec codec = Codec::Deflate;
-  /// Threads building the pyramid (0: hardware concurrency).
-  unsigned threads = 0;
+  std::string gridName{};
   /// A source value (before scale/offset) that also means "missing", beside the ones the
   /// file declares.
-  std::optional<double> nodata;
-  /// Called now and then with the fraction done (may be empty).
-  ProgressFn progress;
-  /// If set and becomes true, the import stops, leaves no file and throws StoreError.
-  const std::atomic<bool>* cancel = nullptr;
+  std::optional<double> nodata{};
 };
 
 /// What an import found and did.

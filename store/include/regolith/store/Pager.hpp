@@ -4,6 +4,7 @@
 
 #include <regolith/store/PatchCache.hpp>
 #include <regolith/store/Store.hpp>
+#include <regolith/topo/Pyramid.hpp>
 #include <regolith/topo/TopoDem.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
 
@@ -42,6 +43,12 @@ class Pager {
   [[nodiscard]] topo::TopoDem dem(std::string_view grid, std::size_t level = 0) const;
   /// A paged TopoPlanet of one level. Throws StoreError if the grid is a DEM.
   [[nodiscard]] topo::TopoPlanet planet(std::string_view grid, std::size_t level = 0) const;
+  /// Every stored level of a grid, paged, in topo terms: what a renderer takes to draw a
+  /// store (clod::HeightPyramid) without knowing the store. A DEM's levels are planar (x
+  /// east, y north, metres; no body); a planet grid's are longitude/latitude on its body.
+  /// Rendering pages patches into this pager's cache, so memory stays within its budget;
+  /// the sources keep the store and the cache alive. Throws StoreError for an unknown grid.
+  [[nodiscard]] topo::GridPyramid pyramid(std::string_view grid) const;
 
   /// The cache key of the patch holding sample (row, col) of a level.
   [[nodiscard]] PatchKey keyOf(std::string_view grid, std::size_t level, std::size_t row,

@@ -2,8 +2,9 @@
 /// \file
 /// HDF5 terrain stores: reading grids by hyperslab, and writing them crash-safely.
 
+#include <regolith/core/Error.hpp>
+#include <regolith/core/Executor.hpp>
 #include <regolith/store/GridInfo.hpp>
-#include <regolith/topo/Error.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
 #include <array>
@@ -120,9 +121,13 @@ struct WriteOptions {
   /// Deflate level 0–9 (0: uncompressed); with deflate, HDF5's shuffle filter runs first.
   /// Codec::Zfp has no level: it must stay 0.
   int deflate = 0;
-  /// Threads that compute and compress pyramid chunks (0: hardware concurrency). The file's
-  /// content does not depend on it.
+  /// Threads that compute and compress pyramid chunks, the caller's included (0: the
+  /// executor's concurrency + 1, or hardware concurrency without one). The file's content
+  /// does not depend on it.
   unsigned threads = 0;
+  /// Where the chunk work runs besides the calling thread (not owned; must outlive the
+  /// write). Null: a thread pool made for the write.
+  core::Executor* executor = nullptr;
   /// Called now and then during the write (may be empty).
   ProgressFn progress;
   /// If set and becomes true, the write stops, removes its temporary file and throws
@@ -154,10 +159,10 @@ struct GridSource {
   std::vector<TileSource> tiles{};
 };
 
-/// Writes a store crash-safely: into `<path>.tmp-<pid>` beside the target, then renamed
-/// over `path` only once complete. Pyramid levels are 2×2 means of the level below,
-/// ignoring missing samples (a coarse sample is missing only if all four are).
-/// Throws StoreError (or regolith::InvalidArgument for a bad GridInfo) and leaves no file.
+/// Writes a store crash-safely (core::writeFileAtomically): into `<path>.tmp-<pid>-<n>`
+/// beside the target, synced, then renamed over `path` only once complete. Pyramid levels are 2×2
+/// means of the level below, ignoring missing samples (a coarse sample is missing only if all four
+/// are). Throws StoreError (or regolith::InvalidArgument for a bad GridInfo) and leaves no file.
 void writeStore(const std::filesystem::path& path, std::span<const GridSource> grids,
                 const WriteOptions& options = {});
 

@@ -1,10 +1,10 @@
-// scenegraph::MarsVictoriaScene and scenegraph::renderFlyover(): the fly-over writes readable PNGs
+// demo::MarsVictoriaScene and demo::renderFlyover(): the fly-over writes readable PNGs
 // from Mars whole down to the rover, switching the focus on the way.
 #include <regolith/clod/Image.hpp>
 #include <regolith/clod/TrackLayer.hpp>
-#include <regolith/scenegraph/MarsVictoria.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/store/Generate.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "clod/GlContext.hpp"
 
@@ -17,8 +17,10 @@
 #include <memory>
 #include <string>
 
-namespace regolith::scenegraph {
+namespace regolith::demo {
 namespace {
+
+using scenegraph::Pose;
 
 MarsVictoriaOptions small() {
   MarsVictoriaOptions o;
@@ -217,4 +219,4 @@ TEST(MarsVictoriaGLTest, RejectsBadOptions) {
 }
 
 }  // namespace
-}  // namespace regolith::scenegraph
+}  // namespace regolith::demo

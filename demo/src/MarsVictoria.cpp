@@ -1,12 +1,11 @@
 #include <regolith/clod/HeadlessContext.hpp>
 #include <regolith/clod/RenderTarget.hpp>
-#include <regolith/scenegraph/MarsVictoria.hpp>
-#include <regolith/scenegraph/StorePyramid.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
-#include <regolith/topo/Error.hpp>
 #include <regolith/topo/Projection.hpp>
 
 #include <EGL/egl.h>
@@ -19,7 +18,7 @@
 #include <numbers>
 #include <string>
 
-namespace regolith::scenegraph {
+namespace regolith::demo {
 
 namespace {
 
@@ -124,10 +123,10 @@ void MarsVictoriaScene::fromStores(const MarsVictoriaOptions& options) {
                           "' is not a DEM on a local tangent plane (placement)");
   auto marsPager = std::make_shared<store::Pager>(marsStore, cache);
   auto demPager = std::make_shared<store::Pager>(demStore, cache);
-  // The kinds were checked above: pyramidFromStore draws a planet grid on its body and a
+  // The kinds were checked above: store::Pager::pyramid() makes a planet grid on its body and a
   // DEM as a plane.
-  mars_ = pyramidFromStore(*marsPager, options.marsGrid);
-  victoria_ = pyramidFromStore(*demPager, options.victoriaGrid);
+  mars_ = std::make_shared<const clod::HeightPyramid>(marsPager->pyramid(options.marsGrid));
+  victoria_ = std::make_shared<const clod::HeightPyramid>(demPager->pyramid(options.victoriaGrid));
   pager_ =
       std::make_shared<std::pair<std::shared_ptr<store::Pager>, std::shared_ptr<store::Pager>>>(
           marsPager, demPager);
@@ -151,7 +150,7 @@ void MarsVictoriaScene::finish() {
       clod::SurfaceKind::Planet, earth));
 
   layout_.roverInDem = {0.0, -395.0, 0.0};
-  nodes_ = buildPaperScene(graph_, layout_);
+  nodes_ = scenegraph::buildPaperScene(graph_, layout_);
   placeRover(0.0, -395.0, 0.0);
 }
 
@@ -162,7 +161,7 @@ double MarsVictoriaScene::demHeight(double x, double y) const {
 }
 
 void MarsVictoriaScene::placeRover(double x, double y, double headingDeg) {
-  graph_.setLocal(nodes_.rover, roverPose({x, y, demHeight(x, y)}, headingDeg));
+  graph_.setLocal(nodes_.rover, scenegraph::roverPose({x, y, demHeight(x, y)}, headingDeg));
 }
 
 void MarsVictoriaScene::registerWith(clod::SceneRenderer& renderer) const {
@@ -171,29 +170,29 @@ void MarsVictoriaScene::registerWith(clod::SceneRenderer& renderer) const {
   planet.albedo = kPlanetAlbedo;
   clod::ClipmapOptions dem = planet;
   dem.albedo = options_.demAlbedo.value_or(kDemAlbedo);
-  renderer.addTerrain(kDrawMars, mars_, planet);
+  renderer.addTerrain(scenegraph::kDrawMars, mars_, planet);
   clod::ClipmapOptions victoria = dem;
   victoria.effects = options_.victoriaEffects;
-  renderer.addTerrain(kDrawVictoria, victoria_, victoria);
-  renderer.addCutOut(kDrawMars, kDrawVictoria);
+  renderer.addTerrain(scenegraph::kDrawVictoria, victoria_, victoria);
+  renderer.addCutOut(scenegraph::kDrawMars, scenegraph::kDrawVictoria);
   if (second_) {
-    renderer.addTerrain(kDrawSecondDem, second_, dem);
-    renderer.addCutOut(kDrawMars, kDrawSecondDem);
+    renderer.addTerrain(scenegraph::kDrawSecondDem, second_, dem);
+    renderer.addCutOut(scenegraph::kDrawMars, scenegraph::kDrawSecondDem);
   }
   clod::ClipmapOptions earth = planet;
   earth.size = 31;
   earth.albedo = {0.3F, 0.45F, 0.8F};
-  renderer.addTerrain(kDrawEarth, earth_, earth);
-  renderer.addMesh(kDrawRover, clod::roverMesh(), {0.85F, 0.85F, 0.8F});
+  renderer.addTerrain(scenegraph::kDrawEarth, earth_, earth);
+  renderer.addMesh(scenegraph::kDrawRover, clod::roverMesh(), {0.85F, 0.85F, 0.8F});
 }
 
-glm::dvec3 MarsVictoriaScene::lightInFocus(NodeId focus) const {
+glm::dvec3 MarsVictoriaScene::lightInFocus(scenegraph::NodeId focus) const {
   // Victoria frame: x east, y north, z up.
   const glm::dvec3 local{std::cos(35.0 * kDeg), -0.3, std::sin(35.0 * kDeg)};
   return graph_.relative(focus, nodes_.victoria).applyVector(glm::normalize(local));
 }
 
-Pose flyoverCamera(double t, const glm::dvec3& rover) {
+scenegraph::Pose flyoverCamera(double t, const glm::dvec3& rover) {
   // Smoothstep in t, logarithmic in distance: 8000 km out to 6 m from the rover. The view
   // direction turns from straight down (north up in the image) to a low look along +y.
   const double s = t * t * (3.0 - 2.0 * t);
@@ -204,7 +203,7 @@ Pose flyoverCamera(double t, const glm::dvec3& rover) {
   const glm::dvec3 target = rover + glm::dvec3(0.0, 0.0, 0.8);
   const glm::dvec3 up =
       glm::normalize(glm::mix(glm::dvec3(0.0, 1.0, 0.0), glm::dvec3(0.0, 0.0, 1.0), tilt));
-  return Pose::lookAt(target + dist * dir, target, up);
+  return scenegraph::Pose::lookAt(target + dist * dir, target, up);
 }
 
 clod::RgbaImage renderSceneView(const SceneViewOptions& options) {
@@ -217,9 +216,10 @@ clod::RgbaImage renderSceneView(const SceneViewOptions& options) {
   {
     MarsVictoriaScene scene(options.scene);
     scene.placeRover(options.roverX, options.roverY, options.roverHeadingDeg);
-    SceneGraph& g = scene.graph();
-    const PaperSceneNodes& n = scene.nodes();
-    const NodeId cam = g.add(n.victoria, "view_camera", options.camera, NodeKind::Camera);
+    scenegraph::SceneGraph& g = scene.graph();
+    const scenegraph::PaperSceneNodes& n = scene.nodes();
+    const scenegraph::NodeId cam =
+        g.add(n.victoria, "view_camera", options.camera, scenegraph::NodeKind::Camera);
     clod::SceneRenderer renderer;
     scene.registerWith(renderer);
     clod::RenderTarget target(options.width, options.height);
@@ -257,22 +257,22 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
   {
     MarsVictoriaScene scene(options.scene);
     if (options.rover) scene.placeRover(options.rover->x, options.rover->y, options.rover->z);
-    SceneGraph& g = scene.graph();
-    const PaperSceneNodes& n = scene.nodes();
+    scenegraph::SceneGraph& g = scene.graph();
+    const scenegraph::PaperSceneNodes& n = scene.nodes();
     const glm::dvec3 rover = g.relative(n.victoria, n.rover).translation;
-    const NodeId cam =
-        g.add(n.victoria, "flyover_camera", flyoverCamera(0.0, rover), NodeKind::Camera);
+    const scenegraph::NodeId cam = g.add(n.victoria, "flyover_camera", flyoverCamera(0.0, rover),
+                                         scenegraph::NodeKind::Camera);
     clod::SceneRenderer renderer;
     scene.registerWith(renderer);
     clod::RenderTarget target(options.width, options.height);
     double renderSeconds = 0.0;
     for (int i = 0; i < options.frames; ++i) {
       const double t = static_cast<double>(i) / (options.frames - 1);
-      const Pose pose = flyoverCamera(t, rover);
+      const scenegraph::Pose pose = flyoverCamera(t, rover);
       g.setLocal(cam, pose);
       const double dist = glm::length(pose.translation - rover);
       // Focus: Mars while the camera is far, Victoria once within 200 km of the rover.
-      const NodeId focus = dist > 2.0e5 ? n.mars : n.victoria;
+      const scenegraph::NodeId focus = dist > 2.0e5 ? n.mars : n.victoria;
       if (focus == n.victoria && summary.focusSwitchFrame < 0) summary.focusSwitchFrame = i;
       if (i == 0) summary.startDistance = dist;
       summary.endDistance = dist;
@@ -317,4 +317,4 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
   return summary;
 }
 
-}  // namespace regolith::scenegraph
+}  // namespace regolith::demo

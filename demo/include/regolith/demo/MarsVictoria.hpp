@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-namespace regolith::scenegraph {
+namespace regolith::demo {
 
 /// Sizes of the generated data (small by default so tests and the demo stay fast).
 struct MarsVictoriaOptions {
@@ -51,18 +51,18 @@ struct MarsVictoriaOptions {
   clod::Effects victoriaEffects;
 };
 
-/// The scene: graph (buildPaperScene), data and what each drawable key draws. Building it
-/// needs no GL; registerWith() does. The DEMs' origin heights are those of the planet's
-/// surface (bilinear in its finest level) at their sites, so the plains meet the planet.
+/// The scene: graph (scenegraph::buildPaperScene), data and what each drawable key draws. Building
+/// it needs no GL; registerWith() does. The DEMs' origin heights are those of the planet's surface
+/// (bilinear in its finest level) at their sites, so the plains meet the planet.
 class MarsVictoriaScene {
  public:
   /// Throws InvalidArgument for bad sizes (from the generators).
   explicit MarsVictoriaScene(const MarsVictoriaOptions& options = {});
 
-  [[nodiscard]] SceneGraph& graph() noexcept { return graph_; }
-  [[nodiscard]] const SceneGraph& graph() const noexcept { return graph_; }
-  [[nodiscard]] const PaperSceneNodes& nodes() const noexcept { return nodes_; }
-  [[nodiscard]] const PaperSceneLayout& layout() const noexcept { return layout_; }
+  [[nodiscard]] scenegraph::SceneGraph& graph() noexcept { return graph_; }
+  [[nodiscard]] const scenegraph::SceneGraph& graph() const noexcept { return graph_; }
+  [[nodiscard]] const scenegraph::PaperSceneNodes& nodes() const noexcept { return nodes_; }
+  [[nodiscard]] const scenegraph::PaperSceneLayout& layout() const noexcept { return layout_; }
   [[nodiscard]] const std::shared_ptr<const clod::HeightPyramid>& mars() const { return mars_; }
   [[nodiscard]] const std::shared_ptr<const clod::HeightPyramid>& victoria() const {
     return victoria_;
@@ -82,16 +82,16 @@ class MarsVictoriaScene {
   /// Registers every drawable of the scene with a renderer (terrains, cut-outs, rover).
   void registerWith(clod::SceneRenderer& renderer) const;
   /// A light direction in `focus`'s frame: morning sun over Victoria (35° up, from the east).
-  [[nodiscard]] glm::dvec3 lightInFocus(NodeId focus) const;
+  [[nodiscard]] glm::dvec3 lightInFocus(scenegraph::NodeId focus) const;
 
  private:
   void fromStores(const MarsVictoriaOptions& options);
   void finish();  // Earth, the graph, the rover
 
   MarsVictoriaOptions options_;
-  SceneGraph graph_{"sun"};
-  PaperSceneLayout layout_;
-  PaperSceneNodes nodes_;
+  scenegraph::SceneGraph graph_{"sun"};
+  scenegraph::PaperSceneLayout layout_;
+  scenegraph::PaperSceneNodes nodes_;
   std::shared_ptr<const clod::HeightPyramid> mars_, victoria_, second_, earth_;
   std::shared_ptr<void> pager_;  // keeps the stores' pager alive while the scene draws them
 };
@@ -138,8 +138,8 @@ struct SceneViewOptions {
   /// clockwise from +y).
   double roverX = 0.0, roverY = -395.0, roverHeadingDeg = 0.0;
   /// The camera's pose in the Victoria DEM's frame (GL eye convention: it looks along its
-  /// −z, e.g. Pose::lookAt()).
-  Pose camera;
+  /// −z, e.g. scenegraph::Pose::lookAt()).
+  scenegraph::Pose camera;
   int width = 960, height = 540;
   double fovYDegrees = 45.0, near = 0.05;
 };
@@ -149,6 +149,6 @@ struct SceneViewOptions {
 clod::RgbaImage renderSceneView(const SceneViewOptions& options);
 
 /// The fly-over camera's pose in the Victoria DEM frame at t ∈ [0, 1] for a rover at `rover`.
-[[nodiscard]] Pose flyoverCamera(double t, const glm::dvec3& rover);
+[[nodiscard]] scenegraph::Pose flyoverCamera(double t, const glm::dvec3& rover);
 
-}  // namespace regolith::scenegraph
+}  // namespace regolith::demo

@@ -1,0 +1,72 @@
+#pragma once
+/// \file
+/// Where Regolith runs work off the caller's thread. Nothing in Regolith starts threads of
+/// its own: a module that runs work in parallel or in the background accepts an Executor
+/// (docs/architecture.md). ThreadPool is the one implementation the library ships.
+///
+/// Thread-safety: submit() and concurrency() may be called from any thread.
+
+#include <condition_variable>
+#include <cstddef>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace regolith::core {
+
+/// Runs submitted tasks, in any order, on threads it owns.
+class Executor {
+ public:
+  Executor() = default;
+  Executor(const Executor&) = delete;
+  Executor& operator=(const Executor&) = delete;
+  Executor(Executor&&) = delete;
+  Executor& operator=(Executor&&) = delete;
+  virtual ~Executor() = default;
+
+  /// Queues `task`. A task must not throw: an exception escaping it terminates the process,
+  /// as it would on a bare std::thread (parallelFor() catches and forwards them).
+  virtual void submit(std::function<void()> task) = 0;
+
+  /// How many tasks can run at once.
+  [[nodiscard]] virtual unsigned concurrency() const noexcept = 0;
+};
+
+/// A fixed set of worker threads taking tasks from one queue. The destructor runs every task
+/// already queued, then joins the workers.
+class ThreadPool final : public Executor {
+ public:
+  /// `threads` workers; 0 means std::thread::hardware_concurrency() (at least 1).
+  explicit ThreadPool(unsigned threads = 0);
+  ThreadPool(const ThreadPool&) = delete;
+  ThreadPool& operator=(const ThreadPool&) = delete;
+  ThreadPool(ThreadPool&&) = delete;
+  ThreadPool& operator=(ThreadPool&&) = delete;
+  ~ThreadPool() override;
+
+  void submit(std::function<void()> task) override;
+  [[nodiscard]] unsigned concurrency() const noexcept override {
+    return static_cast<unsigned>(workers_.size());
+  }
+
+ private:
+  void run();
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<std::function<void()>> queue_;
+  bool stopping_ = false;
+  std::vector<std::thread> workers_;
+};
+
+/// Runs body(0) … body(n − 1), each exactly once, on the calling thread and on up to
+/// `maxTasks − 1` tasks of `executor` (0: the executor's concurrency). Returns when every
+/// index has run. The calling thread takes indices too, so a call from inside a task of the
+/// same executor cannot deadlock. After the first exception no new index starts; that
+/// exception is rethrown once the indices already started have finished.
+void parallelFor(Executor& executor, std::size_t n, const std::function<void(std::size_t)>& body,
+                 unsigned maxTasks = 0);
+
+}  // namespace regolith::core
