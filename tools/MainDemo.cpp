@@ -2,12 +2,12 @@
 
 #include <regolith/clod/Image.hpp>
 #include <regolith/clod/TrackLayer.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/rover/Traverse.hpp>
-#include <regolith/scenegraph/MarsVictoria.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "CancelOnSignal.hpp"
 #include "TerminalProgress.hpp"
@@ -135,6 +135,10 @@ DefaultData ensureData(const MainDemoOptions& o, const fs::path& dir, std::ostre
 /// The traverse and what the renders need from it: the wheel tracks it left.
 struct TraverseRun {
   rover::TraverseResult result;
+  /// The paged store's cache and reads after the traverse.
+  store::CacheStats cache;
+  store::ReadCounters reads;
+  std::size_t budgetBytes = 0;
   /// The overlay the rover presses its six wheels into as it drives (every 5 cm of travel).
   std::shared_ptr<clod::TrackLayer> tracks =
       std::make_shared<clod::TrackLayer>(clod::RoverRuts::kTexelMetres);
@@ -144,15 +148,18 @@ struct TraverseRun {
 };
 
 TraverseRun runTraverse(const MainDemoOptions& o, const fs::path& victoria, std::ostream& out) {
+  // The rover drives on the DEM paged from its store through a cache of --cache-mb.
+  auto file = std::make_shared<const store::Store>(store::Store::open(victoria));
+  auto cache = std::make_shared<store::PatchCache>(o.cacheMb << 20U);
+  const topo::TopoDem dem = store::Pager(file, cache).dem("victoria");
   rover::TraverseOptions t;
-  t.store = victoria;
-  t.cacheBytes = o.cacheMb << 20U;
   t.path = rover::defaultVictoriaPath();
   TraverseRun run;
+  run.budgetBytes = cache->stats().capacityBytes;
   double nextStamp = 0.0;
   double nextReport = 0.0;
   std::array<clod::WheelContact, rover::kWheels> imprint;
-  run.result = rover::runTraverse(t, [&](const rover::StepState& s) {
+  run.result = rover::runTraverse(dem, t, [&](const rover::StepState& s) {
     if (s.distance >= nextStamp) {  // tracks: one imprint of all six wheels every 5 cm
       for (std::size_t w = 0; w < rover::kWheels; ++w)
         imprint[w] = clod::WheelContact{{s.wheels[w].x, s.wheels[w].y},
@@ -168,13 +175,15 @@ TraverseRun runTraverse(const MainDemoOptions& o, const fs::path& victoria, std:
           << s.chassis.y << "  height " << std::setw(7) << std::setprecision(2) << s.chassis.height
           << " m  pitch " << std::setw(5) << std::setprecision(1) << s.chassis.pitch * 180.0 / M_PI
           << "°  roll " << std::setw(5) << s.chassis.roll * 180.0 / M_PI << "°  cache "
-          << s.cache.residentBytes / 1024 << " KiB\n";
+          << cache->stats().residentBytes / 1024 << " KiB\n";
       nextReport = s.distance + 100.0;
     }
     run.last = s.chassis;
     run.lastGround = s.ground;
     return true;
   });
+  run.cache = cache->stats();
+  run.reads = file->counters();
   return run;
 }
 
@@ -185,13 +194,13 @@ struct RoverViews {
 
 /// Renders the scene with the tracks the traverse left from the rover's mast (looking back
 /// along its tracks) and from a chase camera ahead of the rover (looking back at it).
-RoverViews renderRoverViews(const MainDemoOptions& o, const scenegraph::MarsVictoriaOptions& scene,
+RoverViews renderRoverViews(const MainDemoOptions& o, const demo::MarsVictoriaOptions& scene,
                             const TraverseRun& trav, std::ostream& out) {
   RoverViews v;
   v.imprints = trav.imprints;
   v.trackTiles = trav.tracks->tiles();
 
-  scenegraph::SceneViewOptions view;
+  demo::SceneViewOptions view;
   view.scene = scene;
   view.scene.victoriaEffects.tracks = trav.tracks;
   view.roverX = trav.last.x;
@@ -205,13 +214,13 @@ RoverViews renderRoverViews(const MainDemoOptions& o, const scenegraph::MarsVict
   // Mast: 2.1 m up, looking back along the tracks and down at the ground 15 m behind.
   view.camera = scenegraph::Pose::lookAt(p + 2.1 * up + 0.4 * fwd, p - 15.0 * fwd, up);
   v.mast = o.outDir / "rover_view.png";
-  clod::writePng(v.mast.string(), scenegraph::renderSceneView(view));
+  clod::writePng(v.mast.string(), demo::renderSceneView(view));
   out << "  " << v.mast.string() << std::endl;
   // Chase: 9 m ahead and 3.5 m up, looking back at the rover.
   view.camera = scenegraph::Pose::lookAt(p + 9.0 * fwd + 3.5 * up, p - 4.0 * fwd + 0.5 * up, up);
   view.near = 0.1;
   v.chase = o.outDir / "rover_chase.png";
-  clod::writePng(v.chase.string(), scenegraph::renderSceneView(view));
+  clod::writePng(v.chase.string(), demo::renderSceneView(view));
   out << "  " << v.chase.string() << std::endl;
   return v;
 }
@@ -237,7 +246,7 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
 
   out << "[3/4] Fly-over from orbit down to the rover on the crater rim (" << o.frames
       << " frames, " << o.width << "x" << o.height << ")" << std::endl;
-  scenegraph::FlyoverOptions fly;
+  demo::FlyoverOptions fly;
   fly.outputDir = o.outDir / "flyover";
   fly.frames = static_cast<int>(o.frames);
   fly.width = o.width;
@@ -254,7 +263,7 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
     if (static_cast<std::size_t>(done) % every == 0 || done == all)
       out << "  frame " << done << "/" << all << ": " << path.string() << std::endl;
   };
-  const scenegraph::FlyoverSummary flyover = scenegraph::renderFlyover(fly);
+  const demo::FlyoverSummary flyover = demo::renderFlyover(fly);
 
   out << "[4/4] The rover's view back along its tracks, and a chase view" << std::endl;
   const auto t4 = Clock::now();
@@ -266,9 +275,10 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
       << " m driven, " << r.queries << " wheel queries at " << std::setprecision(1)
       << r.queriesPerSecond / 1e6 << " M/s (queries only; whole loop " << traverseSeconds
       << " s)\n";
-  out << "  cache: " << r.cache.hits << " hits, " << r.cache.misses << " misses, " << r.cache.loads
-      << " patch loads, " << r.reads.bytesRead / 1024 << " KiB read; resident "
-      << r.peakResidentBytes / 1024 << " KiB at most, budget " << r.budgetBytes / 1024 << " KiB\n";
+  out << "  cache: " << trav.cache.hits << " hits, " << trav.cache.misses << " misses, "
+      << trav.cache.loads << " patch loads, " << trav.reads.bytesRead / 1024
+      << " KiB read; resident " << trav.cache.peakResidentBytes / 1024 << " KiB at most, budget "
+      << trav.budgetBytes / 1024 << " KiB\n";
   out << "  chassis: largest tilt " << std::setprecision(1) << r.maxTilt * 180.0 / M_PI
       << "°, largest contact residual " << std::setprecision(3) << r.maxResidual << " m\n";
   out << "Fly-over: " << flyover.files.size() << " images in " << (o.outDir / "flyover").string()

@@ -7,15 +7,15 @@
 //   rover_traverse --cache-mb 4 --path "-560,-90 -430,-20 -300,250" --tracks tracks.csv
 //                  --image tracks.png
 //
-// Public API only (regolith::rover, regolith::store, regolith::clod, regolith::scenedemo).
+// Public API only (regolith::rover, regolith::store, regolith::clod).
 #include <regolith/clod/Render.hpp>
 #include <regolith/clod/TrackLayer.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/rover/Traverse.hpp>
-#include <regolith/scenegraph/StorePyramid.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include <CLI/CLI.hpp>
 
@@ -73,11 +73,12 @@ double mib(double bytes) { return bytes / 1048576.0; }
 
 /// Renders the DEM with the traverse's tracks, headless, from 9 m ahead of the rover's last
 /// position and 3.5 m up, looking back along its tracks.
-void renderTracks(const rover::TraverseOptions& o, const rover::ChassisPose& last,
-                  std::shared_ptr<clod::TrackLayer> tracks, const std::string& png) {
-  auto st = std::make_shared<const store::Store>(store::Store::open(o.store));
+void renderTracks(const std::string& storePath, const std::string& grid,
+                  const rover::ChassisPose& last, std::shared_ptr<clod::TrackLayer> tracks,
+                  const std::string& png) {
+  auto st = std::make_shared<const store::Store>(store::Store::open(storePath));
   const store::Pager pager(st, std::make_shared<store::PatchCache>(std::size_t{64} << 20U));
-  auto pyramid = scenegraph::pyramidFromStore(pager, o.grid);
+  auto pyramid = std::make_shared<const clod::HeightPyramid>(pager.pyramid(grid));
   const glm::dvec3 p{last.x, last.y, last.height};
   const glm::dvec3 fwd{std::sin(last.heading), std::cos(last.heading), 0.0}, up{0.0, 0.0, 1.0};
   clod::RenderRequest req;
@@ -125,33 +126,34 @@ int main(int argc, char** argv) try {
 
   try {
     rover::TraverseOptions o;
-    o.store = storePath;
-    o.grid = grid;
-    if (!(std::isfinite(cacheMb) && cacheMb >= 0.0)) {
-      throw InvalidArgument("rover_traverse: --cache-mb is " + std::to_string(cacheMb) +
+    if (!(std::isfinite(cacheMb) && cacheMb > 0.0)) {
+      throw InvalidArgument("rover_traverse: --cache-mb is " + core::number(cacheMb) +
                             ", expected a finite budget > 0");
     }
-    o.cacheBytes = static_cast<std::size_t>(cacheMb * 1048576.0);
-    o.policy = parsePolicy(policy);
+    const auto cacheBytes = static_cast<std::size_t>(cacheMb * 1048576.0);
     o.path = pathText.empty() ? rover::defaultVictoriaPath() : parsePath(pathText);
     o.speed = speed;
     o.step = stepMs / 1000.0;
     o.maxSteps = maxSteps;
     if (trackEvery == 0) throw InvalidArgument("rover_traverse: --track-every is 0, expected > 0");
     if (!(std::isfinite(trackSpacing) && trackSpacing > 0.0)) {
-      throw InvalidArgument("rover_traverse: --track-spacing is " + std::to_string(trackSpacing) +
+      throw InvalidArgument("rover_traverse: --track-spacing is " + core::number(trackSpacing) +
                             ", expected a distance > 0 m");
     }
 
-    if (!std::filesystem::exists(o.store)) {
+    const std::filesystem::path storeFile = storePath;
+    if (!std::filesystem::exists(storeFile)) {
       std::cout << "Generating the Victoria-like DEM (" << size << " x " << size << " at 1 m) into "
-                << o.store.string() << " ...\n";
-      if (o.store.has_parent_path()) std::filesystem::create_directories(o.store.parent_path());
+                << storeFile.string() << " ...\n";
       store::VictoriaOptions v;
       v.size = size;
       v.gridName = grid;
-      store::VictoriaGenerator(v).write(o.store);
+      store::VictoriaGenerator(v).write(storeFile);
     }
+    // The rover drives on the DEM paged from the store through a cache of --cache-mb.
+    auto file = std::make_shared<const store::Store>(store::Store::open(storeFile));
+    auto cache = std::make_shared<store::PatchCache>(cacheBytes, parsePolicy(policy));
+    const topo::TopoDem dem = store::Pager(file, cache).dem(grid);
 
     std::ofstream csv;
     if (!tracks.empty()) {
@@ -167,7 +169,7 @@ int main(int argc, char** argv) try {
     std::size_t imprints = 0;
     double nextImprint = 0.0;
     rover::ChassisPose last;
-    const rover::TraverseResult r = rover::runTraverse(o, [&](const rover::StepState& s) {
+    const rover::TraverseResult r = rover::runTraverse(dem, o, [&](const rover::StepState& s) {
       if (s.distance >= nextImprint) {  // the wheels press their ruts into the overlay
         for (std::size_t i = 0; i < rover::kWheels; ++i)
           imprint[i] = {
@@ -189,8 +191,9 @@ int main(int argc, char** argv) try {
       return true;
     });
 
-    const auto& c = r.cache;
-    std::printf("Traverse of grid '%s' in %s\n", grid.c_str(), o.store.string().c_str());
+    const store::CacheStats c = cache->stats();
+    const store::ReadCounters reads = file->counters();
+    std::printf("Traverse of grid '%s' in %s\n", grid.c_str(), storeFile.string().c_str());
     std::printf("  steps            %zu (%.3f s simulated at %.3g ms, %.1f m driven)\n", r.steps,
                 static_cast<double>(r.steps) * o.step, stepMs, r.distance);
     std::printf(
@@ -205,20 +208,20 @@ int main(int argc, char** argv) try {
                 static_cast<unsigned long long>(c.loads),
                 static_cast<unsigned long long>(c.evictions));
     std::printf("  store reads      %llu hyperslab reads, %.2f MiB read\n",
-                static_cast<unsigned long long>(r.reads.reads),
-                mib(static_cast<double>(r.reads.bytesRead)));
+                static_cast<unsigned long long>(reads.reads),
+                mib(static_cast<double>(reads.bytesRead)));
     std::printf("  resident         %.2f MiB now, %.2f MiB peak, budget %.2f MiB (%s)\n",
                 mib(static_cast<double>(c.residentBytes)),
-                mib(static_cast<double>(r.peakResidentBytes)),
-                mib(static_cast<double>(r.budgetBytes)),
-                r.peakResidentBytes <= r.budgetBytes ? "within budget" : "OVER BUDGET");
+                mib(static_cast<double>(c.peakResidentBytes)),
+                mib(static_cast<double>(c.capacityBytes)),
+                c.peakResidentBytes <= c.capacityBytes ? "within budget" : "OVER BUDGET");
     std::printf("  chassis          max tilt %.2f deg, max contact residual %.4f m\n",
                 r.maxTilt * kDeg, r.maxResidual);
     std::printf("  track overlay    %zu imprints of the six wheels (every %.3g m), %zu tiles\n",
                 imprints, trackSpacing, overlay->tiles());
     if (!tracks.empty()) std::printf("  tracks           %s\n", tracks.c_str());
     if (!image.empty()) {
-      renderTracks(o, last, overlay, image);
+      renderTracks(storePath, grid, last, overlay, image);
       std::printf("  image            %s\n", image.c_str());
     }
     return 0;

@@ -1,11 +1,11 @@
+#include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/rover/Rover.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <string>
 
 namespace regolith::rover {
@@ -13,19 +13,14 @@ namespace regolith::rover {
 namespace {
 
 std::string formatPoint(double x, double y) {
-  std::ostringstream s;
-  s << '(' << x << ", " << y << ')';
-  return s.str();
+  return "(" + core::number(x) + ", " + core::number(y) + ")";
 }
 
 const char* statusName(topo::QueryStatus s) noexcept {
   switch (s) {
-    case topo::QueryStatus::Ok:
-      return "ok";
-    case topo::QueryStatus::Nodata:
-      return "nodata";
-    case topo::QueryStatus::OutsideGrid:
-      return "outside the grid";
+    case topo::QueryStatus::Ok: return "ok";
+    case topo::QueryStatus::Nodata: return "nodata";
+    case topo::QueryStatus::OutsideGrid: return "outside the grid";
   }
   return "unknown";
 }

@@ -1,6 +1,6 @@
+#include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/rover/Traverse.hpp>
-#include <regolith/store/Pager.hpp>
-#include <regolith/topo/Error.hpp>
 #include <regolith/topo/TopoDem.hpp>
 
 #include <glm/geometric.hpp>
@@ -8,9 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <memory>
 #include <numbers>
-#include <sstream>
 #include <string>
 
 namespace regolith::rover {
@@ -19,22 +17,14 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::string num(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 void checkOptions(const TraverseOptions& o) {
   const std::string op = "rover::runTraverse(): ";
-  if (o.cacheBytes == 0) {
-    throw InvalidArgument(op + "cacheBytes is 0, expected a cache budget > 0 bytes");
-  }
   if (!(std::isfinite(o.speed) && o.speed > 0.0)) {
-    throw InvalidArgument(op + "speed is " + num(o.speed) + " m/s, expected finite and > 0");
+    throw InvalidArgument(op + "speed is " + core::number(o.speed) +
+                          " m/s, expected finite and > 0");
   }
   if (!(std::isfinite(o.step) && o.step > 0.0)) {
-    throw InvalidArgument(op + "step is " + num(o.step) + " s, expected finite and > 0");
+    throw InvalidArgument(op + "step is " + core::number(o.step) + " s, expected finite and > 0");
   }
   if (o.path.size() < 2) {
     throw InvalidArgument(op + "path has " + std::to_string(o.path.size()) +
@@ -43,12 +33,14 @@ void checkOptions(const TraverseOptions& o) {
   for (std::size_t i = 0; i < o.path.size(); ++i) {
     const glm::dvec2 p = o.path[i];
     if (!(std::isfinite(p.x) && std::isfinite(p.y))) {
-      throw InvalidArgument(op + "path waypoint " + std::to_string(i) + " is (" + num(p.x) +
-                            ", " + num(p.y) + "), expected finite grid coordinates in metres");
+      throw InvalidArgument(op + "path waypoint " + std::to_string(i) + " is (" +
+                            core::number(p.x) + ", " + core::number(p.y) +
+                            "), expected finite grid coordinates in metres");
     }
     if (i > 0 && p == o.path[i - 1]) {
       throw InvalidArgument(op + "path waypoint " + std::to_string(i) +
-                            " repeats the one before it (" + num(p.x) + ", " + num(p.y) + ")");
+                            " repeats the one before it (" + core::number(p.x) + ", " +
+                            core::number(p.y) + ")");
     }
   }
 }
@@ -62,11 +54,11 @@ void checkPathInside(const TraverseOptions& o, const topo::TopoGrid& g, double r
     if (p.x - reach < g.west() || p.x + reach > g.east() || p.y - reach < g.south() ||
         p.y + reach > g.north()) {
       throw InvalidArgument(
-          "rover::runTraverse(): path waypoint " + std::to_string(i) + " (" + num(p.x) + ", " +
-          num(p.y) + ") puts a wheel (reach " + num(reach) + " m) outside grid '" + o.grid +
-          "' of " + o.store.string() + ": x must lie in [" + num(g.west() + reach) + ", " +
-          num(g.east() - reach) + "] and y in [" + num(g.south() + reach) + ", " +
-          num(g.north() - reach) + "]");
+          "rover::runTraverse(): path waypoint " + std::to_string(i) + " (" + core::number(p.x) +
+          ", " + core::number(p.y) + ") puts a wheel (reach " + core::number(reach) +
+          " m) outside the grid: x must lie in [" + core::number(g.west() + reach) + ", " +
+          core::number(g.east() - reach) + "] and y in [" + core::number(g.south() + reach) + ", " +
+          core::number(g.north() - reach) + "]");
     }
   }
 }
@@ -75,14 +67,10 @@ double seconds(Clock::duration d) { return std::chrono::duration<double>(d).coun
 
 }  // namespace
 
-TraverseResult runTraverse(const TraverseOptions& options, const StepCallback& onStep) {
+TraverseResult runTraverse(const topo::TopoDem& dem, const TraverseOptions& options,
+                           const StepCallback& onStep) {
   checkOptions(options);
   const Rover rover(options.geometry);
-
-  auto store = std::make_shared<const store::Store>(store::Store::open(options.store));
-  auto cache = std::make_shared<store::PatchCache>(options.cacheBytes, options.policy);
-  const store::Pager pager(store, cache);
-  const topo::TopoDem dem = pager.dem(options.grid, options.level);
   checkPathInside(options, dem.grid(), options.geometry.reach());
 
   // Cumulative lengths of the path's segments.
@@ -96,7 +84,6 @@ TraverseResult runTraverse(const TraverseOptions& options, const StepCallback& o
   if (options.maxSteps > 0) steps = std::min(steps, options.maxSteps);
 
   TraverseResult result;
-  result.budgetBytes = options.cacheBytes;
   StepState state;
   std::array<double, kWheels> xs{}, ys{}, hs{};
   std::array<glm::dvec3, kWheels> ns{};
@@ -128,8 +115,6 @@ TraverseResult runTraverse(const TraverseOptions& options, const StepCallback& o
     result.steps = k + 1;
     result.queries += kWheels;
     result.distance = d;
-    state.cache = cache->stats();
-    result.peakResidentBytes = std::max(result.peakResidentBytes, state.cache.residentBytes);
     result.maxTilt = std::max(result.maxTilt, std::acos(std::clamp(state.chassis.up.z, -1.0, 1.0)));
     result.maxResidual = std::max(result.maxResidual, state.chassis.residual);
     if (onStep && !onStep(state)) break;
@@ -138,8 +123,6 @@ TraverseResult runTraverse(const TraverseOptions& options, const StepCallback& o
   result.querySeconds = seconds(queryTime);
   result.queriesPerSecond =
       result.querySeconds > 0.0 ? static_cast<double>(result.queries) / result.querySeconds : 0.0;
-  result.cache = cache->stats();
-  result.reads = store->counters();
   return result;
 }
 

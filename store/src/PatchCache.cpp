@@ -45,9 +45,9 @@
 // value, and glibc's pthread_once makes a futex system call each time: 410 instead of
 // 260 ns of bookkeeping per miss.)
 
+#include <regolith/core/Error.hpp>
 #include <regolith/store/PatchCache.hpp>
 #include <regolith/topo/BlockTable.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include <cmath>
 #include <condition_variable>
@@ -356,6 +356,7 @@ struct PatchCache::Impl {
     e->bytes = bytes;
     e->rank = rank;
     residentBytes += bytes;
+    counters.peakResidentBytes = std::max(counters.peakResidentBytes, residentBytes);
     if (publishes()) {
       if (const auto t = tables.find(tableKey(key.grid, key.level)); t != tables.end()) {
         publishIn(*t->second, key, *e);
@@ -502,6 +503,7 @@ void PatchCache::resetStats() {
   Impl& m = *impl_;
   const std::lock_guard lock(m.mutex);
   m.counters = CacheStats{};
+  m.counters.peakResidentBytes = m.residentBytes;
   m.fastHitsBase = m.fastHitsTotal();
 }
 

@@ -229,7 +229,8 @@ def test_import_raster_with_the_zfp_codec_reads_the_same_samples(plane_tif, tmp_
         with h5py.File(a, "r") as g:
             np.testing.assert_array_equal(f["grids/plane/level0"][...],
                                           g["grids/plane/level0"][...])
-    with pytest.raises(ValueError, match="codec 'lz4', expected deflate or zfp"):
+    with pytest.raises(ValueError,
+                       match=r"^store::codecNamed\(\): codec 'lz4', expected deflate or zfp$"):
         regolith.import_raster(plane_tif, tmp_path / "x.h5", compression="lz4")
     with pytest.raises(regolith.InvalidArgument, match="with the zfp codec"):
         regolith.import_raster(plane_tif, tmp_path / "x.h5", compression="zfp", deflate=6)
@@ -269,6 +270,17 @@ def test_generate_victoria_rejects_a_bad_spacing(tmp_path):
     with pytest.raises(regolith.InvalidArgument, match="spacing"):
         regolith.generate_victoria(tmp_path / "v.h5", spacing=-1.0)
     assert not (tmp_path / "v.h5").exists()
+
+
+def test_a_store_that_cannot_be_written_is_a_store_error_naming_the_folder(tmp_path):
+    # The folder of the target is a regular file: core::writeFileAtomically cannot create it.
+    blocker = tmp_path / "not-a-folder"
+    blocker.write_text("x")
+    with pytest.raises(regolith.StoreError) as e:
+        regolith.generate_victoria(blocker / "v.h5", size=101)
+    assert str(e.value).startswith(f"store::writeStore(): {blocker}: cannot create the folder: ")
+    assert isinstance(e.value, OSError)
+    assert blocker.read_text() == "x"
 
 
 # ---- rendering ------------------------------------------------------------------------------
@@ -328,8 +340,8 @@ def test_traverse_callback_sees_each_step_and_can_stop(victoria):
 
 
 def test_traverse_bad_options_raise_clear_errors(victoria):
-    with pytest.raises(regolith.InvalidArgument,
-                       match=r"rover::runTraverse\(\): cacheBytes is 0, expected a cache budget"):
+    with pytest.raises(regolith.InvalidArgument, match=r"^regolith.run_traverse\(\): "
+                       r"cache_bytes is 0, expected a cache budget > 0 bytes$"):
         regolith.run_traverse(victoria, cache_bytes=0)
     with pytest.raises(ValueError, match=r"path waypoint 1 is \(nan, 0\)"):
         regolith.run_traverse(victoria, path=np.array([[0.0, 0.0], [np.nan, 0.0]]))

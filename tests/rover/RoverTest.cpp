@@ -1,6 +1,6 @@
 // Rover kinematics: wheel footprints and the chassis settled on analytic planes.
+#include <regolith/core/Error.hpp>
 #include <regolith/rover/Rover.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

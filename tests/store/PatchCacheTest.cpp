@@ -1,10 +1,11 @@
 // PatchCache: counting, the three eviction policies, the byte budget (also under threads),
 // single loads per key, loader errors, clear().
+#include <regolith/core/Error.hpp>
 #include <regolith/store/PatchCache.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -344,6 +345,7 @@ TEST(PatchCache, ResidentBytesNeverExceedTheCapacityUnderRandomOperations) {
     std::uniform_int_distribution<int> anyOp(0, 99);
     PatchCache cache(16 * bytesOf(), policy, 3);  // short period: many decays and rescales
     std::uint64_t accesses = 0;
+    std::size_t mostResident = 0;
     for (int i = 0; i < kOps; ++i) {
       const int op = anyOp(rng);
       const PatchKey k = key(anyKey(rng));
@@ -369,6 +371,10 @@ TEST(PatchCache, ResidentBytesNeverExceedTheCapacityUnderRandomOperations) {
       const CacheStats s = cache.stats();
       ASSERT_LE(s.residentBytes, s.capacityBytes) << "after operation " << i;
       ASSERT_EQ(s.hits + s.misses, accesses);
+      // The cache's own peak is the most it ever held: resident bytes grow only by one
+      // insertion per operation, and every operation is sampled here.
+      mostResident = std::max(mostResident, s.residentBytes);
+      ASSERT_EQ(s.peakResidentBytes, mostResident) << "after operation " << i;
       if (i % 1000 == 0) {
         std::size_t resident = 0;
         for (std::uint32_t c = 0; c < kKeys; ++c) resident += cache.contains(key(c)) ? 1U : 0U;
@@ -377,6 +383,9 @@ TEST(PatchCache, ResidentBytesNeverExceedTheCapacityUnderRandomOperations) {
       }
     }
     EXPECT_GT(cache.stats().evictions, 0U);
+    // resetStats() starts the peak again from what is resident now.
+    cache.resetStats();
+    EXPECT_EQ(cache.stats().peakResidentBytes, cache.stats().residentBytes);
   }
 }
 

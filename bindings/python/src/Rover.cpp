@@ -1,6 +1,8 @@
 // The rover traverse (rover::runTraverse) from Python.
+#include <regolith/core/Error.hpp>
 #include <regolith/rover/Traverse.hpp>
-#include <regolith/topo/Error.hpp>
+#include <regolith/store/Pager.hpp>
+#include <regolith/store/Store.hpp>
 
 #include "Common.hpp"
 
@@ -10,6 +12,7 @@
 
 #include <array>
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -74,7 +77,7 @@ py::dict chassisDict(const rover::ChassisPose& p) {
   return c;
 }
 
-py::dict stateDict(const rover::StepState& s) {
+py::dict stateDict(const rover::StepState& s, const store::PatchCache& cache) {
   py::dict d;
   d["step"] = s.step;
   d["time"] = s.time;
@@ -98,7 +101,7 @@ py::dict stateDict(const rover::StepState& s) {
   c["position"] = py::make_tuple(s.chassis.position.x, s.chassis.position.y, s.chassis.position.z);
   c["up"] = py::make_tuple(s.chassis.up.x, s.chassis.up.y, s.chassis.up.z);
   d["chassis"] = c;
-  d["resident_bytes"] = s.cache.residentBytes;
+  d["resident_bytes"] = cache.stats().residentBytes;
   return d;
 }
 
@@ -174,13 +177,12 @@ void bindRover(py::module_& m) {
          const std::string& interp, std::size_t recordEvery,
          const std::function<py::object(py::dict)>& callback, std::size_t callbackEvery,
          const std::optional<rover::Rover>& vehicle) {
+        if (cacheBytes == 0) {
+          throw InvalidArgument(
+              "regolith.run_traverse(): cache_bytes is 0, expected a cache budget > 0 bytes");
+        }
         rover::TraverseOptions o;
         if (vehicle) o.geometry = vehicle->geometry();
-        o.store = storePath;
-        o.grid = grid;
-        o.level = level;
-        o.cacheBytes = cacheBytes;
-        o.policy = parsePolicy(policy);
         o.path = path ? pathOf(*path) : rover::defaultVictoriaPath();
         o.speed = speed;
         o.step = step;
@@ -189,18 +191,24 @@ void bindRover(py::module_& m) {
         if (callback && callbackEvery == 0) {
           throw InvalidArgument("regolith.run_traverse(): callback_every is 0, expected > 0");
         }
+        // The DEM, paged from the store through a cache of cache_bytes that this call owns.
+        auto file = std::make_shared<const store::Store>(store::Store::open(storePath));
+        auto cache = std::make_shared<store::PatchCache>(cacheBytes, parsePolicy(policy));
+        const topo::TopoDem dem = store::Pager(file, cache).dem(grid, level);
         Record rec;
         rover::TraverseResult r;
         {
           const py::gil_scoped_release release;
-          r = rover::runTraverse(o, [&](const rover::StepState& s) {
+          r = rover::runTraverse(dem, o, [&](const rover::StepState& s) {
             if (recordEvery > 0 && s.step % recordEvery == 0) rec.add(s);
             if (!callback || s.step % callbackEvery != 0) return true;
             const py::gil_scoped_acquire acquire;
-            const py::object ret = callback(stateDict(s));
+            const py::object ret = callback(stateDict(s, *cache));
             return ret.is_none() || ret.cast<bool>();
           });
         }
+        const store::CacheStats stats = cache->stats();
+        const store::ReadCounters reads = file->counters();
         py::dict d;
         d["steps"] = r.steps;
         d["queries"] = r.queries;
@@ -208,11 +216,11 @@ void bindRover(py::module_& m) {
         d["query_seconds"] = r.querySeconds;
         d["total_seconds"] = r.totalSeconds;
         d["queries_per_second"] = r.queriesPerSecond;
-        d["cache"] = statsDict(r.cache);
-        d["reads"] = r.reads.reads;
-        d["bytes_read"] = r.reads.bytesRead;
-        d["peak_resident_bytes"] = r.peakResidentBytes;
-        d["budget_bytes"] = r.budgetBytes;
+        d["cache"] = statsDict(stats);
+        d["reads"] = reads.reads;
+        d["bytes_read"] = reads.bytesRead;
+        d["peak_resident_bytes"] = stats.peakResidentBytes;
+        d["budget_bytes"] = stats.capacityBytes;
         d["max_tilt"] = r.maxTilt;
         d["max_residual"] = r.maxResidual;
         if (recordEvery > 0) {

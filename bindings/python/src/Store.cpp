@@ -1,9 +1,9 @@
 // Stores, grids, the patch cache, import and the procedural generators.
+#include <regolith/core/Error.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Import.hpp>
 #include <regolith/store/Pager.hpp>
-#include <regolith/topo/Error.hpp>
 
 #include "Common.hpp"
 
@@ -56,6 +56,7 @@ py::dict statsDict(const store::CacheStats& s) {
   d["evictions"] = s.evictions;
   d["bytes_loaded"] = s.bytesLoaded;
   d["resident_bytes"] = s.residentBytes;
+  d["peak_resident_bytes"] = s.peakResidentBytes;
   d["resident_patches"] = s.residentPatches;
   d["capacity_bytes"] = s.capacityBytes;
   return d;

@@ -83,8 +83,9 @@ struct CacheStats {
   std::uint64_t misses = 0;
   std::uint64_t loads = 0;  // loader calls that produced a patch
   std::uint64_t evictions = 0;
-  std::uint64_t bytesLoaded = 0;  // sum of Patch::bytes() of loaded patches
-  std::size_t residentBytes = 0;  // now held by the cache
+  std::uint64_t bytesLoaded = 0;      // sum of Patch::bytes() of loaded patches
+  std::size_t residentBytes = 0;      // now held by the cache
+  std::size_t peakResidentBytes = 0;  // the most ever held at once (since the last reset)
   std::size_t residentPatches = 0;
   std::size_t capacityBytes = 0;
 };
