@@ -85,9 +85,14 @@ void ClipmapTerrain::initEffects() {
                           std::to_string(e.heightColours->maxHeight) + "] m, expected min < max");
   effects_ = std::make_unique<EffectState>();
   effects_->needs = EffectNeeds::of(e, pyramid_->kind() == SurfaceKind::Planet);
-  if (e.albedo) effects_->albedo = std::make_unique<TextureClipmap>(*e.albedo, "effects.albedo");
-  if (e.overlay)
-    effects_->overlay = std::make_unique<TextureClipmap>(*e.overlay, "effects.overlay");
+  if (e.albedo) {
+    effects_->albedo =
+        std::make_unique<TextureClipmap>(*e.albedo, "effects.albedo", options_.executor);
+  }
+  if (e.overlay) {
+    effects_->overlay =
+        std::make_unique<TextureClipmap>(*e.overlay, "effects.overlay", options_.executor);
+  }
   if (e.tracks) {
     const int n = options_.trackWindow;
     GLuint id = 0;

@@ -43,16 +43,17 @@ struct ClipmapTerrain::Job {
   std::exception_ptr error;  // a failed read, rethrown by update() on the render thread
 };
 
-// The background loader: one worker thread, a queue served coarsest level first, and the
-// finished plans waiting for the render thread to upload them.
+// The background loader: a queue served coarsest level first by one task at a time on the
+// executor (so reads keep the order a single worker gave them), and the finished plans
+// waiting for the render thread to upload them.
 struct ClipmapTerrain::Loader {
   std::mutex mutex;
-  std::condition_variable wake, done;
+  std::condition_variable done;
   std::vector<Job> queue, finished;
   std::vector<bool> busy;  // per level: a job queued, running or finished, not yet applied
   std::optional<glm::dvec3> target;
-  bool stop = false;
-  std::thread worker;
+  bool draining = false;  // a drain task is submitted or running
+  std::shared_ptr<core::Executor> executor;
 };
 
 ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, ClipmapOptions options)
@@ -111,12 +112,11 @@ ClipmapTerrain::ClipmapTerrain(std::shared_ptr<const HeightPyramid> pyramid, Cli
 
 ClipmapTerrain::~ClipmapTerrain() {
   if (loader_) {
-    {
-      const std::lock_guard lock(loader_->mutex);
-      loader_->stop = true;
-    }
-    loader_->wake.notify_all();
-    loader_->worker.join();
+    // The drain task reads this terrain's levels: wait until it has returned. Jobs still
+    // queued are dropped first, so it stops after the one it is reading.
+    std::unique_lock lock(loader_->mutex);
+    loader_->queue.clear();
+    loader_->done.wait(lock, [&] { return !loader_->draining; });
   }
 }
 
@@ -132,7 +132,8 @@ void ClipmapTerrain::requestFocus(const glm::dvec3& focus) {
   if (!loader_) {
     loader_ = std::make_unique<Loader>();
     loader_->busy.assign(levels_.size(), false);
-    loader_->worker = std::thread([this] { workerLoop(); });
+    loader_->executor =
+        options_.executor ? options_.executor : std::make_shared<core::ThreadPool>(1);
   }
   {
     const std::lock_guard lock(loader_->mutex);
@@ -156,16 +157,16 @@ void ClipmapTerrain::schedule() {
     loader_->queue.push_back(Job{k, std::move(plan), nullptr});
     any = true;
   }
+  if (!any || loader_->draining) return;
+  loader_->draining = true;
   lock.unlock();
-  if (any) loader_->wake.notify_one();
+  loader_->executor->submit([this] { drainQueue(); });
 }
 
-void ClipmapTerrain::workerLoop() {
+void ClipmapTerrain::drainQueue() {
   Loader& L = *loader_;
   std::unique_lock lock(L.mutex);
-  for (;;) {
-    L.wake.wait(lock, [&] { return L.stop || !L.queue.empty(); });
-    if (L.stop) return;
+  while (!L.queue.empty()) {
     // Coarsest level first: it covers the most ground and the finer ones wait for it anyway.
     auto it = std::max_element(L.queue.begin(), L.queue.end(),
                                [](const Job& a, const Job& b) { return a.level < b.level; });
@@ -183,6 +184,8 @@ void ClipmapTerrain::workerLoop() {
     L.finished.push_back(std::move(job));
     L.done.notify_all();
   }
+  L.draining = false;
+  L.done.notify_all();
 }
 
 std::size_t ClipmapTerrain::update(bool wait) {

@@ -31,8 +31,17 @@ std::uint8_t unorm8(float v) {
 
 }  // namespace
 
-TextureClipmap::TextureClipmap(const DrapedTexture& texture, std::string name)
-    : source_(texture), name_(std::move(name)), window_(texture.window), texture_(0U) {
+TextureClipmap::~TextureClipmap() {
+  if (job_.valid()) job_.wait();
+}
+
+TextureClipmap::TextureClipmap(const DrapedTexture& texture, std::string name,
+                               std::shared_ptr<core::Executor> executor)
+    : source_(texture),
+      name_(std::move(name)),
+      window_(texture.window),
+      texture_(0U),
+      executor_(std::move(executor)) {
   const auto fail = [&](const std::string& what) {
     throw InvalidArgument("TextureClipmap(): " + name_ + ": " + what);
   };
@@ -110,7 +119,8 @@ void TextureClipmap::request(glm::dvec2 focus) {
   pending_.reset();
   std::vector<Layer> layers = plan(focus);
   if (layers.empty()) return;
-  job_ = std::async(std::launch::async, [this, layers = std::move(layers)]() mutable {
+  if (!executor_) executor_ = std::make_shared<core::ThreadPool>(1);
+  job_ = core::submitTask(*executor_, [this, layers = std::move(layers)]() mutable {
     for (Layer& layer : layers) read(layer);
     return std::move(layers);
   });

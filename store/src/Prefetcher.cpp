@@ -13,25 +13,46 @@ bool Prefetcher::ItemOrder::operator()(const Item& a, const Item& b) const noexc
   return a.sequence > b.sequence;
 }
 
-Prefetcher::Prefetcher(std::shared_ptr<const Pager> pager, std::size_t threads)
-    : pager_(std::move(pager)) {
-  if (!pager_) throw InvalidArgument("store::Prefetcher(): pager is null");
+namespace {
+
+std::shared_ptr<core::Executor> poolOf(std::size_t threads) {
   if (threads == 0) throw InvalidArgument("store::Prefetcher(): threads is 0, expected >= 1");
-  workers_.reserve(threads);
-  for (std::size_t i = 0; i < threads; ++i) workers_.emplace_back([this] { work(); });
+  return std::make_shared<core::ThreadPool>(static_cast<unsigned>(threads));
+}
+
+}  // namespace
+
+Prefetcher::Prefetcher(std::shared_ptr<const Pager> pager, std::size_t threads)
+    : Prefetcher(std::move(pager), poolOf(threads), threads) {}
+
+Prefetcher::Prefetcher(std::shared_ptr<const Pager> pager, std::shared_ptr<core::Executor> executor,
+                       std::size_t maxTasks)
+    : pager_(std::move(pager)), executor_(std::move(executor)) {
+  if (!pager_) throw InvalidArgument("store::Prefetcher(): pager is null");
+  if (!executor_) throw InvalidArgument("store::Prefetcher(): executor is null");
+  maxTasks_ = maxTasks != 0 ? maxTasks : std::max(1U, executor_->concurrency());
 }
 
 Prefetcher::~Prefetcher() {
-  {
-    const std::lock_guard lock(mutex_);
-    stopping_ = true;
-    stats_.cancelled += queue_.size();
-    queue_ = {};
-    pending_.clear();
-  }
-  wake_.notify_all();
+  std::unique_lock lock(mutex_);
+  stopping_ = true;
+  stats_.cancelled += queue_.size();
+  queue_ = {};
+  pending_.clear();
   done_.notify_all();
-  for (auto& t : workers_) t.join();
+  // Loading tasks read this object: wait until every one has returned (a load in progress
+  // finishes first).
+  done_.wait(lock, [&] { return tasks_ == 0; });
+}
+
+void Prefetcher::startTasks(std::unique_lock<std::mutex>& lock) {
+  // One task per queued patch, up to maxTasks_; each drains the queue and then returns, so
+  // the executor's threads are never held while there is nothing to load.
+  const std::size_t start = tasks_ < maxTasks_ ? std::min(maxTasks_ - tasks_, queue_.size()) : 0;
+  tasks_ += start;
+  lock.unlock();
+  for (std::size_t i = 0; i < start; ++i) executor_->submit([this] { work(); });
+  lock.lock();
 }
 
 Prefetcher::Ticket Prefetcher::request(std::string_view grid,
@@ -50,7 +71,7 @@ Prefetcher::Ticket Prefetcher::request(std::string_view grid,
       }
     }
   }
-  const std::lock_guard lock(mutex_);
+  std::unique_lock lock(mutex_);
   const Ticket ticket = nextTicket_++;
   for (Item& it : items) {
     it.ticket = ticket;
@@ -59,7 +80,7 @@ Prefetcher::Ticket Prefetcher::request(std::string_view grid,
   }
   if (!items.empty()) pending_[ticket] = items.size();
   stats_.queued += items.size();
-  wake_.notify_all();
+  startTasks(lock);
   return ticket;
 }
 
@@ -126,9 +147,7 @@ void Prefetcher::setOnLoaded(std::function<void(const PatchKey&)> fn) {
 
 void Prefetcher::work() {
   std::unique_lock lock(mutex_);
-  for (;;) {
-    wake_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
-    if (stopping_) return;
+  while (!stopping_ && !queue_.empty()) {
     const Item item = queue_.top();
     queue_.pop();
     ++busy_;
@@ -154,6 +173,8 @@ void Prefetcher::work() {
     }
     done_.notify_all();
   }
+  --tasks_;
+  done_.notify_all();
 }
 
 }  // namespace regolith::store

@@ -1,11 +1,13 @@
 // Prefetcher: background loading by priority, with cancellation.
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Executor.hpp>
 #include <regolith/store/Prefetcher.hpp>
 
 #include "store/PagerFixture.hpp"
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <mutex>
 #include <vector>
 
@@ -117,4 +119,34 @@ TEST(Prefetcher, DestructionWhileBusyJoinsCleanly) {
   EXPECT_LE(loads, 48u);
   std::this_thread::sleep_for(std::chrono::milliseconds(20));
   EXPECT_EQ(o.cache->stats().loads, loads);
+}
+
+TEST(Prefetcher, PrefetchersShareTheExecutorTheyAreGivenAndStartNoThreads) {
+  Opened o = openFixture();
+  const auto pager = sharedPager(o);
+  // One thread for two prefetchers: each loads as tasks that return when its queue is empty,
+  // so neither holds the thread while the other has work.
+  auto pool = std::make_shared<core::ThreadPool>(1);
+  Prefetcher a(pager, pool), b(pager, pool);
+  const auto ta = a.request("dem", {{0, 0, 0, 256, 256}});
+  const auto tb = b.request("dem", {{0, 256, 256, 256, 256}});
+  a.wait(ta);
+  b.wait(tb);
+  EXPECT_EQ(a.stats().loaded, 4u);
+  EXPECT_EQ(b.stats().loaded, 4u);
+  // The pool still runs other work: nothing of the prefetchers is parked on it.
+  std::atomic<int> ran{0};
+  core::parallelFor(*pool, 8, [&](std::size_t) { ran.fetch_add(1); });
+  EXPECT_EQ(ran.load(), 8);
+  // A second request after the queue drained starts a new task.
+  const auto again = a.request("dem", {{1, 0, 0, 128, 128}});
+  a.wait(again);
+  EXPECT_EQ(a.stats().loaded, 5u);
+  EXPECT_THROW(Prefetcher(pager, std::shared_ptr<core::Executor>()), InvalidArgument);
+  try {
+    Prefetcher(pager, std::size_t{0});
+    ADD_FAILURE() << "expected InvalidArgument";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "store::Prefetcher(): threads is 0, expected >= 1");
+  }
 }

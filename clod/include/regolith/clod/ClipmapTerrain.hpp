@@ -7,6 +7,7 @@
 #include <regolith/clod/GlObjects.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/Program.hpp>
+#include <regolith/core/Executor.hpp>
 
 #include <glm/vec3.hpp>
 
@@ -53,6 +54,10 @@ struct ClipmapOptions {
   bool cutOuts = false;
   /// Tracks: relative darkening of the albedo inside a rut (compacted soil).
   float trackDarkening = 0.15F;
+  /// Where background reads run (requestFocus(): the levels' windows, one at a time,
+  /// coarsest first; the draped textures' windows). Null: one-thread core::ThreadPools made
+  /// at the first background read. Shared, so it outlives the terrain's last read.
+  std::shared_ptr<core::Executor> executor;
 };
 
 /// What one draw() did.
@@ -101,7 +106,8 @@ class ClipmapTerrain {
   /// number of texels uploaded. Reads the pyramid's sources on the calling thread.
   std::size_t setFocus(const glm::dvec3& focus);
   /// Background loading: sets the focus the levels should move to and returns at once. A
-  /// worker thread reads and prepares the new rows and columns, coarsest level first;
+  /// task on the options' executor reads and prepares the new rows and columns, coarsest
+  /// level first;
   /// update() uploads what is ready. Until a level has caught up, draw() leaves it (and any
   /// finer one) out and the next coarser consistent level draws its centre, so a frame
   /// never waits for I/O and never shows a gap.
@@ -109,7 +115,7 @@ class ClipmapTerrain {
   /// Uploads finished background work (height rows and columns, and the windows of draped
   /// textures) and schedules more (render thread). With
   /// `wait` it first blocks until some job finishes, if one is running (tests, tools; a
-  /// frame loop passes false). Returns the texels uploaded. An error the worker met while
+  /// frame loop passes false). Returns the texels uploaded. An error the loader met while
   /// reading (a store I/O error) is rethrown here; that level is then asked again.
   std::size_t update(bool wait = false);
   /// True while background jobs are queued or running.
@@ -161,7 +167,8 @@ class ClipmapTerrain {
  private:
   void buildMesh();
   void schedule();
-  void workerLoop();
+  /// Runs queued level reads, coarsest first, until the queue is empty (on the executor).
+  void drainQueue();
   [[nodiscard]] int polarFor(const glm::dvec2& gridPoint) const;
   [[nodiscard]] std::size_t firstConsistent() const;
 

@@ -5,6 +5,7 @@
 
 #include <regolith/clod/Effects.hpp>
 #include <regolith/clod/GlObjects.hpp>
+#include <regolith/core/Executor.hpp>
 
 #include <glm/vec2.hpp>
 #include <glm/vec4.hpp>
@@ -29,22 +30,31 @@ namespace regolith::clod {
 /// Sources: DrapedTexture::channels, one HeightPyramid per channel (the store's pyramid
 /// through store::Pager, or fromSamples()). Levels stop at the first one the window covers.
 /// A window moves when the focus drifts a quarter window from its centre; the layer is then
-/// read again and uploaded whole: on the calling thread (update()), or on a worker thread
-/// (request(), then poll() uploads on the render thread), while the old windows keep drawing
+/// read again and uploaded whole: on the calling thread (update()), or on the executor it is
+/// given (request(), then poll() uploads on the render thread), while the old windows keep drawing
 /// (a pixel outside every window falls back to the terrain's own albedo). Outside the source or
 /// over NaN the alpha is 0 (the terrain's own albedo shows).
 ///
 /// Needs a current GL 4.5 context; belongs to its thread.
 class TextureClipmap {
  public:
-  /// Throws InvalidArgument naming `name` if there are not 1, 3 or 4 channels, a channel is
-  /// null, channels' grids or level counts differ, or the window is outside 64..4096.
-  TextureClipmap(const DrapedTexture& texture, std::string name);
+  /// Background reads (request()) run on `executor`; null: a one-thread core::ThreadPool
+  /// made at the first request. Throws InvalidArgument naming `name` if there are not 1, 3
+  /// or 4 channels, a channel is null, channels' grids or level counts differ, or the window
+  /// is outside 64..4096.
+  TextureClipmap(const DrapedTexture& texture, std::string name,
+                 std::shared_ptr<core::Executor> executor = nullptr);
+  TextureClipmap(const TextureClipmap&) = delete;
+  TextureClipmap& operator=(const TextureClipmap&) = delete;
+  TextureClipmap(TextureClipmap&&) = delete;
+  TextureClipmap& operator=(TextureClipmap&&) = delete;
+  /// Waits for a background read still running (it reads this object's sources).
+  ~TextureClipmap();
 
   /// Centres the windows on grid point `focus` (the terrain's grid coordinates). Returns the
   /// texels uploaded (0 if no window had to move).
   std::size_t update(glm::dvec2 focus);
-  /// Background loading: reads the windows that must move on a worker thread and returns at
+  /// Background loading: reads the windows that must move on the executor and returns at
   /// once; a request while one is running is kept (the latest) and started after it.
   void request(glm::dvec2 focus);
   /// Uploads finished background reads (render thread); with `wait`, first blocks until the
@@ -86,6 +96,7 @@ class TextureClipmap {
   std::vector<Window> windows_;
   Texture texture_;
   std::size_t uploaded_ = 0;
+  std::shared_ptr<core::Executor> executor_;
   std::future<std::vector<Layer>> job_;
   std::optional<glm::dvec2> pending_;
 };

@@ -10,8 +10,11 @@
 #include <cstddef>
 #include <deque>
 #include <functional>
+#include <future>
+#include <memory>
 #include <mutex>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 namespace regolith::core {
@@ -60,6 +63,19 @@ class ThreadPool final : public Executor {
   bool stopping_ = false;
   std::vector<std::thread> workers_;
 };
+
+/// Runs `task` on `executor` and returns the future of its result; an exception it throws
+/// reaches the future's get(). The future does not wait in its destructor (unlike
+/// std::async's): whoever owns what the task uses must wait for it before destroying that.
+template <typename F>
+[[nodiscard]] std::future<std::invoke_result_t<std::decay_t<F>&>> submitTask(Executor& executor,
+                                                                             F&& task) {
+  using R = std::invoke_result_t<std::decay_t<F>&>;
+  auto job = std::make_shared<std::packaged_task<R()>>(std::forward<F>(task));
+  std::future<R> result = job->get_future();
+  executor.submit([job] { (*job)(); });
+  return result;
+}
 
 /// Runs body(0) … body(n − 1), each exactly once, on the calling thread and on up to
 /// `maxTasks − 1` tasks of `executor` (0: the executor's concurrency). Returns when every

@@ -1,7 +1,8 @@
 #pragma once
 /// \file
-/// Background loading of patches: a thread pool that prefetches windows by priority.
+/// Background loading of patches on an executor, windows by priority.
 
+#include <regolith/core/Executor.hpp>
 #include <regolith/store/Pager.hpp>
 
 #include <condition_variable>
@@ -11,7 +12,6 @@
 #include <mutex>
 #include <queue>
 #include <string_view>
-#include <thread>
 #include <unordered_map>
 #include <vector>
 
@@ -36,14 +36,23 @@ struct PrefetchStats {
 /// its finer ones, and among requests the higher priority first (then the older).
 /// Requests can be cancelled; a focus that moves cancels its previous window.
 ///
+/// Loads run as tasks on a core::Executor: up to maxTasks at once, each draining the queue
+/// and returning when it is empty, so no thread waits on the executor while there is
+/// nothing to load.
+///
 /// Thread-safety: every member may be called from any thread. The destructor cancels what
-/// is queued and joins the workers (a load in progress finishes first).
+/// is queued and waits for the loading tasks to return (a load in progress finishes first).
 class Prefetcher {
  public:
   using Ticket = std::uint64_t;
 
-  /// Throws InvalidArgument if pager is null or threads is 0.
+  /// Loads on a core::ThreadPool of `threads` made for this prefetcher. Throws
+  /// InvalidArgument if pager is null or threads is 0.
   Prefetcher(std::shared_ptr<const Pager> pager, std::size_t threads = 2);
+  /// Loads on `executor`, at most `maxTasks` patches at once (0: the executor's
+  /// concurrency). Throws InvalidArgument if pager or executor is null.
+  Prefetcher(std::shared_ptr<const Pager> pager, std::shared_ptr<core::Executor> executor,
+             std::size_t maxTasks = 0);
   ~Prefetcher();
   Prefetcher(const Prefetcher&) = delete;
   Prefetcher& operator=(const Prefetcher&) = delete;
@@ -68,7 +77,7 @@ class Prefetcher {
   [[nodiscard]] PrefetchStats stats() const;
   /// Message of the last failed load (empty if none).
   [[nodiscard]] std::string lastError() const;
-  /// Called by a worker after each patch it fetched (for tests and progress); may be empty.
+  /// Called by a loading task after each patch it fetched (for tests and progress); may be empty.
   void setOnLoaded(std::function<void(const PatchKey&)> fn);
 
  private:
@@ -82,12 +91,17 @@ class Prefetcher {
   struct ItemOrder {
     bool operator()(const Item& a, const Item& b) const noexcept;
   };
+  /// Drains the queue (a task on the executor).
   void work();
+  /// Submits loading tasks for the queue, up to maxTasks_ running (lock held on entry and
+  /// on return; released while submitting).
+  void startTasks(std::unique_lock<std::mutex>& lock);
 
   std::shared_ptr<const Pager> pager_;
   mutable std::mutex mutex_;
-  std::condition_variable wake_;  // workers: work arrived or stopping
-  std::condition_variable done_;  // waiters: a ticket or the queue drained
+  std::size_t maxTasks_ = 1;
+  std::size_t tasks_ = 0;         // loading tasks submitted and not yet returned
+  std::condition_variable done_;  // waiters: a ticket, the queue drained, a task returned
   std::priority_queue<Item, std::vector<Item>, ItemOrder> queue_;
   std::unordered_map<Ticket, std::size_t> pending_;  // ticket → patches not yet finished
   std::unordered_map<Ticket, bool> cancelled_;
@@ -98,7 +112,8 @@ class Prefetcher {
   PrefetchStats stats_;
   std::string lastError_;
   std::function<void(const PatchKey&)> onLoaded_;
-  std::vector<std::thread> workers_;
+  /// Last, so that a pool of the prefetcher's own is joined before anything else goes.
+  std::shared_ptr<core::Executor> executor_;
 };
 
 }  // namespace regolith::store
