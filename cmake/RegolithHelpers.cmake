@@ -40,6 +40,12 @@ function(regolith_add_library module)
     $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(${target} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   regolith_apply_settings(${target})
+  # No implicit GLM conversions inside the libraries (a vec3 from a scalar, a dvec3 from a
+  # vec3): every one is spelled out. Private, so consumers keep GLM's defaults.
+  target_compile_definitions(${target} PRIVATE GLM_FORCE_EXPLICIT_CTOR)
+  if(REGOLITH_FORCE_ASSERTS)
+    target_compile_definitions(${target} PUBLIC REGOLITH_FORCE_ASSERTS)
+  endif()
   install(TARGETS ${target} EXPORT RegolithTargets
           ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
           LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
@@ -53,4 +59,38 @@ function(regolith_add_executable name)
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS})
   regolith_apply_settings(${name})
+endfunction()
+
+# regolith_find_python(<var> IMPORTS <python code> OVERRIDE <cache variable> WHAT <who needs it>
+#                      INSTALL <Debian packages>)
+# The one way the build picks a Python interpreter: the interpreter named by the cache
+# variable OVERRIDE if it is set, else Debian's /usr/bin/python3, else the python3 on PATH
+# (which may be a separate interpreter without numpy, such as a pyenv shim: it is tried last).
+# The first candidate that runs IMPORTS wins; configuring fails loudly, naming the candidates,
+# the packages and the override, if none does.
+function(regolith_find_python var)
+  cmake_parse_arguments(ARG "" "IMPORTS;OVERRIDE;WHAT;INSTALL" "" ${ARGN})
+  if(${ARG_OVERRIDE})
+    set(candidates ${${ARG_OVERRIDE}})
+  else()
+    set(candidates /usr/bin/python3)
+    find_program(REGOLITH_PATH_PYTHON3 NAMES python3)
+    if(REGOLITH_PATH_PYTHON3)
+      list(APPEND candidates ${REGOLITH_PATH_PYTHON3})
+    endif()
+    list(REMOVE_DUPLICATES candidates)
+  endif()
+  foreach(candidate IN LISTS candidates)
+    if(EXISTS ${candidate})
+      execute_process(COMMAND ${candidate} -c "${ARG_IMPORTS}"
+                      RESULT_VARIABLE rc OUTPUT_QUIET ERROR_QUIET)
+      if(rc EQUAL 0)
+        set(${var} ${candidate} PARENT_SCOPE)
+        return()
+      endif()
+    endif()
+  endforeach()
+  message(FATAL_ERROR
+    "No Python interpreter runs '${ARG_IMPORTS}' (tried: ${candidates}), which ${ARG_WHAT} "
+    "needs. On Debian: apt-get install ${ARG_INSTALL}; or set -D${ARG_OVERRIDE}=/path/to/python3.")
 endfunction()

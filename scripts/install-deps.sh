@@ -6,6 +6,8 @@ set -euo pipefail
 PACKAGES=(
   # toolchain
   build-essential cmake ninja-build pkg-config git clang-format clang-tidy
+  # compiler cache: scripts/test-all.sh reuses objects across runs on one machine
+  ccache
   # I/O: HDF5 stores, GDAL import, PROJ (also the projection oracle in tests)
   libhdf5-dev hdf5-tools libgdal-dev gdal-bin libproj-dev proj-bin libdeflate-dev
   # the optional ZFP codec of stores: libzfp encodes chunks, the H5Z-ZFP plugin (filter

@@ -26,7 +26,7 @@ command -v "$clang_tidy" >/dev/null || { echo "run-clang-tidy: $clang_tidy not f
 
 # Library sources of every module that exists, plus the command-line tool.
 shopt -s nullglob
-candidates=("$root"/{topo,store,clod,scenegraph,scenegraph/demo,rover}/src/*.cpp "$root"/tools/*.cpp "$root"/tools/src/*.cpp)
+candidates=("$root"/{core,topo,store,clod,scenegraph,demo,rover}/src/*.cpp "$root"/tools/*.cpp "$root"/tools/src/*.cpp)
 shopt -u nullglob
 
 files=()
@@ -51,18 +51,39 @@ fi
 
 echo "run-clang-tidy: $("$clang_tidy" --version | grep -o 'version [0-9.]*'), ${#files[@]} files, $jobs jobs"
 log=$(mktemp)
-trap 'rm -f "$log"' EXIT
+tidy_db=$(mktemp -d)
+trap 'rm -rf "$log" "$tidy_db"' EXIT
+# The command's sources use a GCC precompiled header (tools/CMakeLists.txt), which clang
+# cannot read: clang-tidy gets the same commands without it.
+python3 "$root/scripts/tidy-key.py" strip-pch "$db" "$tidy_db"
+
+# Results cache: a file whose key (scripts/tidy-key.py: its preprocessed text with comments,
+# every .clang-tidy, the clang-tidy version and the extra checks) a clean run has recorded is
+# not checked again. REGOLITH_TIDY_CACHE=0 (or REGOLITH_FULL_CHECKS=1) checks every file.
+cache_dir=""
+if [[ ${REGOLITH_TIDY_CACHE:-1} == 1 && ${REGOLITH_FULL_CHECKS:-0} != 1 ]]; then
+  cache_dir=${XDG_CACHE_HOME:-$HOME/.cache}/regolith-tidy
+  mkdir -p "$cache_dir"
+fi
 
 # One clang-tidy per file; each prints its findings in one piece so parallel output does not
 # interleave. xargs exits non-zero if any clang-tidy did (every kept check is an error).
 status=0
 printf '%s\0' "${files[@]}" |
   xargs -0 -n1 -P"$jobs" bash -c '
-    out=$("$0" -p "$1" --quiet ${2:+"$2"} "$3" 2>&1) && rc=0 || rc=$?
+    # $0 clang-tidy, $1 compile database folder, $2 extra checks, $3 cache folder (empty: no
+    # cache), $4 repository root, $5 the file (xargs appends it).
+    key=""
+    if [[ -n $3 ]]; then
+      key=$(python3 "$4/scripts/tidy-key.py" key "$1/compile_commands.json" "$5" "$4" "$2" || true)
+      [[ -n $key && -f $3/$key ]] && exit 0
+    fi
+    out=$("$0" -p "$1" --quiet ${2:+"$2"} "$5" 2>&1) && rc=0 || rc=$?
     # Drop the "N warnings generated." chatter; keep diagnostics.
     out=$(printf "%s\n" "$out" | grep -vE "^[0-9]+ (warnings?|errors?)( and [0-9]+ (warnings?|errors?))? generated\.$" || true)
     [[ -n $out ]] && printf "%s\n" "$out"
-    exit "$rc"' "$clang_tidy" "$build_dir" "$extra_checks" | tee "$log" || status=$?
+    if [[ $rc == 0 && -z $out && -n $key ]]; then touch "$3/$key"; fi
+    exit "$rc"' "$clang_tidy" "$tidy_db" "$extra_checks" "$cache_dir" "$root" | tee "$log" || status=$?
 
 # Belt and braces: a warning that was somehow not promoted to an error still fails the run.
 if ((status != 0)) || grep -qE ': (warning|error):' "$log"; then

@@ -25,6 +25,15 @@ build_dir=${BUILD_DIR:-build}
 asan_dir=${ASAN_BUILD_DIR:-build-asan}
 tsan_dir=${TSAN_BUILD_DIR:-build-tsan}
 read -r -a extra_args <<<"${REGOLITH_CMAKE_ARGS:-}"
+# ccache (installed by install-deps) keeps every object of a run, keyed by its preprocessed
+# source and flags, with paths taken relative to this checkout (CCACHE_BASEDIR): a second run
+# on the same machine, in any clone, recompiles only what changed. The PCH settings let it
+# cache the command's CLI11-precompiled sources too. REGOLITH_CCACHE=0 turns it off.
+if [[ ${REGOLITH_CCACHE:-1} == 1 ]] && command -v ccache >/dev/null; then
+  export CCACHE_BASEDIR=$root
+  export CCACHE_SLOPPINESS=pch_defines,time_macros,include_file_mtime,include_file_ctime
+  extra_args+=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
 jobs=2
 start=$SECONDS
 
@@ -117,6 +126,11 @@ cmake -S . -B "$tsan_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 cmake --build "$tsan_dir" -j"$jobs" --target store_tests
 run_shards "TSan store_tests" "$tsan_dir/tests/store/store_tests" \
   "TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$root/tests/tsan.supp"
+
+if [[ -n ${CCACHE_BASEDIR:-} ]]; then
+  section "ccache"
+  ccache --show-stats 2>/dev/null | grep -iE "hits|misses|cache size" || true
+fi
 
 section "Release tests ($build_dir)"
 ctest --test-dir "$build_dir" --output-on-failure --no-tests=error -j"$jobs"

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <numbers>
 #include <ostream>
 #include <random>
@@ -191,6 +192,7 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
   const std::size_t row0 = (o.size - win) / 2;
   const TriangleMesh mesh = buildMesh(dem, {row0, 0, win, win}, MeshFrame::Grid);
   const auto path = o.outDir / "crater_west_rim.ply";
+  std::filesystem::create_directories(o.outDir);  // --out names a folder of its own
   core::writeStreamAtomically(
       path, [&](std::ostream& s) { writePly(s, mesh); }, "regolith walkthrough");
   out << "\n[6/6] Wrote " << path.string() << ": " << mesh.vertices.size() << " vertices, "

@@ -66,8 +66,10 @@ void writeFileAtomically(const fs::path& target, const std::function<void(const 
   fs::path dir = target.parent_path();
   if (dir.empty()) dir = ".";
   std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) fail(operation, dir, "cannot create the folder: " + ec.message());
+  // The folder must exist: a typo in a path is an error, not a new folder.
+  if (!fs::exists(dir, ec))
+    fail(operation, target, "the folder " + dir.string() + " does not exist");
+  if (!fs::is_directory(dir, ec)) fail(operation, target, dir.string() + " is not a folder");
   Temporary tmp(temporaryPathFor(target));
   write(tmp.path());
   if (!fs::exists(tmp.path(), ec)) {

@@ -145,6 +145,7 @@ int main(int argc, char** argv) try {
     if (!std::filesystem::exists(storeFile)) {
       std::cout << "Generating the Victoria-like DEM (" << size << " x " << size << " at 1 m) into "
                 << storeFile.string() << " ...\n";
+      if (storeFile.has_parent_path()) std::filesystem::create_directories(storeFile.parent_path());
       store::VictoriaOptions v;
       v.size = size;
       v.gridName = grid;

@@ -3,10 +3,15 @@
 // reproduces a plane exactly, so the query must return the analytic height.
 // Exit status 0 only if every check holds.
 
+#include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
+#include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/rover/Rover.hpp>
+#include <regolith/scenegraph/SceneGraph.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/Body.hpp>
-#include <regolith/topo/Error.hpp>
 #include <regolith/topo/Placement.hpp>
 #include <regolith/topo/Projection.hpp>
 #include <regolith/topo/TopoDem.hpp>
@@ -89,6 +94,22 @@ int main() {
     const store::Pager pager(opened, std::make_shared<store::PatchCache>(1 << 20));
     const topo::HeightSample paged = pager.dem("plane").height(x, y);
     ok &= check(paged.valid() && paged.height == h.height, "paged store gives the same height");
+
+    // Every other exported target: core, clod (its store-free pyramid seam), rover,
+    // scenegraph and demo, linked from the package alone.
+    ok &= check(regolith::core::number(1e-9) == "1e-09", "core::number() is shortest round trip");
+    const regolith::clod::HeightPyramid pyramid(pager.pyramid("plane"));
+    ok &= check(pyramid.levelCount() == opened->grid("plane").levels &&
+                    pyramid.position(1.0, 2.0, 3.0) == glm::dvec3(1.0, 2.0, 3.0),
+                "clod draws the store's pyramid export as a plane");
+    const regolith::rover::Rover rover;
+    const auto wheels = rover.wheelPositions({0.0, 0.0, 0.0});
+    ok &= check(std::isfinite(wheels[0].x) && wheels[0] != wheels[5], "rover places its wheels");
+    regolith::scenegraph::SceneGraph graph("mars");
+    ok &= check(graph.add(graph.root(), "rover", regolith::scenegraph::Pose{}) != graph.root(),
+                "scene graph adds a node");
+    const regolith::demo::MarsVictoriaOptions demo;
+    ok &= check(demo.planetRows > 0 && demo.marsGrid == "mars", "demo options link");
     std::filesystem::remove(path);
     return ok ? 0 : 1;
   } catch (const std::exception& e) {

@@ -42,6 +42,19 @@ endif()
 # 1. Install the build under test.
 run("install" "${CMAKE_COMMAND}" --install "${BUILD_DIR}" --prefix "${prefix}" ${config_args})
 
+# The package is relocatable: no installed CMake file names a library by absolute path.
+file(GLOB package_files "${prefix}/lib*/cmake/Regolith/*.cmake")
+if(NOT package_files)
+  message(FATAL_ERROR "consumer test: no CMake package files under ${prefix}/lib*/cmake/Regolith")
+endif()
+foreach(f ${package_files})
+  file(STRINGS "${f}" absolute REGEX "[\"; ]/[^\"; ]*\\.(so|a)([\"; ]|$)")
+  if(absolute)
+    message(FATAL_ERROR "consumer test: ${f} names a library by absolute path, expected a "
+                        "relocatable package:\n${absolute}")
+  endif()
+endforeach()
+
 # 2. Configure and build the consumer against the prefix only.
 set(configure_args
   -S "${SOURCE_DIR}" -B "${consumer_build}"

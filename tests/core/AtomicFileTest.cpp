@@ -45,7 +45,7 @@ std::vector<std::string> siblings(const fs::path& p) {
 }  // namespace
 
 TEST(AtomicFile, WritesTheContentUnderTheTargetAndLeavesNoTemporary) {
-  const fs::path p = scratch("sub/dir/a.txt");  // the folder is created
+  const fs::path p = scratch("a.txt");
   writeStreamAtomically(
       p, [](std::ostream& o) { o << "first"; }, "test()");
   EXPECT_EQ(bytes(p), "first");
@@ -102,7 +102,18 @@ TEST(AtomicFile, TemporaryNamesAreUniqueAndBesideTheTarget) {
 }
 
 TEST(AtomicFile, FileSystemFailuresAreIoErrorsNamingOperationAndFile) {
-  // A target whose folder is a regular file cannot be created.
+  // A missing folder is not created: a mistyped path is an error.
+  const fs::path missing = scratch("no-such-folder") / "d.txt";
+  try {
+    writeStreamAtomically(
+        missing, [](std::ostream& o) { o << "x"; }, "Thing::save()");
+    FAIL() << "expected IoError";
+  } catch (const regolith::IoError& e) {
+    EXPECT_EQ(std::string(e.what()), "Thing::save(): " + missing.string() + ": the folder " +
+                                         missing.parent_path().string() + " does not exist");
+  }
+  EXPECT_FALSE(fs::exists(missing.parent_path()));
+  // A folder that is a regular file.
   const fs::path blocker = scratch("not-a-folder");
   std::ofstream(blocker) << "x";
   const fs::path p = blocker / "d.txt";
@@ -111,9 +122,8 @@ TEST(AtomicFile, FileSystemFailuresAreIoErrorsNamingOperationAndFile) {
         p, [](std::ostream& o) { o << "x"; }, "Thing::save()");
     FAIL() << "expected IoError";
   } catch (const regolith::IoError& e) {
-    const std::string m = e.what();
-    EXPECT_EQ(m.rfind("Thing::save(): " + blocker.string() + ": cannot create the folder: ", 0), 0U)
-        << m;
+    EXPECT_EQ(std::string(e.what()),
+              "Thing::save(): " + p.string() + ": " + blocker.string() + " is not a folder");
   }
   // A writer that never creates the temporary.
   const fs::path q = scratch("e.txt");

@@ -25,7 +25,8 @@ namespace regolith::core {
 /// Calls write(temporary), where `temporary` is a fresh path beside `target` that does not
 /// exist yet and that `write` creates and fills (for writers that take a file name: HDF5,
 /// libpng through fopen). Then syncs the temporary, renames it over `target` and syncs the
-/// folder. The folder of `target` is created if missing.
+/// folder. The folder of `target` must exist (IoError otherwise: a mistyped path is not a
+/// new folder).
 ///
 /// Throws regolith::IoError, whose message starts with `operation` and names the file and
 /// the system's reason, when a step of the file system fails; an exception from `write`
