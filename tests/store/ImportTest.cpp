@@ -1,5 +1,5 @@
 // GDAL import (importRaster, importTiles, describeRaster), with GDAL itself as the oracle:
-// every real fixture (../shared/fixtures/dem) and a PDS4 copy of it is imported, read back
+// every real fixture (tests/data/dem) and a PDS4 copy of it is imported, read back
 // with Store::readWindow and compared sample by sample with GDAL's pixel reads after
 // scale/offset, nodata and special pixels; sample centres are compared with GDAL's
 // geotransform and, through the placement, with PROJ (OGR) inverse projections. Tiles cut

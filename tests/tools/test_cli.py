@@ -10,7 +10,7 @@ The real binary writes and reads real stores. Oracles from outside the library:
 
 Environment: REGOLITH_BIN (the regolith binary), REGOLITH_FIXTURE_WRITER (tests/store's
 write_fixture_store, which writes multi-grid and tiled stores), REGOLITH_FIXTURES_DIR (the
-real DEM fixtures, /work/shared/fixtures/dem by default).
+real DEM fixtures, tests/data/dem of the checkout by default).
 """
 
 import json
@@ -30,7 +30,9 @@ gdal.UseExceptions()
 
 BIN = os.environ.get("REGOLITH_BIN", "regolith")
 FIXTURE_WRITER = os.environ.get("REGOLITH_FIXTURE_WRITER", "")
-DEM_FIXTURES = os.environ.get("REGOLITH_FIXTURES_DIR", "/work/shared/fixtures/dem")
+DEM_FIXTURES = os.environ.get("REGOLITH_FIXTURES_DIR") or os.path.join(
+    os.path.dirname(os.path.abspath(__file__)), "..", "data", "dem"
+)
 
 
 def dem_fixture(name):
