@@ -44,6 +44,10 @@ ImportReport reportOf(const gdal::Raster& r) {
   rep.offsetCorrected = l.offsetCorrected;
   rep.spacingSnapped = l.spacingSnapped;
   rep.voidMarkerAssumed = l.voidMarker;
+  rep.droppedNorthRows = l.droppedNorthRows;
+  rep.droppedSouthRows = l.droppedSouthRows;
+  rep.droppedColumns = l.droppedColumns;
+  rep.poleShiftPixels = l.poleShiftPixels;
   return rep;
 }
 
@@ -103,6 +107,7 @@ ImportReport importRaster(const std::filesystem::path& raster, const std::filesy
   const std::vector<GridSource> grids{GridSource{rep.info, r, {}}};
   writeStore(store, grids, writeOptionsOf(options));
   rep.missingSamples = r->missingRead();
+  rep.voidMarkerAssumed = r->voidsRead() > 0;  // the note only where such voids exist
   rep.info = writtenInfo(store, rep.info.name);
   rep.seconds = secondsSince(t0);
   return rep;
@@ -176,18 +181,21 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   src.info.cols = cols;
   ImportReport rep = reportOf(*rasters.front());
   // Tiles of a global equirectangular grid: the mosaic is a planet grid.
-  rep.spacingSnapped = gdal::globalToPlanet(src.info) || rep.spacingSnapped;
+  rep.spacingSnapped =
+      gdal::globalToPlanet(src.info, firstLayout.labelPixelsPerDegree) || rep.spacingSnapped;
   rep.info = src.info;
   rep.tiles = rasters.size();
   const std::vector<GridSource> grids{src};
   writeStore(store, grids, writeOptionsOf(options));
   // Missing: what the tiles held as missing, plus the gaps no tile covers.
-  std::size_t covered = 0;
+  std::size_t covered = 0, voids = 0;
   for (const auto& r : rasters) {
     rep.missingSamples += r->missingRead();
+    voids += r->voidsRead();
     covered += r->rows() * r->cols();
   }
   rep.missingSamples += rows * cols - covered;
+  rep.voidMarkerAssumed = voids > 0;
   rep.info = writtenInfo(store, src.info.name);
   rep.seconds = secondsSince(t0);
   return rep;

@@ -60,8 +60,16 @@ struct ImportReport {
   /// other projection-offset convention, as the MOLA MEGDR) or snapped (a global grid's
   /// spacing to 360°/cols, 180°/rows).
   bool offsetCorrected = false, spacingSnapped = false;
-  /// Whether a source without a declared nodata value had its −32768 voids taken as missing.
+  /// Whether a source without a declared nodata value had −32768 voids, taken as missing
+  /// (inspectRaster(), which reads no samples: whether it would take them as missing).
   bool voidMarkerAssumed = false;
+  /// Wholly missing rows beyond the north and the south pole (padding) that were dropped, and
+  /// columns beyond 360° of longitude, equal to the first ones, that were dropped.
+  std::size_t droppedNorthRows = 0, droppedSouthRows = 0, droppedColumns = 0;
+  /// A pole-to-pole grid (rows × spacing = 180°) whose offsets, through a rounded map scale,
+  /// put an edge up to 0.9 pixel beyond a pole is moved onto the poles by this many pixels
+  /// (positive: south); 0 when not moved.
+  double poleShiftPixels = 0.0;
   /// Level-0 samples that are missing (nodata, special pixels, NaN); for importTiles() also
   /// the samples of gaps that no tile covers.
   std::size_t missingSamples = 0;
