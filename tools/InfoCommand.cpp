@@ -223,6 +223,10 @@ ordered_json rasterJson(const store::ImportReport& r) {
   j["offset_corrected"] = r.offsetCorrected;
   j["spacing_snapped"] = r.spacingSnapped;
   j["void_marker_assumed"] = r.voidMarkerAssumed;
+  j["dropped_north_rows"] = r.droppedNorthRows;
+  j["dropped_south_rows"] = r.droppedSouthRows;
+  j["dropped_columns"] = r.droppedColumns;
+  j["pole_shift_pixels"] = r.poleShiftPixels;
   j["corrections"] = appliedCorrections(r);
   return j;
 }
@@ -284,7 +288,10 @@ void addInfoCommand(CLI::App& app) {
       "print(json.load(sys.stdin)[\"grids\"][0][\"rows\"])'");
   cmd->callback([a] {
     std::error_code ec;
-    if (std::filesystem::is_regular_file(a->store, ec) && !store::Store::isHdf5(a->store)) {
+    // GDAL's virtual paths (/vsizip/, /vsicurl/, ...) are rasters: `import` accepts them.
+    const bool virtualPath = a->store.rfind("/vsi", 0) == 0;
+    if (virtualPath ||
+        (std::filesystem::is_regular_file(a->store, ec) && !store::Store::isHdf5(a->store))) {
       printRaster(a->store, a->json, std::cout);
       return;
     }

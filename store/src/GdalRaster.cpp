@@ -3,6 +3,7 @@
 #include "GdalRaster.hpp"
 
 #include <regolith/topo/Error.hpp>
+#include <regolith/topo/Placement.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
 
 #include <cpl_conv.h>
@@ -235,6 +236,98 @@ void Raster::open(const ImportOptions& options, bool pdsShift) {
   }
   resolvePoles();
   dropRepeatedColumns();
+  applyWindow(options);
+}
+
+void Raster::applyWindow(const ImportOptions& options) {
+  GridInfo& i = layout_.info;
+  if (!options.body.empty()) i.bodyName = options.body;
+  if (!options.window && !options.bbox) return;
+  if (options.window && options.bbox) {
+    throw ImportError(prefix_ + ": both a window and a bounding box given; expected one");
+  }
+  const SampleWindow w = options.window ? *options.window : windowOfBox(*options.bbox);
+  if (w.rows == 0 || w.cols == 0 || w.row0 + w.rows > i.rows || w.col0 + w.cols > i.cols) {
+    throw ImportError(prefix_ + ": window of " + std::to_string(w.rows) + " rows x " +
+                      std::to_string(w.cols) + " cols from row " + std::to_string(w.row0) +
+                      ", col " + std::to_string(w.col0) + " is empty or leaves the grid of " +
+                      std::to_string(i.rows) + " rows x " + std::to_string(i.cols) +
+                      " cols; expected a non-empty window inside it");
+  }
+  layout_.rowOffset += w.row0;
+  layout_.colOffset += w.col0;
+  i.x0 += static_cast<double>(w.col0) * i.spacingX;
+  i.y0 -= static_cast<double>(w.row0) * i.spacingY;
+  i.rows = w.rows;
+  i.cols = w.cols;
+  layout_.window = w;
+}
+
+SampleWindow Raster::windowOfBox(const std::array<double, 4>& box) const {
+  const GridInfo& i = layout_.info;
+  const auto [west, south, east, north] = box;
+  const std::string text =
+      number(west) + ", " + number(south) + ", " + number(east) + ", " + number(north);
+  if (!(std::isfinite(west) && std::isfinite(east) && west < east && east - west <= 360.0 &&
+        south < north && south >= -90.0 && north <= 90.0)) {
+    throw ImportError(prefix_ + ": bounding box " + text +
+                      " is not west < east (at most 360 deg apart), -90 <= south < north <= 90");
+  }
+  // The box in fractional grid columns (u) and rows (v).
+  double u0 = 0.0, u1 = 0.0, v0 = 0.0, v1 = 0.0;
+  if (i.kind == GridKind::Planet) {
+    // West brought into the grid's 360° from its western edge; the box may not run past it.
+    const double edge = i.x0 - 0.5 * i.spacingX;
+    const double w = edge + (west - edge - 360.0 * std::floor((west - edge) / 360.0));
+    u0 = (w - i.x0) / i.spacingX;
+    u1 = (w + (east - west) - i.x0) / i.spacingX;
+    const bool global = std::abs(static_cast<double>(i.cols) * i.spacingX - 360.0) <= 1e-9;
+    if (global && u1 > static_cast<double>(i.cols) - 0.5) {
+      throw ImportError(prefix_ + ": bounding box " + text + " crosses the grid's seam at " +
+                        number(edge) + " deg longitude; expected a box within " + number(edge) +
+                        " to " + number(edge + 360.0) + " (import the two sides apart)");
+    }
+    v0 = (i.y0 - north) / i.spacingY;
+    v1 = (i.y0 - south) / i.spacingY;
+  } else {
+    // The box's outline through the placement: its rectangle in grid metres.
+    const topo::Placement pl = placementOf(i);
+    double xMin = std::numeric_limits<double>::infinity(), xMax = -xMin, yMin = xMin, yMax = -xMin;
+    constexpr int kSteps = 64;
+    for (int k = 0; k <= kSteps; ++k) {
+      const double t = static_cast<double>(k) / kSteps;
+      const double lon = west + t * (east - west), lat = south + t * (north - south);
+      for (const auto& [la, lo] : {std::pair{south, lon}, std::pair{north, lon},
+                                   std::pair{lat, west}, std::pair{lat, east}}) {
+        glm::dvec3 p{};
+        try {
+          p = pl.fromGeodetic({la, lo, 0.0});
+        } catch (const Error&) {
+          continue;  // outside the projection's domain (the far side of a polar projection)
+        }
+        if (!(std::isfinite(p.x) && std::isfinite(p.y))) continue;
+        xMin = std::min(xMin, p.x);
+        xMax = std::max(xMax, p.x);
+        yMin = std::min(yMin, p.y);
+        yMax = std::max(yMax, p.y);
+      }
+    }
+    u0 = (xMin - i.x0) / i.spacingX;
+    u1 = (xMax - i.x0) / i.spacingX;
+    v0 = (i.y0 - yMax) / i.spacingY;
+    v1 = (i.y0 - yMin) / i.spacingY;
+  }
+  // Samples whose centres lie in the box (to 1e-9 of a sample), clipped to the grid.
+  const double c0 = std::max(0.0, std::ceil(u0 - 1e-9));
+  const double c1 = std::min(static_cast<double>(i.cols) - 1.0, std::floor(u1 + 1e-9));
+  const double r0 = std::max(0.0, std::ceil(v0 - 1e-9));
+  const double r1 = std::min(static_cast<double>(i.rows) - 1.0, std::floor(v1 + 1e-9));
+  if (!(c0 <= c1 && r0 <= r1)) {
+    throw ImportError(prefix_ + ": bounding box " + text +
+                      " holds no sample centre of the grid; expected one that overlaps it");
+  }
+  return {static_cast<std::size_t>(r0), static_cast<std::size_t>(c0),
+          static_cast<std::size_t>(r1 - r0) + 1, static_cast<std::size_t>(c1 - c0) + 1};
 }
 
 void Raster::resolvePoles() {

@@ -69,6 +69,7 @@ struct Layout {
   std::size_t droppedNorthRows = 0, droppedSouthRows = 0, droppedColumns = 0;
   /// A pole-to-pole grid moved onto the poles, in pixels (0: not moved).
   double poleShiftPixels = 0.0;
+  std::optional<SampleWindow> window;  // ImportOptions::window or bbox, as applied
   OGRSpatialReferenceH srs = nullptr;  // owned by the dataset
 };
 
@@ -113,6 +114,8 @@ class Raster final : public topo::SampleSource {
   void detectRadii();
   void resolvePoles();
   void dropRepeatedColumns();
+  void applyWindow(const ImportOptions& options);
+  [[nodiscard]] SampleWindow windowOfBox(const std::array<double, 4>& box) const;
   /// Reads source rows/cols (not offset by the window) as readWindow does; returns the
   /// number of missing samples.
   std::size_t readSource(std::size_t row0, std::size_t col0, std::size_t nrows, std::size_t ncols,

@@ -48,6 +48,7 @@ ImportReport reportOf(const gdal::Raster& r) {
   rep.droppedSouthRows = l.droppedSouthRows;
   rep.droppedColumns = l.droppedColumns;
   rep.poleShiftPixels = l.poleShiftPixels;
+  rep.window = l.window;
   return rep;
 }
 
@@ -118,6 +119,10 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   const auto t0 = std::chrono::steady_clock::now();
   const std::string op = "store::importTiles()";
   if (tiles.empty()) throw ImportError(op + ": " + store.string() + ": no tiles given");
+  if (options.window || options.bbox) {
+    throw ImportError(op + ": " + store.string() +
+                      ": a window or bounding box is for one raster; expected none with tiles");
+  }
   std::vector<std::shared_ptr<gdal::Raster>> rasters;
   for (const auto& t : tiles) rasters.push_back(std::make_shared<gdal::Raster>(t, options, op));
   const GridInfo& first = rasters.front()->layout().info;

@@ -1010,3 +1010,153 @@ TEST(Import, TransverseMercatorGeotiffsOfAnyZoneAndOriginPlaceTheirSamplesWhereP
                          k.file);
   }
 }
+
+// ---- windows, bounding boxes, the body's name ------------------------------------------------
+
+namespace {
+
+/// The store's level 0 equals GDAL's samples of `w` (after scale/offset), and its geometry is
+/// the full grid's moved by the window.
+void expectWindow(const fs::path& raster, const ImportReport& rep, const GridInfo& full,
+                  const SampleWindow& w, bool pdsShift) {
+  ASSERT_TRUE(rep.window);
+  EXPECT_EQ(rep.window->row0, w.row0);
+  EXPECT_EQ(rep.window->col0, w.col0);
+  const GridInfo& g = rep.info;
+  EXPECT_EQ(g.rows, w.rows);
+  EXPECT_EQ(g.cols, w.cols);
+  EXPECT_EQ(g.x0, full.x0 + static_cast<double>(w.col0) * full.spacingX);
+  EXPECT_EQ(g.y0, full.y0 - static_cast<double>(w.row0) * full.spacingY);
+  EXPECT_EQ(g.spacingX, full.spacingX);
+  const Oracle o = readGdal(raster, pdsShift);
+  const Store s = Store::open(scratch("window.h5"));
+  const std::vector<float> got = readLevel(s, g.name);
+  std::size_t bad = 0;
+  for (std::size_t r = 0; r < g.rows; ++r) {
+    for (std::size_t c = 0; c < g.cols; ++c) {
+      const std::size_t k = (w.row0 + r) * o.cols + w.col0 + c;
+      const double raw = o.raw[k];
+      const bool missing = o.mask[k] == 0 || std::isnan(raw) || (o.nodata && raw == *o.nodata);
+      const float want = missing ? std::nanf("") : static_cast<float>(o.offset + o.scale * raw);
+      const float have = got[r * g.cols + c];
+      if (!(have == want || (std::isnan(have) && std::isnan(want))) && ++bad <= 5) {
+        ADD_FAILURE() << r << "," << c << ": " << have << " vs GDAL " << want;
+      }
+    }
+  }
+  EXPECT_EQ(bad, 0U);
+}
+
+}  // namespace
+
+TEST(ImportWindow, AWindowOfTheMolaGridIsItsSamplesAndOpensAsAPlanet) {
+  const fs::path src = fixture("megt90n000cb.lbl");
+  const GridInfo full = describeRaster(src);
+  ImportOptions o = smallPatches();
+  o.window = SampleWindow{100, 200, 50, 60};
+  const ImportReport rep = importRaster(src, scratch("window.h5"), o);
+  EXPECT_TRUE(rep.offsetCorrected);  // decided on the whole grid, before the window
+  expectWindow(src, rep, full, *o.window, true);
+  // The store opens and answers at its samples' centres.
+  Pager pager(std::make_shared<const Store>(Store::open(scratch("window.h5"))),
+              std::make_shared<PatchCache>(std::size_t{4} << 20));
+  const topo::TopoPlanet planet = pager.planet(rep.info.name);
+  const std::vector<float> got = readLevel(Store::open(scratch("window.h5")), rep.info.name);
+  for (std::size_t r = 0; r < rep.info.rows; r += 7) {
+    for (std::size_t c = 0; c < rep.info.cols; c += 9) {
+      const topo::HeightSample h =
+          planet.height({rep.info.y0 - static_cast<double>(r) * rep.info.spacingY,
+                         rep.info.x0 + static_cast<double>(c) * rep.info.spacingX},
+                        topo::Interpolation::Nearest);
+      ASSERT_TRUE(h.valid());
+      EXPECT_EQ(h.height, static_cast<double>(got[r * rep.info.cols + c]));
+    }
+  }
+  o.window = SampleWindow{700, 0, 30, 10};
+  EXPECT_EQ(errorOf([&] { (void)importRaster(src, scratch("window2.h5"), o); }),
+            "store::importRaster(): " + src.string() +
+                ": window of 30 rows x 10 cols from row 700, col 0 is empty or leaves the grid "
+                "of 720 rows x 1440 cols; expected a non-empty window inside it");
+  o.bbox = std::array<double, 4>{1.0, 2.0, 3.0, 4.0};
+  EXPECT_EQ(errorOf([&] { (void)importRaster(src, scratch("window2.h5"), o); }),
+            "store::importRaster(): " + src.string() +
+                ": both a window and a bounding box given; expected one");
+}
+
+TEST(ImportWindow, ABoundingBoxTakesTheSamplesWhoseCentresLieInside) {
+  const fs::path src = fixture("megt90n000cb.lbl");
+  const GridInfo full = describeRaster(src);
+  ImportOptions o = smallPatches();
+  const std::array<double, 4> box{137.0, -6.1, 138.3, -5.0};  // Gale crater, roughly
+  o.bbox = box;
+  const ImportReport rep = importRaster(src, scratch("window.h5"), o);
+  ASSERT_TRUE(rep.window);
+  const SampleWindow w = *rep.window;
+  // Every centre inside the box, and the next row or column out on each side outside it.
+  const auto lon = [&](double c) { return full.x0 + c * full.spacingX; };
+  const auto lat = [&](double r) { return full.y0 - r * full.spacingY; };
+  const double r0 = static_cast<double>(w.row0), c0 = static_cast<double>(w.col0);
+  const double r1 = r0 + static_cast<double>(w.rows) - 1.0;
+  const double c1 = c0 + static_cast<double>(w.cols) - 1.0;
+  EXPECT_GE(lon(c0), box[0]);
+  EXPECT_LT(lon(c0 - 1.0), box[0]);
+  EXPECT_LE(lon(c1), box[2]);
+  EXPECT_GT(lon(c1 + 1.0), box[2]);
+  EXPECT_LE(lat(r0), box[3]);
+  EXPECT_GT(lat(r0 - 1.0), box[3]);
+  EXPECT_GE(lat(r1), box[1]);
+  EXPECT_LT(lat(r1 + 1.0), box[1]);
+  expectWindow(src, rep, full, w, true);
+  // The same box given in −180…180 longitudes, and one across the grid's seam at 0°.
+  o.bbox = std::array<double, 4>{137.0 - 360.0, -6.1, 138.3 - 360.0, -5.0};
+  EXPECT_EQ(importRaster(src, scratch("window.h5"), o).window->col0, w.col0);
+  o.bbox = std::array<double, 4>{-10.0, 0.0, 10.0, 5.0};
+  EXPECT_EQ(errorOf([&] { (void)importRaster(src, scratch("window2.h5"), o); }),
+            "store::importRaster(): " + src.string() +
+                ": bounding box -10, 0, 10, 5 crosses the grid's seam at 0 deg longitude; "
+                "expected a box within 0 to 360 (import the two sides apart)");
+}
+
+TEST(ImportWindow, ABoundingBoxOnAPolarStereographicDemHoldsTheBoxsOutline) {
+  const fs::path src = fixture("Shoemaker_1k.tif");
+  const GridInfo full = describeRaster(src);
+  // A box around the grid's centre sample.
+  const topo::Placement pl = placementOf(full);
+  const double xc = full.x0 + 128.0 * full.spacingX, yc = full.y0 - 128.0 * full.spacingY;
+  const topo::Geodetic centre = pl.toGeodetic(xc, yc, 0.0);
+  ImportOptions o = smallPatches();
+  o.bbox = std::array<double, 4>{centre.lonDeg - 0.3, centre.latDeg - 0.002, centre.lonDeg + 0.3,
+                                 centre.latDeg + 0.002};
+  const ImportReport rep = importRaster(src, scratch("window.h5"), o);
+  ASSERT_TRUE(rep.window);
+  expectWindow(src, rep, full, *rep.window, false);
+  // The window's centres span the box's corners to within one sample: it takes the samples
+  // whose centres lie in the rectangle around the box's outline.
+  const GridInfo& g = rep.info;
+  const double east = g.x0 + static_cast<double>(g.cols - 1) * g.spacingX;
+  const double south = g.y0 - static_cast<double>(g.rows - 1) * g.spacingY;
+  for (const double la : {(*o.bbox)[1], (*o.bbox)[3]}) {
+    for (const double lo : {(*o.bbox)[0], (*o.bbox)[2]}) {
+      const glm::dvec3 p = pl.fromGeodetic({la, lo, 0.0});
+      EXPECT_GT(p.x, g.x0 - g.spacingX);
+      EXPECT_LT(p.x, east + g.spacingX);
+      EXPECT_LT(p.y, g.y0 + g.spacingY);
+      EXPECT_GT(p.y, south - g.spacingY);
+    }
+  }
+  EXPECT_LT(rep.info.rows, full.rows);
+  EXPECT_LT(rep.info.cols, full.cols);
+}
+
+TEST(ImportWindow, TheBodyOptionNamesTheBodyTheCrsDoesNot) {
+  const fs::path tif =
+      makeGeotiff("unnamed_body.tif", 1, GDT_Float32, "+proj=longlat +R=1737400 +no_defs",
+                  {10.0, 0.5, 0.0, 20.0, 0.0, -0.5});
+  EXPECT_EQ(describeRaster(tif).bodyName, "unknown");
+  ImportOptions o;
+  o.body = "Moon";
+  const ImportReport rep = importRaster(tif, scratch("body.h5"), o);
+  EXPECT_EQ(rep.info.bodyName, "Moon");
+  EXPECT_EQ(Store::open(scratch("body.h5")).grid(rep.info.name).bodyName, "Moon");
+  EXPECT_EQ(rep.info.equatorialRadius, 1737400.0);  // the radii stay the CRS's
+}

@@ -20,6 +20,7 @@ import pty
 import select
 import subprocess
 import sys
+import zipfile
 
 import h5py
 import numpy as np
@@ -619,6 +620,89 @@ def test_info_on_a_raster(work):
     assert info["raster"]["radius_reference"] == 1737400.0
     assert info["raster"]["spacing_snapped"] is True
     assert info["grid"]["kind"] == "planet"
+
+
+def test_import_drops_padding_beyond_a_pole_and_info_reads_gdal_virtual_paths(work):
+    # A global geographic grid of 181 rows of 1 deg: row 0 is centred at 90.5 deg N and
+    # wholly missing (ISIS-style padding). The import drops it and says so.
+    path = work / "padded.tif"
+    ds = gdal.GetDriverByName("GTiff").Create(str(path), 360, 181, 1, gdal.GDT_Float32)
+    srs = osr.SpatialReference()
+    srs.ImportFromProj4("+proj=longlat +R=1737400 +no_defs")
+    ds.SetProjection(srs.ExportToWkt())
+    ds.SetGeoTransform([-180.0, 1.0, 0.0, 91.0, 0.0, -1.0])
+    values = np.arange(181 * 360, dtype=np.float32).reshape(181, 360)
+    values[0, :] = -9999.0
+    ds.GetRasterBand(1).SetNoDataValue(-9999.0)
+    ds.GetRasterBand(1).WriteArray(values)
+    ds = None
+    info = json.loads(run("info", path, "--json").stdout)
+    assert info["raster"]["dropped_north_rows"] == 1
+    assert info["raster"]["dropped_south_rows"] == 0
+    assert info["grid"]["rows"] == 180 and info["grid"]["y0"] == 89.5
+    out = work / "padded.h5"
+    p = run("import", path, "--out", out)
+    assert summary_field(p.stdout, "corrections") == (
+        "wholly missing rows beyond a pole dropped: 1 north, 0 south")
+    assert np.array_equal(store_heights(out, "padded"), gdal_heights(path)[1:, :])
+    # The store opens and answers at GDAL's pixel centres (row 1 of the source is row 0).
+    q = parse_csv(run("query", out, "--coords", "lonlat", "--interp", "nearest",
+                      "180.5,89.5", "0.5,0.5").stdout)[1]
+    assert [row[2] for row in q] == [float(values[1, 0]), float(values[90, 180])]
+    # No -32768 note for an int16 source that declares no nodata but has no such value.
+    clean = work / "int16-no-voids.tif"
+    ds = gdal.GetDriverByName("GTiff").Create(str(clean), 8, 6, 1, gdal.GDT_Int16)
+    ds.SetProjection(srs.ExportToWkt())
+    ds.SetGeoTransform([10.0, 1.0, 0.0, 20.0, 0.0, -1.0])
+    ds.GetRasterBand(1).WriteArray(np.arange(48, dtype=np.int16).reshape(6, 8))
+    ds = None
+    p = run("import", clean, "--out", work / "int16-no-voids.h5")
+    assert summary_field(p.stdout, "corrections") == "none"
+    # info and import take GDAL's virtual paths, as GDAL does.
+    archive = work / "fixture.zip"
+    with zipfile.ZipFile(archive, "w") as z:
+        z.write(dem_fixture("Shoemaker_1k.tif"), "Shoemaker_1k.tif")
+    vsi = f"/vsizip/{archive}/Shoemaker_1k.tif"
+    zipped = json.loads(run("info", vsi, "--json").stdout)
+    plain = json.loads(run("info", dem_fixture("Shoemaker_1k.tif"), "--json").stdout)
+    assert zipped["grid"] == plain["grid"] and zipped["raster"] == plain["raster"]
+    run("import", vsi, "--out", work / "zipped.h5")
+    assert np.array_equal(store_heights(work / "zipped.h5", "Shoemaker_1k"),
+                          gdal_heights(dem_fixture("Shoemaker_1k.tif")), equal_nan=True)
+
+
+def test_import_window_bbox_and_body(work):
+    src = dem_fixture("megt90n000cb.lbl")
+    full = json.loads(run("info", src, "--json").stdout)["grid"]
+    out = work / "window.h5"
+    p = run("import", src, "--out", out, "--window", "100,200,50,60", "--body", "Mars")
+    assert summary_field(p.stdout, "size") == "50 rows x 60 cols (window from row 100, col 200)"
+    assert summary_field(p.stdout, "body").startswith("Mars,")
+    a = attrs(out, "megt90n000cb")
+    assert a["body"] == "Mars"
+    assert float(a["x0"]) == full["x0"] + 200 * full["spacing"][0]
+    assert float(a["y0"]) == full["y0"] - 100 * full["spacing"][1]
+    # GDAL's reading of the MOLA label in the corrected offset convention (docs/import.md).
+    keys = ("PDS_SampleProjOffset_Shift", "PDS_LineProjOffset_Shift")
+    try:
+        for k in keys:
+            gdal.SetConfigOption(k, "-0.5")
+        expected = gdal_heights(src)[100:150, 200:260]
+    finally:
+        for k in keys:
+            gdal.SetConfigOption(k, None)
+    assert np.array_equal(store_heights(out, "megt90n000cb"), expected)
+    # --bbox: the samples whose centres lie in the box.
+    p = run("import", src, "--out", work / "bbox.h5", "--bbox", "137.0,-6.1,138.3,-5.0")
+    b = attrs(work / "bbox.h5", "megt90n000cb")
+    lons = float(b["x0"]) + np.arange(int(b["cols"])) * full["spacing"][0]
+    lats = float(b["y0"]) - np.arange(int(b["rows"])) * full["spacing"][1]
+    assert lons.min() >= 137.0 and lons.max() <= 138.3
+    assert lats.min() >= -6.1 and lats.max() <= -5.0
+    assert lons.min() - full["spacing"][0] < 137.0 and lons.max() + full["spacing"][0] > 138.3
+    p = run("import", src, "--out", work / "both.h5", "--bbox", "1,2,3,4", "--window",
+            "0,0,1,1", check=False)
+    assert p.returncode != 0 and "excludes" in p.stderr
 
 
 def sinusoidal_tif(path):
