@@ -24,6 +24,7 @@ WriteOptions writeOptionsOf(const ImportOptions& o) {
   w.threads = o.threads;
   w.progress = o.progress;
   w.cancel = o.cancel;
+  w.statistics = true;  // min, max, mean and count of valid heights, once, for `info`
   return w;
 }
 

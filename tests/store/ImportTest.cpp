@@ -511,7 +511,8 @@ TEST(Import, Nad27UtmGeotiffIsATransverseMercatorDemOnClarke1866WithNodataMissin
   for (const double v : o.raw) nodata += v == -32767.0 ? 1U : 0U;
   EXPECT_GT(nodata, 0U);
   EXPECT_EQ(rep.missingSamples, nodata);
-  EXPECT_EQ(Store::open(scratch("utm.h5")).formatVersion(), (std::array<int, 2>{1, 2}));
+  // Transverse Mercator needs 1.2; the import's height statistics make it 1.3.
+  EXPECT_EQ(Store::open(scratch("utm.h5")).formatVersion(), (std::array<int, 2>{1, 3}));
 }
 
 namespace {
@@ -773,10 +774,9 @@ TEST(ImportTiles, TilesCutWithGdalImportAsOneGridEqualToTheSingleImport) {
     const Store a = Store::open(scratch("single.h5")), b = Store::open(scratch("tiled.h5"));
     EXPECT_TRUE(b.tiled(single.info.name));
     expectSameGrids(a, single.info.name, b, single.info.name);
-    // A tiled transverse Mercator grid needs a 1.2 reader (which reads tiles too).
-    const bool tm = single.info.placement.kind == PlacementInfo::Kind::TransverseMercator &&
-                    single.info.kind == GridKind::Dem;
-    EXPECT_EQ(b.formatVersion(), (std::array<int, 2>{1, tm ? 2 : 1}));
+    // Imports store height statistics: format 1.3 (which reads tiles and transverse
+    // Mercator too).
+    EXPECT_EQ(b.formatVersion(), (std::array<int, 2>{1, 3}));
     EXPECT_EQ(b.grid(single.info.name).placement.kind, single.info.placement.kind);
   }
 }
@@ -1159,4 +1159,44 @@ TEST(ImportWindow, TheBodyOptionNamesTheBodyTheCrsDoesNot) {
   EXPECT_EQ(rep.info.bodyName, "Moon");
   EXPECT_EQ(Store::open(scratch("body.h5")).grid(rep.info.name).bodyName, "Moon");
   EXPECT_EQ(rep.info.equatorialRadius, 1737400.0);  // the radii stay the CRS's
+}
+
+// ---- height statistics ---------------------------------------------------------------------
+
+TEST(ImportStatistics, TheStoreRecordsMinMaxMeanAndValidCountOfGdalsHeights) {
+  for (const char* name : {"vest64_dtm_specialpixels_downsampled.cub", "dem_unfinished.tif",
+                           "Polar_Crater_1_1m_ngate_edited2_forPDS_lowres.cub"}) {
+    SCOPED_TRACE(name);
+    const ImportReport rep = importRaster(fixture(name), scratch("stats.h5"), smallPatches());
+    const Oracle o = readGdal(fixture(name));
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo, sum = 0.0;
+    std::uint64_t valid = 0;
+    for (std::size_t i = 0; i < o.raw.size(); ++i) {
+      const double raw = o.raw[i];
+      if (o.mask[i] == 0 || std::isnan(raw) || (o.nodata && raw == *o.nodata) ||
+          raw < -3.40282255e38 || (o.declaresNothing && raw == -32768.0)) {
+        continue;
+      }
+      const auto h =
+          static_cast<double>(static_cast<float>((o.offset - rep.radiusReference) + o.scale * raw));
+      lo = std::min(lo, h);
+      hi = std::max(hi, h);
+      sum += h;
+      ++valid;
+    }
+    const Store s = Store::open(scratch("stats.h5"));
+    const std::optional<HeightStatistics> st = s.grid(rep.info.name).statistics;
+    ASSERT_TRUE(st);
+    EXPECT_EQ(st->validSamples, valid);
+    EXPECT_EQ(st->validSamples, rep.info.rows * rep.info.cols - rep.missingSamples);
+    if (valid == 0) {  // the all-NULL polar cube
+      EXPECT_TRUE(std::isnan(st->min) && std::isnan(st->max) && std::isnan(st->mean));
+      continue;
+    }
+    EXPECT_EQ(st->min, lo);
+    EXPECT_EQ(st->max, hi);
+    EXPECT_NEAR(st->mean, sum / static_cast<double>(valid),
+                1e-12 * std::abs(sum / static_cast<double>(valid)));
+    EXPECT_EQ(s.formatVersion(), (std::array<int, 2>{1, 3}));
+  }
 }

@@ -308,6 +308,13 @@ def check_info_against_h5py(path, info):
             assert g["scale"] == float(a["scale"]) and g["offset"] == float(a["offset"])
             tiled = "tiles" in h
             assert g["tiled"] == tiled
+            if "valid_samples" in a:  # format 1.3: stored at import
+                assert g["statistics"] == {"min": float(a["height_min"]),
+                                           "max": float(a["height_max"]),
+                                           "mean": float(a["height_mean"]),
+                                           "valid_samples": int(a["valid_samples"])}
+            else:
+                assert g["statistics"] is None
             for k, shape in enumerate(g["level_shapes"]):
                 if k == 0 and tiled:
                     assert shape == [g["rows"], g["cols"]]
@@ -705,6 +712,66 @@ def test_import_window_bbox_and_body(work):
     assert p.returncode != 0 and "excludes" in p.stderr
 
 
+def test_info_statistics_corners_and_ground_size(work):
+    src = dem_fixture("Shoemaker_1k.tif")  # south polar stereographic, NaN nodata
+    out = work / "stats.h5"
+    run("import", src, "--out", out)
+    info = json.loads(run("info", out, "--json").stdout)
+    assert info["format_version"] == [1, 3]
+    g = info["grids"][0]
+    check_info_against_h5py(out, info)
+    # The statistics stored at import are numpy's over the stored level 0.
+    h = store_heights(out, "Shoemaker_1k")
+    st = g["statistics"]
+    assert st["valid_samples"] == int(np.count_nonzero(~np.isnan(h)))
+    assert st["min"] == float(np.nanmin(h)) and st["max"] == float(np.nanmax(h))
+    assert st["mean"] == pytest.approx(float(np.nanmean(h)), rel=1e-12)
+    # Corners and centre: OSR's longitude/latitude of GDAL's pixel centres.
+    ds = gdal.Open(src)
+    gt = ds.GetGeoTransform()
+    srs = ds.GetSpatialRef()
+    geo = srs.CloneGeogCS()
+    for r in (srs, geo):
+        r.SetAxisMappingStrategy(osr.OAMS_TRADITIONAL_GIS_ORDER)
+    ct = osr.CoordinateTransformation(srs, geo)
+    rows, cols = ds.RasterYSize, ds.RasterXSize
+
+    def lonlat(r, c):
+        return ct.TransformPoint(gt[0] + (c + 0.5) * gt[1], gt[3] + (r + 0.5) * gt[5])[:2]
+
+    for key, (r, c) in {"north_west": (0, 0), "north_east": (0, cols - 1),
+                        "south_west": (rows - 1, 0), "south_east": (rows - 1, cols - 1),
+                        "centre": ((rows - 1) / 2, (cols - 1) / 2)}.items():
+        lon, lat = lonlat(r, c)
+        assert g["geodetic"][key]["lat"] == pytest.approx(lat, abs=1e-9), key
+        assert math.remainder(g["geodetic"][key]["lon"] - lon, 360.0) == pytest.approx(0, abs=1e-9)
+    # Ground size: the centre row and column, pixel edge to edge, as 256-segment polylines of
+    # OSR's points on the sphere.
+    radius = srs.GetSemiMajor()
+    assert srs.GetSemiMinor() == radius
+
+    def polyline(points):
+        lon, lat = np.radians(np.array(points)).T
+        xyz = radius * np.column_stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon),
+                                        np.sin(lat)])
+        return float(np.linalg.norm(np.diff(xyz, axis=0), axis=1).sum())
+
+    t = np.linspace(0.0, 1.0, 257)
+    mid_r, mid_c = (rows - 1) / 2, (cols - 1) / 2
+    width = polyline([lonlat(mid_r, -0.5 + k * cols) for k in t])
+    height = polyline([lonlat(-0.5 + k * rows, mid_c) for k in t])
+    assert g["ground_size_m"] == pytest.approx([width, height], rel=1e-9)
+    text = run("info", out).stdout
+    assert (f"  heights:        min {short(st['min'])}, max {short(st['max'])}, mean "
+            f"{short(st['mean'])} m; {st['valid_samples']} valid samples") in text
+    assert "  ground size:    " in text and "  corners:        NW " in text
+    # A store written without statistics (before format 1.3) still opens, and says so.
+    old = work / "no-stats.h5"
+    run("generate", "victoria", "--out", old, "--size", 64)
+    assert json.loads(run("info", old, "--json").stdout)["grids"][0]["statistics"] is None
+    assert "no statistics stored (written before format 1.3)" in run("info", old).stdout
+
+
 def sinusoidal_tif(path):
     ds = gdal.GetDriverByName("GTiff").Create(str(path), 20, 10, 1, gdal.GDT_Float32)
     srs = osr.SpatialReference()
@@ -770,14 +837,14 @@ def test_utm_import_info_and_lonlat_query(work):
     out = work / "utm.h5"
     run("import", src, "--out", out)
     info = json.loads(run("info", out, "--json").stdout)
-    assert info["format_version"] == [1, 2]
+    assert info["format_version"] == [1, 3]  # 1.2 for transverse Mercator, 1.3: statistics
     g = info["grids"][0]
     assert g["placement"] == {"kind": "transverse_mercator", "lon_centre_deg": -123.0,
                               "lat_origin_deg": 0.0, "scale_factor": 0.9996,
                               "false_easting": 500000.0, "false_northing": 0.0}
     with h5py.File(out, "r") as f:
         a = f["grids/dem_nodata"].attrs
-        assert list(a["format_version"]) == [1, 2] and list(f.attrs["format_version"]) == [1, 2]
+        assert list(a["format_version"]) == [1, 3] and list(f.attrs["format_version"]) == [1, 3]
         assert a["placement"] == "transverse_mercator"
         for key in ("lon_centre_deg", "lat_origin_deg", "scale_factor", "false_easting",
                     "false_northing"):
