@@ -175,6 +175,9 @@ ordered_json gridJson(const GridInfo& g, std::optional<bool> tiled) {
     } else {
       j["statistics"] = nullptr;
     }
+    // Recorded at import (format 1.3): sources, GDAL, label fields; null if not recorded.
+    j["provenance"] = g.provenance.empty() ? ordered_json(nullptr)
+                                           : ordered_json::parse(g.provenance, nullptr, false);
   }
   return j;
 }
@@ -289,6 +292,35 @@ void printGrid(const GridInfo& g, std::optional<bool> tiled, std::ostream& out) 
           << "%)\n";
     } else {
       out << "  heights:        no statistics stored (written before format 1.3)\n";
+    }
+    const ordered_json p = g.provenance.empty() ? ordered_json(nullptr)
+                                                : ordered_json::parse(g.provenance, nullptr, false);
+    if (p.is_object()) {
+      const char* label = "  sources:        ";
+      for (const auto& s : p.value("sources", ordered_json::array())) {
+        out << label << s.value("file", std::string()) << ", " << s.value("bytes", std::uint64_t{0})
+            << " bytes, sha256 " << s.value("sha256", std::string()) << "\n";
+        label = "                  ";
+      }
+      out << "  made with:      GDAL " << p.value("gdal_version", std::string()) << ", driver "
+          << p.value("gdal_driver", std::string()) << "\n";
+      if (p.contains("label") && p["label"].is_object()) {
+        std::string fields;
+        for (const auto& [key, value] : p["label"].items()) {
+          if (key.front() == '_') continue;  // GDAL's "_type"
+          std::string v;
+          if (value.is_object() && value.contains("value")) {
+            v = value["value"].dump();
+            if (value.contains("unit")) v += " <" + value["unit"].get<std::string>() + ">";
+          } else {
+            v = value.is_string() ? value.get<std::string>() : value.dump();
+          }
+          fields += (fields.empty() ? "" : "; ") + key + " = " + v;
+        }
+        out << "  label:          " << fields << "\n";
+      }
+    } else {
+      out << "  provenance:     not recorded\n";
     }
   }
 }

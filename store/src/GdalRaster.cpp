@@ -10,9 +10,12 @@
 #include <cpl_error.h>
 #include <cpl_json.h>
 #include <cpl_string.h>
+#include <cpl_vsi.h>
 #include <ogr_srs_api.h>
+#include <openssl/evp.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <limits>
@@ -734,6 +737,92 @@ std::size_t Raster::readSource(std::size_t row0, std::size_t col0, std::size_t n
   }
   if (voids != nullptr) *voids = voidCount;
   return missing;
+}
+
+}  // namespace regolith::store::gdal
+
+namespace regolith::store::gdal {
+
+namespace {
+
+struct DigestCloser {
+  void operator()(EVP_MD_CTX* c) const noexcept { EVP_MD_CTX_free(c); }
+};
+
+/// Size and SHA-256 (lower-case hex) of a file read through GDAL's virtual file layer.
+std::pair<std::uint64_t, std::string> sizeAndSha256(const std::string& path,
+                                                    const std::string& prefix) {
+  VSILFILE* f = VSIFOpenL(path.c_str(), "rb");
+  if (f == nullptr) throw ImportError(prefix + ": cannot read " + path + " to record its digest");
+  std::unique_ptr<EVP_MD_CTX, DigestCloser> ctx(EVP_MD_CTX_new());
+  bool ok = ctx && EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr) == 1;
+  std::vector<unsigned char> buf(std::size_t{1} << 20);
+  std::uint64_t bytes = 0;
+  while (ok) {
+    const std::size_t n = VSIFReadL(buf.data(), 1, buf.size(), f);
+    if (n == 0) break;
+    bytes += n;
+    ok = EVP_DigestUpdate(ctx.get(), buf.data(), n) == 1;
+  }
+  VSIFCloseL(f);
+  std::array<unsigned char, EVP_MAX_MD_SIZE> md{};
+  unsigned len = 0;
+  if (!ok || EVP_DigestFinal_ex(ctx.get(), md.data(), &len) != 1) {
+    throw ImportError(prefix + ": cannot compute the SHA-256 digest of " + path);
+  }
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string hex;
+  for (unsigned i = 0; i < len; ++i) {
+    hex += kHex[md[i] >> 4];
+    hex += kHex[md[i] & 15];
+  }
+  return {bytes, hex};
+}
+
+}  // namespace
+
+std::string Raster::provenance() const {
+  const std::lock_guard lock(mutex_);
+  GDALDatasetH ds = ds_.get();
+  CPLJSONObject root;
+  CPLJSONArray sources;
+  char** files = GDALGetFileList(ds);
+  for (char** f = files; f != nullptr && *f != nullptr; ++f) {
+    const auto [bytes, sha] = sizeAndSha256(*f, prefix_);
+    CPLJSONObject s;
+    s.Add("file", std::filesystem::path(*f).filename().string());
+    s.Add("path", std::string(*f));
+    s.Add("bytes", static_cast<GInt64>(bytes));
+    s.Add("sha256", sha);
+    sources.Add(s);
+  }
+  CSLDestroy(files);
+  root.Add("sources", sources);
+  root.Add("gdal_driver", layout_.driver);
+  root.Add("gdal_version", std::string(GDALVersionInfo("RELEASE_NAME")));
+  // The label fields that decided the georeferencing.
+  const std::pair<const char*, const char*> groups[] = {{"json:PDS", "IMAGE_MAP_PROJECTION"},
+                                                        {"json:ISIS3", "IsisCube/Mapping"}};
+  for (const auto& [domain, path] : groups) {
+    const std::string text = metadataText(ds, domain);
+    CPLJSONDocument doc;
+    if (text.empty() || !doc.LoadMemory(text)) continue;
+    const CPLJSONObject group = doc.GetRoot().GetObj(path);
+    if (group.IsValid()) root.Add("label", group);
+  }
+  CPLJSONArray gt;
+  std::array<double, 6> g{};
+  if (GDALGetGeoTransform(ds, g.data()) == CE_None) {
+    for (const double v : g) gt.Add(v);
+  }
+  root.Add("geotransform", gt);
+  char* wkt = nullptr;
+  const char* options[] = {"FORMAT=WKT2_2019", nullptr};
+  if (layout_.srs != nullptr && OSRExportToWktEx(layout_.srs, &wkt, options) == OGRERR_NONE) {
+    root.Add("crs_wkt", std::string(wkt));
+  }
+  CPLFree(wkt);
+  return root.Format(CPLJSONObject::PrettyFormat::Plain);
 }
 
 }  // namespace regolith::store::gdal

@@ -99,6 +99,12 @@ class Raster final : public topo::SampleSource {
   [[nodiscard]] std::size_t voidsRead() const noexcept { return voids_.load(); }
   /// "<operation>: <file>"
   [[nodiscard]] const std::string& prefix() const noexcept { return prefix_; }
+  /// Provenance (JSON, docs/store-format.md): this raster's files as GDAL lists them (a label
+  /// and its data file, ...) with sizes and SHA-256 digests read through GDAL's virtual file
+  /// layer (so /vsizip/ paths work), GDAL's driver and version, the label's map projection
+  /// group (PDS3 IMAGE_MAP_PROJECTION, ISIS3 Mapping), the geotransform and the CRS.
+  /// Throws ImportError if a file cannot be read.
+  [[nodiscard]] std::string provenance() const;
 
  private:
   std::filesystem::path path_;

@@ -3,6 +3,8 @@
 
 #include "GdalRaster.hpp"
 
+#include <cpl_json.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -106,6 +108,7 @@ ImportReport importRaster(const std::filesystem::path& raster, const std::filesy
   const auto t0 = std::chrono::steady_clock::now();
   auto r = std::make_shared<gdal::Raster>(raster, options, "store::importRaster()");
   ImportReport rep = reportOf(*r);
+  rep.info.provenance = r->provenance();
   const std::vector<GridSource> grids{GridSource{rep.info, r, {}}};
   writeStore(store, grids, writeOptionsOf(options));
   rep.missingSamples = r->missingRead();
@@ -189,6 +192,19 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   // Tiles of a global equirectangular grid: the mosaic is a planet grid.
   rep.spacingSnapped =
       gdal::globalToPlanet(src.info, firstLayout.labelPixelsPerDegree) || rep.spacingSnapped;
+  // Provenance: the first tile's, with every tile's files.
+  CPLJSONDocument doc;
+  if (!doc.LoadMemory(rasters.front()->provenance())) {
+    throw ImportError(op + ": " + store.string() + ": cannot record the tiles' provenance");
+  }
+  CPLJSONArray files = doc.GetRoot().GetArray("sources");
+  for (std::size_t i = 1; i < rasters.size(); ++i) {
+    CPLJSONDocument t;
+    if (!t.LoadMemory(rasters[i]->provenance())) continue;
+    const CPLJSONArray more = t.GetRoot().GetArray("sources");
+    for (int k = 0; k < more.Size(); ++k) files.Add(more[k]);
+  }
+  src.info.provenance = doc.GetRoot().Format(CPLJSONObject::PrettyFormat::Plain);
   rep.info = src.info;
   rep.tiles = rasters.size();
   const std::vector<GridSource> grids{src};

@@ -84,13 +84,15 @@ inline constexpr const char* kHeightMin = "height_min";
 inline constexpr const char* kHeightMax = "height_max";
 inline constexpr const char* kHeightMean = "height_mean";
 inline constexpr const char* kValidSamples = "valid_samples";
+// Provenance (format 1.3, optional): a JSON string.
+inline constexpr const char* kProvenance = "provenance";
 
 /// The minor format version a grid needs: 0, 1 for a tiled grid, 2 for a transverse
 /// Mercator placement, 3 with height statistics (minor versions are cumulative: a 1.2
 /// reader reads tiles too).
 [[nodiscard]] inline int gridFormatMinor(const GridInfo& info, bool tiled,
                                          bool statistics = false) noexcept {
-  if (statistics) return kStatisticsFormatMinor;
+  if (statistics || !info.provenance.empty()) return kStatisticsFormatMinor;
   if (info.kind == GridKind::Dem &&
       info.placement.kind == PlacementInfo::Kind::TransverseMercator) {
     return kTransverseMercatorFormatMinor;

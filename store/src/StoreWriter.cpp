@@ -268,6 +268,7 @@ void writeAttributes(hid_t g, const GridInfo& info, bool tiled, bool statistics,
       ctx);
   writeUInt64(g, format::kLevels, info.levels, ctx);
   writeUInt64s(g, format::kPatchShape, {info.patchRows, info.patchCols}, ctx);
+  if (!info.provenance.empty()) writeString(g, format::kProvenance, info.provenance, ctx);
   if (info.kind != GridKind::Dem) return;
   const PlacementInfo& p = info.placement;
   writeString(g, format::kPlacement, std::string(placementName(p.kind)), ctx);

@@ -221,7 +221,8 @@ def test_import_raster_window_bbox_and_body(plane_tif, tmp_path):
     out = tmp_path / "window.h5"
     rep = regolith.import_raster(plane_tif, out, grid="w", window=(10, 20, 30, 40), body="Mars")
     assert rep["window"] == (10, 20, 30, 40) and (rep["rows"], rep["cols"]) == (30, 40)
-    expected = gdal.Open(str(plane_tif)).GetRasterBand(1).ReadAsArray()[10:40, 20:60]
+    ds = gdal.Open(str(plane_tif))  # kept alive while its band is read
+    expected = ds.GetRasterBand(1).ReadAsArray()[10:40, 20:60]
     with h5py.File(out, "r") as f:
         np.testing.assert_array_equal(f["grids/w/level0"][...], expected)
         assert f["grids/w"].attrs["body"] == "Mars"

@@ -14,6 +14,7 @@
 #include "support/StoreScratch.hpp"
 
 #include <cpl_conv.h>
+#include <cpl_json.h>
 #include <gdal.h>
 #include <gdal_utils.h>
 #include <gtest/gtest.h>
@@ -31,8 +32,10 @@
 #include <iostream>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -1199,4 +1202,40 @@ TEST(ImportStatistics, TheStoreRecordsMinMaxMeanAndValidCountOfGdalsHeights) {
                 1e-12 * std::abs(sum / static_cast<double>(valid)));
     EXPECT_EQ(s.formatVersion(), (std::array<int, 2>{1, 3}));
   }
+}
+
+// ---- provenance ----------------------------------------------------------------------------
+
+TEST(ImportProvenance, TheStoreRecordsSourceFilesDigestsGdalAndTheDecidingLabelFields) {
+  // The fixtures' own SHA256SUMS (made when they were collected) are the digests' oracle.
+  std::map<std::string, std::string> sums;
+  std::ifstream in(fixture("SHA256SUMS"));
+  for (std::string hash, file; in >> hash >> file;) sums[file] = hash;
+  ASSERT_FALSE(sums.empty());
+  const fs::path src = fixture("megt90n000cb.lbl");
+  const ImportReport rep = importRaster(src, scratch("provenance.h5"), smallPatches());
+  const std::string text = Store::open(scratch("provenance.h5")).grid(rep.info.name).provenance;
+  CPLJSONDocument doc;
+  ASSERT_TRUE(doc.LoadMemory(text)) << text;
+  const CPLJSONObject root = doc.GetRoot();
+  const CPLJSONArray sources = root.GetArray("sources");
+  ASSERT_EQ(sources.Size(), 2);  // the detached label and its image, as GDAL lists them
+  std::set<std::string> names;
+  for (int i = 0; i < sources.Size(); ++i) {
+    const std::string file = sources[i].GetString("file");
+    names.insert(file);
+    EXPECT_EQ(sources[i].GetString("sha256"), sums.at(file)) << file;
+    EXPECT_EQ(sources[i].GetLong("bytes"), static_cast<GInt64>(fs::file_size(fixture(file))));
+  }
+  EXPECT_EQ(names, (std::set<std::string>{"megt90n000cb.lbl", "megt90n000cb.img"}));
+  EXPECT_EQ(root.GetString("gdal_driver"), "PDS");
+  EXPECT_EQ(root.GetString("gdal_version"), std::string(GDALVersionInfo("RELEASE_NAME")));
+  EXPECT_EQ(root.GetDouble("label/MAP_RESOLUTION/value"), 4.0);
+  EXPECT_EQ(root.GetDouble("label/LINE_PROJECTION_OFFSET"), 360.5);
+  const CPLJSONArray gt = root.GetArray("geotransform");
+  const Oracle o = readGdal(src, true);  // the geotransform as the import read it
+  ASSERT_EQ(gt.Size(), 6);
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(gt[i].ToDouble(), o.gt[static_cast<std::size_t>(i)]);
+  EXPECT_NE(root.GetString("crs_wkt").find("3396000"), std::string::npos);  // the sphere
+  EXPECT_EQ(Store::open(scratch("provenance.h5")).formatVersion(), (std::array<int, 2>{1, 3}));
 }

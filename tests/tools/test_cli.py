@@ -13,6 +13,7 @@ write_fixture_store, which writes multi-grid and tiled stores), REGOLITH_FIXTURE
 real DEM fixtures, tests/data/dem of the checkout by default).
 """
 
+import hashlib
 import json
 import math
 import os
@@ -315,6 +316,10 @@ def check_info_against_h5py(path, info):
                                            "valid_samples": int(a["valid_samples"])}
             else:
                 assert g["statistics"] is None
+            if "provenance" in a:  # format 1.3: recorded at import
+                assert g["provenance"] == json.loads(a["provenance"])
+            else:
+                assert g["provenance"] is None
             for k, shape in enumerate(g["level_shapes"]):
                 if k == 0 and tiled:
                     assert shape == [g["rows"], g["cols"]]
@@ -765,11 +770,26 @@ def test_info_statistics_corners_and_ground_size(work):
     assert (f"  heights:        min {short(st['min'])}, max {short(st['max'])}, mean "
             f"{short(st['mean'])} m; {st['valid_samples']} valid samples") in text
     assert "  ground size:    " in text and "  corners:        NW " in text
+    # Provenance: the source, its size and SHA-256 (hashlib's), GDAL's driver and version.
+    prov = g["provenance"]
+    with open(src, "rb") as fh:
+        data = fh.read()
+    assert [(s["file"], s["bytes"], s["sha256"]) for s in prov["sources"]] == [
+        ("Shoemaker_1k.tif", len(data), hashlib.sha256(data).hexdigest())]
+    assert prov["gdal_driver"] == "GTiff"
+    assert prov["gdal_version"] == gdal.VersionInfo("RELEASE_NAME")
+    assert prov["geotransform"] == list(gt)
+    assert (f"  sources:        Shoemaker_1k.tif, {len(data)} bytes, sha256 "
+            f"{hashlib.sha256(data).hexdigest()}\n") in text
+    assert f"  made with:      GDAL {gdal.VersionInfo('RELEASE_NAME')}, driver GTiff\n" in text
     # A store written without statistics (before format 1.3) still opens, and says so.
     old = work / "no-stats.h5"
     run("generate", "victoria", "--out", old, "--size", 64)
     assert json.loads(run("info", old, "--json").stdout)["grids"][0]["statistics"] is None
-    assert "no statistics stored (written before format 1.3)" in run("info", old).stdout
+    old_text = run("info", old).stdout
+    assert "no statistics stored (written before format 1.3)" in old_text
+    assert "  provenance:     not recorded\n" in old_text
+    assert json.loads(run("info", old, "--json").stdout)["grids"][0]["provenance"] is None
 
 
 def sinusoidal_tif(path):

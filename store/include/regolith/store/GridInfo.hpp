@@ -68,6 +68,10 @@ struct GridInfo {
   std::size_t patchRows = 256, patchCols = 256;  // HDF5 chunk = pager patch
   /// Read from the store; the writer computes them (WriteOptions::statistics).
   std::optional<HeightStatistics> statistics;
+  /// Where the grid came from, as JSON text (format 1.3; empty: not recorded): the import's
+  /// source files with sizes and SHA-256 digests, GDAL's driver and version, the label
+  /// fields and geotransform that decided the georeferencing (docs/store-format.md).
+  std::string provenance;
 
   [[nodiscard]] std::size_t levelRows(std::size_t level) const noexcept {
     return (rows + (std::size_t{1} << level) - 1) >> level;
