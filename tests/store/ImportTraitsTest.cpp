@@ -200,7 +200,7 @@ void labelCentres(Oracle& o, double lon0, double degreesPerPixel) {
 /// height by design (its polar cap); where OSR's latitude of an outermost centre lies in
 /// the cap (a rounded map scale moves it there), that row is queried at its own latitude.
 void expectExact(const fs::path& store, const ImportReport& rep, const Oracle& o,
-                 std::size_t row0 = 0) {
+                 std::size_t row0 = 0, bool demAtMapXy = false) {
   const GridInfo& g = rep.info;
   ASSERT_LE(row0 + g.rows, o.rows);
   ASSERT_LE(g.cols, o.cols);
@@ -232,6 +232,10 @@ void expectExact(const fs::path& store, const ImportReport& rep, const Oracle& o
         cap = (r == 0 && o.lat[k] >= rowLat && planet->hasNorthCap()) ||
               (r + 1 == g.rows && o.lat[k] <= rowLat && planet->hasSouthCap());
         q = planet->height({cap ? rowLat : o.lat[k], o.lon[k]}, topo::Interpolation::Nearest);
+      } else if (demAtMapXy) {  // GDAL's pixel centre in the DEM's own map metres
+        q = dem->height(o.gt[0] + (static_cast<double>(c) + 0.5) * o.gt[1],
+                        o.gt[3] + (static_cast<double>(row0 + r) + 0.5) * o.gt[5],
+                        topo::Interpolation::Nearest);
       } else {
         const glm::dvec3 xy = placement->fromGeodetic({o.lat[k], o.lon[k], 0.0});
         q = dem->height(xy.x, xy.y, topo::Interpolation::Nearest);
@@ -474,6 +478,43 @@ TEST(ImportTraits, AGeographicGridCentredOn180ReachingPastMinus180Imports) {
   expectExact(store, rep, o);
   for (double& lon : o.lon) lon = std::remainder(lon, 360.0);
   expectExact(store, rep, o);
+}
+
+TEST(ImportTraits, AnEquirectangularDemCentredOn180ReachingPastMinus180Imports) {
+  // Projected metres on lon_0 = 180°: columns from 160°E to 200°E (= −160°), across ±180°.
+  const double res = kMetresPerDegree;
+  Spec s;
+  s.rows = 10;
+  s.cols = 40;
+  s.gt = {-20.0 * res, res, 0.0, 10.0 * res, 0.0, -res};
+  s.crs = moonEqc(180.0);
+  s.values = indexValues(s.rows, s.cols);
+  const fs::path tif = write("dem_across_180.tif", s);
+  const fs::path store = scratch("dem_across_180.h5");
+  const ImportReport rep = importRaster(tif, store);
+  EXPECT_EQ(rep.info.kind, GridKind::Dem);
+  EXPECT_EQ(rep.info.placement.lonCentreDeg, 180.0);
+  Oracle o = readGdal(tif);
+  expectExact(store, rep, o);
+}
+
+TEST(ImportTraits, AnEquirectangularDemWhoseColumnsLieAcross180FromItsMeridianImports) {
+  // Projected metres on lon_0 = 0°: columns from 170°E to 190°E, x beyond πR.
+  const double res = kMetresPerDegree;
+  Spec s;
+  s.rows = 10;
+  s.cols = 20;
+  s.gt = {170.0 * res, res, 0.0, 10.0 * res, 0.0, -res};
+  s.crs = moonEqc(0.0);
+  s.values = indexValues(s.rows, s.cols);
+  const fs::path tif = write("dem_beyond_180.tif", s);
+  const fs::path store = scratch("dem_beyond_180.h5");
+  const ImportReport rep = importRaster(tif, store);
+  EXPECT_EQ(rep.info.kind, GridKind::Dem);
+  // Queried at GDAL's pixel centres in map metres: the placement's forward projection wraps
+  // longitudes to −180…180 around the central meridian, so lon/lat queries beyond 180°E miss
+  // until it follows PROJ's +over (issue 16, item 5).
+  expectExact(store, rep, readGdal(tif), 0, true);
 }
 
 TEST(ImportTraits, AGeographicGridOfMoreThan360DegreesDropsItsRepeatedColumns) {
