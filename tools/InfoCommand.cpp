@@ -315,7 +315,8 @@ void printGrid(const GridInfo& g, std::optional<bool> tiled, std::ostream& out) 
           } else {
             v = value.is_string() ? value.get<std::string>() : value.dump();
           }
-          fields += (fields.empty() ? "" : "; ") + key + " = " + v;
+          if (!fields.empty()) fields += "; ";
+          fields.append(key).append(" = ").append(v);
         }
         out << "  label:          " << fields << "\n";
       }
