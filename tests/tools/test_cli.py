@@ -683,6 +683,65 @@ def test_import_drops_padding_beyond_a_pole_and_info_reads_gdal_virtual_paths(wo
                           gdal_heights(dem_fixture("Shoemaker_1k.tif")), equal_nan=True)
 
 
+def test_import_pds3_label_resolution_is_the_truth(work):
+    # A PDS3 product written here (label text and MSB int16 image): the Moon at 2.5 px/deg,
+    # MAP_SCALE rounded to 12.115 km (0.3995 deg), 451 lines whose last one is missing
+    # padding beyond the south pole. Through the metres, 451 lines span 180.19 deg: the old
+    # snap to 180/451 deg contradicted MAP_RESOLUTION. Offsets in MOLA's convention.
+    rows, cols = 451, 900
+    values = (np.arange(rows * cols) % 30000).astype(">i2").reshape(rows, cols)
+    values[450, :] = -32768
+    values.tofile(work / "pds3.img")
+    (work / "pds3.lbl").write_text(f"""PDS_VERSION_ID = PDS3
+RECORD_TYPE = FIXED_LENGTH
+RECORD_BYTES = {cols * 2}
+FILE_RECORDS = {rows}
+^IMAGE = "pds3.img"
+OBJECT = IMAGE
+  LINES = {rows}
+  LINE_SAMPLES = {cols}
+  SAMPLE_TYPE = MSB_INTEGER
+  SAMPLE_BITS = 16
+  MISSING_CONSTANT = -32768
+  UNIT = METER
+END_OBJECT = IMAGE
+OBJECT = IMAGE_MAP_PROJECTION
+  MAP_PROJECTION_TYPE = "SIMPLE CYLINDRICAL"
+  A_AXIS_RADIUS = 1737.4 <KM>
+  B_AXIS_RADIUS = 1737.4 <KM>
+  C_AXIS_RADIUS = 1737.4 <KM>
+  POSITIVE_LONGITUDE_DIRECTION = EAST
+  CENTER_LATITUDE = 0.0 <DEGREE>
+  CENTER_LONGITUDE = 180.0 <DEGREE>
+  MAP_RESOLUTION = 2.5 <PIXEL/DEGREE>
+  MAP_SCALE = 12.115 <KM/PIXEL>
+  LINE_PROJECTION_OFFSET = 225.5
+  SAMPLE_PROJECTION_OFFSET = 450.5
+  COORDINATE_SYSTEM_NAME = PLANETOCENTRIC
+END_OBJECT = IMAGE_MAP_PROJECTION
+END
+""")
+    out = work / "pds3.h5"
+    p = run("import", work / "pds3.lbl", "--out", out, "--grid", "pds3")
+    corrections = p.stdout.split("corrections:", 1)[1]
+    assert "PDS3 projection offsets read in the other convention" in corrections
+    assert "global spacing snapped to the label's resolution" in corrections
+    assert "wholly missing rows beyond a pole dropped: 0 north, 1 south" in corrections
+    a = attrs(out, "pds3")
+    assert a["kind"] == "planet" and [float(v) for v in a["spacing"]] == [0.4, 0.4]
+    assert int(a["rows"]) == 450 and int(a["cols"]) == 900
+    assert float(a["x0"]) == pytest.approx(0.2, abs=1e-12)
+    assert float(a["y0"]) == pytest.approx(89.8, abs=1e-12)
+    assert np.array_equal(store_heights(out, "pds3"), values[:450, :].astype(np.float64))
+    # Nearest queries at the label's sample centres return those samples (1 um: in the
+    # outermost rows TopoPlanet's polar cap may see a centre an ulp poleward and blend).
+    pts = [(0, 0), (0, 899), (224, 450), (449, 0), (449, 899), (300, 613)]
+    args = [f"{0.2 + 0.4 * c!r},{89.8 - 0.4 * r!r}" for r, c in pts]
+    q = parse_csv(run("query", out, "--coords", "lonlat", "--interp", "nearest", *args).stdout)[1]
+    assert [row[2] for row in q] == pytest.approx([float(values[r, c]) for r, c in pts],
+                                                  rel=0, abs=1e-6)
+
+
 def test_import_window_bbox_and_body(work):
     src = dem_fixture("megt90n000cb.lbl")
     full = json.loads(run("info", src, "--json").stdout)["grid"]
