@@ -133,20 +133,21 @@ bool globalToPlanet(GridInfo& info, std::optional<double> labelPixelsPerDegree) 
   const double dlon = info.spacingX / (a * cosTs) * kRadToDeg;
   const double dlat = info.spacingY / a * kRadToDeg;
   // The label's own resolution is the truth where it exists and agrees with the (rounded)
-  // map scale; labels print it rounded, so a value within 1e-9 of a whole grid is that grid.
+  // map scale. Labels print it rounded, and GDAL's writers derive it from the metres, so a
+  // value within 1e-6 of 180°/rows is that value.
   std::optional<double> res;
   if (labelPixelsPerDegree && std::abs(1.0 / *labelPixelsPerDegree - dlat) <= 0.01 * dlat) {
     res = 1.0 / *labelPixelsPerDegree;
   }
-  const auto whole = [](double span, double full) { return std::abs(span - full) <= 1e-9 * full; };
   const double lonStep = res ? *res / cosTs : dlon;
   if (std::abs(cols * lonStep - 360.0) > 0.5 * lonStep) return false;
-  // Global: a linear longitude/latitude grid at its exact resolution, placed by the samples'
-  // offsets from the projection's origin (the map scale in metres may be rounded).
-  const double sx = !res || whole(cols * lonStep, 360.0) ? 360.0 / cols : lonStep;
+  // Global: a linear longitude/latitude grid at its exact resolution, every longitude once
+  // (360°/cols), placed by the samples' offsets from the projection's origin (the map scale
+  // in metres may be rounded).
+  const double sx = 360.0 / cols;
   double sy = dlat;
   if (res) {
-    sy = whole(rows * *res, 180.0) ? 180.0 / rows : *res;
+    sy = std::abs(rows * *res - 180.0) <= 1e-6 * 180.0 ? 180.0 / rows : *res;
   } else if (std::abs(rows * dlat - 180.0) <= 0.5 * dlat) {
     sy = 180.0 / rows;
   }

@@ -20,12 +20,14 @@
 namespace regolith::store::gdal {
 
 /// An equirectangular DEM (x, y in metres from the projection's origin) that covers all
-/// longitudes becomes a planet grid at its exact resolution: the label's own resolution
-/// `labelPixelsPerDegree` (PDS3 MAP_RESOLUTION, ISIS3 Scale) where it exists and agrees with
-/// the map scale to 1 %, else 360°/cols (and 180°/rows if it covers all latitudes within half
-/// a pixel). A label resolution within 1e-9 of 360°/cols or 180°/rows is that value (labels
-/// print it rounded). Samples are placed by their pixel offsets from the projection's
-/// origin. Returns whether the spacing was snapped; leaves other grids alone.
+/// longitudes (within half a pixel, at the label's resolution if it has one) becomes a planet
+/// grid at its exact resolution: 360°/cols in longitude; in latitude the label's own
+/// resolution `labelPixelsPerDegree` (PDS3 MAP_RESOLUTION, ISIS3 Scale) where it exists and
+/// agrees with the map scale to 1 % (within 1e-6 of 180°/rows it is that: labels print it
+/// rounded, GDAL's writers derive it from the metres), else 180°/rows if the rows cover all
+/// latitudes within half a pixel, else the map scale's. Samples are placed by their pixel
+/// offsets from the projection's origin. Returns whether the spacing was snapped; leaves
+/// other grids alone.
 bool globalToPlanet(GridInfo& info, std::optional<double> labelPixelsPerDegree = std::nullopt);
 
 /// Runs GDALAllRegister() once.

@@ -13,6 +13,7 @@
 #include <regolith/topo/TopoDem.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
 
+#include "support/Fixtures.hpp"
 #include "support/StoreScratch.hpp"
 
 #include <cpl_json.h>
@@ -342,6 +343,32 @@ TEST(ImportTraits, ALabelScaleThatContradicts180OverRowsIsKeptAndAPaddingRowDrop
   Oracle o = readGdal(cube);
   labelCentres(o, 180.0, 0.4);
   expectExact(store, rep, o);
+}
+
+TEST(ImportTraits, AnIsis3CopyMadeByGdalWhoseScaleComesFromRoundedMetresImportsAsTheOriginal) {
+  // GDAL's ISIS3 writer derives Scale from PixelResolution (LOLA: 1.33333291 px/deg, not
+  // 4/3): still the global 0.75° grid of the original, every sample and position the same.
+  GDALAllRegister();
+  const fs::path copy = scratch("lola_copy.cub");
+  {
+    Dataset in(GDALOpen(test::fixture("ldem_4_reduced.cub").c_str(), GA_ReadOnly));
+    ASSERT_TRUE(in);
+    Dataset out(GDALCreateCopy(GDALGetDriverByName("ISIS3"), copy.c_str(), in.get(), FALSE, nullptr,
+                               nullptr, nullptr));
+    ASSERT_TRUE(out);
+  }
+  const ImportReport a = importRaster(test::fixture("ldem_4_reduced.cub"), scratch("lola.h5"));
+  const ImportReport b = importRaster(copy, scratch("lola_copy.h5"));
+  EXPECT_EQ(b.info.kind, GridKind::Planet);
+  EXPECT_EQ(b.info.spacingX, a.info.spacingX);
+  EXPECT_EQ(b.info.spacingY, a.info.spacingY);
+  EXPECT_NEAR(b.info.x0, a.info.x0, 1e-9);
+  EXPECT_NEAR(b.info.y0, a.info.y0, 1e-9);
+  std::vector<float> va(a.info.rows * a.info.cols), vb(va.size());
+  Store::open(scratch("lola.h5")).readWindow(a.info.name, 0, 0, 0, a.info.rows, a.info.cols, va);
+  Store::open(scratch("lola_copy.h5"))
+      .readWindow(b.info.name, 0, 0, 0, b.info.rows, b.info.cols, vb);
+  EXPECT_EQ(va, vb);
 }
 
 // ---- one tolerance for "at the pole" -----------------------------------------------------------
