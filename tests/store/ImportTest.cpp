@@ -777,6 +777,22 @@ TEST(ImportTiles, TilesCutWithGdalImportAsOneGridEqualToTheSingleImport) {
     const Store a = Store::open(scratch("single.h5")), b = Store::open(scratch("tiled.h5"));
     EXPECT_TRUE(b.tiled(single.info.name));
     expectSameGrids(a, single.info.name, b, single.info.name);
+    // The mosaic's height statistics are the single import's, to the bit (chunk order).
+    const std::optional<HeightStatistics> sa = a.grid(single.info.name).statistics,
+                                          sb = b.grid(single.info.name).statistics;
+    ASSERT_TRUE(sa && sb);
+    EXPECT_EQ(sb->validSamples, sa->validSamples);
+    EXPECT_EQ(sb->min, sa->min);
+    EXPECT_EQ(sb->max, sa->max);
+    EXPECT_EQ(sb->mean, sa->mean);
+    // Its provenance lists every tile's files (a PDS4 tile is its label, its image and the
+    // sidecar files GDAL lists beside them).
+    CPLJSONDocument doc;
+    ASSERT_TRUE(doc.LoadMemory(b.grid(single.info.name).provenance));
+    const CPLJSONArray sources = doc.GetRoot().GetArray("sources");
+    std::set<std::string> paths;
+    for (int i = 0; i < sources.Size(); ++i) paths.insert(sources[i].GetString("path"));
+    for (const fs::path& t : tiles) EXPECT_EQ(paths.count(t.string()), 1U) << t;
     // Imports store height statistics: format 1.3 (which reads tiles and transverse
     // Mercator too).
     EXPECT_EQ(b.formatVersion(), (std::array<int, 2>{1, 3}));
