@@ -307,7 +307,7 @@ void printGrid(const GridInfo& g, std::optional<bool> tiled, std::ostream& out) 
       if (p.contains("label") && p["label"].is_object()) {
         std::string fields;
         for (const auto& [key, value] : p["label"].items()) {
-          if (key.front() == '_') continue;  // GDAL's "_type"
+          if (key.front() == '_' || key == "END_OBJECT") continue;  // GDAL's "_type", PDS3's end
           std::string v;
           if (value.is_object() && value.contains("value")) {
             v = value["value"].dump();
