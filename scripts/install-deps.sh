@@ -8,8 +8,9 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git clang-format clang-tidy
   # compiler cache: scripts/test-all.sh reuses objects across runs on one machine
   ccache
-  # I/O: HDF5 stores, GDAL import, PROJ (also the projection oracle in tests)
-  libhdf5-dev hdf5-tools libgdal-dev gdal-bin libproj-dev proj-bin libdeflate-dev
+  # I/O: HDF5 stores, GDAL import, PROJ (also the projection oracle in tests), libcrypto
+  # (SHA-256 of import sources)
+  libhdf5-dev hdf5-tools libgdal-dev gdal-bin libproj-dev proj-bin libdeflate-dev libssl-dev
   # the optional ZFP codec of stores: libzfp encodes chunks, the H5Z-ZFP plugin (filter
   # 32013, in HDF5's default plugin directory) decodes them for every HDF5 reader
   libzfp-dev hdf5-filter-plugin-zfp-serial

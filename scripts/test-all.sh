@@ -14,8 +14,8 @@
 # Environment (all optional): BUILD_DIR (default build), ASAN_BUILD_DIR (default
 # build-asan), TSAN_BUILD_DIR (default build-tsan), REGOLITH_CMAKE_ARGS (extra arguments for
 # every configure step, split on spaces), REGOLITH_FULL_CHECKS=1 (sanitize and test every
-# module, and run clang-tidy's analyzer on every directory: longer than CI allows). Real-data fixtures come from ../shared/fixtures/dem unless REGOLITH_FIXTURES_DIR
-# says otherwise.
+# module, and run clang-tidy's analyzer on every directory: longer than CI allows). Real-data fixtures come from
+# tests/data/dem unless REGOLITH_FIXTURES_DIR says otherwise.
 set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)

@@ -33,6 +33,9 @@ struct Args {
   std::string compression = "deflate";
   unsigned threads = 0;
   double nodata = 0.0;
+  std::string body;
+  std::vector<std::size_t> window;
+  std::vector<double> bbox;
 };
 
 void printSummary(const std::string& out, const store::ImportReport& r, std::ostream& os) {
@@ -42,7 +45,11 @@ void printSummary(const std::string& out, const store::ImportReport& r, std::ost
   os << "  grid:           '" << g.name << "', "
      << (dem ? "dem (planar grid placed on the body)" : "planet (latitude/longitude grid)")
      << (r.tiles > 1 ? ", tiled" : "") << "\n";
-  os << "  size:           " << g.rows << " rows x " << g.cols << " cols\n";
+  os << "  size:           " << g.rows << " rows x " << g.cols << " cols";
+  if (r.window) {
+    os << " (window from row " << r.window->row0 << ", col " << r.window->col0 << ")";
+  }
+  os << "\n";
   os << "  spacing:        " << shortestNumber(g.spacingX) << " x " << shortestNumber(g.spacingY)
      << (dem ? " m" : " deg") << "\n";
   os << "  body:           " << g.bodyName << ", equatorial radius "
@@ -102,11 +109,26 @@ void addImportCommand(CLI::App& app) {
   cmd->add_option("--nodata", a->nodata,
                   "A further source value (before scale/offset) that means missing, beside "
                   "the ones the file declares");
+  cmd->add_option("--body", a->body,
+                  "Name of the body, where the CRS does not say it or says it wrongly (the "
+                  "radii stay the CRS's)");
+  auto* window = cmd->add_option("--window", a->window,
+                                 "Import only these samples: row0,col0,rows,cols of the grid "
+                                 "`regolith info SOURCE` shows")
+                     ->delimiter(',')
+                     ->expected(4);
+  cmd->add_option("--bbox", a->bbox,
+                  "Import only the samples whose centres lie in lon0,lat0,lon1,lat1 (degrees: "
+                  "west, south, east, north)")
+      ->delimiter(',')
+      ->expected(4)
+      ->excludes(window);
   cmd->footer(
       "Examples:\n"
       "  regolith import dtm.cub --out dtm.h5 --deflate 4\n"
       "  regolith import dtm.cub --out dtm.h5 --compression zfp   (smaller, needs the ZFP plugin)\n"
       "  regolith import N00E010.hgt N00E011.hgt N01E010.hgt --out tiles.h5 --grid srtm\n"
+      "  regolith import mola.lbl --out crater.h5 --bbox 137.2,-5.6,137.6,-5.2\n"
       "  regolith info dtm.cub      (what an import would make of a raster)\n"
       "A summary goes to stdout. A progress bar is drawn on stderr when it is a terminal; "
       "Ctrl-C cancels cleanly (no partial file).");
@@ -120,6 +142,11 @@ void addImportCommand(CLI::App& app) {
     o.codec = store::codecNamed(a->compression);
     o.threads = a->threads;
     if (cmd->count("--nodata") > 0) o.nodata = a->nodata;
+    o.body = a->body;
+    if (a->window.size() == 4) {
+      o.window = store::SampleWindow{a->window[0], a->window[1], a->window[2], a->window[3]};
+    }
+    if (a->bbox.size() == 4) o.bbox = {a->bbox[0], a->bbox[1], a->bbox[2], a->bbox[3]};
     TerminalProgress progress = TerminalProgress::forStderr();
     o.progress = progress.callback();
     o.cancel = CancelOnSignal::flag();

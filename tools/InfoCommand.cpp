@@ -7,9 +7,12 @@
 #include "ReportText.hpp"
 
 #include <CLI/CLI.hpp>
+#include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <limits>
@@ -79,6 +82,50 @@ ordered_json placementJson(const GridInfo& g) {
   return j;
 }
 
+/// Planetodetic position of the reference surface at fractional sample (row, col).
+topo::Geodetic geodeticAt(const GridInfo& g, double row, double col) {
+  const double x = g.x0 + col * g.spacingX, y = g.y0 - row * g.spacingY;
+  if (g.kind == GridKind::Dem) return store::placementOf(g).toGeodetic(x, y, 0.0);
+  return {store::bodyOf(g).toPlanetodetic(y, g.latitudeType), x, 0.0};
+}
+
+/// Where a grid lies: its corner and centre samples (planetodetic degrees), and its ground
+/// size in metres along the centre row and the centre column, pixel edge to edge, measured
+/// on the reference surface as a polyline of 256 segments in body-fixed coordinates.
+struct Footprint {
+  std::array<topo::Geodetic, 4> corners;  // NW, NE, SW, SE sample centres
+  topo::Geodetic centre;
+  double widthM = 0.0, heightM = 0.0;
+};
+
+Footprint footprintOf(const GridInfo& g) {
+  Footprint f;
+  const double r1 = static_cast<double>(g.rows) - 1.0, c1 = static_cast<double>(g.cols) - 1.0;
+  f.corners = {geodeticAt(g, 0.0, 0.0), geodeticAt(g, 0.0, c1), geodeticAt(g, r1, 0.0),
+               geodeticAt(g, r1, c1)};
+  f.centre = geodeticAt(g, 0.5 * r1, 0.5 * c1);
+  const topo::Body body = store::bodyOf(g);
+  const auto length = [&](double ra, double ca, double rb, double cb) {
+    constexpr int kSegments = 256;
+    double sum = 0.0;
+    glm::dvec3 prev = body.toBodyFixed(geodeticAt(g, ra, ca));
+    for (int k = 1; k <= kSegments; ++k) {
+      const double t = static_cast<double>(k) / kSegments;
+      const glm::dvec3 p = body.toBodyFixed(geodeticAt(g, ra + t * (rb - ra), ca + t * (cb - ca)));
+      sum += glm::length(p - prev);
+      prev = p;
+    }
+    return sum;
+  };
+  f.widthM = length(0.5 * r1, -0.5, 0.5 * r1, c1 + 0.5);
+  f.heightM = length(-0.5, 0.5 * c1, r1 + 0.5, 0.5 * c1);
+  return f;
+}
+
+ordered_json geodeticJson(const topo::Geodetic& p) {
+  return {{"lat", p.latDeg}, {"lon", p.lonDeg}};
+}
+
 /// The grid's keys. `tiled` is set for a grid of a store (whether level 0 is tiled), and adds
 /// levels, patch shape and tiling; unset for the grid a raster would become.
 ordered_json gridJson(const GridInfo& g, std::optional<bool> tiled) {
@@ -99,6 +146,13 @@ ordered_json gridJson(const GridInfo& g, std::optional<bool> tiled) {
                {"polar_radius", g.polarRadius}};
   j["latitude_type"] = latitudeTypeName(g.latitudeType);
   j["placement"] = placementJson(g);
+  const Footprint f = footprintOf(g);
+  j["geodetic"] = {{"north_west", geodeticJson(f.corners[0])},
+                   {"north_east", geodeticJson(f.corners[1])},
+                   {"south_west", geodeticJson(f.corners[2])},
+                   {"south_east", geodeticJson(f.corners[3])},
+                   {"centre", geodeticJson(f.centre)}};
+  j["ground_size_m"] = {f.widthM, f.heightM};
   if (tiled) {
     j["levels"] = g.levels;
     ordered_json shapes = ordered_json::array();
@@ -111,7 +165,20 @@ ordered_json gridJson(const GridInfo& g, std::optional<bool> tiled) {
   j["nodata"] = g.nodata ? ordered_json(static_cast<double>(*g.nodata)) : nullptr;
   j["scale"] = g.scale;
   j["offset"] = g.offset;
-  if (tiled) j["tiled"] = *tiled;
+  if (tiled) {
+    j["tiled"] = *tiled;
+    // Stored at import (format 1.3); null for stores written without them: no scan at open.
+    if (g.statistics) {
+      const store::HeightStatistics& s = *g.statistics;
+      j["statistics"] = {
+          {"min", s.min}, {"max", s.max}, {"mean", s.mean}, {"valid_samples", s.validSamples}};
+    } else {
+      j["statistics"] = nullptr;
+    }
+    // Recorded at import (format 1.3): sources, GDAL, label fields; null if not recorded.
+    j["provenance"] = g.provenance.empty() ? ordered_json(nullptr)
+                                           : ordered_json::parse(g.provenance, nullptr, false);
+  }
   return j;
 }
 
@@ -189,6 +256,17 @@ void printGrid(const GridInfo& g, std::optional<bool> tiled, std::ostream& out) 
       << " m\n";
   out << "  latitude type:  " << latitudeTypeName(g.latitudeType) << "\n";
   if (dem) printPlacement(g, out);
+  const Footprint f = footprintOf(g);
+  const auto at = [](const topo::Geodetic& p) {
+    return shortestNumber(p.latDeg) + ", " + shortestNumber(p.lonDeg);
+  };
+  out << "  corners:        NW " << at(f.corners[0]) << "; NE " << at(f.corners[1]) << "; SW "
+      << at(f.corners[2]) << "; SE " << at(f.corners[3])
+      << " (lat, lon deg, planetodetic, sample centres)\n";
+  out << "  centre:         " << at(f.centre) << " (lat, lon deg)\n";
+  out << "  ground size:    " << shortestNumber(std::round(f.widthM)) << " x "
+      << shortestNumber(std::round(f.heightM))
+      << " m (centre row x centre column, pixel edge to edge)\n";
   if (tiled) {
     out << "  levels:         " << g.levels << " (";
     for (std::size_t k = 0; k < g.levels; ++k) {
@@ -203,7 +281,49 @@ void printGrid(const GridInfo& g, std::optional<bool> tiled, std::ostream& out) 
       << "\n";
   out << "  height:         " << shortestNumber(g.offset) << " + " << shortestNumber(g.scale)
       << " x stored value, in " << g.units << "\n";
-  if (tiled) out << "  tiled:          " << (*tiled ? "yes" : "no") << "\n";
+  if (tiled) {
+    out << "  tiled:          " << (*tiled ? "yes" : "no") << "\n";
+    if (g.statistics) {
+      const store::HeightStatistics& s = *g.statistics;
+      const double total = static_cast<double>(g.rows) * static_cast<double>(g.cols);
+      out << "  heights:        min " << shortestNumber(s.min) << ", max " << shortestNumber(s.max)
+          << ", mean " << shortestNumber(s.mean) << " m; " << s.validSamples << " valid samples ("
+          << shortestNumber(std::round(1000.0 * static_cast<double>(s.validSamples) / total) / 10.0)
+          << "%)\n";
+    } else {
+      out << "  heights:        no statistics stored (written before format 1.3)\n";
+    }
+    const ordered_json p = g.provenance.empty() ? ordered_json(nullptr)
+                                                : ordered_json::parse(g.provenance, nullptr, false);
+    if (p.is_object()) {
+      const char* label = "  sources:        ";
+      for (const auto& s : p.value("sources", ordered_json::array())) {
+        out << label << s.value("file", std::string()) << ", " << s.value("bytes", std::uint64_t{0})
+            << " bytes, sha256 " << s.value("sha256", std::string()) << "\n";
+        label = "                  ";
+      }
+      out << "  made with:      GDAL " << p.value("gdal_version", std::string()) << ", driver "
+          << p.value("gdal_driver", std::string()) << "\n";
+      if (p.contains("label") && p["label"].is_object()) {
+        std::string fields;
+        for (const auto& [key, value] : p["label"].items()) {
+          if (key.front() == '_' || key == "END_OBJECT") continue;  // GDAL's "_type", PDS3's end
+          std::string v;
+          if (value.is_object() && value.contains("value")) {
+            v = value["value"].dump();
+            if (value.contains("unit")) v += " <" + value["unit"].get<std::string>() + ">";
+          } else {
+            v = value.is_string() ? value.get<std::string>() : value.dump();
+          }
+          if (!fields.empty()) fields += "; ";
+          fields.append(key).append(" = ").append(v);
+        }
+        out << "  label:          " << fields << "\n";
+      }
+    } else {
+      out << "  provenance:     not recorded\n";
+    }
+  }
 }
 
 void printText(const store::Store& s, std::ostream& out) {
@@ -223,6 +343,10 @@ ordered_json rasterJson(const store::ImportReport& r) {
   j["offset_corrected"] = r.offsetCorrected;
   j["spacing_snapped"] = r.spacingSnapped;
   j["void_marker_assumed"] = r.voidMarkerAssumed;
+  j["dropped_north_rows"] = r.droppedNorthRows;
+  j["dropped_south_rows"] = r.droppedSouthRows;
+  j["dropped_columns"] = r.droppedColumns;
+  j["pole_shift_pixels"] = r.poleShiftPixels;
   j["corrections"] = appliedCorrections(r);
   return j;
 }
@@ -284,7 +408,10 @@ void addInfoCommand(CLI::App& app) {
       "print(json.load(sys.stdin)[\"grids\"][0][\"rows\"])'");
   cmd->callback([a] {
     std::error_code ec;
-    if (std::filesystem::is_regular_file(a->store, ec) && !store::Store::isHdf5(a->store)) {
+    // GDAL's virtual paths (/vsizip/, /vsicurl/, ...) are rasters: `import` accepts them.
+    const bool virtualPath = a->store.rfind("/vsi", 0) == 0;
+    if (virtualPath ||
+        (std::filesystem::is_regular_file(a->store, ec) && !store::Store::isHdf5(a->store))) {
       printRaster(a->store, a->json, std::cout);
       return;
     }

@@ -3,13 +3,19 @@
 #include "GdalRaster.hpp"
 
 #include <regolith/core/Error.hpp>
+#include <regolith/topo/Placement.hpp>
+#include <regolith/topo/TopoPlanet.hpp>
 
 #include <cpl_conv.h>
 #include <cpl_error.h>
+#include <cpl_json.h>
 #include <cpl_string.h>
+#include <cpl_vsi.h>
 #include <ogr_srs_api.h>
+#include <openssl/evp.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <limits>
@@ -68,21 +74,83 @@ double projParm(OGRSpatialReferenceH srs, const char* name, double fallback) {
   return err == OGRERR_NONE ? v : fallback;
 }
 
+/// A label value: a number, a numeric string, or an object {"value": ..., "unit": ...} whose
+/// unit, if any, is per degree.
+std::optional<double> perDegree(const CPLJSONObject& o) {
+  if (!o.IsValid()) return std::nullopt;
+  if (o.GetType() == CPLJSONObject::Type::Object) {
+    const std::string unit = lower(o.GetString("unit"));
+    if (!unit.empty() && unit.find("deg") == std::string::npos) return std::nullopt;
+    return perDegree(o.GetObj("value"));
+  }
+  double v = 0.0;
+  switch (o.GetType()) {
+    case CPLJSONObject::Type::Integer:
+    case CPLJSONObject::Type::Long:
+    case CPLJSONObject::Type::Double: v = o.ToDouble(); break;
+    case CPLJSONObject::Type::String: v = CPLAtof(o.ToString().c_str()); break;
+    default: return std::nullopt;
+  }
+  return std::isfinite(v) && v > 0.0 ? std::optional<double>(v) : std::nullopt;
+}
+
+/// The label's map resolution in pixels per degree: PDS3 IMAGE_MAP_PROJECTION.MAP_RESOLUTION,
+/// ISIS3 IsisCube.Mapping.Scale (GDAL gives both labels as JSON).
+std::optional<double> labelPixelsPerDegree(GDALDatasetH ds) {
+  const std::pair<const char*, const char*> fields[] = {
+      {"json:PDS", "IMAGE_MAP_PROJECTION/MAP_RESOLUTION"},
+      {"json:ISIS3", "IsisCube/Mapping/Scale"}};
+  for (const auto& [domain, path] : fields) {
+    const std::string text = metadataText(ds, domain);
+    if (text.empty()) continue;
+    CPLJSONDocument doc;
+    if (!doc.LoadMemory(text)) continue;
+    if (auto v = perDegree(doc.GetRoot().GetObj(path))) return v;
+  }
+  return std::nullopt;
+}
+
+/// How far (pixels) a planet grid's pixel extent reaches beyond its farther pole (≤ 0 inside).
+double poleOverhang(const GridInfo& i) {
+  const double north = i.y0 + 0.5 * i.spacingY;
+  const double south = i.y0 - (static_cast<double>(i.rows) - 0.5) * i.spacingY;
+  return std::max(north - 90.0, -90.0 - south) / i.spacingY;
+}
+
+std::string rowsText(std::size_t first, std::size_t last) {
+  return first == last ? "row " + std::to_string(first)
+                       : "rows " + std::to_string(first) + "-" + std::to_string(last);
+}
+
 }  // namespace
 
-bool globalToPlanet(GridInfo& info) {
+bool globalToPlanet(GridInfo& info, std::optional<double> labelPixelsPerDegree) {
   const PlacementInfo& pl = info.placement;
   if (info.kind != GridKind::Dem || pl.kind != PlacementInfo::Kind::Equirectangular) return false;
   const double a = pl.projectionRadius;
   const double rows = static_cast<double>(info.rows), cols = static_cast<double>(info.cols);
-  const double dlon =
-      info.spacingX / (a * std::cos(pl.latTrueScaleDeg.value_or(0.0) / kRadToDeg)) * kRadToDeg;
+  const double cosTs = std::cos(pl.latTrueScaleDeg.value_or(0.0) / kRadToDeg);
+  const double dlon = info.spacingX / (a * cosTs) * kRadToDeg;
   const double dlat = info.spacingY / a * kRadToDeg;
-  if (std::abs(cols * dlon - 360.0) > 0.5 * dlon) return false;
-  // Global: a linear longitude/latitude grid at its exact resolution, placed by the samples'
-  // offsets from the projection's origin (the map scale in metres may be rounded).
+  // The label's own resolution is the truth where it exists and agrees with the (rounded)
+  // map scale. Labels print it rounded, and GDAL's writers derive it from the metres, so a
+  // value within 1e-6 of 180°/rows is that value.
+  std::optional<double> res;
+  if (labelPixelsPerDegree && std::abs(1.0 / *labelPixelsPerDegree - dlat) <= 0.01 * dlat) {
+    res = 1.0 / *labelPixelsPerDegree;
+  }
+  const double lonStep = res ? *res / cosTs : dlon;
+  if (std::abs(cols * lonStep - 360.0) > 0.5 * lonStep) return false;
+  // Global: a linear longitude/latitude grid at its exact resolution, every longitude once
+  // (360°/cols), placed by the samples' offsets from the projection's origin (the map scale
+  // in metres may be rounded).
   const double sx = 360.0 / cols;
-  const double sy = std::abs(rows * dlat - 180.0) <= 0.5 * dlat ? 180.0 / rows : dlat;
+  double sy = dlat;
+  if (res) {
+    sy = std::abs(rows * *res - 180.0) <= 1e-6 * 180.0 ? 180.0 / rows : *res;
+  } else if (std::abs(rows * dlat - 180.0) <= 0.5 * dlat) {
+    sy = 180.0 / rows;
+  }
   info.x0 = pl.lonCentreDeg + info.x0 / info.spacingX * sx;
   info.y0 = pl.latOriginDeg + info.y0 / info.spacingY * sy;
   const bool snapped = sx != dlon || sy != dlat;
@@ -160,25 +228,217 @@ void Raster::open(const ImportOptions& options, bool pdsShift) {
   }
   ds_.reset(ds);
   analyse(options);
-  if (layout_.offsetCorrected) return;
-  // A global grid reaching beyond a pole: a PDS3 label in the other offset convention.
+  // A planet grid reaching half a pixel or more beyond a pole: a PDS3 label in the other
+  // offset convention (GDAL puts the MOLA MEGDR one pixel north and west).
   const GridInfo& i = layout_.info;
-  const bool beyondPole =
-      i.kind == GridKind::Planet &&
-      (i.y0 + 0.5 * i.spacingY > 90.0 + 0.01 * i.spacingY ||
-       i.y0 - (static_cast<double>(i.rows) - 0.5) * i.spacingY < -90.0 - 0.01 * i.spacingY);
-  if (beyondPole && layout_.driver == "PDS" && !pdsShift) {
+  if (!pdsShift && layout_.driver == "PDS" && i.kind == GridKind::Planet &&
+      poleOverhang(i) >= 0.5) {
     ds_.reset();
     open(options, true);
     layout_.offsetCorrected = true;
     return;
   }
-  if (beyondPole) {
+  resolvePoles();
+  dropRepeatedColumns();
+  applyWindow(options);
+}
+
+void Raster::applyWindow(const ImportOptions& options) {
+  GridInfo& i = layout_.info;
+  if (!options.body.empty()) i.bodyName = options.body;
+  if (!options.window && !options.bbox) return;
+  if (options.window && options.bbox) {
+    throw ImportError(prefix_ + ": both a window and a bounding box given; expected one");
+  }
+  const SampleWindow w = options.window ? *options.window : windowOfBox(*options.bbox);
+  if (w.rows == 0 || w.cols == 0 || w.row0 + w.rows > i.rows || w.col0 + w.cols > i.cols) {
+    throw ImportError(prefix_ + ": window of " + std::to_string(w.rows) + " rows x " +
+                      std::to_string(w.cols) + " cols from row " + std::to_string(w.row0) +
+                      ", col " + std::to_string(w.col0) + " is empty or leaves the grid of " +
+                      std::to_string(i.rows) + " rows x " + std::to_string(i.cols) +
+                      " cols; expected a non-empty window inside it");
+  }
+  layout_.rowOffset += w.row0;
+  layout_.colOffset += w.col0;
+  i.x0 += static_cast<double>(w.col0) * i.spacingX;
+  i.y0 -= static_cast<double>(w.row0) * i.spacingY;
+  i.rows = w.rows;
+  i.cols = w.cols;
+  layout_.window = w;
+}
+
+SampleWindow Raster::windowOfBox(const std::array<double, 4>& box) const {
+  const GridInfo& i = layout_.info;
+  const auto [west, south, east, north] = box;
+  const std::string text =
+      number(west) + ", " + number(south) + ", " + number(east) + ", " + number(north);
+  if (!(std::isfinite(west) && std::isfinite(east) && west < east && east - west <= 360.0 &&
+        south < north && south >= -90.0 && north <= 90.0)) {
+    throw ImportError(prefix_ + ": bounding box " + text +
+                      " is not west < east (at most 360 deg apart), -90 <= south < north <= 90");
+  }
+  // The box in fractional grid columns (u) and rows (v).
+  double u0 = 0.0, u1 = 0.0, v0 = 0.0, v1 = 0.0;
+  if (i.kind == GridKind::Planet) {
+    // West brought into the grid's 360° from its western edge; the box may not run past it.
+    const double edge = i.x0 - 0.5 * i.spacingX;
+    const double w = edge + (west - edge - 360.0 * std::floor((west - edge) / 360.0));
+    u0 = (w - i.x0) / i.spacingX;
+    u1 = (w + (east - west) - i.x0) / i.spacingX;
+    const bool global = std::abs(static_cast<double>(i.cols) * i.spacingX - 360.0) <= 1e-9;
+    if (global && u1 > static_cast<double>(i.cols) - 0.5) {
+      throw ImportError(prefix_ + ": bounding box " + text + " crosses the grid's seam at " +
+                        number(edge) + " deg longitude; expected a box within " + number(edge) +
+                        " to " + number(edge + 360.0) + " (import the two sides apart)");
+    }
+    v0 = (i.y0 - north) / i.spacingY;
+    v1 = (i.y0 - south) / i.spacingY;
+  } else {
+    // The box's outline through the placement: its rectangle in grid metres.
+    const topo::Placement pl = placementOf(i);
+    double xMin = std::numeric_limits<double>::infinity(), xMax = -xMin, yMin = xMin, yMax = -xMin;
+    constexpr int kSteps = 64;
+    for (int k = 0; k <= kSteps; ++k) {
+      const double t = static_cast<double>(k) / kSteps;
+      const double lon = west + t * (east - west), lat = south + t * (north - south);
+      for (const auto& [la, lo] : {std::pair{south, lon}, std::pair{north, lon},
+                                   std::pair{lat, west}, std::pair{lat, east}}) {
+        glm::dvec3 p{};
+        try {
+          p = pl.fromGeodetic({la, lo, 0.0});
+        } catch (const Error&) {
+          continue;  // outside the projection's domain (the far side of a polar projection)
+        }
+        if (!(std::isfinite(p.x) && std::isfinite(p.y))) continue;
+        xMin = std::min(xMin, p.x);
+        xMax = std::max(xMax, p.x);
+        yMin = std::min(yMin, p.y);
+        yMax = std::max(yMax, p.y);
+      }
+    }
+    u0 = (xMin - i.x0) / i.spacingX;
+    u1 = (xMax - i.x0) / i.spacingX;
+    v0 = (i.y0 - yMax) / i.spacingY;
+    v1 = (i.y0 - yMin) / i.spacingY;
+  }
+  // Samples whose centres lie in the box (to 1e-9 of a sample), clipped to the grid.
+  const double c0 = std::max(0.0, std::ceil(u0 - 1e-9));
+  const double c1 = std::min(static_cast<double>(i.cols) - 1.0, std::floor(u1 + 1e-9));
+  const double r0 = std::max(0.0, std::ceil(v0 - 1e-9));
+  const double r1 = std::min(static_cast<double>(i.rows) - 1.0, std::floor(v1 + 1e-9));
+  if (!(c0 <= c1 && r0 <= r1)) {
+    throw ImportError(prefix_ + ": bounding box " + text +
+                      " holds no sample centre of the grid; expected one that overlaps it");
+  }
+  return {static_cast<std::size_t>(r0), static_cast<std::size_t>(c0),
+          static_cast<std::size_t>(r1 - r0) + 1, static_cast<std::size_t>(c1 - c0) + 1};
+}
+
+void Raster::resolvePoles() {
+  GridInfo& i = layout_.info;
+  const bool planet = i.kind == GridKind::Planet;
+  const bool eqc = i.kind == GridKind::Dem &&
+                   i.placement.kind == PlacementInfo::Kind::Equirectangular &&
+                   i.placement.projectionRadius > 0.0;
+  if (!planet && !eqc) return;  // other projections have no rows beyond a pole
+  const double tol = topo::kPoleOverhangPixels;
+  const double rows = static_cast<double>(i.rows);
+  // A pole-to-pole grid (rows × spacing = 180°) whose offsets, through a rounded map scale,
+  // place it up to 0.9 pixel beyond a pole: its edges are the poles.
+  if (planet && std::abs(rows * i.spacingY - 180.0) <= 1e-9 * 180.0) {
+    const double over = poleOverhang(i);
+    if (over > tol && over <= 0.9) {
+      const double y0 = 90.0 - 0.5 * i.spacingY;
+      layout_.poleShiftPixels = (i.y0 - y0) / i.spacingY;
+      i.y0 = y0;
+    }
+  }
+  // Latitude (degrees) of the centre of row r, and the pole tolerance in degrees.
+  const double degPerY = planet ? 1.0 : kRadToDeg / i.placement.projectionRadius;
+  const double lat0 = planet ? 0.0 : i.placement.latOriginDeg;
+  const auto lat = [&](std::size_t r) {
+    return lat0 + (i.y0 - static_cast<double>(r) * i.spacingY) * degPerY;
+  };
+  const double tolDeg = tol * i.spacingY * degPerY;
+  std::size_t north = 0, south = 0;
+  while (north < i.rows && lat(north) > 90.0 + tolDeg) ++north;
+  while (south < i.rows - north && lat(i.rows - 1 - south) < -90.0 - tolDeg) ++south;
+  if (north + south == i.rows) {
+    throw ImportError(prefix_ + ": every row's centre lies beyond a pole (latitudes " +
+                      number(lat(0)) + " to " + number(lat(i.rows - 1)) +
+                      " deg); expected within -90 to 90");
+  }
+  // Rows beyond a pole are dropped when wholly missing (padding), and refused otherwise.
+  const auto refuse = [&](std::size_t first, std::size_t last, const char* pole) {
+    throw ImportError(prefix_ + ": " + rowsText(first, last) + " (centre latitude " +
+                      number(lat(first)) + (first == last ? "" : " to " + number(lat(last))) +
+                      " deg) lie beyond the " + pole +
+                      " pole and hold valid samples; expected within -90 to 90 (wholly "
+                      "missing rows beyond a pole are dropped)");
+  };
+  const std::size_t r0 = layout_.rowOffset, c0 = layout_.colOffset;
+  if (north > 0 && !allMissing(r0, north, c0, i.cols)) refuse(0, north - 1, "north");
+  if (south > 0 && !allMissing(r0 + i.rows - south, south, c0, i.cols)) {
+    refuse(i.rows - south, i.rows - 1, "south");
+  }
+  layout_.rowOffset += north;
+  layout_.droppedNorthRows += north;
+  layout_.droppedSouthRows += south;
+  i.y0 -= static_cast<double>(north) * i.spacingY;
+  i.rows -= north + south;
+  // What is left of a planet grid must lie within the poles as TopoPlanet requires.
+  if (planet && poleOverhang(i) > tol) {
     throw ImportError(prefix_ + ": georeferencing places the grid's edges at latitudes " +
                       number(i.y0 + 0.5 * i.spacingY) + " to " +
                       number(i.y0 - (static_cast<double>(i.rows) - 0.5) * i.spacingY) +
                       " deg, beyond a pole; expected within -90 to 90");
   }
+}
+
+void Raster::dropRepeatedColumns() {
+  GridInfo& i = layout_.info;
+  if (i.kind != GridKind::Planet) return;
+  const double span = static_cast<double>(i.cols) * i.spacingX;
+  if (span <= 360.0 + 1e-9) return;  // TopoPlanet's bound
+  // More than 360° of longitude: the columns from n on repeat the longitudes of 0… (360°
+  // must be a whole number n of columns), and are dropped if they repeat their values too.
+  const auto n = static_cast<std::size_t>(std::llround(360.0 / i.spacingX));
+  const std::string spans = "grid spans " + number(span) + " deg of longitude in " +
+                            std::to_string(i.cols) + " columns of " + number(i.spacingX) + " deg";
+  if (n == 0 || n >= i.cols || std::abs(static_cast<double>(n) * i.spacingX - 360.0) > 1e-9) {
+    throw ImportError(prefix_ + ": " + spans +
+                      ", and no whole number of columns spans 360 deg; expected at most 360");
+  }
+  const std::size_t extra = i.cols - n, band = 64;
+  std::vector<float> head, tail;
+  for (std::size_t r = 0; r < i.rows; r += band) {
+    const std::size_t nr = std::min(band, i.rows - r);
+    head.resize(nr * extra);
+    tail.resize(nr * extra);
+    (void)readSource(layout_.rowOffset + r, layout_.colOffset, nr, extra, head);
+    (void)readSource(layout_.rowOffset + r, layout_.colOffset + n, nr, extra, tail);
+    for (std::size_t k = 0; k < head.size(); ++k) {
+      const bool same = head[k] == tail[k] || (std::isnan(head[k]) && std::isnan(tail[k]));
+      if (!same) {
+        const std::size_t row = r + k / extra, col = n + k % extra;
+        throw ImportError(prefix_ + ": " + spans + "; column " + std::to_string(col) +
+                          " repeats the longitude of column " + std::to_string(col - n) +
+                          " with another value (row " + std::to_string(row) + ": " +
+                          number(static_cast<double>(tail[k])) + " vs " +
+                          number(static_cast<double>(head[k])) +
+                          " m); expected at most 360 deg, or repeated columns equal to the "
+                          "first ones");
+      }
+    }
+  }
+  layout_.droppedColumns = extra;
+  i.cols = n;
+}
+
+bool Raster::allMissing(std::size_t row0, std::size_t nrows, std::size_t col0,
+                        std::size_t ncols) const {
+  std::vector<float> v(nrows * ncols);
+  return readSource(row0, col0, nrows, ncols, v) == v.size();
 }
 
 void Raster::analyse(const ImportOptions& options) {
@@ -270,6 +530,7 @@ void Raster::analyse(const ImportOptions& options) {
   }
   info.equatorialRadius = a;
   info.polarRadius = b;
+  l.labelPixelsPerDegree = labelPixelsPerDegree(ds);
   info.bodyName = bodyName(srs, a);
   const char* crsName = OSRGetName(srs);
   const std::string crs = crsName != nullptr ? crsName : "unnamed CRS";
@@ -330,7 +591,7 @@ void Raster::analyse(const ImportOptions& options) {
       info.spacingY = dyM;
       info.x0 = gt[0] * lf + 0.5 * dxM - fe;
       info.y0 = gt[3] * lf - 0.5 * dyM - fn;
-      l.spacingSnapped = globalToPlanet(info);
+      l.spacingSnapped = globalToPlanet(info, l.labelPixelsPerDegree);
     } else if (method == SRS_PT_POLAR_STEREOGRAPHIC ||
                ((method == SRS_PT_STEREOGRAPHIC || method == SRS_PT_OBLIQUE_STEREOGRAPHIC) &&
                 std::abs(lat0) == 90.0)) {
@@ -421,6 +682,14 @@ float Raster::sample(std::size_t row, std::size_t col) const {
 
 void Raster::readWindow(std::size_t row0, std::size_t col0, std::size_t nrows, std::size_t ncols,
                         std::span<float> out) const {
+  std::size_t voids = 0;
+  missing_ +=
+      readSource(row0 + layout_.rowOffset, col0 + layout_.colOffset, nrows, ncols, out, &voids);
+  voids_ += voids;
+}
+
+std::size_t Raster::readSource(std::size_t row0, std::size_t col0, std::size_t nrows,
+                               std::size_t ncols, std::span<float> out, std::size_t* voids) const {
   const std::size_t n = nrows * ncols;
   const Layout& l = layout_;
   const double base = l.offset - l.radiusReference;
@@ -451,13 +720,14 @@ void Raster::readWindow(std::size_t row0, std::size_t col0, std::size_t nrows, s
                         std::to_string(row0 + nrows - 1) + " (GDAL: " + errors.messages() + ")");
     }
   }
-  std::size_t missing = 0;
+  std::size_t missing = 0, voidCount = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const double raw = direct ? static_cast<double>(out[i]) : values[i];
+    const bool isVoid = l.voidMarker && raw == -32768.0;
+    voidCount += isVoid ? 1 : 0;
     const bool isMissing =
-        std::isnan(raw) || raw < kIsisSpecialBelow || (l.readMask && mask[i] == 0) ||
-        (l.declaredNodata && raw == *l.declaredNodata) ||
-        (l.extraNodata && raw == *l.extraNodata) || (l.voidMarker && raw == -32768.0);
+        isVoid || std::isnan(raw) || raw < kIsisSpecialBelow || (l.readMask && mask[i] == 0) ||
+        (l.declaredNodata && raw == *l.declaredNodata) || (l.extraNodata && raw == *l.extraNodata);
     if (isMissing) {
       out[i] = kNan;
       ++missing;
@@ -466,7 +736,94 @@ void Raster::readWindow(std::size_t row0, std::size_t col0, std::size_t nrows, s
       out[i] = static_cast<float>(base + l.scale * raw);
     }
   }
-  missing_ += missing;
+  if (voids != nullptr) *voids = voidCount;
+  return missing;
+}
+
+}  // namespace regolith::store::gdal
+
+namespace regolith::store::gdal {
+
+namespace {
+
+struct DigestCloser {
+  void operator()(EVP_MD_CTX* c) const noexcept { EVP_MD_CTX_free(c); }
+};
+
+/// Size and SHA-256 (lower-case hex) of a file read through GDAL's virtual file layer.
+std::pair<std::uint64_t, std::string> sizeAndSha256(const std::string& path,
+                                                    const std::string& prefix) {
+  VSILFILE* f = VSIFOpenL(path.c_str(), "rb");
+  if (f == nullptr) throw ImportError(prefix + ": cannot read " + path + " to record its digest");
+  std::unique_ptr<EVP_MD_CTX, DigestCloser> ctx(EVP_MD_CTX_new());
+  bool ok = ctx && EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr) == 1;
+  std::vector<unsigned char> buf(std::size_t{1} << 20);
+  std::uint64_t bytes = 0;
+  while (ok) {
+    const std::size_t n = VSIFReadL(buf.data(), 1, buf.size(), f);
+    if (n == 0) break;
+    bytes += n;
+    ok = EVP_DigestUpdate(ctx.get(), buf.data(), n) == 1;
+  }
+  VSIFCloseL(f);
+  std::array<unsigned char, EVP_MAX_MD_SIZE> md{};
+  unsigned len = 0;
+  if (!ok || EVP_DigestFinal_ex(ctx.get(), md.data(), &len) != 1) {
+    throw ImportError(prefix + ": cannot compute the SHA-256 digest of " + path);
+  }
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string hex;
+  for (unsigned i = 0; i < len; ++i) {
+    hex += kHex[md[i] >> 4];
+    hex += kHex[md[i] & 15];
+  }
+  return {bytes, hex};
+}
+
+}  // namespace
+
+std::string Raster::provenance() const {
+  const std::lock_guard lock(mutex_);
+  GDALDatasetH ds = ds_.get();
+  CPLJSONObject root;
+  CPLJSONArray sources;
+  char** files = GDALGetFileList(ds);
+  for (char** f = files; f != nullptr && *f != nullptr; ++f) {
+    const auto [bytes, sha] = sizeAndSha256(*f, prefix_);
+    CPLJSONObject s;
+    s.Add("file", std::filesystem::path(*f).filename().string());
+    s.Add("path", std::string(*f));
+    s.Add("bytes", static_cast<GInt64>(bytes));
+    s.Add("sha256", sha);
+    sources.Add(s);
+  }
+  CSLDestroy(files);
+  root.Add("sources", sources);
+  root.Add("gdal_driver", layout_.driver);
+  root.Add("gdal_version", std::string(GDALVersionInfo("RELEASE_NAME")));
+  // The label fields that decided the georeferencing.
+  const std::pair<const char*, const char*> groups[] = {{"json:PDS", "IMAGE_MAP_PROJECTION"},
+                                                        {"json:ISIS3", "IsisCube/Mapping"}};
+  for (const auto& [domain, path] : groups) {
+    const std::string text = metadataText(ds, domain);
+    CPLJSONDocument doc;
+    if (text.empty() || !doc.LoadMemory(text)) continue;
+    const CPLJSONObject group = doc.GetRoot().GetObj(path);
+    if (group.IsValid()) root.Add("label", group);
+  }
+  CPLJSONArray gt;
+  std::array<double, 6> g{};
+  if (GDALGetGeoTransform(ds, g.data()) == CE_None) {
+    for (const double v : g) gt.Add(v);
+  }
+  root.Add("geotransform", gt);
+  char* wkt = nullptr;
+  const char* options[] = {"FORMAT=WKT2_2019", nullptr};
+  if (layout_.srs != nullptr && OSRExportToWktEx(layout_.srs, &wkt, options) == OGRERR_NONE) {
+    root.Add("crs_wkt", std::string(wkt));
+  }
+  CPLFree(wkt);
+  return root.Format(CPLJSONObject::PrettyFormat::Plain);
 }
 
 }  // namespace regolith::store::gdal

@@ -20,9 +20,15 @@
 namespace regolith::store::gdal {
 
 /// An equirectangular DEM (x, y in metres from the projection's origin) that covers all
-/// longitudes becomes a planet grid at its exact resolution (360°/cols, and 180°/rows if it
-/// covers all latitudes). Returns whether the spacing was snapped; leaves other grids alone.
-bool globalToPlanet(GridInfo& info);
+/// longitudes (within half a pixel, at the label's resolution if it has one) becomes a planet
+/// grid at its exact resolution: 360°/cols in longitude; in latitude the label's own
+/// resolution `labelPixelsPerDegree` (PDS3 MAP_RESOLUTION, ISIS3 Scale) where it exists and
+/// agrees with the map scale to 1 % (within 1e-6 of 180°/rows it is that: labels print it
+/// rounded, GDAL's writers derive it from the metres), else 180°/rows if the rows cover all
+/// latitudes within half a pixel, else the map scale's. Samples are placed by their pixel
+/// offsets from the projection's origin. Returns whether the spacing was snapped; leaves
+/// other grids alone.
+bool globalToPlanet(GridInfo& info, std::optional<double> labelPixelsPerDegree = std::nullopt);
 
 /// Runs GDALAllRegister() once.
 void registerOnce();
@@ -57,6 +63,15 @@ struct Layout {
   std::optional<double> declaredNodata, extraNodata;
   bool readMask = false;  // GDAL's mask band has more to say than the nodata value
   bool voidMarker = false, offsetCorrected = false, spacingSnapped = false;
+  /// The label's map resolution in pixels per degree (PDS3 MAP_RESOLUTION, ISIS3 Scale).
+  std::optional<double> labelPixelsPerDegree;
+  /// The grid is the source's rows from rowOffset and columns from colOffset (rows or columns
+  /// dropped beyond a pole or beyond 360°).
+  std::size_t rowOffset = 0, colOffset = 0;
+  std::size_t droppedNorthRows = 0, droppedSouthRows = 0, droppedColumns = 0;
+  /// A pole-to-pole grid moved onto the poles, in pixels (0: not moved).
+  double poleShiftPixels = 0.0;
+  std::optional<SampleWindow> window;  // ImportOptions::window or bbox, as applied
   OGRSpatialReferenceH srs = nullptr;  // owned by the dataset
 };
 
@@ -82,8 +97,16 @@ class Raster final : public topo::SampleSource {
                   std::span<float> out) const override;
   /// Missing samples delivered by readWindow() so far.
   [[nodiscard]] std::size_t missingRead() const noexcept { return missing_.load(); }
+  /// Of those, the −32768 voids of a file declaring no nodata (Layout::voidMarker).
+  [[nodiscard]] std::size_t voidsRead() const noexcept { return voids_.load(); }
   /// "<operation>: <file>"
   [[nodiscard]] const std::string& prefix() const noexcept { return prefix_; }
+  /// Provenance (JSON, docs/store-format.md): this raster's files as GDAL lists them (a label
+  /// and its data file, ...) with sizes and SHA-256 digests read through GDAL's virtual file
+  /// layer (so /vsizip/ paths work), GDAL's driver and version, the label's map projection
+  /// group (PDS3 IMAGE_MAP_PROJECTION, ISIS3 Mapping), the geotransform and the CRS.
+  /// Throws ImportError if a file cannot be read.
+  [[nodiscard]] std::string provenance() const;
 
  private:
   std::filesystem::path path_;
@@ -92,11 +115,22 @@ class Raster final : public topo::SampleSource {
   GDALRasterBandH band_ = nullptr;
   Layout layout_;
   mutable std::mutex mutex_;
-  mutable std::atomic<std::size_t> missing_{0};
+  mutable std::atomic<std::size_t> missing_{0}, voids_{0};
 
   void open(const ImportOptions& options, bool pdsShift);
   void analyse(const ImportOptions& options);
   void detectRadii();
+  void resolvePoles();
+  void dropRepeatedColumns();
+  void applyWindow(const ImportOptions& options);
+  [[nodiscard]] SampleWindow windowOfBox(const std::array<double, 4>& box) const;
+  /// Reads source rows/cols (not offset by the window) as readWindow does; returns the
+  /// number of missing samples.
+  std::size_t readSource(std::size_t row0, std::size_t col0, std::size_t nrows, std::size_t ncols,
+                         std::span<float> out, std::size_t* voids = nullptr) const;
+  /// Whether every sample of the source's rows row0… (or columns col0…) is missing.
+  [[nodiscard]] bool allMissing(std::size_t row0, std::size_t nrows, std::size_t col0,
+                                std::size_t ncols) const;
 };
 
 }  // namespace regolith::store::gdal

@@ -3,6 +3,8 @@
 
 #include "GdalRaster.hpp"
 
+#include <cpl_json.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,6 +15,14 @@
 namespace regolith::store {
 
 namespace {
+
+/// The store's options of an import: its own, with level 0's statistics (min, max, mean and
+/// count of valid heights, computed once for `info`).
+WriteOptions writeOptionsOf(const ImportOptions& o) {
+  WriteOptions w = static_cast<const WriteOptions&>(o);
+  w.statistics = true;
+  return w;
+}
 
 std::string number(double v) {
   std::ostringstream o;
@@ -31,6 +41,11 @@ ImportReport reportOf(const gdal::Raster& r) {
   rep.offsetCorrected = l.offsetCorrected;
   rep.spacingSnapped = l.spacingSnapped;
   rep.voidMarkerAssumed = l.voidMarker;
+  rep.droppedNorthRows = l.droppedNorthRows;
+  rep.droppedSouthRows = l.droppedSouthRows;
+  rep.droppedColumns = l.droppedColumns;
+  rep.poleShiftPixels = l.poleShiftPixels;
+  rep.window = l.window;
   return rep;
 }
 
@@ -87,9 +102,11 @@ ImportReport importRaster(const std::filesystem::path& raster, const std::filesy
   const auto t0 = std::chrono::steady_clock::now();
   auto r = std::make_shared<gdal::Raster>(raster, options, "store::importRaster()");
   ImportReport rep = reportOf(*r);
+  rep.info.provenance = r->provenance();
   const std::vector<GridSource> grids{GridSource{rep.info, r, {}}};
-  writeStore(store, grids, options);
+  writeStore(store, grids, writeOptionsOf(options));
   rep.missingSamples = r->missingRead();
+  rep.voidMarkerAssumed = r->voidsRead() > 0;  // the note only where such voids exist
   rep.info = writtenInfo(store, rep.info.name);
   rep.seconds = secondsSince(t0);
   return rep;
@@ -100,6 +117,10 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   const auto t0 = std::chrono::steady_clock::now();
   const std::string op = "store::importTiles()";
   if (tiles.empty()) throw ImportError(op + ": " + store.string() + ": no tiles given");
+  if (options.window || options.bbox) {
+    throw ImportError(op + ": " + store.string() +
+                      ": a window or bounding box is for one raster; expected none with tiles");
+  }
   std::vector<std::shared_ptr<gdal::Raster>> rasters;
   for (const auto& t : tiles) rasters.push_back(std::make_shared<gdal::Raster>(t, options, op));
   const GridInfo& first = rasters.front()->layout().info;
@@ -163,18 +184,34 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   src.info.cols = cols;
   ImportReport rep = reportOf(*rasters.front());
   // Tiles of a global equirectangular grid: the mosaic is a planet grid.
-  rep.spacingSnapped = gdal::globalToPlanet(src.info) || rep.spacingSnapped;
+  rep.spacingSnapped =
+      gdal::globalToPlanet(src.info, firstLayout.labelPixelsPerDegree) || rep.spacingSnapped;
+  // Provenance: the first tile's, with every tile's files.
+  CPLJSONDocument doc;
+  if (!doc.LoadMemory(rasters.front()->provenance())) {
+    throw ImportError(op + ": " + store.string() + ": cannot record the tiles' provenance");
+  }
+  CPLJSONArray files = doc.GetRoot().GetArray("sources");
+  for (std::size_t i = 1; i < rasters.size(); ++i) {
+    CPLJSONDocument t;
+    if (!t.LoadMemory(rasters[i]->provenance())) continue;
+    const CPLJSONArray more = t.GetRoot().GetArray("sources");
+    for (int k = 0; k < more.Size(); ++k) files.Add(more[k]);
+  }
+  src.info.provenance = doc.GetRoot().Format(CPLJSONObject::PrettyFormat::Plain);
   rep.info = src.info;
   rep.tiles = rasters.size();
   const std::vector<GridSource> grids{src};
-  writeStore(store, grids, options);
+  writeStore(store, grids, writeOptionsOf(options));
   // Missing: what the tiles held as missing, plus the gaps no tile covers.
-  std::size_t covered = 0;
+  std::size_t covered = 0, voids = 0;
   for (const auto& r : rasters) {
     rep.missingSamples += r->missingRead();
+    voids += r->voidsRead();
     covered += r->rows() * r->cols();
   }
   rep.missingSamples += rows * cols - covered;
+  rep.voidMarkerAssumed = voids > 0;
   rep.info = writtenInfo(store, src.info.name);
   rep.seconds = secondsSince(t0);
   return rep;

@@ -234,6 +234,17 @@ void readAttributes(hid_t g, GridEntry& entry, const Context& ctx, const std::st
   }
   info.patchRows = static_cast<std::size_t>(patch[0]);
   info.patchCols = static_cast<std::size_t>(patch[1]);
+  if (hdf5::hasAttribute(g, format::kProvenance, ctx)) {  // format 1.3
+    info.provenance = hdf5::readString(g, format::kProvenance, ctx, owner);
+  }
+  if (hdf5::hasAttribute(g, format::kValidSamples, ctx)) {  // format 1.3
+    HeightStatistics st;
+    st.validSamples = hdf5::readCount(g, format::kValidSamples, ctx, owner);
+    st.min = hdf5::readNumber(g, format::kHeightMin, ctx, owner);
+    st.max = hdf5::readNumber(g, format::kHeightMax, ctx, owner);
+    st.mean = hdf5::readNumber(g, format::kHeightMean, ctx, owner);
+    info.statistics = st;
+  }
 }
 
 /// Opens and checks one sample dataset: rank, shape, type, chunking and filters. `shapeNote`

@@ -78,9 +78,21 @@ inline constexpr std::string_view kTransverseMercator = "transverse_mercator";
 // Transverse Mercator placements (format 1.2): a grid with one has format_version [1, 2].
 inline constexpr int kTransverseMercatorFormatMinor = 2;
 
+// Height statistics of level 0 (format 1.3), optional: all four or none.
+inline constexpr int kStatisticsFormatMinor = 3;
+inline constexpr const char* kHeightMin = "height_min";
+inline constexpr const char* kHeightMax = "height_max";
+inline constexpr const char* kHeightMean = "height_mean";
+inline constexpr const char* kValidSamples = "valid_samples";
+// Provenance (format 1.3, optional): a JSON string.
+inline constexpr const char* kProvenance = "provenance";
+
 /// The minor format version a grid needs: 0, 1 for a tiled grid, 2 for a transverse
-/// Mercator placement (minor versions are cumulative: a 1.2 reader reads tiles too).
-[[nodiscard]] inline int gridFormatMinor(const GridInfo& info, bool tiled) noexcept {
+/// Mercator placement, 3 with height statistics (minor versions are cumulative: a 1.2
+/// reader reads tiles too).
+[[nodiscard]] inline int gridFormatMinor(const GridInfo& info, bool tiled,
+                                         bool statistics = false) noexcept {
+  if (statistics || !info.provenance.empty()) return kStatisticsFormatMinor;
   if (info.kind == GridKind::Dem &&
       info.placement.kind == PlacementInfo::Kind::TransverseMercator) {
     return kTransverseMercatorFormatMinor;

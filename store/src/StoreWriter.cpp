@@ -23,6 +23,8 @@
 #include <exception>
 #include <functional>
 #include <limits>
+#include <map>
+#include <mutex>
 #include <set>
 #include <thread>
 
@@ -238,12 +240,13 @@ std::string_view placementName(PlacementInfo::Kind k) {
   return "?";
 }
 
-void writeAttributes(hid_t g, const GridInfo& info, bool tiled, const Context& ctx) {
+void writeAttributes(hid_t g, const GridInfo& info, bool tiled, bool statistics,
+                     const Context& ctx) {
   using namespace hdf5;
-  writeInt32s(
-      g, format::kFormatVersion,
-      {kFormatVersionMajor, std::max(kFormatVersionMinor, format::gridFormatMinor(info, tiled))},
-      ctx);
+  writeInt32s(g, format::kFormatVersion,
+              {kFormatVersionMajor,
+               std::max(kFormatVersionMinor, format::gridFormatMinor(info, tiled, statistics))},
+              ctx);
   writeString(g, format::kKind,
               std::string(info.kind == GridKind::Dem ? format::kDem : format::kPlanet), ctx);
   writeUInt64(g, format::kRows, info.rows, ctx);
@@ -268,6 +271,7 @@ void writeAttributes(hid_t g, const GridInfo& info, bool tiled, const Context& c
       ctx);
   writeUInt64(g, format::kLevels, info.levels, ctx);
   writeUInt64s(g, format::kPatchShape, {info.patchRows, info.patchCols}, ctx);
+  if (!info.provenance.empty()) writeString(g, format::kProvenance, info.provenance, ctx);
   if (info.kind != GridKind::Dem) return;
   const PlacementInfo& p = info.placement;
   writeString(g, format::kPlacement, std::string(placementName(p.kind)), ctx);
@@ -348,6 +352,14 @@ struct Missing {
     return std::isnan(v) || (nodata && v == *nodata);
   }
   [[nodiscard]] float stored() const noexcept { return nodata.value_or(kNan); }
+};
+
+/// Level 0's valid heights in one block: the parts of HeightStatistics.
+struct BlockStats {
+  double min = std::numeric_limits<double>::infinity();
+  double max = -std::numeric_limits<double>::infinity();
+  double sum = 0.0;
+  std::uint64_t count = 0;
 };
 
 class LevelWriter {
@@ -798,8 +810,27 @@ void writeGrid(hid_t grids, const GridSource& src, const Prepared& p, const Writ
   const GridInfo& info = p.info;
   const bool tiled = !p.tiles.empty();
   hdf5::Group group = createGroup(grids, info.name, ctx);
-  writeAttributes(group.get(), info, tiled, ctx);
+  writeAttributes(group.get(), info, tiled, o.statistics, ctx);
   if (tiled) writeTiles(group.get(), p, o, progress, ctx);
+  // Level 0's statistics, per block keyed by its position and summed in that order, so
+  // that they do not depend on the threads.
+  std::mutex statsMutex;
+  std::map<std::pair<std::size_t, std::size_t>, BlockStats> blockStats;
+  const Missing missing{info.nodata};
+  const auto collect = [&](std::size_t br0, std::size_t c0, const std::vector<float>& out) {
+    if (!o.statistics) return;
+    BlockStats b;
+    for (const float v : out) {
+      if (missing(v)) continue;
+      const auto d = static_cast<double>(v);
+      b.min = std::min(b.min, d);
+      b.max = std::max(b.max, d);
+      b.sum += d;
+      ++b.count;
+    }
+    const std::lock_guard lock(statsMutex);
+    blockStats[{br0, c0}] = b;
+  };
   {
     Pyramid pyramid(group.get(), p, o, progress, ctx);
     // Level 0 band by band; each band flows up the pyramid as soon as its pair is complete.
@@ -816,9 +847,26 @@ void writeGrid(hid_t grids, const GridSource& src, const Prepared& p, const Writ
                            } else {
                              level0Block(*src.samples, info, br0, c0, bnr, nc, out, ctx);
                            }
+                           collect(br0, c0, out);
                          });
     }
     pyramid.close();
+  }
+  if (o.statistics) {
+    BlockStats all;
+    for (const auto& [key, b] : blockStats) {
+      all.min = std::min(all.min, b.min);
+      all.max = std::max(all.max, b.max);
+      all.sum += b.sum;
+      all.count += b.count;
+    }
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const bool none = all.count == 0;
+    hdf5::writeDouble(group.get(), format::kHeightMin, none ? nan : all.min, ctx);
+    hdf5::writeDouble(group.get(), format::kHeightMax, none ? nan : all.max, ctx);
+    hdf5::writeDouble(group.get(), format::kHeightMean,
+                      none ? nan : all.sum / static_cast<double>(all.count), ctx);
+    hdf5::writeUInt64(group.get(), format::kValidSamples, all.count, ctx);
   }
   const hdf5::Lock lock;
   hdf5::check(H5Gclose(group.release()), ctx, "cannot close group '/grids/" + info.name + "'");
@@ -850,7 +898,8 @@ void writeStore(const std::filesystem::path& path, std::span<const GridSource> g
   for (const GridSource& src : grids) {
     prepared.push_back(prepare(src, options, dir, ctx));
     const GridInfo& info = prepared.back().info;
-    rootMinor = std::max(rootMinor, format::gridFormatMinor(info, !prepared.back().tiles.empty()));
+    rootMinor = std::max(rootMinor, format::gridFormatMinor(info, !prepared.back().tiles.empty(),
+                                                            options.statistics));
     for (const PreparedTile& t : prepared.back().tiles) {
       if (t.samples) totalSamples += static_cast<double>(t.rows * t.cols);
     }

@@ -216,6 +216,30 @@ def test_import_raster_gives_exact_plane_heights_and_normals(plane_tif, tmp_path
     np.testing.assert_allclose(n, np.broadcast_to(expect, n.shape), rtol=0, atol=1e-5)
 
 
+def test_import_raster_window_bbox_and_body(plane_tif, tmp_path):
+    # A window of the plane: its samples are GDAL's, its extent the window's.
+    out = tmp_path / "window.h5"
+    rep = regolith.import_raster(plane_tif, out, grid="w", window=(10, 20, 30, 40), body="Mars")
+    assert rep["window"] == (10, 20, 30, 40) and (rep["rows"], rep["cols"]) == (30, 40)
+    ds = gdal.Open(str(plane_tif))  # kept alive while its band is read
+    expected = ds.GetRasterBand(1).ReadAsArray()[10:40, 20:60]
+    with h5py.File(out, "r") as f:
+        np.testing.assert_array_equal(f["grids/w/level0"][...], expected)
+        assert f["grids/w"].attrs["body"] == "Mars"
+    dem = regolith.open(out)
+    assert dem.extent == (520.0, 560.0, 1960.0, 1990.0)
+    x, y = np.array([520.5, 559.5]), np.array([1989.5, 1960.5])
+    np.testing.assert_allclose(dem.heights(x, y), 0.25 * x - 0.125 * y + 10.0, rtol=0,
+                               atol=2e-4)
+    # A bounding box in degrees (the plane lies near 0 deg N, 0 deg E on Mars).
+    deg = 180.0 / (math.pi * 3396190.0)  # degrees per metre
+    box = (520.0 * deg, 1960.0 * deg, 560.0 * deg, 1990.0 * deg)
+    rep = regolith.import_raster(plane_tif, tmp_path / "bbox.h5", grid="b", bbox=box)
+    assert rep["window"] == (10, 20, 30, 40)
+    with pytest.raises(regolith.RasterImportError, match="both a window and a bounding box"):
+        regolith.import_raster(plane_tif, tmp_path / "x.h5", window=(0, 0, 1, 1), bbox=box)
+
+
 def test_import_raster_with_the_zfp_codec_reads_the_same_samples(plane_tif, tmp_path):
     a, b = tmp_path / "deflate.h5", tmp_path / "zfp.h5"
     regolith.import_raster(plane_tif, a, grid="plane", patch_size=64, deflate=4)

@@ -1,5 +1,5 @@
 // GDAL import (importRaster, importTiles, describeRaster), with GDAL itself as the oracle:
-// every real fixture (../shared/fixtures/dem) and a PDS4 copy of it is imported, read back
+// every real fixture (tests/data/dem) and a PDS4 copy of it is imported, read back
 // with Store::readWindow and compared sample by sample with GDAL's pixel reads after
 // scale/offset, nodata and special pixels; sample centres are compared with GDAL's
 // geotransform and, through the placement, with PROJ (OGR) inverse projections. Tiles cut
@@ -14,6 +14,7 @@
 #include "support/StoreScratch.hpp"
 
 #include <cpl_conv.h>
+#include <cpl_json.h>
 #include <gdal.h>
 #include <gdal_utils.h>
 #include <gtest/gtest.h>
@@ -31,8 +32,10 @@
 #include <iostream>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -511,7 +514,8 @@ TEST(Import, Nad27UtmGeotiffIsATransverseMercatorDemOnClarke1866WithNodataMissin
   for (const double v : o.raw) nodata += v == -32767.0 ? 1U : 0U;
   EXPECT_GT(nodata, 0U);
   EXPECT_EQ(rep.missingSamples, nodata);
-  EXPECT_EQ(Store::open(scratch("utm.h5")).formatVersion(), (std::array<int, 2>{1, 2}));
+  // Transverse Mercator needs 1.2; the import's height statistics make it 1.3.
+  EXPECT_EQ(Store::open(scratch("utm.h5")).formatVersion(), (std::array<int, 2>{1, 3}));
 }
 
 namespace {
@@ -773,10 +777,25 @@ TEST(ImportTiles, TilesCutWithGdalImportAsOneGridEqualToTheSingleImport) {
     const Store a = Store::open(scratch("single.h5")), b = Store::open(scratch("tiled.h5"));
     EXPECT_TRUE(b.tiled(single.info.name));
     expectSameGrids(a, single.info.name, b, single.info.name);
-    // A tiled transverse Mercator grid needs a 1.2 reader (which reads tiles too).
-    const bool tm = single.info.placement.kind == PlacementInfo::Kind::TransverseMercator &&
-                    single.info.kind == GridKind::Dem;
-    EXPECT_EQ(b.formatVersion(), (std::array<int, 2>{1, tm ? 2 : 1}));
+    // The mosaic's height statistics are the single import's, to the bit (chunk order).
+    const std::optional<HeightStatistics> sa = a.grid(single.info.name).statistics,
+                                          sb = b.grid(single.info.name).statistics;
+    ASSERT_TRUE(sa && sb);
+    EXPECT_EQ(sb->validSamples, sa->validSamples);
+    EXPECT_EQ(sb->min, sa->min);
+    EXPECT_EQ(sb->max, sa->max);
+    EXPECT_EQ(sb->mean, sa->mean);
+    // Its provenance lists every tile's files (a PDS4 tile is its label, its image and the
+    // sidecar files GDAL lists beside them).
+    CPLJSONDocument doc;
+    ASSERT_TRUE(doc.LoadMemory(b.grid(single.info.name).provenance));
+    const CPLJSONArray sources = doc.GetRoot().GetArray("sources");
+    std::set<std::string> paths;
+    for (int i = 0; i < sources.Size(); ++i) paths.insert(sources[i].GetString("path"));
+    for (const fs::path& t : tiles) EXPECT_EQ(paths.count(t.string()), 1U) << t;
+    // Imports store height statistics: format 1.3 (which reads tiles and transverse
+    // Mercator too).
+    EXPECT_EQ(b.formatVersion(), (std::array<int, 2>{1, 3}));
     EXPECT_EQ(b.grid(single.info.name).placement.kind, single.info.placement.kind);
   }
 }
@@ -1009,4 +1028,230 @@ TEST(Import, TransverseMercatorGeotiffsOfAnyZoneAndOriginPlaceTheirSamplesWhereP
     expectGeoreferencing(g, p, o, Expect{GridKind::Dem, PlacementInfo::Kind::TransverseMercator},
                          k.file);
   }
+}
+
+// ---- windows, bounding boxes, the body's name ------------------------------------------------
+
+namespace {
+
+/// The store's level 0 equals GDAL's samples of `w` (after scale/offset), and its geometry is
+/// the full grid's moved by the window.
+void expectWindow(const fs::path& raster, const ImportReport& rep, const GridInfo& full,
+                  const SampleWindow& w, bool pdsShift) {
+  ASSERT_TRUE(rep.window);
+  EXPECT_EQ(rep.window->row0, w.row0);
+  EXPECT_EQ(rep.window->col0, w.col0);
+  const GridInfo& g = rep.info;
+  EXPECT_EQ(g.rows, w.rows);
+  EXPECT_EQ(g.cols, w.cols);
+  EXPECT_EQ(g.x0, full.x0 + static_cast<double>(w.col0) * full.spacingX);
+  EXPECT_EQ(g.y0, full.y0 - static_cast<double>(w.row0) * full.spacingY);
+  EXPECT_EQ(g.spacingX, full.spacingX);
+  const Oracle o = readGdal(raster, pdsShift);
+  const Store s = Store::open(scratch("window.h5"));
+  const std::vector<float> got = readLevel(s, g.name);
+  std::size_t bad = 0;
+  for (std::size_t r = 0; r < g.rows; ++r) {
+    for (std::size_t c = 0; c < g.cols; ++c) {
+      const std::size_t k = (w.row0 + r) * o.cols + w.col0 + c;
+      const double raw = o.raw[k];
+      const bool missing = o.mask[k] == 0 || std::isnan(raw) || (o.nodata && raw == *o.nodata);
+      const float want = missing ? std::nanf("") : static_cast<float>(o.offset + o.scale * raw);
+      const float have = got[r * g.cols + c];
+      if (!(have == want || (std::isnan(have) && std::isnan(want))) && ++bad <= 5) {
+        ADD_FAILURE() << r << "," << c << ": " << have << " vs GDAL " << want;
+      }
+    }
+  }
+  EXPECT_EQ(bad, 0U);
+}
+
+}  // namespace
+
+TEST(ImportWindow, AWindowOfTheMolaGridIsItsSamplesAndOpensAsAPlanet) {
+  const fs::path src = fixture("megt90n000cb.lbl");
+  const GridInfo full = describeRaster(src);
+  ImportOptions o = smallPatches();
+  o.window = SampleWindow{100, 200, 50, 60};
+  const ImportReport rep = importRaster(src, scratch("window.h5"), o);
+  EXPECT_TRUE(rep.offsetCorrected);  // decided on the whole grid, before the window
+  expectWindow(src, rep, full, *o.window, true);
+  // The store opens and answers at its samples' centres.
+  Pager pager(std::make_shared<const Store>(Store::open(scratch("window.h5"))),
+              std::make_shared<PatchCache>(std::size_t{4} << 20));
+  const topo::TopoPlanet planet = pager.planet(rep.info.name);
+  const std::vector<float> got = readLevel(Store::open(scratch("window.h5")), rep.info.name);
+  for (std::size_t r = 0; r < rep.info.rows; r += 7) {
+    for (std::size_t c = 0; c < rep.info.cols; c += 9) {
+      const topo::HeightSample h =
+          planet.height({rep.info.y0 - static_cast<double>(r) * rep.info.spacingY,
+                         rep.info.x0 + static_cast<double>(c) * rep.info.spacingX},
+                        topo::Interpolation::Nearest);
+      ASSERT_TRUE(h.valid());
+      EXPECT_EQ(h.height, static_cast<double>(got[r * rep.info.cols + c]));
+    }
+  }
+  o.window = SampleWindow{700, 0, 30, 10};
+  EXPECT_EQ(errorOf([&] { (void)importRaster(src, scratch("window2.h5"), o); }),
+            "store::importRaster(): " + src.string() +
+                ": window of 30 rows x 10 cols from row 700, col 0 is empty or leaves the grid "
+                "of 720 rows x 1440 cols; expected a non-empty window inside it");
+  o.bbox = std::array<double, 4>{1.0, 2.0, 3.0, 4.0};
+  EXPECT_EQ(errorOf([&] { (void)importRaster(src, scratch("window2.h5"), o); }),
+            "store::importRaster(): " + src.string() +
+                ": both a window and a bounding box given; expected one");
+}
+
+TEST(ImportWindow, ABoundingBoxTakesTheSamplesWhoseCentresLieInside) {
+  const fs::path src = fixture("megt90n000cb.lbl");
+  const GridInfo full = describeRaster(src);
+  ImportOptions o = smallPatches();
+  const std::array<double, 4> box{137.0, -6.1, 138.3, -5.0};  // Gale crater, roughly
+  o.bbox = box;
+  const ImportReport rep = importRaster(src, scratch("window.h5"), o);
+  ASSERT_TRUE(rep.window);
+  const SampleWindow w = *rep.window;
+  // Every centre inside the box, and the next row or column out on each side outside it.
+  const auto lon = [&](double c) { return full.x0 + c * full.spacingX; };
+  const auto lat = [&](double r) { return full.y0 - r * full.spacingY; };
+  const double r0 = static_cast<double>(w.row0), c0 = static_cast<double>(w.col0);
+  const double r1 = r0 + static_cast<double>(w.rows) - 1.0;
+  const double c1 = c0 + static_cast<double>(w.cols) - 1.0;
+  EXPECT_GE(lon(c0), box[0]);
+  EXPECT_LT(lon(c0 - 1.0), box[0]);
+  EXPECT_LE(lon(c1), box[2]);
+  EXPECT_GT(lon(c1 + 1.0), box[2]);
+  EXPECT_LE(lat(r0), box[3]);
+  EXPECT_GT(lat(r0 - 1.0), box[3]);
+  EXPECT_GE(lat(r1), box[1]);
+  EXPECT_LT(lat(r1 + 1.0), box[1]);
+  expectWindow(src, rep, full, w, true);
+  // The same box given in −180…180 longitudes, and one across the grid's seam at 0°.
+  o.bbox = std::array<double, 4>{137.0 - 360.0, -6.1, 138.3 - 360.0, -5.0};
+  EXPECT_EQ(importRaster(src, scratch("window.h5"), o).window->col0, w.col0);
+  o.bbox = std::array<double, 4>{-10.0, 0.0, 10.0, 5.0};
+  EXPECT_EQ(errorOf([&] { (void)importRaster(src, scratch("window2.h5"), o); }),
+            "store::importRaster(): " + src.string() +
+                ": bounding box -10, 0, 10, 5 crosses the grid's seam at 0 deg longitude; "
+                "expected a box within 0 to 360 (import the two sides apart)");
+}
+
+TEST(ImportWindow, ABoundingBoxOnAPolarStereographicDemHoldsTheBoxsOutline) {
+  const fs::path src = fixture("Shoemaker_1k.tif");
+  const GridInfo full = describeRaster(src);
+  // A box around the grid's centre sample.
+  const topo::Placement pl = placementOf(full);
+  const double xc = full.x0 + 128.0 * full.spacingX, yc = full.y0 - 128.0 * full.spacingY;
+  const topo::Geodetic centre = pl.toGeodetic(xc, yc, 0.0);
+  ImportOptions o = smallPatches();
+  o.bbox = std::array<double, 4>{centre.lonDeg - 0.3, centre.latDeg - 0.002, centre.lonDeg + 0.3,
+                                 centre.latDeg + 0.002};
+  const ImportReport rep = importRaster(src, scratch("window.h5"), o);
+  ASSERT_TRUE(rep.window);
+  expectWindow(src, rep, full, *rep.window, false);
+  // The window's centres span the box's corners to within one sample: it takes the samples
+  // whose centres lie in the rectangle around the box's outline.
+  const GridInfo& g = rep.info;
+  const double east = g.x0 + static_cast<double>(g.cols - 1) * g.spacingX;
+  const double south = g.y0 - static_cast<double>(g.rows - 1) * g.spacingY;
+  for (const double la : {(*o.bbox)[1], (*o.bbox)[3]}) {
+    for (const double lo : {(*o.bbox)[0], (*o.bbox)[2]}) {
+      const glm::dvec3 p = pl.fromGeodetic({la, lo, 0.0});
+      EXPECT_GT(p.x, g.x0 - g.spacingX);
+      EXPECT_LT(p.x, east + g.spacingX);
+      EXPECT_LT(p.y, g.y0 + g.spacingY);
+      EXPECT_GT(p.y, south - g.spacingY);
+    }
+  }
+  EXPECT_LT(rep.info.rows, full.rows);
+  EXPECT_LT(rep.info.cols, full.cols);
+}
+
+TEST(ImportWindow, TheBodyOptionNamesTheBodyTheCrsDoesNot) {
+  const fs::path tif =
+      makeGeotiff("unnamed_body.tif", 1, GDT_Float32, "+proj=longlat +R=1737400 +no_defs",
+                  {10.0, 0.5, 0.0, 20.0, 0.0, -0.5});
+  EXPECT_EQ(describeRaster(tif).bodyName, "unknown");
+  ImportOptions o;
+  o.body = "Moon";
+  const ImportReport rep = importRaster(tif, scratch("body.h5"), o);
+  EXPECT_EQ(rep.info.bodyName, "Moon");
+  EXPECT_EQ(Store::open(scratch("body.h5")).grid(rep.info.name).bodyName, "Moon");
+  EXPECT_EQ(rep.info.equatorialRadius, 1737400.0);  // the radii stay the CRS's
+}
+
+// ---- height statistics ---------------------------------------------------------------------
+
+TEST(ImportStatistics, TheStoreRecordsMinMaxMeanAndValidCountOfGdalsHeights) {
+  for (const char* name : {"vest64_dtm_specialpixels_downsampled.cub", "dem_unfinished.tif",
+                           "Polar_Crater_1_1m_ngate_edited2_forPDS_lowres.cub"}) {
+    SCOPED_TRACE(name);
+    const ImportReport rep = importRaster(fixture(name), scratch("stats.h5"), smallPatches());
+    const Oracle o = readGdal(fixture(name));
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo, sum = 0.0;
+    std::uint64_t valid = 0;
+    for (std::size_t i = 0; i < o.raw.size(); ++i) {
+      const double raw = o.raw[i];
+      if (o.mask[i] == 0 || std::isnan(raw) || (o.nodata && raw == *o.nodata) ||
+          raw < -3.40282255e38 || (o.declaresNothing && raw == -32768.0)) {
+        continue;
+      }
+      const auto h =
+          static_cast<double>(static_cast<float>((o.offset - rep.radiusReference) + o.scale * raw));
+      lo = std::min(lo, h);
+      hi = std::max(hi, h);
+      sum += h;
+      ++valid;
+    }
+    const Store s = Store::open(scratch("stats.h5"));
+    const std::optional<HeightStatistics> st = s.grid(rep.info.name).statistics;
+    ASSERT_TRUE(st);
+    EXPECT_EQ(st->validSamples, valid);
+    EXPECT_EQ(st->validSamples, rep.info.rows * rep.info.cols - rep.missingSamples);
+    if (valid == 0) {  // the all-NULL polar cube
+      EXPECT_TRUE(std::isnan(st->min) && std::isnan(st->max) && std::isnan(st->mean));
+      continue;
+    }
+    EXPECT_EQ(st->min, lo);
+    EXPECT_EQ(st->max, hi);
+    EXPECT_NEAR(st->mean, sum / static_cast<double>(valid),
+                1e-12 * std::abs(sum / static_cast<double>(valid)));
+    EXPECT_EQ(s.formatVersion(), (std::array<int, 2>{1, 3}));
+  }
+}
+
+// ---- provenance ----------------------------------------------------------------------------
+
+TEST(ImportProvenance, TheStoreRecordsSourceFilesDigestsGdalAndTheDecidingLabelFields) {
+  // The fixtures' own SHA256SUMS (made when they were collected) are the digests' oracle.
+  std::map<std::string, std::string> sums;
+  std::ifstream in(fixture("SHA256SUMS"));
+  for (std::string hash, file; in >> hash >> file;) sums[file] = hash;
+  ASSERT_FALSE(sums.empty());
+  const fs::path src = fixture("megt90n000cb.lbl");
+  const ImportReport rep = importRaster(src, scratch("provenance.h5"), smallPatches());
+  const std::string text = Store::open(scratch("provenance.h5")).grid(rep.info.name).provenance;
+  CPLJSONDocument doc;
+  ASSERT_TRUE(doc.LoadMemory(text)) << text;
+  const CPLJSONObject root = doc.GetRoot();
+  const CPLJSONArray sources = root.GetArray("sources");
+  ASSERT_EQ(sources.Size(), 2);  // the detached label and its image, as GDAL lists them
+  std::set<std::string> names;
+  for (int i = 0; i < sources.Size(); ++i) {
+    const std::string file = sources[i].GetString("file");
+    names.insert(file);
+    EXPECT_EQ(sources[i].GetString("sha256"), sums.at(file)) << file;
+    EXPECT_EQ(sources[i].GetLong("bytes"), static_cast<GInt64>(fs::file_size(fixture(file))));
+  }
+  EXPECT_EQ(names, (std::set<std::string>{"megt90n000cb.lbl", "megt90n000cb.img"}));
+  EXPECT_EQ(root.GetString("gdal_driver"), "PDS");
+  EXPECT_EQ(root.GetString("gdal_version"), std::string(GDALVersionInfo("RELEASE_NAME")));
+  EXPECT_EQ(root.GetDouble("label/MAP_RESOLUTION/value"), 4.0);
+  EXPECT_EQ(root.GetDouble("label/LINE_PROJECTION_OFFSET"), 360.5);
+  const CPLJSONArray gt = root.GetArray("geotransform");
+  const Oracle o = readGdal(src, true);  // the geotransform as the import read it
+  ASSERT_EQ(gt.Size(), 6);
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(gt[i].ToDouble(), o.gt[static_cast<std::size_t>(i)]);
+  EXPECT_NE(root.GetString("crs_wkt").find("3396000"), std::string::npos);  // the sphere
+  EXPECT_EQ(Store::open(scratch("provenance.h5")).formatVersion(), (std::array<int, 2>{1, 3}));
 }

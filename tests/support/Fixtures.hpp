@@ -1,6 +1,6 @@
 #pragma once
 // Locates the real-data fixtures: the environment variable REGOLITH_FIXTURES_DIR if set and
-// non-empty, else the CMake cache variable of the same name (default ../shared/fixtures/dem).
+// non-empty, else the CMake cache variable of the same name (default: tests/data/dem).
 
 #include <cstdlib>
 #include <string>

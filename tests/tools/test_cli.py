@@ -10,9 +10,10 @@ The real binary writes and reads real stores. Oracles from outside the library:
 
 Environment: REGOLITH_BIN (the regolith binary), REGOLITH_FIXTURE_WRITER (tests/store's
 write_fixture_store, which writes multi-grid and tiled stores), REGOLITH_FIXTURES_DIR (the
-real DEM fixtures, /work/shared/fixtures/dem by default).
+real DEM fixtures, tests/data/dem of the checkout by default).
 """
 
+import hashlib
 import json
 import math
 import os
@@ -20,6 +21,7 @@ import pty
 import select
 import subprocess
 import sys
+import zipfile
 
 import h5py
 import numpy as np
@@ -30,7 +32,9 @@ gdal.UseExceptions()
 
 BIN = os.environ.get("REGOLITH_BIN", "regolith")
 FIXTURE_WRITER = os.environ.get("REGOLITH_FIXTURE_WRITER", "")
-DEM_FIXTURES = os.environ.get("REGOLITH_FIXTURES_DIR", "/work/shared/fixtures/dem")
+DEM_FIXTURES = os.environ.get("REGOLITH_FIXTURES_DIR") or os.path.join(
+    os.path.dirname(os.path.abspath(__file__)), "..", "data", "dem"
+)
 
 
 def dem_fixture(name):
@@ -305,6 +309,17 @@ def check_info_against_h5py(path, info):
             assert g["scale"] == float(a["scale"]) and g["offset"] == float(a["offset"])
             tiled = "tiles" in h
             assert g["tiled"] == tiled
+            if "valid_samples" in a:  # format 1.3: stored at import
+                assert g["statistics"] == {"min": float(a["height_min"]),
+                                           "max": float(a["height_max"]),
+                                           "mean": float(a["height_mean"]),
+                                           "valid_samples": int(a["valid_samples"])}
+            else:
+                assert g["statistics"] is None
+            if "provenance" in a:  # format 1.3: recorded at import
+                assert g["provenance"] == json.loads(a["provenance"])
+            else:
+                assert g["provenance"] is None
             for k, shape in enumerate(g["level_shapes"]):
                 if k == 0 and tiled:
                     assert shape == [g["rows"], g["cols"]]
@@ -619,6 +634,223 @@ def test_info_on_a_raster(work):
     assert info["grid"]["kind"] == "planet"
 
 
+def test_import_drops_padding_beyond_a_pole_and_info_reads_gdal_virtual_paths(work):
+    # A global geographic grid of 181 rows of 1 deg: row 0 is centred at 90.5 deg N and
+    # wholly missing (ISIS-style padding). The import drops it and says so.
+    path = work / "padded.tif"
+    ds = gdal.GetDriverByName("GTiff").Create(str(path), 360, 181, 1, gdal.GDT_Float32)
+    srs = osr.SpatialReference()
+    srs.ImportFromProj4("+proj=longlat +R=1737400 +no_defs")
+    ds.SetProjection(srs.ExportToWkt())
+    ds.SetGeoTransform([-180.0, 1.0, 0.0, 91.0, 0.0, -1.0])
+    values = np.arange(181 * 360, dtype=np.float32).reshape(181, 360)
+    values[0, :] = -9999.0
+    ds.GetRasterBand(1).SetNoDataValue(-9999.0)
+    ds.GetRasterBand(1).WriteArray(values)
+    ds = None
+    info = json.loads(run("info", path, "--json").stdout)
+    assert info["raster"]["dropped_north_rows"] == 1
+    assert info["raster"]["dropped_south_rows"] == 0
+    assert info["grid"]["rows"] == 180 and info["grid"]["y0"] == 89.5
+    out = work / "padded.h5"
+    p = run("import", path, "--out", out)
+    assert summary_field(p.stdout, "corrections") == (
+        "wholly missing rows beyond a pole dropped: 1 north, 0 south")
+    assert np.array_equal(store_heights(out, "padded"), gdal_heights(path)[1:, :])
+    # The store opens and answers at GDAL's pixel centres (row 1 of the source is row 0).
+    q = parse_csv(run("query", out, "--coords", "lonlat", "--interp", "nearest",
+                      "180.5,89.5", "0.5,0.5").stdout)[1]
+    assert [row[2] for row in q] == [float(values[1, 0]), float(values[90, 180])]
+    # No -32768 note for an int16 source that declares no nodata but has no such value.
+    clean = work / "int16-no-voids.tif"
+    ds = gdal.GetDriverByName("GTiff").Create(str(clean), 8, 6, 1, gdal.GDT_Int16)
+    ds.SetProjection(srs.ExportToWkt())
+    ds.SetGeoTransform([10.0, 1.0, 0.0, 20.0, 0.0, -1.0])
+    ds.GetRasterBand(1).WriteArray(np.arange(48, dtype=np.int16).reshape(6, 8))
+    ds = None
+    p = run("import", clean, "--out", work / "int16-no-voids.h5")
+    assert summary_field(p.stdout, "corrections") == "none"
+    # info and import take GDAL's virtual paths, as GDAL does.
+    archive = work / "fixture.zip"
+    with zipfile.ZipFile(archive, "w") as z:
+        z.write(dem_fixture("Shoemaker_1k.tif"), "Shoemaker_1k.tif")
+    vsi = f"/vsizip/{archive}/Shoemaker_1k.tif"
+    zipped = json.loads(run("info", vsi, "--json").stdout)
+    plain = json.loads(run("info", dem_fixture("Shoemaker_1k.tif"), "--json").stdout)
+    assert zipped["grid"] == plain["grid"] and zipped["raster"] == plain["raster"]
+    run("import", vsi, "--out", work / "zipped.h5")
+    assert np.array_equal(store_heights(work / "zipped.h5", "Shoemaker_1k"),
+                          gdal_heights(dem_fixture("Shoemaker_1k.tif")), equal_nan=True)
+
+
+def test_import_pds3_label_resolution_is_the_truth(work):
+    # A PDS3 product written here (label text and MSB int16 image): the Moon at 2.5 px/deg,
+    # MAP_SCALE rounded to 12.115 km (0.3995 deg), 451 lines whose last one is missing
+    # padding beyond the south pole. Through the metres, 451 lines span 180.19 deg: the old
+    # snap to 180/451 deg contradicted MAP_RESOLUTION. Offsets in MOLA's convention.
+    rows, cols = 451, 900
+    values = (np.arange(rows * cols) % 30000).astype(">i2").reshape(rows, cols)
+    values[450, :] = -32768
+    values.tofile(work / "pds3.img")
+    (work / "pds3.lbl").write_text(f"""PDS_VERSION_ID = PDS3
+RECORD_TYPE = FIXED_LENGTH
+RECORD_BYTES = {cols * 2}
+FILE_RECORDS = {rows}
+^IMAGE = "pds3.img"
+OBJECT = IMAGE
+  LINES = {rows}
+  LINE_SAMPLES = {cols}
+  SAMPLE_TYPE = MSB_INTEGER
+  SAMPLE_BITS = 16
+  MISSING_CONSTANT = -32768
+  UNIT = METER
+END_OBJECT = IMAGE
+OBJECT = IMAGE_MAP_PROJECTION
+  MAP_PROJECTION_TYPE = "SIMPLE CYLINDRICAL"
+  A_AXIS_RADIUS = 1737.4 <KM>
+  B_AXIS_RADIUS = 1737.4 <KM>
+  C_AXIS_RADIUS = 1737.4 <KM>
+  POSITIVE_LONGITUDE_DIRECTION = EAST
+  CENTER_LATITUDE = 0.0 <DEGREE>
+  CENTER_LONGITUDE = 180.0 <DEGREE>
+  MAP_RESOLUTION = 2.5 <PIXEL/DEGREE>
+  MAP_SCALE = 12.115 <KM/PIXEL>
+  LINE_PROJECTION_OFFSET = 225.5
+  SAMPLE_PROJECTION_OFFSET = 450.5
+  COORDINATE_SYSTEM_NAME = PLANETOCENTRIC
+END_OBJECT = IMAGE_MAP_PROJECTION
+END
+""")
+    out = work / "pds3.h5"
+    p = run("import", work / "pds3.lbl", "--out", out, "--grid", "pds3")
+    corrections = p.stdout.split("corrections:", 1)[1]
+    assert "PDS3 projection offsets read in the other convention" in corrections
+    assert "global spacing snapped to the label's resolution" in corrections
+    assert "wholly missing rows beyond a pole dropped: 0 north, 1 south" in corrections
+    a = attrs(out, "pds3")
+    assert a["kind"] == "planet" and [float(v) for v in a["spacing"]] == [0.4, 0.4]
+    assert int(a["rows"]) == 450 and int(a["cols"]) == 900
+    assert float(a["x0"]) == pytest.approx(0.2, abs=1e-12)
+    assert float(a["y0"]) == pytest.approx(89.8, abs=1e-12)
+    assert np.array_equal(store_heights(out, "pds3"), values[:450, :].astype(np.float64))
+    # Nearest queries at the label's sample centres return those samples (1 um: in the
+    # outermost rows TopoPlanet's polar cap may see a centre an ulp poleward and blend).
+    pts = [(0, 0), (0, 899), (224, 450), (449, 0), (449, 899), (300, 613)]
+    args = [f"{0.2 + 0.4 * c!r},{89.8 - 0.4 * r!r}" for r, c in pts]
+    q = parse_csv(run("query", out, "--coords", "lonlat", "--interp", "nearest", *args).stdout)[1]
+    assert [row[2] for row in q] == pytest.approx([float(values[r, c]) for r, c in pts],
+                                                  rel=0, abs=1e-6)
+
+
+def test_import_window_bbox_and_body(work):
+    src = dem_fixture("megt90n000cb.lbl")
+    full = json.loads(run("info", src, "--json").stdout)["grid"]
+    out = work / "window.h5"
+    p = run("import", src, "--out", out, "--window", "100,200,50,60", "--body", "Mars")
+    assert summary_field(p.stdout, "size") == "50 rows x 60 cols (window from row 100, col 200)"
+    assert summary_field(p.stdout, "body").startswith("Mars,")
+    a = attrs(out, "megt90n000cb")
+    assert a["body"] == "Mars"
+    assert float(a["x0"]) == full["x0"] + 200 * full["spacing"][0]
+    assert float(a["y0"]) == full["y0"] - 100 * full["spacing"][1]
+    # GDAL's reading of the MOLA label in the corrected offset convention (docs/import.md).
+    keys = ("PDS_SampleProjOffset_Shift", "PDS_LineProjOffset_Shift")
+    try:
+        for k in keys:
+            gdal.SetConfigOption(k, "-0.5")
+        expected = gdal_heights(src)[100:150, 200:260]
+    finally:
+        for k in keys:
+            gdal.SetConfigOption(k, None)
+    assert np.array_equal(store_heights(out, "megt90n000cb"), expected)
+    # --bbox: the samples whose centres lie in the box.
+    p = run("import", src, "--out", work / "bbox.h5", "--bbox", "137.0,-6.1,138.3,-5.0")
+    b = attrs(work / "bbox.h5", "megt90n000cb")
+    lons = float(b["x0"]) + np.arange(int(b["cols"])) * full["spacing"][0]
+    lats = float(b["y0"]) - np.arange(int(b["rows"])) * full["spacing"][1]
+    assert lons.min() >= 137.0 and lons.max() <= 138.3
+    assert lats.min() >= -6.1 and lats.max() <= -5.0
+    assert lons.min() - full["spacing"][0] < 137.0 and lons.max() + full["spacing"][0] > 138.3
+    p = run("import", src, "--out", work / "both.h5", "--bbox", "1,2,3,4", "--window",
+            "0,0,1,1", check=False)
+    assert p.returncode != 0 and "excludes" in p.stderr
+
+
+def test_info_statistics_corners_and_ground_size(work):
+    src = dem_fixture("Shoemaker_1k.tif")  # south polar stereographic, NaN nodata
+    out = work / "stats.h5"
+    run("import", src, "--out", out)
+    info = json.loads(run("info", out, "--json").stdout)
+    assert info["format_version"] == [1, 3]
+    g = info["grids"][0]
+    check_info_against_h5py(out, info)
+    # The statistics stored at import are numpy's over the stored level 0.
+    h = store_heights(out, "Shoemaker_1k")
+    st = g["statistics"]
+    assert st["valid_samples"] == int(np.count_nonzero(~np.isnan(h)))
+    assert st["min"] == float(np.nanmin(h)) and st["max"] == float(np.nanmax(h))
+    assert st["mean"] == pytest.approx(float(np.nanmean(h)), rel=1e-12)
+    # Corners and centre: OSR's longitude/latitude of GDAL's pixel centres.
+    ds = gdal.Open(src)
+    gt = ds.GetGeoTransform()
+    srs = ds.GetSpatialRef()
+    geo = srs.CloneGeogCS()
+    for r in (srs, geo):
+        r.SetAxisMappingStrategy(osr.OAMS_TRADITIONAL_GIS_ORDER)
+    ct = osr.CoordinateTransformation(srs, geo)
+    rows, cols = ds.RasterYSize, ds.RasterXSize
+
+    def lonlat(r, c):
+        return ct.TransformPoint(gt[0] + (c + 0.5) * gt[1], gt[3] + (r + 0.5) * gt[5])[:2]
+
+    for key, (r, c) in {"north_west": (0, 0), "north_east": (0, cols - 1),
+                        "south_west": (rows - 1, 0), "south_east": (rows - 1, cols - 1),
+                        "centre": ((rows - 1) / 2, (cols - 1) / 2)}.items():
+        lon, lat = lonlat(r, c)
+        assert g["geodetic"][key]["lat"] == pytest.approx(lat, abs=1e-9), key
+        assert math.remainder(g["geodetic"][key]["lon"] - lon, 360.0) == pytest.approx(0, abs=1e-9)
+    # Ground size: the centre row and column, pixel edge to edge, as 256-segment polylines of
+    # OSR's points on the sphere.
+    radius = srs.GetSemiMajor()
+    assert srs.GetSemiMinor() == radius
+
+    def polyline(points):
+        lon, lat = np.radians(np.array(points)).T
+        xyz = radius * np.column_stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon),
+                                        np.sin(lat)])
+        return float(np.linalg.norm(np.diff(xyz, axis=0), axis=1).sum())
+
+    t = np.linspace(0.0, 1.0, 257)
+    mid_r, mid_c = (rows - 1) / 2, (cols - 1) / 2
+    width = polyline([lonlat(mid_r, -0.5 + k * cols) for k in t])
+    height = polyline([lonlat(-0.5 + k * rows, mid_c) for k in t])
+    assert g["ground_size_m"] == pytest.approx([width, height], rel=1e-9)
+    text = run("info", out).stdout
+    assert (f"  heights:        min {short(st['min'])}, max {short(st['max'])}, mean "
+            f"{short(st['mean'])} m; {st['valid_samples']} valid samples") in text
+    assert "  ground size:    " in text and "  corners:        NW " in text
+    # Provenance: the source, its size and SHA-256 (hashlib's), GDAL's driver and version.
+    prov = g["provenance"]
+    with open(src, "rb") as fh:
+        data = fh.read()
+    assert [(s["file"], s["bytes"], s["sha256"]) for s in prov["sources"]] == [
+        ("Shoemaker_1k.tif", len(data), hashlib.sha256(data).hexdigest())]
+    assert prov["gdal_driver"] == "GTiff"
+    assert prov["gdal_version"] == gdal.VersionInfo("RELEASE_NAME")
+    assert prov["geotransform"] == list(gt)
+    assert (f"  sources:        Shoemaker_1k.tif, {len(data)} bytes, sha256 "
+            f"{hashlib.sha256(data).hexdigest()}\n") in text
+    assert f"  made with:      GDAL {gdal.VersionInfo('RELEASE_NAME')}, driver GTiff\n" in text
+    # A store written without statistics (before format 1.3) still opens, and says so.
+    old = work / "no-stats.h5"
+    run("generate", "victoria", "--out", old, "--size", 64)
+    assert json.loads(run("info", old, "--json").stdout)["grids"][0]["statistics"] is None
+    old_text = run("info", old).stdout
+    assert "no statistics stored (written before format 1.3)" in old_text
+    assert "  provenance:     not recorded\n" in old_text
+    assert json.loads(run("info", old, "--json").stdout)["grids"][0]["provenance"] is None
+
+
 def sinusoidal_tif(path):
     ds = gdal.GetDriverByName("GTiff").Create(str(path), 20, 10, 1, gdal.GDT_Float32)
     srs = osr.SpatialReference()
@@ -684,14 +916,14 @@ def test_utm_import_info_and_lonlat_query(work):
     out = work / "utm.h5"
     run("import", src, "--out", out)
     info = json.loads(run("info", out, "--json").stdout)
-    assert info["format_version"] == [1, 2]
+    assert info["format_version"] == [1, 3]  # 1.2 for transverse Mercator, 1.3: statistics
     g = info["grids"][0]
     assert g["placement"] == {"kind": "transverse_mercator", "lon_centre_deg": -123.0,
                               "lat_origin_deg": 0.0, "scale_factor": 0.9996,
                               "false_easting": 500000.0, "false_northing": 0.0}
     with h5py.File(out, "r") as f:
         a = f["grids/dem_nodata"].attrs
-        assert list(a["format_version"]) == [1, 2] and list(f.attrs["format_version"]) == [1, 2]
+        assert list(a["format_version"]) == [1, 3] and list(f.attrs["format_version"]) == [1, 3]
         assert a["placement"] == "transverse_mercator"
         for key in ("lon_centre_deg", "lat_origin_deg", "scale_factor", "false_easting",
                     "false_northing"):

@@ -52,7 +52,8 @@ TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
                           "x" + std::to_string(samples_->cols()) + ", expected the grid's " +
                           std::to_string(grid_.rows()) + "x" + std::to_string(grid_.cols()));
   }
-  if (grid_.north() > 90.0 + kEdgeTol || grid_.south() < -90.0 - kEdgeTol) {
+  const double poleTol = kPoleOverhangPixels * grid_.spacingY();
+  if (grid_.north() > 90.0 + poleTol || grid_.south() < -90.0 - poleTol) {
     throw InvalidArgument(std::string(op) + ": grid spans latitudes " +
                           std::to_string(grid_.south()) + " to " + std::to_string(grid_.north()) +
                           " deg, expected within [-90, 90]");

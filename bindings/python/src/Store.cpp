@@ -11,6 +11,7 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <filesystem>
 
@@ -76,6 +77,13 @@ py::dict reportDict(const store::ImportReport& r) {
   d["offset_corrected"] = r.offsetCorrected;
   d["spacing_snapped"] = r.spacingSnapped;
   d["void_marker_assumed"] = r.voidMarkerAssumed;
+  d["dropped_north_rows"] = r.droppedNorthRows;
+  d["dropped_south_rows"] = r.droppedSouthRows;
+  d["dropped_columns"] = r.droppedColumns;
+  d["pole_shift_pixels"] = r.poleShiftPixels;
+  if (r.window) {
+    d["window"] = py::make_tuple(r.window->row0, r.window->col0, r.window->rows, r.window->cols);
+  }
   d["missing_samples"] = r.missingSamples;
   d["seconds"] = r.seconds;
   return d;
@@ -224,9 +232,16 @@ void bindStore(py::module_& m) {
       "import_raster",
       [](const std::filesystem::path& raster, const std::filesystem::path& out,
          const std::string& grid, std::size_t levels, std::size_t patch, int deflate,
-         std::optional<double> nodata, const std::string& compression) {
+         std::optional<double> nodata, const std::string& compression,
+         std::optional<std::array<std::size_t, 4>> window,
+         std::optional<std::array<double, 4>> bbox, const std::string& body) {
         store::ImportOptions o;
         o.gridName = grid;
+        o.body = body;
+        if (window) {
+          o.window = store::SampleWindow{(*window)[0], (*window)[1], (*window)[2], (*window)[3]};
+        }
+        o.bbox = bbox;
         o.levels = levels;
         o.patchRows = o.patchCols = patch;
         o.deflate = deflate;
@@ -241,11 +256,15 @@ void bindStore(py::module_& m) {
       },
       py::arg("raster"), py::arg("store"), py::arg("grid") = "", py::arg("levels") = 0,
       py::arg("patch_size") = 256, py::arg("deflate") = 0, py::arg("nodata") = py::none(),
-      py::arg("compression") = "deflate",
+      py::arg("compression") = "deflate", py::arg("window") = py::none(),
+      py::arg("bbox") = py::none(), py::arg("body") = "",
       "Imports a single-band raster GDAL reads (GeoTIFF, PDS3, PDS4, ISIS3...) as one grid of a "
       "new store, written crash-safely. compression: 'deflate' (shuffle + deflate at `deflate`) "
       "or 'zfp' (ZFP reversible, lossless and smaller; readers need HDF5's ZFP filter plugin, "
-      "and deflate must be 0). Returns the import report as a dict. Raises RasterImportError, "
+      "and deflate must be 0). window: (row0, col0, rows, cols) of the grid `regolith info RASTER` "
+      "shows; bbox: (west, south, east, north) degrees, the samples whose centres lie inside "
+      "(at most one of the two); body: the body's name where the CRS lacks it. Returns the "
+      "import report as a dict. Raises RasterImportError, "
       "StoreError or ValueError (a bad option).");
 
   m.def(

@@ -8,6 +8,7 @@
 #include <regolith/topo/TopoGrid.hpp>
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -36,6 +37,15 @@ struct PlacementInfo {
   double projectionRadius = 0.0, latOriginDeg = 0.0;
 };
 
+/// Level 0's heights summarised once, when the grid was written (format 1.3; absent in
+/// grids written without them, which readers still open). Metres; NaN when no sample is
+/// valid.
+struct HeightStatistics {
+  double min = 0.0, max = 0.0, mean = 0.0;
+  /// Level-0 samples that are not missing.
+  std::uint64_t validSamples = 0;
+};
+
 /// One grid's configuration. Sample (row, col) of level 0 sits at (x0 + col·dx,
 /// y0 − row·dy) (docs/grid-convention.md); for a planet x is longitude and y latitude in
 /// degrees. Level k has ⌈rows/2^k⌉ × ⌈cols/2^k⌉ samples with spacing 2^k·dx, its sample
@@ -56,6 +66,12 @@ struct GridInfo {
   PlacementInfo placement;                       // Dem only
   std::size_t levels = 1;                        // pyramid levels stored, level 0 included
   std::size_t patchRows = 256, patchCols = 256;  // HDF5 chunk = pager patch
+  /// Read from the store; the writer computes them (WriteOptions::statistics).
+  std::optional<HeightStatistics> statistics;
+  /// Where the grid came from, as JSON text (format 1.3; empty: not recorded): the import's
+  /// source files with sizes and SHA-256 digests, GDAL's driver and version, the label
+  /// fields and geotransform that decided the georeferencing (docs/store-format.md).
+  std::string provenance;
 
   [[nodiscard]] std::size_t levelRows(std::size_t level) const noexcept {
     return (rows + (std::size_t{1} << level) - 1) >> level;

@@ -7,6 +7,7 @@
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Store.hpp>
 
+#include <array>
 #include <atomic>
 #include <cstddef>
 #include <filesystem>
@@ -24,12 +25,29 @@ class ImportError : public StoreError {
   using StoreError::StoreError;
 };
 
+/// A window of samples: rows row0 … row0 + rows − 1, columns col0 … col0 + cols − 1.
+struct SampleWindow {
+  std::size_t row0 = 0, col0 = 0, rows = 0, cols = 0;
+};
+
 /// What to import and how to write it: the store's WriteOptions (patch size, levels, codec,
 /// deflate level, threads and executor, progress, cancel; 0 levels: until a level fits one
 /// patch), and the import's own choices.
 struct ImportOptions : WriteOptions {
   /// Name of the grid written; empty: the file's stem (of the first tile).
   std::string gridName{};
+  /// The body's name, where the CRS does not say it or says it wrongly (GDAL's PDS4 writer
+  /// drops it); empty: the CRS's. The radii stay the CRS's.
+  std::string body{};
+  /// importRaster() only: import just these samples of the grid the import would write
+  /// without a window (its rows and columns as describeRaster() gives them).
+  std::optional<SampleWindow> window{};
+  /// importRaster() only: import just the samples whose centres lie in this longitude/latitude
+  /// box, {west, south, east, north} in degrees (east > west; a box may not cross the
+  /// grid's seam). Planet grids: the grid's longitudes and latitudes; DEMs: the samples
+  /// inside the grid-aligned rectangle that holds the box's outline through the placement
+  /// (planetodetic latitudes). At most one of window and bbox.
+  std::optional<std::array<double, 4>> bbox{};
   /// A source value (before scale/offset) that also means "missing", beside the ones the
   /// file declares.
   std::optional<double> nodata{};
@@ -51,8 +69,18 @@ struct ImportReport {
   /// other projection-offset convention, as the MOLA MEGDR) or snapped (a global grid's
   /// spacing to 360°/cols, 180°/rows).
   bool offsetCorrected = false, spacingSnapped = false;
-  /// Whether a source without a declared nodata value had its −32768 voids taken as missing.
+  /// Whether a source without a declared nodata value had −32768 voids, taken as missing
+  /// (inspectRaster(), which reads no samples: whether it would take them as missing).
   bool voidMarkerAssumed = false;
+  /// Wholly missing rows beyond the north and the south pole (padding) that were dropped, and
+  /// columns beyond 360° of longitude, equal to the first ones, that were dropped.
+  std::size_t droppedNorthRows = 0, droppedSouthRows = 0, droppedColumns = 0;
+  /// A pole-to-pole grid (rows × spacing = 180°) whose offsets, through a rounded map scale,
+  /// put an edge up to 0.9 pixel beyond a pole is moved onto the poles by this many pixels
+  /// (positive: south); 0 when not moved.
+  double poleShiftPixels = 0.0;
+  /// The window of ImportOptions::window or ::bbox, in the grid without a window.
+  std::optional<SampleWindow> window;
   /// Level-0 samples that are missing (nodata, special pixels, NaN); for importTiles() also
   /// the samples of gaps that no tile covers.
   std::size_t missingSamples = 0;

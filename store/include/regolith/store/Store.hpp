@@ -133,6 +133,9 @@ struct WriteOptions {
   /// If set and becomes true, the write stops, removes its temporary file and throws
   /// StoreError("... cancelled").
   const std::atomic<bool>* cancel = nullptr;
+  /// Compute level 0's height statistics while writing and store them with each grid
+  /// (format 1.3, docs/store-format.md); the import does.
+  bool statistics = false;
 };
 
 /// One grid to write: its description (levels, patch size and sample type are set by the

@@ -11,6 +11,12 @@
 
 namespace regolith::topo {
 
+/// How far a planet grid's pixel extent may reach beyond a pole, in pixels (a fraction of
+/// its latitude spacing): the rounding of a geotransform. TopoPlanet refuses a grid that
+/// reaches further, and store::importRaster() applies the same bound, so that every store
+/// an import writes opens.
+inline constexpr double kPoleOverhangPixels = 0.01;
+
 /// A lat/lon grid of heights (metres above the body's reference surface, along its
 /// normal). The grid's x is longitude and y latitude, both in degrees, with the pixel-centre
 /// convention of TopoGrid; latitudes are planetocentric or planetodetic as declared.
@@ -26,8 +32,9 @@ namespace regolith::topo {
 /// Thread-safety: as TopoDem.
 class TopoPlanet {
  public:
-  /// Throws InvalidArgument if samples is null or mis-sized, or the grid leaves
-  /// −90…90° latitude or spans more than 360° of longitude.
+  /// Throws InvalidArgument if samples is null or mis-sized, or the grid's pixel extent
+  /// leaves −90…90° latitude by more than kPoleOverhangPixels, or it spans more than 360° of
+  /// longitude.
   TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
              std::shared_ptr<const SampleSource> samples);
 
