@@ -2,9 +2,11 @@
 #include <regolith/topo/Error.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <cassert>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace regolith::topo {
@@ -47,10 +49,19 @@ std::array<double, 6> TopoGrid::geoTransform() const noexcept {
   return {x0_ - 0.5 * dx_, dx_, 0.0, y0_ + 0.5 * dy_, 0.0, -dy_};
 }
 
+glm::dvec2 TopoGrid::edgeSlack() const noexcept {
+  constexpr double k = 4.0 * std::numeric_limits<double>::epsilon();
+  const double mx = std::max({std::abs(x0_), std::abs(west()), std::abs(east())});
+  const double my = std::max({std::abs(y0_), std::abs(north()), std::abs(south())});
+  return {k * (mx / dx_ + static_cast<double>(cols_) + 1.0),
+          k * (my / dy_ + static_cast<double>(rows_) + 1.0)};
+}
+
 bool TopoGrid::contains(double x, double y) const noexcept {
   const glm::dvec2 f = fractionalIndex(x, y);
-  return f.x >= -0.5 && f.x <= static_cast<double>(cols_) - 0.5 && f.y >= -0.5 &&
-         f.y <= static_cast<double>(rows_) - 0.5;
+  const glm::dvec2 e = edgeSlack();
+  return f.x >= -0.5 - e.x && f.x <= static_cast<double>(cols_) - 0.5 + e.x && f.y >= -0.5 - e.y &&
+         f.y <= static_cast<double>(rows_) - 0.5 + e.y;
 }
 
 SampleSource::SampleSource() {

@@ -68,6 +68,7 @@ TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
   southCap_ = grid_.south() <= -90.0 + kEdgeTol && lastLat > -90.0;
   northPoleV_ = (grid_.y0() - 90.0) / grid_.spacingY();
   southPoleV_ = (grid_.y0() + 90.0) / grid_.spacingY();
+  slack_ = grid_.edgeSlack();
   if (northCap_ || grid_.y0() >= 90.0) northPole_ = rowMean(*samples_, grid_, 0);
   if (southCap_ || lastLat <= -90.0) southPole_ = rowMean(*samples_, grid_, grid_.rows() - 1);
 }
@@ -76,11 +77,16 @@ TopoPlanet::Located TopoPlanet::locate(const LatLon& ll) const {
   Located L;
   const double west = grid_.west();
   const double rel = ll.lonDeg - west;
-  const double lon = (rel >= 0.0 && rel < 360.0) ? ll.lonDeg : west + wrapLongitude360(rel);
+  // A longitude a few ulps west of the west edge (an edge computed another way) is on it,
+  // not a turn further east.
+  const double lon = (rel >= 0.0 && rel < 360.0) ? ll.lonDeg
+                     : (rel < 0.0 && rel >= -slack_.x * grid_.spacingX())
+                         ? west
+                         : west + wrapLongitude360(rel);
   L.u = (lon - grid_.x0()) / grid_.spacingX();
   const double cmax = static_cast<double>(grid_.cols()) - 1.0;
   if (!global_) {
-    if (L.u > cmax + 0.5) return L;
+    if (L.u > cmax + 0.5 + slack_.x) return L;
     L.u = std::clamp(L.u, 0.0, cmax);
   }
   const double rmax = static_cast<double>(grid_.rows()) - 1.0;
@@ -89,7 +95,7 @@ TopoPlanet::Located TopoPlanet::locate(const LatLon& ll) const {
     if (northCap_) {
       L.cap = 1;
       L.t = std::min(L.v / northPoleV_, 1.0);
-    } else if (L.v < -0.5) {
+    } else if (L.v < -0.5 - slack_.y) {
       return L;
     }
     L.v = 0.0;
@@ -97,7 +103,7 @@ TopoPlanet::Located TopoPlanet::locate(const LatLon& ll) const {
     if (southCap_) {
       L.cap = -1;
       L.t = std::min((L.v - rmax) / (southPoleV_ - rmax), 1.0);
-    } else if (L.v > rmax + 0.5) {
+    } else if (L.v > rmax + 0.5 + slack_.y) {
       return L;
     }
     L.v = rmax;
@@ -171,14 +177,20 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, No
         [&](const auto& acc) { return detail::evaluate<G>(interp, acc, L.u, L.v, nd); });
   };
   const bool analytic = wantNormal && L.cap == 0;
-  const detail::KernelResult k = analytic ? eval(std::true_type{}) : eval(std::false_type{});
+  const detail::KernelResult k =
+      analytic ? planetAccessor<true>(grid_, *samples_, global_, northCap_, southCap_, L.u, L.v,
+                                      [&](const auto& acc) {
+                                        return detail::evaluateSurface(interp, acc, L.u, L.v, nd);
+                                      })
+               : eval(std::false_type{});
   s.status = k.status;
+  s.normalStatus = k.status;
   if (k.status != QueryStatus::Ok) return s;
   double h = k.h;
   if (L.cap != 0) {
     const double pole = L.cap > 0 ? northPole_ : southPole_;
     if (std::isnan(pole)) {
-      s.status = QueryStatus::Nodata;
+      s.status = s.normalStatus = QueryStatus::Nodata;
       return s;
     }
     h = (1.0 - L.t) * h + L.t * pole;
@@ -190,6 +202,8 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, No
   const double cosD = std::cos(latD * kDeg);
   glm::dvec3 enu;
   if (analytic && cosD > 1e-9) {
+    s.normalStatus = k.gradStatus;
+    if (k.gradStatus != QueryStatus::Ok) return s;
     // Surface S(φ, λ) = X(φ, λ) + h·U: its normal in ENU is (−h_e, −h_n, 1) with
     // h_e = h_λ / ((N + h) cos φ) and h_n = h_φ / (M + h), φ planetodetic.
     const double hLam = k.dhdu / (grid_.spacingX() * kDeg);
@@ -206,10 +220,11 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, No
   } else {
     enu = capNormalEnu(ll, interp, h);
     if (std::isnan(enu.x)) {
-      s.status = QueryStatus::Nodata;
-      s.height = kNan;
+      // The normal's tangent-plane stencil reaches a hole; the height is still valid.
+      s.normalStatus = QueryStatus::Nodata;
       return s;
     }
+    s.normalStatus = QueryStatus::Ok;
   }
   s.normal = frame == NormalFrame::Grid ? enu : body_.enuFrame(latD, ll.lonDeg) * enu;
   return s;
@@ -256,12 +271,13 @@ void TopoPlanet::heights(std::span<const double> latsDeg, std::span<const double
 
 void TopoPlanet::surfaces(std::span<const double> latsDeg, std::span<const double> lonsDeg,
                           std::span<double> outHeights, std::span<glm::dvec3> outNormals,
-                          std::span<QueryStatus> status, Interpolation interp,
-                          NormalFrame frame) const {
+                          std::span<QueryStatus> status, Interpolation interp, NormalFrame frame,
+                          std::span<QueryStatus> normalStatus) const {
   constexpr const char* op = "TopoPlanet::surfaces()";
   const std::size_t n = latsDeg.size();
   if (lonsDeg.size() != n || outHeights.size() != n || outNormals.size() != n ||
-      (!status.empty() && status.size() != n)) {
+      (!status.empty() && status.size() != n) ||
+      (!normalStatus.empty() && normalStatus.size() != n)) {
     throw InvalidArgument(std::string(op) + ": arrays differ in length, expected " +
                           std::to_string(n) + " elements each");
   }
@@ -271,6 +287,7 @@ void TopoPlanet::surfaces(std::span<const double> latsDeg, std::span<const doubl
     outHeights[i] = s.height;
     outNormals[i] = s.normal;
     if (!status.empty()) status[i] = s.status;
+    if (!normalStatus.empty()) normalStatus[i] = s.normalStatus;
   }
 }
 

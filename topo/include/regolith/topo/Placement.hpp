@@ -57,7 +57,9 @@ class Placement {
 
   /// Columns: ∂P/∂x, ∂P/∂y, ∂P/∂h of the body-fixed position P at (x, y, h). Exact for the
   /// tangent plane; central differences over ±0.5 m for map projections (relative error
-  /// ~1e-13, far below anything a DEM resolves).
+  /// ~1e-13, far below anything a DEM resolves), one-sided (second order) within 0.5 m of
+  /// the edge of the projection's domain, such as a pole an equirectangular map reaches.
+  /// Throws DomainError only if (x, y) itself has no image.
   [[nodiscard]] glm::dmat3 jacobian(double x, double y, double h) const;
   /// Converts a normal in the grid frame (x, y, h) at (x, y, h) to a unit body-fixed normal.
   [[nodiscard]] glm::dvec3 normalToBodyFixed(const glm::dvec3& gridNormal, double x, double y,
