@@ -92,6 +92,15 @@ glm::dvec3 Placement::fromGeodetic(const Geodetic& g) const {
   return {xy.x, xy.y, g.height};
 }
 
+glm::dvec3 Placement::fromGeodeticNear(const Geodetic& g, double xNear) const {
+  if (const auto* eqc = equirectangular()) {
+    const glm::dvec2 xy =
+        eqc->forwardNear({body_.fromPlanetodetic(g.latDeg, latType_), g.lonDeg}, xNear);
+    return {xy.x, xy.y, g.height};
+  }
+  return fromGeodetic(g);
+}
+
 glm::dvec3 Placement::fromBodyFixed(const glm::dvec3& p) const {
   if (const auto* ltp = localTangentPlane()) return ltp->fromBodyFixed(p);
   return fromGeodetic(body_.toGeodetic(p));

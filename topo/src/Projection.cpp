@@ -62,6 +62,16 @@ glm::dvec2 Equirectangular::forward(const LatLon& ll) const {
   return {r_ * dl * kDeg * cosTs_, r_ * (ll.latDeg - lat0Deg_) * kDeg};
 }
 
+glm::dvec2 Equirectangular::forwardNear(const LatLon& ll, double xNear) const {
+  requireLatitude(ll.latDeg, "Equirectangular::forwardNear()");
+  requireFinite(ll.lonDeg, "Equirectangular::forwardNear()", "longitude");
+  requireFinite(xNear, "Equirectangular::forwardNear()", "x near");
+  const double dl0 = wrapLongitude180(ll.lonDeg - lon0Deg_);
+  const double turns = std::round((xNear / (r_ * kDeg * cosTs_) - dl0) / 360.0);
+  const double dl = dl0 + 360.0 * turns;
+  return {r_ * dl * kDeg * cosTs_, r_ * (ll.latDeg - lat0Deg_) * kDeg};
+}
+
 LatLon Equirectangular::inverse(const glm::dvec2& xy) const {
   requireFinite(xy.x, "Equirectangular::inverse()", "x");
   requireFinite(xy.y, "Equirectangular::inverse()", "y");

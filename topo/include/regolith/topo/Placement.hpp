@@ -52,6 +52,11 @@ class Placement {
   [[nodiscard]] Geodetic toGeodetic(double x, double y, double h) const;
   /// Grid coordinates (x, y, h) of a planetodetic position: the inverse of toGeodetic.
   [[nodiscard]] glm::dvec3 fromGeodetic(const Geodetic& g) const;
+  /// As fromGeodetic(), but an equirectangular map takes the longitude in the turn whose x
+  /// lies nearest xNear (Equirectangular::forwardNear, PROJ's `+over`): a DEM that runs past
+  /// ±180° from its central meridian passes the centre of its x extent. Other placements
+  /// are single-valued in longitude and ignore xNear.
+  [[nodiscard]] glm::dvec3 fromGeodeticNear(const Geodetic& g, double xNear) const;
   /// Grid coordinates (x, y, h) of a body-fixed point.
   [[nodiscard]] glm::dvec3 fromBodyFixed(const glm::dvec3& p) const;
 
