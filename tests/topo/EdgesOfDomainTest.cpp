@@ -273,3 +273,81 @@ TEST(EdgesOfDomain, BodyNormalsNextToAPoleAnEquirectangularDemReaches) {
     EXPECT_LT(glm::length(n[i] - up), yPole - ys[i] < 1.0 ? 1e-6 : 1e-9) << yPole - ys[i];
   }
 }
+
+namespace {
+// A 2° global planet grid (row centres at ±89°, a polar cap beyond) of a field smooth on
+// the sphere, so that it has one value and one gradient at each pole.
+TopoPlanet capPlanet() {
+  const std::size_t rows = 90, cols = 180;
+  const TopoGrid g(rows, cols, -179.0, 89.0, 2.0, 2.0);
+  auto s = InMemorySamples::fromFunction(rows, cols, [&](std::size_t r, std::size_t c) {
+    const glm::dvec2 p = g.sampleCentre(static_cast<double>(r), static_cast<double>(c));
+    const double lat = p.y * kDeg, lon = p.x * kDeg;
+    const glm::dvec3 u(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat));
+    return static_cast<float>(1000.0 * u.x + 700.0 * u.y * u.z + 300.0 * u.z * u.z);
+  });
+  return {g, Body::marsSphere(), LatitudeType::Planetocentric, s};
+}
+
+double angle(const glm::dvec3& a, const glm::dvec3& b) {
+  return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
+}
+
+// Angle between body-frame normals at two points.
+double normalJump(const TopoPlanet& p, Interpolation k, LatLon a, LatLon b) {
+  const SurfaceSample sa = p.surface(a, k, NormalFrame::BodyFixed);
+  const SurfaceSample sb = p.surface(b, k, NormalFrame::BodyFixed);
+  EXPECT_TRUE(sa.normalValid() && sb.normalValid());
+  return angle(sa.normal, sb.normal);
+}
+}  // namespace
+
+// Item 2: a pole is one point, with one body-frame normal whatever longitude is passed.
+TEST(EdgesOfDomain, OneNormalAtAPoleWhateverTheLongitude) {
+  const TopoPlanet p = capPlanet();
+  for (const Interpolation k : kAll) {
+    for (const double lat : {90.0, -90.0}) {
+      const SurfaceSample s0 = p.surface({lat, 0.0}, k, NormalFrame::BodyFixed);
+      ASSERT_TRUE(s0.normalValid());
+      for (const double lon : {45.0, -77.7, 123.0, 180.0, 359.0}) {
+        const SurfaceSample s = p.surface({lat, lon}, k, NormalFrame::BodyFixed);
+        EXPECT_EQ(s.height, s0.height);
+        ASSERT_TRUE(s.normalValid());
+        EXPECT_LT(angle(s.normal, s0.normal), 1e-15) << int(k) << " " << lat << " " << lon;
+      }
+    }
+  }
+}
+
+// Item 1: bicubic normals are continuous across the polar cap's edge (the outermost row of
+// centres, ±89° here) and across the pole: the largest turn over a 1e-6° step there is at
+// most twice the largest over the same step elsewhere (across sample rows and between them).
+TEST(EdgesOfDomain, BicubicNormalsAreContinuousAcrossTheCapEdgeAndThePole) {
+  const TopoPlanet p = capPlanet();
+  const double step = 1e-6;
+  const Interpolation k = Interpolation::Bicubic;
+  double elsewhere = 0.0;
+  for (const double lat : {87.0, 85.0, 60.3, 1.0, -45.0, -87.0}) {
+    for (const double lon : {-179.0, -33.3, 0.0, 77.0, 150.5}) {
+      elsewhere =
+          std::max(elsewhere, normalJump(p, k, {lat - 0.5 * step, lon}, {lat + 0.5 * step, lon}));
+    }
+  }
+  ASSERT_GT(elsewhere, 0.0);
+  double atCap = 0.0, acrossPole = 0.0;
+  for (const double lon : {-179.0, -33.3, 0.0, 77.0, 150.5}) {
+    for (const double edge : {89.0, -89.0}) {
+      atCap = std::max(atCap, normalJump(p, k, {edge - 0.5 * step, lon}, {edge + 0.5 * step, lon}));
+    }
+    for (const double pole : {90.0, -90.0}) {
+      const double lat = pole - std::copysign(0.5 * step, pole);
+      acrossPole = std::max(acrossPole, normalJump(p, k, {lat, lon}, {lat, lon + 180.0}));
+    }
+  }
+  EXPECT_LE(atCap, 2.0 * elsewhere) << "elsewhere " << elsewhere;
+  EXPECT_LE(acrossPole, 2.0 * elsewhere) << "elsewhere " << elsewhere;
+  std::printf(
+      "[ measured ] cap.bicubic_normal_jump_1e-6deg: cap edge %.3e, across pole %.3e, "
+      "elsewhere %.3e rad\n",
+      atCap, acrossPole, elsewhere);
+}

@@ -28,6 +28,7 @@ struct KernelResult {
   double dhdv = 0.0;                         // ∂h/∂(row index)
   QueryStatus status = QueryStatus::Ok;      // of h
   QueryStatus gradStatus = QueryStatus::Ok;  // of dhdu, dhdv (when asked for)
+  double dhduv = 0.0;  // ∂²h/∂u∂v (bilinear and bicubic; 0 for nearest and fallbacks)
 };
 
 // A sample is missing if NaN or equal to the nodata value (NaN itself when none is declared).
@@ -241,6 +242,7 @@ KernelResult bilinear(const Acc& acc, double u, double v, double nd) {
   if constexpr (Grad) {
     k.dhdu = (1 - tv) * (b - a) + tv * (d - cc);
     k.dhdv = bottom - top;
+    k.dhduv = (d - cc) - (b - a);
   }
   return k;
 }
@@ -269,6 +271,7 @@ KernelResult bicubic(const Acc& acc, double u, double v, double nd) {
     if constexpr (Grad) {
       k.dhdu += wv[i] * drow;
       k.dhdv += dwv[i] * row;
+      k.dhduv += dwv[i] * drow;
     }
   }
   return k;

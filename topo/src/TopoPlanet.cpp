@@ -176,7 +176,10 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, No
         grid_, *samples_, global_, northCap_, southCap_, L.u, L.v,
         [&](const auto& acc) { return detail::evaluate<G>(interp, acc, L.u, L.v, nd); });
   };
-  const bool analytic = wantNormal && L.cap == 0;
+  // Bilinear and bicubic caps are a cubic Hermite blend in latitude (below), which needs the
+  // kernel's gradient at the cap's edge even for a height.
+  const bool hermiteCap = L.cap != 0 && interp != Interpolation::Nearest;
+  const bool analytic = (wantNormal && L.cap == 0) || hermiteCap;
   const detail::KernelResult k =
       analytic ? planetAccessor<true>(grid_, *samples_, global_, northCap_, southCap_, L.u, L.v,
                                       [&](const auto& acc) {
@@ -186,14 +189,35 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, No
   s.status = k.status;
   s.normalStatus = k.status;
   if (k.status != QueryStatus::Ok) return s;
-  double h = k.h;
+  double h = k.h, dhdu = k.dhdu, dhdv = k.dhdv;
   if (L.cap != 0) {
     const double pole = L.cap > 0 ? northPole_ : southPole_;
     if (std::isnan(pole)) {
       s.status = s.normalStatus = QueryStatus::Nodata;
       return s;
     }
-    h = (1.0 - L.t) * h + L.t * pole;
+    const double t = L.t;
+    if (hermiteCap) {
+      // h(t) from the edge row (t = 0: the kernel's height H and slope) to the pole (t = 1:
+      // the pole's height, slope 0), with v = v_edge + t·D. The cap then joins the grid with
+      // a continuous gradient (C1, as bicubic promises; bilinear's cells are C0 between
+      // themselves anyway), and the pole's gradient is 0: one normal there, the body's up,
+      // whatever the longitude.
+      const double rmax = static_cast<double>(grid_.rows()) - 1.0;
+      const double d = L.cap > 0 ? northPoleV_ : southPoleV_ - rmax;
+      const bool slope = k.gradStatus == QueryStatus::Ok;
+      const double m0 = slope ? k.dhdv * d : 0.0, m0u = slope ? k.dhduv * d : 0.0;
+      const double t2 = t * t, t3 = t2 * t;
+      const double h00 = 2.0 * t3 - 3.0 * t2 + 1.0, h10 = t3 - 2.0 * t2 + t,
+                   h01 = 3.0 * t2 - 2.0 * t3;
+      const double d00 = 6.0 * t2 - 6.0 * t, d10 = 3.0 * t2 - 4.0 * t + 1.0,
+                   d01 = 6.0 * t - 6.0 * t2;
+      h = k.h * h00 + m0 * h10 + pole * h01;
+      dhdu = k.dhdu * h00 + m0u * h10;
+      dhdv = (k.h * d00 + m0 * d10 + pole * d01) / d;
+    } else {
+      h = (1.0 - t) * h + t * pole;
+    }
   }
   s.height = h;
   if (!wantNormal) return s;
@@ -201,20 +225,21 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, No
   const double latD = body_.toPlanetodetic(ll.latDeg, latType_);
   const double cosD = std::cos(latD * kDeg);
   glm::dvec3 enu;
-  if (analytic && cosD > 1e-9) {
+  if (analytic && (cosD > 1e-9 || hermiteCap)) {
     s.normalStatus = k.gradStatus;
     if (k.gradStatus != QueryStatus::Ok) return s;
     // Surface S(φ, λ) = X(φ, λ) + h·U: its normal in ENU is (−h_e, −h_n, 1) with
-    // h_e = h_λ / ((N + h) cos φ) and h_n = h_φ / (M + h), φ planetodetic.
-    const double hLam = k.dhdu / (grid_.spacingX() * kDeg);
-    double hPhi = -k.dhdv / (grid_.spacingY() * kDeg);
+    // h_e = h_λ / ((N + h) cos φ) and h_n = h_φ / (M + h), φ planetodetic. In a Hermite cap
+    // h_λ vanishes as (1 − t)² towards the pole and cos φ as (1 − t): h_e → 0 there.
+    const double hLam = dhdu / (grid_.spacingX() * kDeg);
+    double hPhi = -dhdv / (grid_.spacingY() * kDeg);
     if (latType_ == LatitudeType::Planetocentric && !body_.isSphere()) {
       const double q = (body_.polarRadius() / body_.equatorialRadius()) *
                        (body_.polarRadius() / body_.equatorialRadius());
       const double sinD = std::sin(latD * kDeg);
       hPhi *= q / (cosD * cosD + q * q * sinD * sinD);  // ∂φc/∂φd
     }
-    const double he = hLam / ((body_.primeVerticalRadius(latD) + h) * cosD);
+    const double he = cosD > 1e-300 ? hLam / ((body_.primeVerticalRadius(latD) + h) * cosD) : 0.0;
     const double hn = hPhi / (body_.meridianRadius(latD) + h);
     enu = glm::normalize(glm::dvec3(-he, -hn, 1.0));
   } else {
@@ -233,10 +258,13 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, No
 glm::dvec3 TopoPlanet::capNormalEnu(const LatLon& ll, Interpolation interp, double) const {
   // Near and at a pole latitude/longitude derivatives degenerate, so the normal comes from
   // four heights a quarter row apart along east and north in the tangent plane, which
-  // stay well defined at the pole itself (east/north are taken at the given longitude).
+  // stay well defined at the pole itself. East/north are taken at the given longitude,
+  // except at the pole itself: one point, so one stencil (that of longitude 0) and one
+  // body-fixed normal, expressed in the ENU frame of the longitude given.
   const double latD = body_.toPlanetodetic(ll.latDeg, latType_);
-  const glm::dmat3 enu = body_.enuFrame(latD, ll.lonDeg);
-  const glm::dvec3 p0 = body_.toBodyFixed({latD, ll.lonDeg, 0.0});
+  const double stencilLon = std::abs(latD) == 90.0 ? 0.0 : ll.lonDeg;
+  const glm::dmat3 enu = body_.enuFrame(latD, stencilLon);
+  const glm::dvec3 p0 = body_.toBodyFixed({latD, stencilLon, 0.0});
   const double delta = 0.25 * grid_.spacingY() * kDeg * body_.meridianRadius(latD);
   glm::dvec3 pts[4];
   const glm::dvec3 offs[4] = {delta * enu[0], -delta * enu[0], delta * enu[1], -delta * enu[1]};
@@ -248,7 +276,8 @@ glm::dvec3 TopoPlanet::capNormalEnu(const LatLon& ll, Interpolation interp, doub
     pts[i] = body_.toBodyFixed({g.latDeg, g.lonDeg, hs.height});
   }
   const glm::dvec3 n = glm::normalize(glm::cross(pts[0] - pts[1], pts[2] - pts[3]));
-  return {glm::dot(n, enu[0]), glm::dot(n, enu[1]), glm::dot(n, enu[2])};
+  const glm::dmat3 out = stencilLon == ll.lonDeg ? enu : body_.enuFrame(latD, ll.lonDeg);
+  return {glm::dot(n, out[0]), glm::dot(n, out[1]), glm::dot(n, out[2])};
 }
 
 void TopoPlanet::heights(std::span<const double> latsDeg, std::span<const double> lonsDeg,
