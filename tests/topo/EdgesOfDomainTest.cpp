@@ -351,3 +351,36 @@ TEST(EdgesOfDomain, BicubicNormalsAreContinuousAcrossTheCapEdgeAndThePole) {
       "elsewhere %.3e rad\n",
       atCap, acrossPole, elsewhere);
 }
+
+// Item 10: longitudes of any size reduce exactly as fmod(lon, 360) does, and subnormal
+// spacings are refused (they put every point outside).
+TEST(EdgesOfDomain, HugeLongitudesReduceExactly) {
+  for (const double lon : {1e308, -1e308, 1.7976931348623157e308, 1e20 + 0.5, -7.3e15, 540.0}) {
+    const double r = std::fmod(lon, 360.0);
+    const double expected = r >= 180.0 ? r - 360.0 : (r < -180.0 ? r + 360.0 : r);
+    EXPECT_NEAR(wrapLongitude180(lon), expected, 2e-13) << lon;  // within an ulp of 540
+    EXPECT_EQ(wrapLongitude360(lon), r < 0.0 ? r + 360.0 : r) << lon;
+  }
+  const TopoPlanet p = capPlanet();
+  for (const double lon : {1e308, -1e308, 1e20 + 0.5}) {
+    const double same = wrapLongitude180(lon);
+    for (const Interpolation k : kAll) {
+      const SurfaceSample a = p.surface({12.3, lon}, k, NormalFrame::BodyFixed);
+      const SurfaceSample b = p.surface({12.3, same}, k, NormalFrame::BodyFixed);
+      EXPECT_EQ(a.height, b.height) << lon;
+      EXPECT_EQ(a.normal, b.normal) << lon;
+    }
+  }
+}
+
+TEST(EdgesOfDomain, SubnormalSpacingsAreRefused) {
+  try {
+    (void)TopoGrid(2, 2, 0.0, 0.0, 5e-324, 1.0);
+    ADD_FAILURE() << "no exception";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(),
+                 "TopoGrid(): spacing is (5e-324, 1), expected normal doubles (at least "
+                 "2.2250738585072014e-308)");
+  }
+  EXPECT_NO_THROW((void)TopoGrid(2, 2, 0.0, 0.0, 2.2250738585072014e-308, 1.0));
+}

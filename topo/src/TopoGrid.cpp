@@ -3,8 +3,10 @@
 #include <regolith/topo/TopoGrid.hpp>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cassert>
+#include <charconv>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -26,6 +28,15 @@ TopoGrid::TopoGrid(std::size_t rows, std::size_t cols, double x0, double y0, dou
   if (dx <= 0.0 || dy <= 0.0) {
     throw InvalidArgument(std::string(op) + ": spacing is (" + std::to_string(dx) + ", " +
                           std::to_string(dy) + "), expected both > 0");
+  }
+  if (!std::isnormal(dx) || !std::isnormal(dy)) {
+    // A subnormal spacing makes every fractional index infinite: every point "outside".
+    const auto shortest = [](double v) {
+      std::array<char, 32> buf{};
+      return std::string(buf.data(), std::to_chars(buf.data(), buf.data() + buf.size(), v).ptr);
+    };
+    throw InvalidArgument(std::string(op) + ": spacing is (" + shortest(dx) + ", " + shortest(dy) +
+                          "), expected normal doubles (at least 2.2250738585072014e-308)");
   }
 }
 

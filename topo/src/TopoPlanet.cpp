@@ -164,8 +164,12 @@ SurfaceSample TopoPlanet::surface(const LatLon& ll, Interpolation interp, Normal
   return surfaceImpl(ll, interp, frame, true);
 }
 
-SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, NormalFrame frame,
+SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp, NormalFrame frame,
                                       bool wantNormal) const {
+  // Longitudes beyond a turn are reduced exactly first (wrapLongitude180), so that 1e308 is
+  // the meridian fmod(1e308, 360) names, not what rounding of lon − west leaves of it.
+  const LatLon ll{given.latDeg,
+                  std::abs(given.lonDeg) > 360.0 ? wrapLongitude180(given.lonDeg) : given.lonDeg};
   SurfaceSample s;
   const Located L = locate(ll);
   if (!L.inside) return s;
