@@ -384,3 +384,29 @@ TEST(EdgesOfDomain, SubnormalSpacingsAreRefused) {
   }
   EXPECT_NO_THROW((void)TopoGrid(2, 2, 0.0, 0.0, 2.2250738585072014e-308, 1.0));
 }
+
+// Item 7 in C++: a DEM cell the placement cannot map (an equirectangular grid reaching past
+// the pole) has a height in the grid's terms but no body-frame normal: normalStatus
+// Unmappable for that point, and the rest of the batch is answered.
+TEST(EdgesOfDomain, AnUnmappablePointNeverFailsABatch) {
+  const Body body = Body::marsSphere();
+  const double r = body.equatorialRadius();
+  const double yPole = r * 90.0 * kDeg;
+  const std::size_t rows = 20, cols = 10;
+  const TopoGrid g(rows, cols, 0.0, yPole + 5000.0, 1000.0, 1000.0);  // 5 km beyond the pole
+  const TopoDem dem(g, Placement(body, Equirectangular(r, 0.0, 0.0)), flat(rows, cols, 3.0F));
+  const std::vector<double> xs{2000.0, 2000.0, 2000.0}, ys{yPole + 2500.0, yPole - 4000.0, 1e9};
+  std::vector<double> h(3);
+  std::vector<glm::dvec3> n(3);
+  std::vector<QueryStatus> st(3), nst(3);
+  ASSERT_NO_THROW(
+      dem.surfaces(xs, ys, h, n, st, Interpolation::Bicubic, NormalFrame::BodyFixed, nst));
+  EXPECT_EQ(st,
+            (std::vector<QueryStatus>{QueryStatus::Ok, QueryStatus::Ok, QueryStatus::OutsideGrid}));
+  EXPECT_EQ(nst, (std::vector<QueryStatus>{QueryStatus::Unmappable, QueryStatus::Ok,
+                                           QueryStatus::OutsideGrid}));
+  EXPECT_EQ(h[0], 3.0);
+  EXPECT_TRUE(std::isnan(n[0].x));
+  EXPECT_NEAR(glm::length(n[1]), 1.0, 1e-12);
+  EXPECT_STREQ(statusName(nst[0]), "unmappable");
+}
