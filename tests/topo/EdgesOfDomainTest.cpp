@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <tuple>
 #include <vector>
 
 using namespace regolith;
@@ -409,4 +410,48 @@ TEST(EdgesOfDomain, AnUnmappablePointNeverFailsABatch) {
   EXPECT_TRUE(std::isnan(n[0].x));
   EXPECT_NEAR(glm::length(n[1]), 1.0, 1e-12);
   EXPECT_STREQ(statusName(nst[0]), "unmappable");
+}
+
+// Item 8 with rounding: a sample centre given as grid indices lands a few ulps off the sample
+// line on a UTM-like grid, so a hole beside it got a weight of 1e-15 and made it invalid.
+// On the line to a few ulps is on it: every kernel's height there is the sample.
+TEST(EdgesOfDomain, SampleCentresNextToHolesAreValidDespiteRounding) {
+  const std::size_t rows = 40, cols = 40;
+  std::size_t offLine = 0, checked = 0;
+  for (const auto& [x0, y0, d] :
+       std::vector<std::tuple<double, double, double>>{{500123.45, 4987654.35, 0.3},
+                                                       {123456.789, -987654.321, 463.3127},
+                                                       {4e6 + 0.1, 0.7, 1.0 / 3.0}}) {
+    const TopoGrid g(rows, cols, x0, y0, d, d, -9999.0F);
+    std::vector<float> data(rows * cols, 0.0F);
+    for (std::size_t i = 0; i < data.size(); ++i) data[i] = static_cast<float>(i % 97);
+    std::vector<std::pair<std::size_t, std::size_t>> holes;
+    for (std::size_t r = 3; r < rows - 3; r += 5) {
+      for (std::size_t c = 3; c < cols - 3; c += 5) {
+        data[r * cols + c] = -9999.0F;
+        holes.emplace_back(r, c);
+      }
+    }
+    const TopoDem dem(g, marsPlane(), std::make_shared<InMemorySamples>(rows, cols, data));
+    for (const auto& [hr, hc] : holes) {
+      for (const auto& [dr, dc] :
+           std::vector<std::pair<int, int>>{{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
+        const double r = static_cast<double>(hr) + dr, c = static_cast<double>(hc) + dc;
+        const glm::dvec2 p = g.sampleCentre(r, c);
+        const glm::dvec2 f = g.fractionalIndex(p.x, p.y);
+        offLine += (f.x != c || f.y != r) ? 1U : 0U;
+        const float expected =
+            data[static_cast<std::size_t>(r) * cols + static_cast<std::size_t>(c)];
+        for (const Interpolation k : kAll) {
+          const SurfaceSample s = dem.surface(p.x, p.y, k);
+          EXPECT_EQ(s.status, QueryStatus::Ok) << r << "," << c << " kernel " << int(k);
+          EXPECT_EQ(s.height, static_cast<double>(expected)) << r << "," << c;
+          EXPECT_EQ(dem.height(p.x, p.y, k).status, QueryStatus::Ok);
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 100U);
+  EXPECT_GT(offLine, 0U) << "no case lands off its sample line: the test could not fail";
 }
