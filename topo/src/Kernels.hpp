@@ -39,6 +39,15 @@ inline long floorToLong(double x) noexcept {
   return i - static_cast<long>(x < static_cast<double>(i));
 }
 
+// f, or the integer nearest to it when within `slack` (TopoGrid::edgeSlack()): a point on a
+// sample line to a few ulps is on it. Casts, not nearbyint (a libm call on baseline
+// x86-64); beyond 2^52 every double is an integer already.
+inline double snapToLine(double f, double slack) noexcept {
+  if (!(std::abs(f) < 4503599627370496.0)) return f;
+  const double r = static_cast<double>(floorToLong(f + 0.5));
+  return std::abs(f - r) <= slack ? r : f;
+}
+
 inline bool missing(double s, double nd) noexcept { return s != s || s == nd; }
 
 // Raw fetchers: indices already valid.

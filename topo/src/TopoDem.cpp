@@ -29,11 +29,6 @@ bool isPowerOfTwo(double d) noexcept {
   return std::frexp(d, &e) == 0.5;
 }
 
-inline double snapToLine(double f, double slack) noexcept {
-  const double r = std::nearbyint(f);
-  return std::abs(f - r) <= slack ? r : f;
-}
-
 // cmax, rmax: cols − 1 and rows − 1 (precomputed: size_t → double is not free); slack:
 // TopoGrid::edgeSlack(), so that points on a reported edge are inside.
 inline Where locate(const detail::DemIndexer& m, double x, double y, double cmax, double rmax,
@@ -42,8 +37,8 @@ inline Where locate(const detail::DemIndexer& m, double x, double y, double cmax
   double v = m.v(y);
   // On a sample line to a few ulps (a sample centre given as grid indices, or computed
   // another way) is on it: a hole next to it then has zero weight, as it has exactly there.
-  u = snapToLine(u, slack.x);
-  v = snapToLine(v, slack.y);
+  u = detail::snapToLine(u, slack.x);
+  v = detail::snapToLine(v, slack.y);
   const bool inside = u >= -0.5 - slack.x && u <= cmax + 0.5 + slack.x && v >= -0.5 - slack.y &&
                       v <= rmax + 0.5 + slack.y;
   // Within the half-pixel border the stencil sits on the outermost samples.

@@ -85,7 +85,7 @@ TopoPlanet::Located TopoPlanet::locate(const LatLon& ll) const {
                          : west + wrapLongitude360(rel);
   L.u = (lon - grid_.x0()) / grid_.spacingX();
   // On a sample line to a few ulps is on it (a hole beside it then has zero weight).
-  if (const double ru = std::nearbyint(L.u); std::abs(L.u - ru) <= slack_.x) L.u = ru;
+  L.u = detail::snapToLine(L.u, slack_.x);
   const double cmax = static_cast<double>(grid_.cols()) - 1.0;
   if (!global_) {
     if (L.u > cmax + 0.5 + slack_.x) return L;
@@ -93,7 +93,7 @@ TopoPlanet::Located TopoPlanet::locate(const LatLon& ll) const {
   }
   const double rmax = static_cast<double>(grid_.rows()) - 1.0;
   L.v = (grid_.y0() - ll.latDeg) / grid_.spacingY();
-  if (const double rv = std::nearbyint(L.v); std::abs(L.v - rv) <= slack_.y) L.v = rv;
+  L.v = detail::snapToLine(L.v, slack_.y);
   if (L.v < 0.0) {
     if (northCap_) {
       L.cap = 1;
