@@ -134,47 +134,103 @@ void appendNumber(std::string& out, double v) {
 struct Result {
   std::vector<double> height;
   std::vector<glm::dvec3> normal;
-  std::vector<topo::QueryStatus> status;
+  std::vector<topo::QueryStatus> status;        // the height's
+  std::vector<topo::QueryStatus> normalStatus;  // the normal's
   explicit Result(std::size_t n)
-      : height(n), normal(n), status(n, topo::QueryStatus::OutsideGrid) {}
+      : height(n, std::nan("")),
+        normal(n, glm::dvec3(std::nan(""))),
+        status(n, topo::QueryStatus::OutsideGrid),
+        normalStatus(n, topo::QueryStatus::OutsideGrid) {}
 };
+
+/// Heights and normals of the points `index` names, written into res at those indices.
+template <class Query>
+void querySubset(std::span<const std::size_t> index, Result& res, Query&& query) {
+  const std::size_t m = index.size();
+  std::vector<double> h(m);
+  std::vector<glm::dvec3> nrm(m);
+  std::vector<topo::QueryStatus> st(m), nst(m);
+  query(std::span<double>(h), std::span<glm::dvec3>(nrm), std::span<topo::QueryStatus>(st),
+        std::span<topo::QueryStatus>(nst));
+  for (std::size_t k = 0; k < m; ++k) {
+    res.height[index[k]] = h[k];
+    res.normal[index[k]] = nrm[k];
+    res.status[index[k]] = st[k];
+    res.normalStatus[index[k]] = nst[k];
+  }
+}
+
+/// Ellipsoid height at which the vertical through (lat, lon) meets the grid's zero surface
+/// (h = 0): the seed of the terrain iteration, taken from the point itself. For map
+/// projections it is 0 (their h is the ellipsoid height); for a tangent plane the plane's
+/// own height there. Throws DomainError if the placement cannot map the point.
+double seedHeight(const topo::Placement& placement, double lat, double lon) {
+  const double z0 = placement.fromGeodetic({lat, lon, 0.0}).z;
+  const double z1 = placement.fromGeodetic({lat, lon, 1.0}).z;
+  return -z0 / (z1 - z0);
+}
 
 void queryDem(const topo::TopoDem& dem, Coords coords, std::span<const Point> pts,
               topo::Interpolation interp, topo::NormalFrame frame, Result& res) {
   const std::size_t n = pts.size();
-  std::vector<double> xs(n), ys(n);
+  std::vector<double> xs, ys;
+  std::vector<std::size_t> index;  // the points the placement maps (others: Unmappable)
+  xs.reserve(n);
+  ys.reserve(n);
+  index.reserve(n);
   const topo::TopoGrid& grid = dem.grid();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (coords == Coords::Grid) {
-      const glm::dvec2 p = grid.sampleCentre(pts[i].a, pts[i].b);
-      xs[i] = p.x;
-      ys[i] = p.y;
-    } else {
-      xs[i] = pts[i].a;
-      ys[i] = pts[i].b;
+  if (coords != Coords::LonLat) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const glm::dvec2 p = coords == Coords::Grid ? grid.sampleCentre(pts[i].a, pts[i].b)
+                                                  : glm::dvec2(pts[i].a, pts[i].b);
+      xs.push_back(p.x);
+      ys.push_back(p.y);
+      index.push_back(i);
     }
-  }
-  if (coords == Coords::LonLat) {
+  } else {
     // The point where the vertical through (lat, lon) meets the terrain: project at an
     // ellipsoid height, read the terrain there, and repeat with the terrain's ellipsoid
-    // height (the plane's normal and the ellipsoid's differ away from its origin).
+    // height (the plane's normal and the ellipsoid's differ away from its origin). A point
+    // the projection cannot map (the pole opposite a polar stereographic centre, 90° or more
+    // from a transverse Mercator meridian) is Unmappable, and the others go on.
     const topo::Placement& placement = dem.placement();
-    std::vector<double> he(n, placement.toGeodetic(0.0, 0.0, 0.0).height), h(n);
-    std::vector<topo::QueryStatus> st(n);
-    for (int iter = 0; iter < 5; ++iter) {
-      for (std::size_t i = 0; i < n; ++i) {
-        const glm::dvec3 g = placement.fromGeodetic({pts[i].b, pts[i].a, he[i]});
-        xs[i] = g.x;
-        ys[i] = g.y;
+    const double xNear = 0.5 * (grid.west() + grid.east());
+    std::vector<double> he, h;
+    for (std::size_t i = 0; i < n; ++i) {
+      try {
+        const double lat = pts[i].b, lon = pts[i].a;
+        const double seed = seedHeight(placement, lat, lon);
+        const glm::dvec3 g = placement.fromGeodeticNear({lat, lon, seed}, xNear);
+        xs.push_back(g.x);
+        ys.push_back(g.y);
+        he.push_back(seed);
+        index.push_back(i);
+      } catch (const DomainError&) {
+        res.status[i] = res.normalStatus[i] = topo::QueryStatus::Unmappable;
       }
-      if (iter == 4) break;
+    }
+    const std::size_t m = index.size();
+    h.resize(m);
+    std::vector<topo::QueryStatus> st(m);
+    for (int iter = 0; iter < 4; ++iter) {
       dem.heights(xs, ys, h, st, interp);
-      for (std::size_t i = 0; i < n; ++i) {
-        if (st[i] == topo::QueryStatus::Ok) he[i] = placement.toGeodetic(xs[i], ys[i], h[i]).height;
+      for (std::size_t k = 0; k < m; ++k) {
+        if (st[k] != topo::QueryStatus::Ok) continue;
+        const std::size_t i = index[k];
+        try {
+          he[k] = placement.toGeodetic(xs[k], ys[k], h[k]).height;
+          const glm::dvec3 g = placement.fromGeodeticNear({pts[i].b, pts[i].a, he[k]}, xNear);
+          xs[k] = g.x;
+          ys[k] = g.y;
+        } catch (const DomainError&) {
+          // Keeps the previous position: the terrain moved the point no further.
+        }
       }
     }
   }
-  dem.surfaces(xs, ys, res.height, res.normal, res.status, interp, frame);
+  querySubset(index, res, [&](auto h, auto nrm, auto st, auto nst) {
+    dem.surfaces(xs, ys, h, nrm, st, interp, frame, nst);
+  });
 }
 
 void queryPlanet(const topo::TopoPlanet& planet, Coords coords, std::span<const Point> pts,
@@ -192,24 +248,14 @@ void queryPlanet(const topo::TopoPlanet& planet, Coords coords, std::span<const 
       lon = p.x;
       lat = p.y;
     }
-    if (std::abs(lat) > 90.0) {
-      res.height[i] = std::nan("");
-      res.normal[i] = glm::dvec3(std::nan(""));
-      continue;
-    }
+    if (std::abs(lat) > 90.0) continue;
     lats.push_back(lat);
     lons.push_back(lon);
     index.push_back(i);
   }
-  std::vector<double> h(index.size());
-  std::vector<glm::dvec3> nrm(index.size());
-  std::vector<topo::QueryStatus> st(index.size());
-  planet.surfaces(lats, lons, h, nrm, st, interp, frame);
-  for (std::size_t k = 0; k < index.size(); ++k) {
-    res.height[index[k]] = h[k];
-    res.normal[index[k]] = nrm[k];
-    res.status[index[k]] = st[k];
-  }
+  querySubset(index, res, [&](auto h, auto nrm, auto st, auto nst) {
+    planet.surfaces(lats, lons, h, nrm, st, interp, frame, nst);
+  });
 }
 
 struct Args {
@@ -265,7 +311,8 @@ void runQuery(const Args& a) {
   }
 
   const auto [nameA, nameB] = coordNames(coords);
-  std::string out = std::string(nameA) + "," + nameB + ",height,nx,ny,nz,valid\n";
+  std::string out =
+      std::string(nameA) + "," + nameB + ",height,nx,ny,nz,valid,normal_valid,reason\n";
   constexpr std::size_t kBatch = 1U << 16U;
   for (std::size_t first = 0; first < points.size() || first == 0; first += kBatch) {
     const std::size_t n = std::min(kBatch, points.size() - first);
@@ -278,6 +325,7 @@ void runQuery(const Args& a) {
     }
     for (std::size_t i = 0; i < n; ++i) {
       const bool valid = res.status[i] == topo::QueryStatus::Ok;
+      const bool normalValid = valid && res.normalStatus[i] == topo::QueryStatus::Ok;
       const double nan = std::nan("");
       appendNumber(out, batch[i].a);
       out += ',';
@@ -286,9 +334,13 @@ void runQuery(const Args& a) {
       appendNumber(out, valid ? res.height[i] : nan);
       for (int k = 0; k < 3; ++k) {
         out += ',';
-        appendNumber(out, valid ? res.normal[i][k] : nan);
+        appendNumber(out, normalValid ? res.normal[i][k] : nan);
       }
-      out += valid ? ",1\n" : ",0\n";
+      out += valid ? ",1," : ",0,";
+      out += normalValid ? "1," : "0,";
+      // Why the height, else the normal, is invalid: outside, nodata or unmappable.
+      out += topo::statusName(valid ? res.normalStatus[i] : res.status[i]);
+      out += '\n';
     }
     std::fwrite(out.data(), 1, out.size(), stdout);
     out.clear();
@@ -304,8 +356,11 @@ void addQueryCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "query",
       "Heights and unit normals at points, as CSV on stdout: a header line, then one row per "
-      "input point in input order with its two coordinates, height, nx, ny, nz and valid (1, "
-      "or 0 with nan values over nodata or outside the grid). Points come as arguments "
+      "input point in input order with its two coordinates, height, nx, ny, nz, valid (1, or 0 "
+      "with a nan height), normal_valid (1, or 0 with a nan normal: its stencil reaches a hole "
+      "the height's does not) and reason (ok, or why the height, else the normal, is invalid: "
+      "outside, nodata, or unmappable where the DEM's projection cannot map a lon,lat; one "
+      "such point never fails the others). Points come as arguments "
       "'a,b' (if one starts with '-.', put -- before the first point) or, with none given, as CSV "
       "lines on stdin (an optional header line naming the columns; blank lines and lines "
       "starting with # are skipped)");

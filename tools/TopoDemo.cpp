@@ -95,7 +95,7 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
     for (double r = 0.0; r < std::min(half, 500.0); r += 2.0) {
       const SurfaceSample s =
           dem.surface(r * std::cos(th), r * std::sin(th), Interpolation::Bicubic);
-      if (!s.valid()) continue;
+      if (!s.normalValid()) continue;
       rimMax = std::max(rimMax, s.height);
       floorMin = std::min(floorMin, s.height);
       steepest = std::max(steepest, std::acos(std::clamp(s.normal.z, -1.0, 1.0)) * 180.0 / kPi);
@@ -117,7 +117,7 @@ int runTopoDemo(const TopoDemoOptions& o, std::ostream& out) {
     const SurfaceSample s = dem.surface(x, y, Interpolation::Bilinear, NormalFrame::Grid);
     const SurfaceSample b = dem.surface(x, y, Interpolation::Bilinear, NormalFrame::BodyFixed);
     char line[200];
-    if (!s.valid()) {
+    if (!s.normalValid() || !b.normalValid()) {
       std::snprintf(line, sizeof line, "      %7.1f %7.1f  (no valid terrain here)\n", x, y);
     } else {
       const Geodetic g = dem.placement().toGeodetic(x, y, s.height);

@@ -16,11 +16,12 @@ std::string formatPoint(double x, double y) {
   return "(" + core::number(x) + ", " + core::number(y) + ")";
 }
 
-const char* statusName(topo::QueryStatus s) noexcept {
+const char* contactStatusName(topo::QueryStatus s) noexcept {
   switch (s) {
     case topo::QueryStatus::Ok: return "ok";
     case topo::QueryStatus::Nodata: return "nodata";
     case topo::QueryStatus::OutsideGrid: return "outside the grid";
+    case topo::QueryStatus::Unmappable: return "beyond the placement's projection";
   }
   return "unknown";
 }
@@ -77,7 +78,7 @@ ChassisPose Rover::settle(const GroundPose& pose,
     if (c.status != topo::QueryStatus::Ok) {
       throw DomainError("rover::Rover::settle(): wheel " + std::to_string(i) + " at " +
                         formatPoint(c.x, c.y) + " has no terrain under it (" +
-                        statusName(c.status) + ")");
+                        contactStatusName(c.status) + ")");
     }
     mx += c.x - pose.x, my += c.y - pose.y, mz += c.height;
   }

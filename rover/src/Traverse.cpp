@@ -87,7 +87,7 @@ TraverseResult runTraverse(const topo::TopoDem& dem, const TraverseOptions& opti
   StepState state;
   std::array<double, kWheels> xs{}, ys{}, hs{};
   std::array<glm::dvec3, kWheels> ns{};
-  std::array<topo::QueryStatus, kWheels> st{};
+  std::array<topo::QueryStatus, kWheels> st{}, normalSt{};
   Clock::duration queryTime{};
   std::size_t segment = 0;
   const auto start = Clock::now();
@@ -102,10 +102,12 @@ TraverseResult runTraverse(const topo::TopoDem& dem, const TraverseOptions& opti
     const auto wheels = rover.wheelPositions(state.ground);
     for (std::size_t i = 0; i < kWheels; ++i) xs[i] = wheels[i].x, ys[i] = wheels[i].y;
     const auto q0 = Clock::now();
-    dem.surfaces(xs, ys, hs, ns, st, options.interpolation, topo::NormalFrame::Grid);
+    dem.surfaces(xs, ys, hs, ns, st, options.interpolation, topo::NormalFrame::Grid, normalSt);
     queryTime += Clock::now() - q0;
     for (std::size_t i = 0; i < kWheels; ++i) {
-      state.wheels[i] = {xs[i], ys[i], hs[i], ns[i], st[i]};
+      // A wheel needs its height and its normal (WheelContact: both valid, or status says
+      // why not); the normal's status is the stricter of the two.
+      state.wheels[i] = {xs[i], ys[i], hs[i], ns[i], normalSt[i]};
     }
     state.chassis = rover.settle(state.ground, state.wheels);
     state.step = k;

@@ -25,12 +25,24 @@ Pose Pose::lookAt(const glm::dvec3& eye, const glm::dvec3& target, const glm::dv
   if (!(glm::length(d) > 0.0))
     throw InvalidArgument("Pose::lookAt(): eye and target coincide, expected distinct points");
   const glm::dvec3 f = glm::normalize(d);
-  const glm::dvec3 rr = glm::cross(f, up);
-  if (!(glm::length(rr) > 1e-12 * glm::length(up)))
-    throw InvalidArgument("Pose::lookAt(): up is parallel to the view direction");
-  const glm::dvec3 r = glm::normalize(rr);
+  const glm::dvec3 r = glm::normalize(glm::cross(f, viewUp(f, up)));
   const glm::dvec3 u = glm::cross(r, f);
   return fromAxes(eye, r, u, -f);
+}
+
+glm::dvec3 Pose::viewUp(const glm::dvec3& forward, const glm::dvec3& up) noexcept {
+  const double lf = glm::length(forward), lu = glm::length(up);
+  // sin of the angle between them; NaN (not finite input) fails the test too.
+  const double s = glm::length(glm::cross(forward, up)) / (lf * lu);
+  if (s > 1e-6) return up;
+  const glm::dvec3 f = forward / lf;
+  int k = 0;  // the axis least aligned with the view
+  for (int i = 1; i < 3; ++i) {
+    if (std::abs(f[i]) < std::abs(f[k])) k = i;
+  }
+  glm::dvec3 e(0.0);
+  e[k] = 1.0;
+  return glm::normalize(e - f * glm::dot(f, e));
 }
 
 Pose Pose::inverse() const noexcept {

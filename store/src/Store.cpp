@@ -171,6 +171,11 @@ void readAttributes(hid_t g, GridEntry& entry, const Context& ctx, const std::st
     if (!(std::isfinite(s) && s > 0.0)) {
       fail(ctx, owner + " has spacing " + core::number(s) + unit + ", expected > 0");
     }
+    // A subnormal spacing makes every fractional index infinite: every point "outside".
+    if (!std::isnormal(s)) {
+      fail(ctx, owner + " has spacing " + core::number(s) + unit +
+                    ", expected a normal double (at least 2.2250738585072014e-308)");
+    }
   };
   checkSpacing(spacing[0]);
   checkSpacing(spacing[1]);

@@ -1,3 +1,4 @@
+#include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/Render.hpp>
 #include <regolith/core/Error.hpp>
 
@@ -9,6 +10,8 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 namespace regolith::clod {
 namespace {
@@ -74,6 +77,61 @@ TEST(RenderGLTest, CameraLookingAtOrbitsTheTargetAtTheGivenHeadingAndElevation) 
                InvalidArgument);
   EXPECT_THROW((void)cameraLookingAt(*pyramid, target, 0.0, 45.0, -1.0, 40.0, 64, 48),
                InvalidArgument);
+}
+
+// Issue 16 item 9: cameras whose up (the local vertical) is parallel to the view direction,
+// at nadir, aimed at the body's centre, above a pole, and one at 1e12 m; and one at
+// R + 1 mm looking at the horizon. Each renders the planet: no NaN view matrix, so no empty
+// image (the pixels that are terrain are counted against the background).
+TEST(RenderGLTest, CamerasAtNadirAtThePoleAndFarAwayRenderThePlanet) {
+  test::glContext();
+  const std::size_t rows = 128, cols = 256;
+  const double d = 180.0 / static_cast<double>(rows);
+  const topo::TopoGrid grid(rows, cols, -180.0 + 0.5 * d, 90.0 - 0.5 * d, d, d);
+  auto samples = topo::InMemorySamples::fromFunction(rows, cols, [](std::size_t r, std::size_t c) {
+    return static_cast<float>((r + c) % 7) * 50.0F;
+  });
+  const auto pyramid = std::make_shared<const HeightPyramid>(
+      HeightPyramid::fromSamples(grid, samples, SurfaceKind::Planet, topo::Body::marsSphere()));
+  const double r = topo::Body::marsSphere().equatorialRadius();
+  struct View {
+    const char* name;
+    glm::dvec3 eye, target;
+    double fov;
+    double minTerrain;  // fraction of the image that must be terrain
+  };
+  const glm::dvec3 site = pyramid->position(20.0, 10.0, 0.0);
+  const glm::dvec3 above = pyramid->position(20.0, 10.0, 1e6);
+  const glm::dvec3 pole = pyramid->position(0.0, 90.0, 1e6);
+  const glm::dvec3 low = pyramid->position(20.0, 10.0, 3000.0 + 0.001);  // above every sample
+  const glm::dvec3 north = glm::normalize(pyramid->position(20.0, 10.1, 3000.0) - low);
+  const glm::dvec3 far = 1e12 * glm::normalize(above);
+  const std::vector<View> views = {
+      {"nadir", above, site, 40.0, 0.99},
+      {"body_centre", above, glm::dvec3(0.0), 40.0, 0.99},
+      {"pole", pole, glm::dvec3(0.0), 40.0, 0.99},
+      {"horizon_at_R_plus_1mm", low, low + 1000.0 * north, 60.0, 0.05},
+      {"far_1e12m", far, glm::dvec3(0.0), 4.0 * r / 1e12 * 180.0 / M_PI, 0.05},
+  };
+  for (const View& v : views) {
+    RenderRequest req;
+    req.camera.position = v.eye;
+    req.camera.target = v.target;
+    req.camera.up = pyramid->up(v.eye);  // parallel to the view in all but the horizon view
+    req.camera.fovYDegrees = v.fov;
+    req.camera.width = 64;
+    req.camera.height = 48;
+    req.camera.near = std::max(0.05, 1e-3 * glm::length(v.target - v.eye));
+    req.clipmap.size = 257;  // a window of 360° at this grid's 1.40625°, all round the pole
+    req.background = {0.0F, 0.0F, 1.0F, 1.0F};
+    const RgbaImage img = renderImage(pyramid, req);
+    test::savePng(std::string("edge_camera_") + v.name, img);
+    int terrain = 0;
+    for (int y = 0; y < img.height; ++y) {
+      for (int x = 0; x < img.width; ++x) terrain += img.is(x, y, 0, 0, 255) ? 0 : 1;
+    }
+    EXPECT_GE(terrain, static_cast<int>(v.minTerrain * img.width * img.height)) << v.name;
+  }
 }
 
 }  // namespace

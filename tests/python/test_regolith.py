@@ -155,6 +155,52 @@ def test_outside_points_are_nan_with_a_status(victoria):
     assert math.isnan(h[0]) and np.isnan(n).all() and st[0] == regolith.STATUS_OUTSIDE
 
 
+def test_height_next_to_a_hole_is_valid_and_the_normal_has_its_own_status(tmp_path):
+    """Issue 16: a valid height next to a hole stays valid (status), its normal comes from a
+    one-sided stencil (normal_status); the corners of the reported extent are inside."""
+    path = tmp_path / "holes.tif"
+    rows, cols = 40, 50
+    x0, y0 = 500.0, 2000.0
+    ds = gdal.GetDriverByName("GTiff").Create(str(path), cols, rows, 1, gdal.GDT_Float32)
+    ds.SetGeoTransform((x0, 1.0, 0.0, y0, 0.0, -1.0))
+    ds.SetProjection((
+        'PROJCS["Mars equirectangular",GEOGCS["Mars",DATUM["Mars",SPHEROID["Mars",3396190,0]],'
+        'PRIMEM["Reference meridian",0],UNIT["degree",0.0174532925199433]],'
+        'PROJECTION["Equirectangular"],PARAMETER["standard_parallel_1",0],'
+        'PARAMETER["central_meridian",0],PARAMETER["false_easting",0],'
+        'PARAMETER["false_northing",0],UNIT["metre",1]]'))
+    c, r = np.meshgrid(np.arange(cols), np.arange(rows))
+    x, y = x0 + 0.5 + c, y0 - 0.5 - r
+    values = (0.25 * x - 0.5 * y + 10.0).astype(np.float32)  # exact in float32
+    values[20, 30] = -9999.0
+    band = ds.GetRasterBand(1)
+    band.SetNoDataValue(-9999.0)
+    band.WriteArray(values)
+    ds = None
+    out = tmp_path / "holes.h5"
+    regolith.import_raster(path, out, grid="holes", patch_size=16)
+    dem = regolith.open(out)
+    cells = [(19, 30), (21, 30), (20, 29), (20, 31), (20, 30)]
+    qx = np.array([x0 + 0.5 + cc for _, cc in cells])
+    qy = np.array([y0 - 0.5 - rr for rr, _ in cells])
+    expect = np.array([-0.25, 0.5, 1.0]) / math.sqrt(0.25**2 + 0.5**2 + 1.0)
+    for interp in ["nearest", "bilinear", "bicubic"]:
+        h, n, st, nst = dem.surfaces(qx, qy, interp=interp, status=True, normal_status=True)
+        assert st.tolist() == [regolith.STATUS_OK] * 4 + [regolith.STATUS_NODATA], interp
+        assert nst.tolist() == [regolith.STATUS_OK] * 4 + [regolith.STATUS_NODATA], interp
+        assert h[:4].tolist() == [float(values[rr, cc]) for rr, cc in cells[:4]]
+        np.testing.assert_allclose(n[:4], np.broadcast_to(expect, (4, 3)), rtol=0, atol=1e-12)
+        assert math.isnan(h[4]) and np.isnan(n[4]).all()
+        # normal_status alone comes right after the normals.
+        h2, n2, nst2 = dem.surfaces(qx, qy, interp=interp, normal_status=True)
+        assert nst2.tolist() == nst.tolist()
+    # The corners of the extent, exactly as reported, are inside.
+    w, e, s, nn = dem.extent
+    h, st = dem.heights(np.array([w, e, w, e]), np.array([s, s, nn, nn]), status=True)
+    assert st.tolist() == [regolith.STATUS_OK] * 4
+    assert regolith.STATUS_UNMAPPABLE == 3
+
+
 def test_bad_query_input_raises_with_the_cpp_message(victoria):
     dem = regolith.open(victoria)
     with pytest.raises(regolith.InvalidArgument, match=r"TopoDem::heights\(\): xs\[1\] is nan"):
@@ -506,8 +552,13 @@ def test_render_scene_draws_the_dem_close_up_and_mars_from_afar():
     centre = far[40:50, 75:85].astype(int)
     assert (centre[..., 0] > centre[..., 1]).all()
     assert far[0, 0, :3].max() < 30 and far[-1, -1, :3].max() < 30
-    with pytest.raises(regolith.InvalidArgument, match="up is parallel to the view direction"):
-        regolith.render_scene(eye=(0.0, 0.0, 1.5e7), look_at=(0.0, 0.0, -3.39e6), **SMALL_SCENE)
+    # The default up (the site's vertical) is parallel to that view: another up is chosen
+    # (issue 16), and the disc is drawn all the same.
+    default_up = regolith.render_scene(eye=(0.0, 0.0, 1.5e7), look_at=(0.0, 0.0, -3.39e6),
+                                       **SMALL_SCENE)
+    centre = default_up[40:50, 75:85].astype(int)
+    assert (centre[..., 0] > centre[..., 1]).all()
+    assert default_up[0, 0, :3].max() < 30 and default_up[-1, -1, :3].max() < 30
 
 
 def test_render_scene_draws_the_rover_where_it_is_placed():

@@ -61,7 +61,33 @@ TEST(PoseTest, LookAtPutsTheTargetOnTheMinusZAxis) {
   // The world's up is up in the image: a point above the target has eye y > 0.
   EXPECT_GT(cam.inverse().apply({0.0, 0.0, 10.0}).y, 0.0);
   EXPECT_THROW((void)Pose::lookAt(eye, eye, {0, 0, 1}), InvalidArgument);
-  EXPECT_THROW((void)Pose::lookAt({0, 0, 5}, {0, 0, 0}, {0, 0, 1}), InvalidArgument);
+}
+
+// Issue 16 item 9: a camera at nadir (or looking at the body's centre) with the local
+// vertical as up gets another up, not an exception or a NaN pose; an up 1e-5 rad off the
+// view direction is still used as given.
+TEST(PoseTest, LookAtWithUpParallelToTheViewChoosesAnotherUp) {
+  const double r = 3396190.0;
+  for (const glm::dvec3& eye :
+       {glm::dvec3(0, 0, r + 1000.0), glm::dvec3(r + 0.001, 0, 0), glm::dvec3(0, -1e12, 0)}) {
+    for (const double tilt : {0.0, 1e-9, 1e-7}) {
+      const glm::dvec3 up = glm::normalize(eye) + glm::dvec3(tilt, tilt, 0.0);
+      const Pose cam = Pose::lookAt(eye, {0.0, 0.0, 0.0}, up);
+      const glm::dmat3 m = cam.matrix();
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_TRUE(std::isfinite(m[c].x) && std::isfinite(m[c].y) && std::isfinite(m[c].z));
+        EXPECT_NEAR(glm::length(m[c]), 1.0, 1e-12);
+      }
+      EXPECT_NEAR(glm::determinant(m), 1.0, 1e-12);
+      const glm::dvec3 centre = cam.inverse().apply({0.0, 0.0, 0.0});
+      EXPECT_NEAR(glm::length(glm::dvec3(centre.x, centre.y, 0.0)) / glm::length(eye), 0.0, 1e-12);
+      EXPECT_LT(centre.z, 0.0);
+    }
+  }
+  // 1e-5 rad from parallel: the given up decides the image's up.
+  const glm::dvec3 eye{0.0, 0.0, 10.0};
+  const Pose cam = Pose::lookAt(eye, {0.0, 0.0, 0.0}, {1e-5, 0.0, 1.0});
+  EXPECT_GT(glm::dot(cam.applyVector({0.0, 1.0, 0.0}), glm::dvec3(1.0, 0.0, 0.0)), 0.99);
 }
 
 }  // namespace

@@ -823,6 +823,14 @@ TEST(Store, RejectsNonPositiveSpacing) {
   });
   EXPECT_EQ(openError(p),
             "store::open(): " + p.string() + ": grid 'victoria' has spacing 0 m, expected > 0");
+  // Issue 16: a subnormal spacing put every point outside the grid.
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/victoria", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(g, "spacing", {5e-324, 2.0}, H5T_IEEE_F64LE);
+  });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'victoria' has spacing 5e-324 m, expected "
+                              "a normal double (at least 2.2250738585072014e-308)");
 }
 
 TEST(Store, RejectsADatasetOfTheWrongRank) {

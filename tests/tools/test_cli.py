@@ -60,10 +60,17 @@ def run(*args, stdin=None, check=True, env_render=False):
     return p
 
 
+def number_or_word(v):
+    try:
+        return float(v)
+    except ValueError:
+        return v  # query's reason column
+
+
 def parse_csv(text):
     lines = text.strip("\n").split("\n")
     header = lines[0].split(",")
-    rows = [[float(v) for v in line.split(",")] for line in lines[1:]]
+    rows = [[number_or_word(v) for v in line.split(",")] for line in lines[1:]]
     return header, rows
 
 
@@ -484,7 +491,7 @@ def test_zfp_without_its_plugin_is_a_clear_error(work):
     store = work / "victoria-zfp.h5"
     run("generate", "victoria", "--out", store, "--size", 200, "--compression", "zfp")
     q = run("query", store, "--coords", "grid", "10,10")  # readable with the plugin
-    assert parse_csv(q.stdout)[1][0][-1] == 1.0
+    assert parse_csv(q.stdout)[1][0][6:] == [1.0, 1.0, "ok"]
     env = {**os.environ, "HDF5_PLUGIN_PATH": str(work / "no-plugins-here")}
 
     def without_plugin(*args):
@@ -953,8 +960,10 @@ def test_utm_import_info_and_lonlat_query(work):
         if values[r, c] == nodata:
             assert row[6] == 0 and math.isnan(row[2]), (r, c)
             continue
-        if (values[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2] == nodata).any():
-            continue  # next to a hole: no normal, so the point may be reported invalid
+        # Next to a hole too, the height is valid (the normal may come from one side).
+        assert row[6] == 1 and row[2] == values[r, c], (r, c, row)
+        if row[7] == 0:
+            continue
         checked += 1
         assert row[6] == 1 and row[2] == values[r, c], (r, c, row)
         # The body-frame normal is a unit vector pointing up, near the ellipsoid normal.
@@ -964,6 +973,133 @@ def test_utm_import_info_and_lonlat_query(work):
                        math.sin(phi)])
         assert abs(np.linalg.norm(n) - 1.0) < 1e-9 and float(n @ up) > 0.5, (r, c, n)
     assert checked >= 15
+
+
+def projected_tif(path, proj4, centre_xy, values, spacing=100.0):
+    """A float32 GeoTIFF in `proj4` whose pixel extent is centred on map point centre_xy."""
+    rows, cols = values.shape
+    ds = gdal.GetDriverByName("GTiff").Create(str(path), cols, rows, 1, gdal.GDT_Float32)
+    srs = osr.SpatialReference()
+    srs.ImportFromProj4(proj4)
+    ds.SetProjection(srs.ExportToWkt())
+    x0 = centre_xy[0] - 0.5 * cols * spacing
+    y0 = centre_xy[1] + 0.5 * rows * spacing
+    ds.SetGeoTransform([x0, spacing, 0.0, y0, 0.0, -spacing])
+    ds.GetRasterBand(1).WriteArray(values.astype(np.float32))
+    ds = None
+    return x0, y0
+
+
+def proj_forward(proj4, lon, lat):
+    """PROJ's forward projection of one lon/lat (the oracle)."""
+    src = osr.SpatialReference()
+    src.ImportFromProj4(proj4.split("+proj=")[0] + "+proj=longlat " +
+                        " ".join(t for t in proj4.split() if t.startswith(("+R=", "+ellps=",
+                                                                            "+datum="))))
+    dst = osr.SpatialReference()
+    dst.ImportFromProj4(proj4)
+    for s in (src, dst):
+        s.SetAxisMappingStrategy(osr.OAMS_TRADITIONAL_GIS_ORDER)
+    x, y, _ = osr.CoordinateTransformation(src, dst).TransformPoint(lon, lat)
+    return x, y
+
+
+# Issue 16 items 6 and 7: a point the DEM's projection cannot map is a row with valid=0 and
+# the reason `unmappable`, never a failed batch; a UTM south DEM (false northing 10,000 km)
+# answers lon/lat queries (the height iteration is seeded from the point, not from map (0, 0)).
+@pytest.mark.parametrize("name,proj4,lonlat,bad", [
+    ("utm10n", "+proj=utm +zone=10 +ellps=WGS84 +units=m +no_defs", (-123.0, 45.0),
+     "60,45"),
+    ("utm10s", "+proj=utm +zone=10 +south +ellps=WGS84 +units=m +no_defs", (-123.0, -45.0),
+     "60,-45"),
+    ("south_polar", "+proj=stere +lat_0=-90 +lat_ts=-71 +lon_0=0 +ellps=WGS84 +units=m "
+     "+no_defs", (3.0, -87.2), "0,90"),
+])
+def test_query_unmappable_point_is_a_row_not_a_failure(work, name, proj4, lonlat, bad):
+    values = np.arange(400, dtype=np.float64).reshape(20, 20)  # sample (r, c) = 20 r + c
+    centre = proj_forward(proj4, *lonlat)
+    # The point at the centre of pixel (10, 9).
+    x0, y0 = projected_tif(work / f"{name}.tif", proj4, (centre[0] + 50.0, centre[1] + 50.0),
+                           values)
+    out = work / f"{name}.h5"
+    run("import", work / f"{name}.tif", "--out", out)
+    good = f"{lonlat[0]!r},{lonlat[1]!r}"
+    text = run("query", out, "--interp", "nearest", "--", good, bad, good).stdout
+    header, rows = parse_csv(text)
+    assert header[-3:] == ["valid", "normal_valid", "reason"]
+    assert len(rows) == 3
+    # The good point: GDAL's sample at the pixel PROJ puts it in.
+    c = int((centre[0] - x0) // 100.0)
+    r = int((y0 - centre[1]) // 100.0)
+    for row in (rows[0], rows[2]):
+        assert row[6:] == [1, 1, "ok"], row
+        assert row[2] == values[r, c]
+    assert text.split("\n")[2] == f"{bad},nan,nan,nan,nan,0,0,unmappable"
+    # Alone, the unmappable point is still a row, and the exit status 0.
+    p = run("query", out, "--", bad)
+    assert p.stdout.split("\n")[1] == f"{bad},nan,nan,nan,nan,0,0,unmappable"
+
+
+# Issue 16 item 5: an equirectangular DEM (central meridian 0) whose grid lies on 180 deg and
+# reaches past it: its lon/lat queries land where the grid lies (PROJ +over), whatever range
+# the longitude is given in.
+def test_query_lonlat_on_a_dem_across_the_antimeridian(work):
+    proj4 = "+proj=eqc +lon_0=0 +R=3396190 +units=m +no_defs"
+    metres_per_deg = 3396190.0 * math.pi / 180.0
+    spacing = 2000.0
+    values = np.arange(20 * 60, dtype=np.float64).reshape(20, 60)
+    x0, y0 = projected_tif(work / "antimeridian.tif", proj4, (180.0 * metres_per_deg, 0.0),
+                           values, spacing)
+    out = work / "antimeridian.h5"
+    run("import", work / "antimeridian.tif", "--out", out)
+    cells = [(r, c) for r in (0, 7, 19) for c in (0, 5, 29, 30, 44, 59)]
+    points, expected = [], []
+    for r, c in cells:
+        x = x0 + (c + 0.5) * spacing
+        lat = (y0 - (r + 0.5) * spacing) / metres_per_deg
+        lon = x / metres_per_deg  # 178 to 182
+        for given in (lon, lon - 360.0, lon + 360.0):
+            # PROJ with +over keeps the longitude's turn: the oracle for where it lies.
+            px, _ = proj_forward(proj4 + " +over", given, lat)
+            px += 360.0 * metres_per_deg * round((x - px) / (360.0 * metres_per_deg))
+            assert px == pytest.approx(x, abs=1e-6)
+            points.append(f"{given!r},{lat!r}")
+            expected.append(values[r, c])
+    _, rows = parse_csv(run("query", out, "--interp", "nearest", "--", *points).stdout)
+    assert [row[6] for row in rows] == [1] * len(points)
+    assert [row[2] for row in rows] == expected
+
+
+# Issue 16 item 8: with every kernel, every valid sample of a real DEM that borders a void has
+# a valid height, exactly the sample (21-43 per DEM came back invalid with `nearest` when the
+# normal's stencil decided; with bilinear and bicubic, rounding put grid indices 1e-15 off the
+# sample, giving the void a weight).
+def test_query_samples_next_to_voids_are_valid(work):
+    src = dem_fixture("dem_nodata.dem")
+    out = work / "voids.h5"
+    run("import", src, "--out", out)
+    ds = gdal.Open(src)
+    values = ds.GetRasterBand(1).ReadAsArray().astype(np.float64)
+    void = values == ds.GetRasterBand(1).GetNoDataValue()
+    near = np.zeros_like(void)
+    near[1:, :] |= void[:-1, :]
+    near[:-1, :] |= void[1:, :]
+    near[:, 1:] |= void[:, :-1]
+    near[:, :-1] |= void[:, 1:]
+    border = np.argwhere(near & ~void)
+    assert len(border) >= 10
+    for interp in ["nearest", "bilinear", "bicubic"]:
+        text = run("query", out, "--coords", "grid", "--interp", interp,
+                   stdin="".join(f"{r},{c}\n" for r, c in border)).stdout
+        _, rows = parse_csv(text)
+        assert [row[6] for row in rows] == [1] * len(border), interp
+        assert [row[2] for row in rows] == [values[r, c] for r, c in border], interp
+        # Their normals come from one side where they have one: unit vectors, or an honest 0.
+        for row in rows:
+            if row[7] == 1:
+                assert abs(math.hypot(*row[3:6]) - 1.0) < 1e-12 and row[8] == "ok"
+            else:
+                assert math.isnan(row[3]) and row[8] == "nodata"
 
 
 def read_pty(master, timeout=60):
@@ -1058,7 +1194,7 @@ def test_query_bilinear_matches_numpy(victoria):
     pts = rng.uniform(-590, 590, size=(200, 2))
     args = [f"{x!r},{y!r}" for x, y in pts]
     header, rows = parse_csv(run("query", victoria, "--coords", "xy", "--", *args).stdout)
-    assert header == ["x", "y", "height", "nx", "ny", "nz", "valid"]
+    assert header == ["x", "y", "height", "nx", "ny", "nz", "valid", "normal_valid", "reason"]
     assert len(rows) == len(pts)
     for (x, y), row in zip(pts, rows):
         assert row[0] == x and row[1] == y  # coordinates echoed exactly, in input order
@@ -1098,7 +1234,7 @@ def test_query_stdin_equals_arguments(victoria, planet):
             with_header = run("query", store, "--interp", interp,
                               stdin="lon,lat\n" + "\n".join(pts) + "\n\n# done\n").stdout
             assert by_args == by_stdin == with_header
-            assert by_args.startswith("lon,lat,height,nx,ny,nz,valid\n")
+            assert by_args.startswith("lon,lat,height,nx,ny,nz,valid,normal_valid,reason\n")
             assert len(by_args.strip().split("\n")) == len(pts) + 1
 
 
@@ -1121,11 +1257,11 @@ def test_query_nodata_and_outside_rows(h5py_store):
                "1000,1000",    # outside the grid
                "99,201.5").stdout  # on the pixel edge: inside, clamped onto sample (0, 0)
     header, rows = parse_csv(text)
-    assert header == ["x", "y", "height", "nx", "ny", "nz", "valid"]
+    assert header == ["x", "y", "height", "nx", "ny", "nz", "valid", "normal_valid", "reason"]
     lines = text.strip().split("\n")[1:]
-    assert lines[0] == "142,164,nan,nan,nan,nan,0"
-    assert lines[1] == "110,110,nan,nan,nan,nan,0"
-    assert lines[3] == "1000,1000,nan,nan,nan,nan,0"
+    assert lines[0] == "142,164,nan,nan,nan,nan,0,0,nodata"
+    assert lines[1] == "110,110,nan,nan,nan,nan,0,0,nodata"
+    assert lines[3] == "1000,1000,nan,nan,nan,nan,0,0,outside"
     assert rows[2][6] == 1 and rows[2][2] == data[10, 10]
     assert rows[4][6] == 1 and rows[4][2] == data[0, 0]
     # Outside in grid coordinates too, and a row for every point still.

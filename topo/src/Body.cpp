@@ -18,7 +18,11 @@ void requireFinite(double v, const char* operation, const char* field) {
 }
 
 double wrapLongitude180(double lonDeg) noexcept {
-  double w = std::fmod(lonDeg + 180.0, 360.0);
+  // Beyond two turns, fmod (exact) first: lon + 180 would round away what fmod(lon, 360)
+  // keeps (at 1e308 all of it). Within them, lon + 180 rounds by at most an ulp of 900,
+  // which keeps λ0 + 180 − λ0 on the −180 side as callers expect.
+  const double r = std::abs(lonDeg) > 720.0 ? std::fmod(lonDeg, 360.0) : lonDeg;
+  double w = std::fmod(r + 180.0, 360.0);
   if (w < 0.0) w += 360.0;
   if (w >= 360.0) w -= 360.0;  // fmod of a tiny negative can round up to 360
   return w - 180.0;
@@ -27,7 +31,7 @@ double wrapLongitude180(double lonDeg) noexcept {
 double wrapLongitude360(double lonDeg) noexcept {
   double w = std::fmod(lonDeg, 360.0);
   if (w < 0.0) w += 360.0;
-  if (w >= 360.0) w -= 360.0;
+  if (w >= 360.0) w -= 360.0;  // −tiny + 360 rounds to 360
   return w;
 }
 

@@ -24,9 +24,11 @@ namespace regolith::topo::detail {
 
 struct KernelResult {
   double h = 0.0;
-  double dhdu = 0.0;  // ∂h/∂(column index)
-  double dhdv = 0.0;  // ∂h/∂(row index)
-  QueryStatus status = QueryStatus::Ok;
+  double dhdu = 0.0;                         // ∂h/∂(column index)
+  double dhdv = 0.0;                         // ∂h/∂(row index)
+  QueryStatus status = QueryStatus::Ok;      // of h
+  QueryStatus gradStatus = QueryStatus::Ok;  // of dhdu, dhdv (when asked for)
+  double dhduv = 0.0;  // ∂²h/∂u∂v (bilinear and bicubic; 0 for nearest and fallbacks)
 };
 
 // A sample is missing if NaN or equal to the nodata value (NaN itself when none is declared).
@@ -35,6 +37,15 @@ struct KernelResult {
 inline long floorToLong(double x) noexcept {
   const long i = static_cast<long>(x);
   return i - static_cast<long>(x < static_cast<double>(i));
+}
+
+// f, or the integer nearest to it when within `slack` (TopoGrid::edgeSlack()): a point on a
+// sample line to a few ulps is on it. Casts, not nearbyint (a libm call on baseline
+// x86-64); beyond 2^52 every double is an integer already.
+inline double snapToLine(double f, double slack) noexcept {
+  if (!(std::abs(f) < 4503599627370496.0)) return f;
+  const double r = static_cast<double>(floorToLong(f + 0.5));
+  return std::abs(f - r) <= slack ? r : f;
 }
 
 inline bool missing(double s, double nd) noexcept { return s != s || s == nd; }
@@ -191,21 +202,25 @@ KernelResult nearest(const Acc& acc, double u, double v, double nd) {
   const long r = floorToLong(v + 0.5);
   KernelResult k;
   const double s = acc(r, c);
-  if (missing(s, nd)) return {0.0, 0.0, 0.0, QueryStatus::Nodata};
+  if (missing(s, nd)) return {0.0, 0.0, 0.0, QueryStatus::Nodata, QueryStatus::Nodata};
   k.h = s;
   if constexpr (Grad) {
-    // Central differences of the neighbouring samples, one-sided at the edges.
+    // Central differences of the neighbouring samples; one-sided where a neighbour is beyond
+    // an edge or missing. An axis with neighbours that are all missing has no slope: the
+    // height stays valid and the gradient is Nodata. An axis of one sample is flat.
     auto diff = [&](bool hasLo, bool hasHi, double lo, double hi, double& out) {
-      const double a = hasLo ? lo : k.h;
-      const double b = hasHi ? hi : k.h;
-      const int n = int(hasLo) + int(hasHi);
-      if ((hasLo && missing(lo, nd)) || (hasHi && missing(hi, nd))) return false;
-      out = n == 0 ? 0.0 : (b - a) / n;
+      const bool okLo = hasLo && !missing(lo, nd), okHi = hasHi && !missing(hi, nd);
+      if (!okLo && !okHi) {
+        out = 0.0;
+        return !hasLo && !hasHi;
+      }
+      out = ((okHi ? hi : k.h) - (okLo ? lo : k.h)) / (int(okLo) + int(okHi));
       return true;
     };
     if (!diff(acc.hasCol(c - 1), acc.hasCol(c + 1), acc(r, c - 1), acc(r, c + 1), k.dhdu) ||
         !diff(acc.hasRow(r - 1), acc.hasRow(r + 1), acc(r - 1, c), acc(r + 1, c), k.dhdv)) {
-      return {0.0, 0.0, 0.0, QueryStatus::Nodata};
+      k.dhdu = k.dhdv = 0.0;
+      k.gradStatus = QueryStatus::Nodata;
     }
   }
   return k;
@@ -218,13 +233,13 @@ KernelResult bilinear(const Acc& acc, double u, double v, double nd) {
   const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
   double s00 = acc(r, c), s01 = acc(r, c + 1), s10 = acc(r + 1, c), s11 = acc(r + 1, c + 1);
   if (missing(s00, nd) || missing(s01, nd) || missing(s10, nd) || missing(s11, nd)) {
-    if constexpr (Grad) return {0.0, 0.0, 0.0, QueryStatus::Nodata};
+    if constexpr (Grad) return {0.0, 0.0, 0.0, QueryStatus::Nodata, QueryStatus::Nodata};
     // Height only: a missing sample is harmless exactly when its weight is zero.
     const double w[4] = {(1 - tu) * (1 - tv), tu * (1 - tv), (1 - tu) * tv, tu * tv};
     double* s[4] = {&s00, &s01, &s10, &s11};
     for (int i = 0; i < 4; ++i) {
       if (missing(*s[i], nd)) {
-        if (w[i] != 0.0) return {0.0, 0.0, 0.0, QueryStatus::Nodata};
+        if (w[i] != 0.0) return {0.0, 0.0, 0.0, QueryStatus::Nodata, QueryStatus::Nodata};
         *s[i] = 0.0;
       }
     }
@@ -236,6 +251,7 @@ KernelResult bilinear(const Acc& acc, double u, double v, double nd) {
   if constexpr (Grad) {
     k.dhdu = (1 - tv) * (b - a) + tv * (d - cc);
     k.dhdv = bottom - top;
+    k.dhduv = (d - cc) - (b - a);
   }
   return k;
 }
@@ -253,7 +269,8 @@ KernelResult bicubic(const Acc& acc, double u, double v, double nd) {
     for (int j = 0; j < 4; ++j) {
       const double s = acc(r - 1 + i, c - 1 + j);
       if (missing(s, nd)) {
-        if (Grad || (wv[i] * wu[j]) != 0.0) return {0.0, 0.0, 0.0, QueryStatus::Nodata};
+        if (Grad || (wv[i] * wu[j]) != 0.0)
+          return {0.0, 0.0, 0.0, QueryStatus::Nodata, QueryStatus::Nodata};
         continue;
       }
       row += wu[j] * s;
@@ -263,6 +280,7 @@ KernelResult bicubic(const Acc& acc, double u, double v, double nd) {
     if constexpr (Grad) {
       k.dhdu += wv[i] * drow;
       k.dhdv += dwv[i] * row;
+      k.dhduv += dwv[i] * drow;
     }
   }
   return k;
@@ -276,6 +294,51 @@ KernelResult evaluate(Interpolation interp, const Acc& acc, double u, double v, 
     case Interpolation::Bilinear: break;
   }
   return bilinear<Grad>(acc, u, v, nd);
+}
+
+// The gradient of the cell holding (u, v) from the samples it has: all four (the bilinear
+// gradient) or three (the plane through them). False if it has fewer.
+template <class Acc>
+bool cellGradient(const Acc& acc, double u, double v, double nd, double& dhdu, double& dhdv) {
+  const long c = std::min(floorToLong(u), acc.cMax());
+  const long r = std::min(floorToLong(v), acc.rMax());
+  const double s00 = acc(r, c), s01 = acc(r, c + 1), s10 = acc(r + 1, c), s11 = acc(r + 1, c + 1);
+  const bool m00 = missing(s00, nd), m01 = missing(s01, nd), m10 = missing(s10, nd),
+             m11 = missing(s11, nd);
+  const int nMissing = int(m00) + int(m01) + int(m10) + int(m11);
+  if (nMissing == 0) {
+    const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
+    dhdu = (1 - tv) * (s01 - s00) + tv * (s11 - s10);
+    dhdv = (1 - tu) * (s10 - s00) + tu * (s11 - s01);
+    return true;
+  }
+  if (nMissing > 1) return false;
+  // Three samples: each difference along an axis uses the row or column that has both ends.
+  dhdu = m00 || m01 ? s11 - s10 : s01 - s00;
+  dhdv = m00 || m10 ? s11 - s01 : s10 - s00;
+  return true;
+}
+
+// Height and gradient at (u, v) for a surface query. The height is valid wherever the
+// height kernel has its samples (as evaluate<false>). The gradient is the kernel's own when
+// its whole stencil is there; where the stencil reaches a hole, it falls back to the cell's
+// gradient (cellGradient), then to the nearest sample's one-sided differences; gradStatus
+// is Nodata when none of them has its samples.
+template <class Acc>
+KernelResult evaluateSurface(Interpolation interp, const Acc& acc, double u, double v, double nd) {
+  KernelResult k = evaluate<true>(interp, acc, u, v, nd);
+  if (k.status == QueryStatus::Ok) return k;  // nearest sets gradStatus itself
+  k = evaluate<false>(interp, acc, u, v, nd);
+  if (k.status != QueryStatus::Ok) {
+    k.gradStatus = k.status;
+    return k;
+  }
+  if (cellGradient(acc, u, v, nd, k.dhdu, k.dhdv)) return k;
+  const KernelResult n = nearest<true>(acc, u, v, nd);
+  k.dhdu = n.dhdu;
+  k.dhdv = n.dhdv;
+  k.gradStatus = n.status == QueryStatus::Ok ? n.gradStatus : n.status;
+  return k;
 }
 
 inline double nodataOrNan(const TopoGrid& g) noexcept {

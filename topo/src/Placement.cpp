@@ -92,6 +92,15 @@ glm::dvec3 Placement::fromGeodetic(const Geodetic& g) const {
   return {xy.x, xy.y, g.height};
 }
 
+glm::dvec3 Placement::fromGeodeticNear(const Geodetic& g, double xNear) const {
+  if (const auto* eqc = equirectangular()) {
+    const glm::dvec2 xy =
+        eqc->forwardNear({body_.fromPlanetodetic(g.latDeg, latType_), g.lonDeg}, xNear);
+    return {xy.x, xy.y, g.height};
+  }
+  return fromGeodetic(g);
+}
+
 glm::dvec3 Placement::fromBodyFixed(const glm::dvec3& p) const {
   if (const auto* ltp = localTangentPlane()) return ltp->fromBodyFixed(p);
   return fromGeodetic(body_.toGeodetic(p));
@@ -103,9 +112,30 @@ glm::dmat3 Placement::jacobian(double x, double y, double h) const {
   }
   // Central differences: the projections are smooth at the metre scale, so the truncation
   // error (~(δ/R)²) and the rounding error (~1e-16·R/δ) are both ~1e-10 relative or less.
+  // Within δ of the edge of the projection's domain (a pole an equirectangular map reaches)
+  // the step beyond it has no image: the derivative is then one-sided, of second order too,
+  // (−3P(0) + 4P(δ) − P(2δ)) / 2δ towards the domain. A point that is itself outside the
+  // domain throws DomainError.
   constexpr double d = 0.5;
-  const glm::dvec3 px = (toBodyFixed(x + d, y, h) - toBodyFixed(x - d, y, h)) / (2.0 * d);
-  const glm::dvec3 py = (toBodyFixed(x, y + d, h) - toBodyFixed(x, y - d, h)) / (2.0 * d);
+  const auto partial = [&](double ex, double ey) {
+    try {
+      return (toBodyFixed(x + d * ex, y + d * ey, h) - toBodyFixed(x - d * ex, y - d * ey, h)) /
+             (2.0 * d);
+    } catch (const DomainError&) {
+      const glm::dvec3 p0 = toBodyFixed(x, y, h);
+      for (const double sign : {1.0, -1.0}) {
+        try {
+          const glm::dvec3 p1 = toBodyFixed(x + sign * d * ex, y + sign * d * ey, h);
+          const glm::dvec3 p2 = toBodyFixed(x + 2.0 * sign * d * ex, y + 2.0 * sign * d * ey, h);
+          return sign * (-3.0 * p0 + 4.0 * p1 - p2) / (2.0 * d);
+        } catch (const DomainError&) {  // NOLINT(bugprone-empty-catch): try the other side
+        }
+      }
+      throw;
+    }
+  };
+  const glm::dvec3 px = partial(1.0, 0.0);
+  const glm::dvec3 py = partial(0.0, 1.0);
   const Geodetic g = toGeodetic(x, y, h);
   const glm::dvec3 up = body_.enuFrame(g.latDeg, g.lonDeg)[2];
   return glm::dmat3(px, py, up);

@@ -23,6 +23,13 @@ void requireLatitude(double latDeg, const char* op) {
   }
 }
 
+// A longitude beyond two turns reduced exactly into [−180, 180) first, so that lon − λ0
+// does not round away what fmod(lon, 360) keeps (1e308 is a meridian like any other);
+// smaller ones as given, so that λ0 ± 180 stays exactly on its side of the antimeridian.
+double reducedLongitude(double lonDeg) noexcept {
+  return std::abs(lonDeg) > 720.0 ? wrapLongitude180(lonDeg) : lonDeg;
+}
+
 // Snyder (15-9): t = tan(π/4 − φ/2) / ((1 − e sinφ)/(1 + e sinφ))^(e/2). tan(π/4 − φ/2)
 // is written cos φ / (1 + sin φ) in the projection's hemisphere and (1 − sin φ) / cos φ in
 // the other, so it stays accurate (and finite) next to both poles.
@@ -58,7 +65,17 @@ Equirectangular::Equirectangular(double radius, double latTrueScaleDeg, double l
 glm::dvec2 Equirectangular::forward(const LatLon& ll) const {
   requireLatitude(ll.latDeg, "Equirectangular::forward()");
   requireFinite(ll.lonDeg, "Equirectangular::forward()", "longitude");
-  const double dl = wrapLongitude180(ll.lonDeg - lon0Deg_);
+  const double dl = wrapLongitude180(reducedLongitude(ll.lonDeg) - lon0Deg_);
+  return {r_ * dl * kDeg * cosTs_, r_ * (ll.latDeg - lat0Deg_) * kDeg};
+}
+
+glm::dvec2 Equirectangular::forwardNear(const LatLon& ll, double xNear) const {
+  requireLatitude(ll.latDeg, "Equirectangular::forwardNear()");
+  requireFinite(ll.lonDeg, "Equirectangular::forwardNear()", "longitude");
+  requireFinite(xNear, "Equirectangular::forwardNear()", "x near");
+  const double dl0 = wrapLongitude180(reducedLongitude(ll.lonDeg) - lon0Deg_);
+  const double turns = std::round((xNear / (r_ * kDeg * cosTs_) - dl0) / 360.0);
+  const double dl = dl0 + 360.0 * turns;
   return {r_ * dl * kDeg * cosTs_, r_ * (ll.latDeg - lat0Deg_) * kDeg};
 }
 
@@ -148,7 +165,7 @@ glm::dvec2 PolarStereographic::forward(const LatLon& ll) const {
                       " deg is the pole opposite the projection's centre; it maps to infinity");
   }
   const double rho = rhoFactor_ * stereoT(latN * kDeg, e_);
-  const double dl = (ll.lonDeg - lon0Deg_) * kDeg;
+  const double dl = (reducedLongitude(ll.lonDeg) - lon0Deg_) * kDeg;
   const double x = rho * std::sin(dl);
   const double y = north ? -rho * std::cos(dl) : rho * std::cos(dl);
   return {x + fe_, y + fn_};
@@ -303,7 +320,7 @@ glm::dvec2 TransverseMercator::forward(const LatLon& ll) const {
   constexpr const char* op = "TransverseMercator::forward()";
   requireLatitude(ll.latDeg, op);
   requireFinite(ll.lonDeg, op, "longitude");
-  const double dl = wrapLongitude180(ll.lonDeg - lon0Deg_);
+  const double dl = wrapLongitude180(reducedLongitude(ll.lonDeg) - lon0Deg_);
   if (std::abs(dl) >= 90.0 && std::abs(ll.latDeg) != 90.0) {
     throw DomainError(std::string(op) + ": longitude " + std::to_string(ll.lonDeg) + " deg is " +
                       std::to_string(std::abs(dl)) + " deg from the central meridian " +

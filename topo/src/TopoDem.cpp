@@ -29,12 +29,18 @@ bool isPowerOfTwo(double d) noexcept {
   return std::frexp(d, &e) == 0.5;
 }
 
-// cmax, rmax: cols − 1 and rows − 1 (precomputed: size_t → double is not free).
-inline Where locate(const detail::DemIndexer& m, double x, double y, double cmax,
-                    double rmax) noexcept {
-  const double u = m.u(x);
-  const double v = m.v(y);
-  const bool inside = u >= -0.5 && u <= cmax + 0.5 && v >= -0.5 && v <= rmax + 0.5;
+// cmax, rmax: cols − 1 and rows − 1 (precomputed: size_t → double is not free); slack:
+// TopoGrid::edgeSlack(), so that points on a reported edge are inside.
+inline Where locate(const detail::DemIndexer& m, double x, double y, double cmax, double rmax,
+                    const glm::dvec2& slack) noexcept {
+  double u = m.u(x);
+  double v = m.v(y);
+  // On a sample line to a few ulps (a sample centre given as grid indices, or computed
+  // another way) is on it: a hole next to it then has zero weight, as it has exactly there.
+  u = detail::snapToLine(u, slack.x);
+  v = detail::snapToLine(v, slack.y);
+  const bool inside = u >= -0.5 - slack.x && u <= cmax + 0.5 + slack.x && v >= -0.5 - slack.y &&
+                      v <= rmax + 0.5 + slack.y;
   // Within the half-pixel border the stencil sits on the outermost samples.
   return {std::clamp(u, 0.0, cmax), std::clamp(v, 0.0, rmax), inside};
 }
@@ -150,11 +156,12 @@ TopoDem::TopoDem(TopoGrid grid, Placement placement, std::shared_ptr<const Sampl
   fast_.vMax = static_cast<double>(grid_.rows()) - 1.0;
   fast_.nodata = detail::nodataOrNan(grid_);
   fast_.hasNodata = grid_.nodata().has_value() && !std::isnan(*grid_.nodata());
+  slack_ = grid_.edgeSlack();
 }
 
 HeightSample TopoDem::heightGeneric(double x, double y, Interpolation interp) const {
   requirePoint(x, y, "TopoDem::height()");
-  const Where w = locate(index_, x, y, fast_.uMax, fast_.vMax);
+  const Where w = locate(index_, x, y, fast_.uMax, fast_.vMax, slack_);
   if (!w.inside) return {};
   if (resident_ == nullptr && interp == Interpolation::Bilinear) {
     double h = 0.0;
@@ -172,22 +179,32 @@ HeightSample TopoDem::heightGeneric(double x, double y, Interpolation interp) co
 
 SurfaceSample TopoDem::surface(double x, double y, Interpolation interp, NormalFrame frame) const {
   requirePoint(x, y, "TopoDem::surface()");
-  const Where w = locate(index_, x, y, fast_.uMax, fast_.vMax);
+  const Where w = locate(index_, x, y, fast_.uMax, fast_.vMax, slack_);
   if (!w.inside) return {};
   const KernelResult k = withAccessor(grid_, *samples_, resident_, w, [&](const auto& acc) {
-    return detail::evaluate<true>(interp, acc, w.u, w.v, fast_.nodata);
+    return detail::evaluateSurface(interp, acc, w.u, w.v, fast_.nodata);
   });
   SurfaceSample s;
   s.status = k.status;
+  s.normalStatus = k.gradStatus;
   if (k.status != QueryStatus::Ok) return s;
   s.height = k.h;
+  if (k.gradStatus != QueryStatus::Ok) return s;
   // Grid frame: z = h(x, y) with ∂h/∂x = ∂h/∂u / dx and ∂h/∂y = −∂h/∂v / dy (row 0 north).
   const double hx = k.dhdu / grid_.spacingX();
   const double hy = -k.dhdv / grid_.spacingY();
-  s.normal = glm::normalize(glm::dvec3(-hx, -hy, 1.0));
+  glm::dvec3 n = glm::normalize(glm::dvec3(-hx, -hy, 1.0));
   if (frame == NormalFrame::BodyFixed) {
-    s.normal = placement_.normalToBodyFixed(s.normal, x, y, k.h);
+    try {
+      n = placement_.normalToBodyFixed(n, x, y, k.h);
+    } catch (const DomainError&) {
+      // The point itself lies beyond the projection's domain (a grid reaching past a pole):
+      // its height is the grid's, but it has no body-fixed normal.
+      s.normalStatus = QueryStatus::Unmappable;
+      return s;
+    }
   }
+  s.normal = n;
   return s;
 }
 
@@ -329,7 +346,7 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
   // The kernel is chosen once for the whole batch.
   auto run = [&](auto kernel) {
     for (std::size_t i = 0; i < n; ++i) {
-      const Where w = locate(index_, xs[i], ys[i], fast_.uMax, fast_.vMax);
+      const Where w = locate(index_, xs[i], ys[i], fast_.uMax, fast_.vMax, slack_);
       QueryStatus st = QueryStatus::OutsideGrid;
       double h = nan;
       if (w.inside) {
@@ -351,14 +368,15 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
 
 void TopoDem::surfaces(std::span<const double> xs, std::span<const double> ys,
                        std::span<double> outHeights, std::span<glm::dvec3> outNormals,
-                       std::span<QueryStatus> status, Interpolation interp,
-                       NormalFrame frame) const {
+                       std::span<QueryStatus> status, Interpolation interp, NormalFrame frame,
+                       std::span<QueryStatus> normalStatus) const {
   constexpr const char* op = "TopoDem::surfaces()";
   const std::size_t n = xs.size();
   requireSameLength(n, ys.size(), op, "ys");
   requireSameLength(n, outHeights.size(), op, "outHeights");
   requireSameLength(n, outNormals.size(), op, "outNormals");
   if (!status.empty()) requireSameLength(n, status.size(), op, "status");
+  if (!normalStatus.empty()) requireSameLength(n, normalStatus.size(), op, "normalStatus");
   requireFiniteArray(xs, op, "xs");
   requireFiniteArray(ys, op, "ys");
   for (std::size_t i = 0; i < n; ++i) {
@@ -366,6 +384,7 @@ void TopoDem::surfaces(std::span<const double> xs, std::span<const double> ys,
     outHeights[i] = s.height;
     outNormals[i] = s.normal;
     if (!status.empty()) status[i] = s.status;
+    if (!normalStatus.empty()) normalStatus[i] = s.normalStatus;
   }
 }
 

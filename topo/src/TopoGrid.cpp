@@ -2,9 +2,13 @@
 #include <regolith/topo/Body.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <cassert>
+#include <charconv>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace regolith::topo {
@@ -24,6 +28,15 @@ TopoGrid::TopoGrid(std::size_t rows, std::size_t cols, double x0, double y0, dou
   if (dx <= 0.0 || dy <= 0.0) {
     throw InvalidArgument(std::string(op) + ": spacing is (" + std::to_string(dx) + ", " +
                           std::to_string(dy) + "), expected both > 0");
+  }
+  if (!std::isnormal(dx) || !std::isnormal(dy)) {
+    // A subnormal spacing makes every fractional index infinite: every point "outside".
+    const auto shortest = [](double v) {
+      std::array<char, 32> buf{};
+      return std::string(buf.data(), std::to_chars(buf.data(), buf.data() + buf.size(), v).ptr);
+    };
+    throw InvalidArgument(std::string(op) + ": spacing is (" + shortest(dx) + ", " + shortest(dy) +
+                          "), expected normal doubles (at least 2.2250738585072014e-308)");
   }
 }
 
@@ -47,10 +60,19 @@ std::array<double, 6> TopoGrid::geoTransform() const noexcept {
   return {x0_ - 0.5 * dx_, dx_, 0.0, y0_ + 0.5 * dy_, 0.0, -dy_};
 }
 
+glm::dvec2 TopoGrid::edgeSlack() const noexcept {
+  constexpr double k = 4.0 * std::numeric_limits<double>::epsilon();
+  const double mx = std::max({std::abs(x0_), std::abs(west()), std::abs(east())});
+  const double my = std::max({std::abs(y0_), std::abs(north()), std::abs(south())});
+  return {k * (mx / dx_ + static_cast<double>(cols_) + 1.0),
+          k * (my / dy_ + static_cast<double>(rows_) + 1.0)};
+}
+
 bool TopoGrid::contains(double x, double y) const noexcept {
   const glm::dvec2 f = fractionalIndex(x, y);
-  return f.x >= -0.5 && f.x <= static_cast<double>(cols_) - 0.5 && f.y >= -0.5 &&
-         f.y <= static_cast<double>(rows_) - 0.5;
+  const glm::dvec2 e = edgeSlack();
+  return f.x >= -0.5 - e.x && f.x <= static_cast<double>(cols_) - 0.5 + e.x && f.y >= -0.5 - e.y &&
+         f.y <= static_cast<double>(rows_) - 0.5 + e.y;
 }
 
 SampleSource::SampleSource() {

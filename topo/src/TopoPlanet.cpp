@@ -69,6 +69,7 @@ TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
   southCap_ = grid_.south() <= -90.0 + kEdgeTol && lastLat > -90.0;
   northPoleV_ = (grid_.y0() - 90.0) / grid_.spacingY();
   southPoleV_ = (grid_.y0() + 90.0) / grid_.spacingY();
+  slack_ = grid_.edgeSlack();
   if (northCap_ || grid_.y0() >= 90.0) northPole_ = rowMean(*samples_, grid_, 0);
   if (southCap_ || lastLat <= -90.0) southPole_ = rowMean(*samples_, grid_, grid_.rows() - 1);
 }
@@ -77,20 +78,28 @@ TopoPlanet::Located TopoPlanet::locate(const LatLon& ll) const {
   Located L;
   const double west = grid_.west();
   const double rel = ll.lonDeg - west;
-  const double lon = (rel >= 0.0 && rel < 360.0) ? ll.lonDeg : west + wrapLongitude360(rel);
+  // A longitude a few ulps west of the west edge (an edge computed another way) is on it,
+  // not a turn further east.
+  const double lon = (rel >= 0.0 && rel < 360.0) ? ll.lonDeg
+                     : (rel < 0.0 && rel >= -slack_.x * grid_.spacingX())
+                         ? west
+                         : west + wrapLongitude360(rel);
   L.u = (lon - grid_.x0()) / grid_.spacingX();
+  // On a sample line to a few ulps is on it (a hole beside it then has zero weight).
+  L.u = detail::snapToLine(L.u, slack_.x);
   const double cmax = static_cast<double>(grid_.cols()) - 1.0;
   if (!global_) {
-    if (L.u > cmax + 0.5) return L;
+    if (L.u > cmax + 0.5 + slack_.x) return L;
     L.u = std::clamp(L.u, 0.0, cmax);
   }
   const double rmax = static_cast<double>(grid_.rows()) - 1.0;
   L.v = (grid_.y0() - ll.latDeg) / grid_.spacingY();
+  L.v = detail::snapToLine(L.v, slack_.y);
   if (L.v < 0.0) {
     if (northCap_) {
       L.cap = 1;
       L.t = std::min(L.v / northPoleV_, 1.0);
-    } else if (L.v < -0.5) {
+    } else if (L.v < -0.5 - slack_.y) {
       return L;
     }
     L.v = 0.0;
@@ -98,7 +107,7 @@ TopoPlanet::Located TopoPlanet::locate(const LatLon& ll) const {
     if (southCap_) {
       L.cap = -1;
       L.t = std::min((L.v - rmax) / (southPoleV_ - rmax), 1.0);
-    } else if (L.v > rmax + 0.5) {
+    } else if (L.v > rmax + 0.5 + slack_.y) {
       return L;
     }
     L.v = rmax;
@@ -159,8 +168,12 @@ SurfaceSample TopoPlanet::surface(const LatLon& ll, Interpolation interp, Normal
   return surfaceImpl(ll, interp, frame, true);
 }
 
-SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, NormalFrame frame,
+SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp, NormalFrame frame,
                                       bool wantNormal) const {
+  // Longitudes beyond a turn are reduced exactly first (wrapLongitude180), so that 1e308 is
+  // the meridian fmod(1e308, 360) names, not what rounding of lon − west leaves of it.
+  const LatLon ll{given.latDeg,
+                  std::abs(given.lonDeg) > 360.0 ? wrapLongitude180(given.lonDeg) : given.lonDeg};
   SurfaceSample s;
   const Located L = locate(ll);
   if (!L.inside) return s;
@@ -171,18 +184,48 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, No
         grid_, *samples_, global_, northCap_, southCap_, L.u, L.v,
         [&](const auto& acc) { return detail::evaluate<G>(interp, acc, L.u, L.v, nd); });
   };
-  const bool analytic = wantNormal && L.cap == 0;
-  const detail::KernelResult k = analytic ? eval(std::true_type{}) : eval(std::false_type{});
+  // Bilinear and bicubic caps are a cubic Hermite blend in latitude (below), which needs the
+  // kernel's gradient at the cap's edge even for a height.
+  const bool hermiteCap = L.cap != 0 && interp != Interpolation::Nearest;
+  const bool analytic = (wantNormal && L.cap == 0) || hermiteCap;
+  const detail::KernelResult k =
+      analytic ? planetAccessor<true>(grid_, *samples_, global_, northCap_, southCap_, L.u, L.v,
+                                      [&](const auto& acc) {
+                                        return detail::evaluateSurface(interp, acc, L.u, L.v, nd);
+                                      })
+               : eval(std::false_type{});
   s.status = k.status;
+  s.normalStatus = k.status;
   if (k.status != QueryStatus::Ok) return s;
-  double h = k.h;
+  double h = k.h, dhdu = k.dhdu, dhdv = k.dhdv;
   if (L.cap != 0) {
     const double pole = L.cap > 0 ? northPole_ : southPole_;
     if (std::isnan(pole)) {
-      s.status = QueryStatus::Nodata;
+      s.status = s.normalStatus = QueryStatus::Nodata;
       return s;
     }
-    h = (1.0 - L.t) * h + L.t * pole;
+    const double t = L.t;
+    if (hermiteCap) {
+      // h(t) from the edge row (t = 0: the kernel's height H and slope) to the pole (t = 1:
+      // the pole's height, slope 0), with v = v_edge + t·D. The cap then joins the grid with
+      // a continuous gradient (C1, as bicubic promises; bilinear's cells are C0 between
+      // themselves anyway), and the pole's gradient is 0: one normal there, the body's up,
+      // whatever the longitude.
+      const double rmax = static_cast<double>(grid_.rows()) - 1.0;
+      const double d = L.cap > 0 ? northPoleV_ : southPoleV_ - rmax;
+      const bool slope = k.gradStatus == QueryStatus::Ok;
+      const double m0 = slope ? k.dhdv * d : 0.0, m0u = slope ? k.dhduv * d : 0.0;
+      const double t2 = t * t, t3 = t2 * t;
+      const double h00 = 2.0 * t3 - 3.0 * t2 + 1.0, h10 = t3 - 2.0 * t2 + t,
+                   h01 = 3.0 * t2 - 2.0 * t3;
+      const double d00 = 6.0 * t2 - 6.0 * t, d10 = 3.0 * t2 - 4.0 * t + 1.0,
+                   d01 = 6.0 * t - 6.0 * t2;
+      h = k.h * h00 + m0 * h10 + pole * h01;
+      dhdu = k.dhdu * h00 + m0u * h10;
+      dhdv = (k.h * d00 + m0 * d10 + pole * d01) / d;
+    } else {
+      h = (1.0 - t) * h + t * pole;
+    }
   }
   s.height = h;
   if (!wantNormal) return s;
@@ -190,27 +233,31 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, No
   const double latD = body_.toPlanetodetic(ll.latDeg, latType_);
   const double cosD = std::cos(latD * kDeg);
   glm::dvec3 enu;
-  if (analytic && cosD > 1e-9) {
+  if (analytic && (cosD > 1e-9 || hermiteCap)) {
+    s.normalStatus = k.gradStatus;
+    if (k.gradStatus != QueryStatus::Ok) return s;
     // Surface S(φ, λ) = X(φ, λ) + h·U: its normal in ENU is (−h_e, −h_n, 1) with
-    // h_e = h_λ / ((N + h) cos φ) and h_n = h_φ / (M + h), φ planetodetic.
-    const double hLam = k.dhdu / (grid_.spacingX() * kDeg);
-    double hPhi = -k.dhdv / (grid_.spacingY() * kDeg);
+    // h_e = h_λ / ((N + h) cos φ) and h_n = h_φ / (M + h), φ planetodetic. In a Hermite cap
+    // h_λ vanishes as (1 − t)² towards the pole and cos φ as (1 − t): h_e → 0 there.
+    const double hLam = dhdu / (grid_.spacingX() * kDeg);
+    double hPhi = -dhdv / (grid_.spacingY() * kDeg);
     if (latType_ == LatitudeType::Planetocentric && !body_.isSphere()) {
       const double q = (body_.polarRadius() / body_.equatorialRadius()) *
                        (body_.polarRadius() / body_.equatorialRadius());
       const double sinD = std::sin(latD * kDeg);
       hPhi *= q / (cosD * cosD + q * q * sinD * sinD);  // ∂φc/∂φd
     }
-    const double he = hLam / ((body_.primeVerticalRadius(latD) + h) * cosD);
+    const double he = cosD > 1e-300 ? hLam / ((body_.primeVerticalRadius(latD) + h) * cosD) : 0.0;
     const double hn = hPhi / (body_.meridianRadius(latD) + h);
     enu = glm::normalize(glm::dvec3(-he, -hn, 1.0));
   } else {
     enu = capNormalEnu(ll, interp, h);
     if (std::isnan(enu.x)) {
-      s.status = QueryStatus::Nodata;
-      s.height = kNan;
+      // The normal's tangent-plane stencil reaches a hole; the height is still valid.
+      s.normalStatus = QueryStatus::Nodata;
       return s;
     }
+    s.normalStatus = QueryStatus::Ok;
   }
   s.normal = frame == NormalFrame::Grid ? enu : body_.enuFrame(latD, ll.lonDeg) * enu;
   return s;
@@ -219,10 +266,13 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& ll, Interpolation interp, No
 glm::dvec3 TopoPlanet::capNormalEnu(const LatLon& ll, Interpolation interp, double) const {
   // Near and at a pole latitude/longitude derivatives degenerate, so the normal comes from
   // four heights a quarter row apart along east and north in the tangent plane, which
-  // stay well defined at the pole itself (east/north are taken at the given longitude).
+  // stay well defined at the pole itself. East/north are taken at the given longitude,
+  // except at the pole itself: one point, so one stencil (that of longitude 0) and one
+  // body-fixed normal, expressed in the ENU frame of the longitude given.
   const double latD = body_.toPlanetodetic(ll.latDeg, latType_);
-  const glm::dmat3 enu = body_.enuFrame(latD, ll.lonDeg);
-  const glm::dvec3 p0 = body_.toBodyFixed({latD, ll.lonDeg, 0.0});
+  const double stencilLon = std::abs(latD) == 90.0 ? 0.0 : ll.lonDeg;
+  const glm::dmat3 enu = body_.enuFrame(latD, stencilLon);
+  const glm::dvec3 p0 = body_.toBodyFixed({latD, stencilLon, 0.0});
   const double delta = 0.25 * grid_.spacingY() * kDeg * body_.meridianRadius(latD);
   glm::dvec3 pts[4];
   const glm::dvec3 offs[4] = {delta * enu[0], -delta * enu[0], delta * enu[1], -delta * enu[1]};
@@ -234,7 +284,8 @@ glm::dvec3 TopoPlanet::capNormalEnu(const LatLon& ll, Interpolation interp, doub
     pts[i] = body_.toBodyFixed({g.latDeg, g.lonDeg, hs.height});
   }
   const glm::dvec3 n = glm::normalize(glm::cross(pts[0] - pts[1], pts[2] - pts[3]));
-  return {glm::dot(n, enu[0]), glm::dot(n, enu[1]), glm::dot(n, enu[2])};
+  const glm::dmat3 out = stencilLon == ll.lonDeg ? enu : body_.enuFrame(latD, ll.lonDeg);
+  return {glm::dot(n, out[0]), glm::dot(n, out[1]), glm::dot(n, out[2])};
 }
 
 void TopoPlanet::heights(std::span<const double> latsDeg, std::span<const double> lonsDeg,
@@ -257,12 +308,13 @@ void TopoPlanet::heights(std::span<const double> latsDeg, std::span<const double
 
 void TopoPlanet::surfaces(std::span<const double> latsDeg, std::span<const double> lonsDeg,
                           std::span<double> outHeights, std::span<glm::dvec3> outNormals,
-                          std::span<QueryStatus> status, Interpolation interp,
-                          NormalFrame frame) const {
+                          std::span<QueryStatus> status, Interpolation interp, NormalFrame frame,
+                          std::span<QueryStatus> normalStatus) const {
   constexpr const char* op = "TopoPlanet::surfaces()";
   const std::size_t n = latsDeg.size();
   if (lonsDeg.size() != n || outHeights.size() != n || outNormals.size() != n ||
-      (!status.empty() && status.size() != n)) {
+      (!status.empty() && status.size() != n) ||
+      (!normalStatus.empty() && normalStatus.size() != n)) {
     throw InvalidArgument(std::string(op) + ": arrays differ in length, expected " +
                           std::to_string(n) + " elements each");
   }
@@ -272,6 +324,7 @@ void TopoPlanet::surfaces(std::span<const double> latsDeg, std::span<const doubl
     outHeights[i] = s.height;
     outNormals[i] = s.normal;
     if (!status.empty()) status[i] = s.status;
+    if (!normalStatus.empty()) normalStatus[i] = s.normalStatus;
   }
 }
 

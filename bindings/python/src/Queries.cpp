@@ -75,10 +75,13 @@ py::object batchHeights(const char* op, const char* na, const DoubleArray& a, co
   return py::make_tuple(out, st);
 }
 
-/// Heights and normals: fn(xs, ys, heights, normals, status).
+/// Heights and normals: fn(xs, ys, heights, normals, status, normalStatus). Returns
+/// (heights, normals), then the heights' statuses if withStatus, then the normals' if
+/// withNormalStatus.
 template <class Fn>
 py::tuple batchSurfaces(const char* op, const char* na, const DoubleArray& a, const char* nb,
-                        const DoubleArray& b, bool withStatus, const py::object& outArg, Fn&& fn) {
+                        const DoubleArray& b, bool withStatus, bool withNormalStatus,
+                        const py::object& outArg, Fn&& fn) {
   const auto shape = commonShape(op, na, a, nb, b);
   auto nshape = shape;
   nshape.push_back(3);
@@ -95,17 +98,25 @@ py::tuple batchSurfaces(const char* op, const char* na, const DoubleArray& a, co
   py::array_t<double> normals = outputArray(op, "out[1]", outN, nshape);
   const auto n = static_cast<std::size_t>(a.size());
   std::vector<topo::QueryStatus> status(withStatus ? n : 0);
+  std::vector<topo::QueryStatus> normalStatus(withNormalStatus ? n : 0);
   {
     const py::gil_scoped_release release;
     fn(in(a), in(b), std::span<double>(heights.mutable_data(), n),
        std::span<glm::dvec3>(reinterpret_cast<glm::dvec3*>(normals.mutable_data()), n),
-       std::span(status));
+       std::span(status), std::span(normalStatus));
   }
-  if (!withStatus) return py::make_tuple(heights, normals);
-  py::array_t<std::uint8_t> st(shape);
-  auto* s = st.mutable_data();
-  for (std::size_t i = 0; i < n; ++i) s[i] = static_cast<std::uint8_t>(status[i]);
-  return py::make_tuple(heights, normals, st);
+  const auto codes = [&](const std::vector<topo::QueryStatus>& v) {
+    py::array_t<std::uint8_t> st(shape);
+    auto* s = st.mutable_data();
+    for (std::size_t i = 0; i < n; ++i) s[i] = static_cast<std::uint8_t>(v[i]);
+    return st;
+  };
+  if (withStatus && withNormalStatus) {
+    return py::make_tuple(heights, normals, codes(status), codes(normalStatus));
+  }
+  if (withStatus) return py::make_tuple(heights, normals, codes(status));
+  if (withNormalStatus) return py::make_tuple(heights, normals, codes(normalStatus));
+  return py::make_tuple(heights, normals);
 }
 
 const topo::TopoDem& demOf(const Terrain& t) { return *t.dem; }
@@ -138,6 +149,7 @@ void bindQueries(py::module_& m) {
   m.attr("STATUS_OK") = static_cast<int>(topo::QueryStatus::Ok);
   m.attr("STATUS_NODATA") = static_cast<int>(topo::QueryStatus::Nodata);
   m.attr("STATUS_OUTSIDE") = static_cast<int>(topo::QueryStatus::OutsideGrid);
+  m.attr("STATUS_UNMAPPABLE") = static_cast<int>(topo::QueryStatus::Unmappable);
 
   py::class_<DemTerrain, std::shared_ptr<DemTerrain>> dem(
       m, "Dem",
@@ -163,19 +175,21 @@ void bindQueries(py::module_& m) {
           "surfaces",
           [](const DemTerrain& t, const DoubleArray& x, const DoubleArray& y,
              const std::string& interp, const std::string& frame, bool status,
-             const py::object& out) {
+             const py::object& out, bool normalStatus) {
             const auto k = parseInterpolation(interp);
             const auto f = parseFrame(frame);
-            return batchSurfaces("Dem.surfaces()", "x", x, "y", y, status, out,
-                                 [&](auto xs, auto ys, auto h, auto n, auto st) {
-                                   demOf(t).surfaces(xs, ys, h, n, st, k, f);
+            return batchSurfaces("Dem.surfaces()", "x", x, "y", y, status, normalStatus, out,
+                                 [&](auto xs, auto ys, auto h, auto n, auto st, auto nst) {
+                                   demOf(t).surfaces(xs, ys, h, n, st, k, f, nst);
                                  });
           },
           py::arg("x"), py::arg("y"), py::arg("interp") = "bilinear", py::arg("frame") = "grid",
-          py::arg("status") = false, py::arg("out") = py::none(),
+          py::arg("status") = false, py::arg("out") = py::none(), py::arg("normal_status") = false,
           "(heights, normals[..., 3]) at (x, y); unit normals in the grid frame (x, y, h) or "
-          "frame='body' (body-fixed); with status=True also the STATUS_* codes. out: a "
-          "(heights, normals) pair of float64 arrays to write into (no allocation).")
+          "frame='body' (body-fixed); with status=True also the heights' STATUS_* codes, with "
+          "normal_status=True (after them) the normals': a height next to a hole is valid while "
+          "its normal may not be, and a normal the placement cannot map is STATUS_UNMAPPABLE. "
+          "out: a (heights, normals) pair of float64 arrays to write into (no allocation).")
       .def(
           "height",
           [](const DemTerrain& t, double x, double y, const std::string& interp) {
@@ -227,16 +241,18 @@ void bindQueries(py::module_& m) {
           "surfaces",
           [](const PlanetTerrain& t, const DoubleArray& lat, const DoubleArray& lon,
              const std::string& interp, const std::string& frame, bool status,
-             const py::object& out) {
+             const py::object& out, bool normalStatus) {
             const auto k = parseInterpolation(interp);
             const auto f = parseFrame(frame);
-            return batchSurfaces("Planet.surfaces()", "lat", lat, "lon", lon, status, out,
-                                 [&](auto la, auto lo, auto h, auto n, auto st) {
-                                   planetOf(t).surfaces(la, lo, h, n, st, k, f);
+            return batchSurfaces("Planet.surfaces()", "lat", lat, "lon", lon, status, normalStatus,
+                                 out, [&](auto la, auto lo, auto h, auto n, auto st, auto nst) {
+                                   planetOf(t).surfaces(la, lo, h, n, st, k, f, nst);
                                  });
           },
           py::arg("lat"), py::arg("lon"), py::arg("interp") = "bilinear", py::arg("frame") = "grid",
-          py::arg("status") = false, py::arg("out") = py::none())
+          py::arg("status") = false, py::arg("out") = py::none(), py::arg("normal_status") = false,
+          "(heights, normals[..., 3]); status=True and normal_status=True add the heights' and "
+          "the normals' STATUS_* codes, as Dem.surfaces().")
       .def("__repr__", [](const PlanetTerrain& t) {
         return "<regolith.Planet '" + t.grid + "' level " + std::to_string(t.level) + " of '" +
                t.store->path().string() + "'>";

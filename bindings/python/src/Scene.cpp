@@ -257,8 +257,9 @@ void bindScene(py::module_& m) {
       "Builds the Mars/Victoria scene with data (generated in memory, or the given mars and "
       "victoria stores, as `regolith demo` writes them) and renders one view headless into a "
       "(height, width, 4) uint8 RGBA array. eye and look_at are in the Victoria DEM's frame "
-      "(x east, y north, z up, metres), and up is the direction that is up in the image (it must "
-      "not be parallel to the view); rover is (x, y, heading_deg) on the DEM. tracks: wheel "
+      "(x east, y north, z up, metres), and up is the direction that is up in the image (within "
+      "1e-6 rad of parallel to the view, another up is chosen: the frame axis most "
+      "perpendicular to it); rover is (x, y, heading_deg) on the DEM. tracks: wheel "
       "contacts (steps, 6, 2), e.g. run_traverse(...)['record']['wheels'], pressed as ruts, or "
       "a TrackLayer a traverse stamped.");
 

@@ -96,9 +96,12 @@ class Body {
   double e2_;
 };
 
-/// Wraps a longitude in degrees into [−180, 180).
+/// Wraps a longitude in degrees into [−180, 180), for any finite longitude up to ±1.8e308:
+/// beyond two turns it is first reduced exactly (fmod(lon, 360)), so 1e308 names the
+/// meridian fmod does; then shifted by 180 (rounding by at most an ulp of 540).
 [[nodiscard]] double wrapLongitude180(double lonDeg) noexcept;
-/// Wraps a longitude in degrees into [0, 360).
+/// Wraps a longitude in degrees into [0, 360) (exact but for a tiny negative longitude,
+/// which rounds to 0 rather than to the double below 360).
 [[nodiscard]] double wrapLongitude360(double lonDeg) noexcept;
 
 /// Throws InvalidArgument naming `operation` and `field` unless v is finite.

@@ -52,12 +52,19 @@ class Placement {
   [[nodiscard]] Geodetic toGeodetic(double x, double y, double h) const;
   /// Grid coordinates (x, y, h) of a planetodetic position: the inverse of toGeodetic.
   [[nodiscard]] glm::dvec3 fromGeodetic(const Geodetic& g) const;
+  /// As fromGeodetic(), but an equirectangular map takes the longitude in the turn whose x
+  /// lies nearest xNear (Equirectangular::forwardNear, PROJ's `+over`): a DEM that runs past
+  /// ±180° from its central meridian passes the centre of its x extent. Other placements
+  /// are single-valued in longitude and ignore xNear.
+  [[nodiscard]] glm::dvec3 fromGeodeticNear(const Geodetic& g, double xNear) const;
   /// Grid coordinates (x, y, h) of a body-fixed point.
   [[nodiscard]] glm::dvec3 fromBodyFixed(const glm::dvec3& p) const;
 
   /// Columns: ∂P/∂x, ∂P/∂y, ∂P/∂h of the body-fixed position P at (x, y, h). Exact for the
   /// tangent plane; central differences over ±0.5 m for map projections (relative error
-  /// ~1e-13, far below anything a DEM resolves).
+  /// ~1e-13, far below anything a DEM resolves), one-sided (second order) within 0.5 m of
+  /// the edge of the projection's domain, such as a pole an equirectangular map reaches.
+  /// Throws DomainError only if (x, y) itself has no image.
   [[nodiscard]] glm::dmat3 jacobian(double x, double y, double h) const;
   /// Converts a normal in the grid frame (x, y, h) at (x, y, h) to a unit body-fixed normal.
   [[nodiscard]] glm::dvec3 normalToBodyFixed(const glm::dvec3& gridNormal, double x, double y,

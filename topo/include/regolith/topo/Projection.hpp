@@ -27,6 +27,10 @@ class Equirectangular {
                   double latOriginDeg = 0.0);
 
   [[nodiscard]] glm::dvec2 forward(const LatLon& ll) const;
+  /// Forward with λ − λ0 taken in the turn whose x lies nearest xNear (metres) instead of
+  /// [−180°, 180°): PROJ's `+over`, for a map that runs past ±180° from its centre (a DEM
+  /// centred on 180° that reaches past −180°). forward() is forwardNear(ll, 0).
+  [[nodiscard]] glm::dvec2 forwardNear(const LatLon& ll, double xNear) const;
   /// Inverse; latitude beyond ±90° (y outside the map) throws DomainError.
   [[nodiscard]] LatLon inverse(const glm::dvec2& xy) const;
 

@@ -7,6 +7,7 @@
 #include <regolith/topo/Query.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #if defined(__x86_64__) || defined(_M_X64)
@@ -234,11 +235,14 @@ class TopoDem {
   /// status may be empty. All inputs are checked for NaN/inf before anything is written.
   void heights(std::span<const double> xs, std::span<const double> ys, std::span<double> out,
                std::span<QueryStatus> status, Interpolation interp = Interpolation::Bilinear) const;
-  /// Batch heights and normals.
+  /// Batch heights and normals. status receives the heights' statuses and normalStatus
+  /// the normals' (either may be empty; see SurfaceSample). A point whose normal the
+  /// placement cannot map gets normalStatus Unmappable; it never fails the batch.
   void surfaces(std::span<const double> xs, std::span<const double> ys,
                 std::span<double> outHeights, std::span<glm::dvec3> outNormals,
                 std::span<QueryStatus> status, Interpolation interp = Interpolation::Bilinear,
-                NormalFrame frame = NormalFrame::Grid) const;
+                NormalFrame frame = NormalFrame::Grid,
+                std::span<QueryStatus> normalStatus = {}) const;
 
   /// Body-fixed position of grid point (x, y) at height h.
   [[nodiscard]] glm::dvec3 toBodyFixed(double x, double y, double h) const {
@@ -256,6 +260,7 @@ class TopoDem {
   detail::ResidentBilinear fast_;
   std::uint64_t sourceId_ = 0;         // samples_->id()
   const BlockTable* table_ = nullptr;  // samples_->blockTable(), cached
+  glm::dvec2 slack_{0.0};              // grid_.edgeSlack()
 
   [[nodiscard]] HeightSample heightGeneric(double x, double y, Interpolation interp) const;
 };

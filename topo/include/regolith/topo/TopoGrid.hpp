@@ -65,8 +65,17 @@ class TopoGrid {
   [[nodiscard]] double south() const noexcept {
     return y0_ - (static_cast<double>(rows_) - 0.5) * dy_;
   }
-  /// True if (x, y) lies within the pixel extent (edges included).
+  /// True if (x, y) lies within the pixel extent, edges included: a point on an edge that
+  /// west() … north() report is inside, even when rounding puts its fractional index a few
+  /// ulps beyond ±0.5 (see edgeSlack()).
   [[nodiscard]] bool contains(double x, double y) const noexcept;
+  /// How far beyond the pixel extent, in fractional index units (col, row), a point still
+  /// counts as on its edge: 4 ulps of the grid's largest coordinate over the spacing, plus
+  /// 4 ulps of the largest index. That covers the rounding of an edge's own coordinate, of
+  /// x − x0 and of the division, in every coordinate mode (grid indices, grid coordinates,
+  /// longitude/latitude), and is far below any distance a grid resolves (1e-11 of a pixel
+  /// for x0 = 1e5 spacings).
+  [[nodiscard]] glm::dvec2 edgeSlack() const noexcept;
   /// True if sample value s is missing (NaN or equal to nodata).
   [[nodiscard]] bool isNodata(float s) const noexcept {
     return s != s || (nodata_ && s == *nodata_);

@@ -58,11 +58,13 @@ class TopoPlanet {
   void heights(std::span<const double> latsDeg, std::span<const double> lonsDeg,
                std::span<double> out, std::span<QueryStatus> status,
                Interpolation interp = Interpolation::Bilinear) const;
-  /// Batch heights and normals.
+  /// Batch heights and normals; status receives the heights' statuses and normalStatus the
+  /// normals' (either may be empty; see SurfaceSample).
   void surfaces(std::span<const double> latsDeg, std::span<const double> lonsDeg,
                 std::span<double> outHeights, std::span<glm::dvec3> outNormals,
                 std::span<QueryStatus> status, Interpolation interp = Interpolation::Bilinear,
-                NormalFrame frame = NormalFrame::Grid) const;
+                NormalFrame frame = NormalFrame::Grid,
+                std::span<QueryStatus> normalStatus = {}) const;
 
   /// Planetodetic position of a grid latitude/longitude at height h.
   [[nodiscard]] Geodetic toGeodetic(const LatLon& ll, double h) const;
@@ -89,6 +91,7 @@ class TopoPlanet {
   bool southCap_ = false;
   double northPoleV_ = 0.0;  // fractional row of the north pole
   double southPoleV_ = 0.0;
+  glm::dvec2 slack_{0.0};  // grid_.edgeSlack()
   double northPole_, southPole_;
 };
 
