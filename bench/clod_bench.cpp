@@ -15,9 +15,9 @@
 // Run: build/bench/clod_bench   (about 4 minutes: the 8192² mesh takes half a minute a
 // frame).
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/HeadlessContext.hpp>
 #include <regolith/clod/MeshRenderer.hpp>
-#include <regolith/clod/RenderTarget.hpp>
+#include <regolith/gl/HeadlessContext.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 
 #include <benchmark/benchmark.h>
 #include <glm/geometric.hpp>
@@ -72,14 +72,14 @@ Camera camera(const glm::dvec3& target) {
 
 const glm::dvec3 kTarget{0.0, 0.0, -1400.0};
 
-DepthImage referenceDepth(std::size_t side) {
-  static std::map<std::size_t, DepthImage> cache;
+gl::DepthImage referenceDepth(std::size_t side) {
+  static std::map<std::size_t, gl::DepthImage> cache;
   auto it = cache.find(side);
   if (it != cache.end()) return it->second;
   const auto p = dem(side);
   const Camera cam = camera(kTarget);
   MeshRenderer mesh(p->level(0).grid, *p->level(0).source);
-  RenderTarget target(cam.width, cam.height);
+  gl::RenderTarget target(cam.width, cam.height);
   target.clear({0, 0, 0, 1});
   mesh.draw(cam);
   return cache[side] = target.readDepth();
@@ -88,7 +88,7 @@ DepthImage referenceDepth(std::size_t side) {
 /// Screen-space error in pixels: distance between the surface points seen through each
 /// pixel in `a` and in the reference, times focal length over distance. Pixels that one of
 /// the two leaves empty, or at depth discontinuities of the reference, are skipped.
-void errorCounters(benchmark::State& state, const DepthImage& a, const DepthImage& ref) {
+void errorCounters(benchmark::State& state, const gl::DepthImage& a, const gl::DepthImage& ref) {
   const Camera cam = camera(kTarget);
   std::vector<double> e;
   for (int y = 1; y + 1 < ref.height; ++y)
@@ -116,7 +116,7 @@ void clipmapFrame(benchmark::State& state) {
   ClipmapTerrain terrain(p, opt);
   terrain.setFocus(kTarget);
   const Camera cam = camera(kTarget);
-  RenderTarget target(cam.width, cam.height);
+  gl::RenderTarget target(cam.width, cam.height);
   ClipmapFrame frame;
   for (auto _ : state) {
     target.clear({0, 0, 0, 1});
@@ -134,7 +134,7 @@ void meshFrame(benchmark::State& state) {
   const auto p = dem(side);
   MeshRenderer mesh(p->level(level).grid, *p->level(level).source);
   const Camera cam = camera(kTarget);
-  RenderTarget target(cam.width, cam.height);
+  gl::RenderTarget target(cam.width, cam.height);
   std::size_t vertices = 0;
   for (auto _ : state) {
     target.clear({0, 0, 0, 1});
@@ -150,7 +150,7 @@ void panFrames(benchmark::State& state) {
   ClipmapOptions opt;
   opt.size = static_cast<int>(state.range(1));
   const auto p = dem(side);
-  RenderTarget target(1280, 720);
+  gl::RenderTarget target(1280, 720);
   double mean = 0.0, worst = 0.0, coarser = 0.0;
   for (auto _ : state) {
     ClipmapTerrain terrain(p, opt);
@@ -212,7 +212,7 @@ BENCHMARK(panFrames)
 }  // namespace
 
 int main(int argc, char** argv) {
-  const HeadlessContext context;  // one GL context for every case
+  const gl::HeadlessContext context;  // one GL context for every case
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

@@ -12,9 +12,9 @@
 //
 // Run: build/bench/effects_bench --benchmark_min_time=40x   (about a minute)
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/HeadlessContext.hpp>
-#include <regolith/clod/RenderTarget.hpp>
 #include <regolith/clod/TrackLayer.hpp>
+#include <regolith/gl/HeadlessContext.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Placement.hpp>
 
 #include <benchmark/benchmark.h>
@@ -116,7 +116,7 @@ Camera camera() {
   return cam;
 }
 
-double frameMs(const ClipmapTerrain& terrain, const Camera& cam, const RenderTarget& target) {
+double frameMs(const ClipmapTerrain& terrain, const Camera& cam, const gl::RenderTarget& target) {
   const auto t0 = std::chrono::steady_clock::now();
   target.clear({0, 0, 0, 1});
   (void)terrain.draw(cam);
@@ -133,7 +133,7 @@ void effectFrame(benchmark::State& state, const std::string& name) {
   ClipmapTerrain withEffect(p, opt);
   bare.setFocus(cam.target);
   withEffect.setFocus(cam.target);
-  const RenderTarget target(cam.width, cam.height);
+  const gl::RenderTarget target(cam.width, cam.height);
   (void)frameMs(bare, cam, target);  // first frames: shader JIT, uploads
   (void)frameMs(withEffect, cam, target);
   double bareMs = 0.0, effectMs = 0.0;
@@ -150,7 +150,7 @@ void effectFrame(benchmark::State& state, const std::string& name) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const HeadlessContext context;  // one GL context for every case
+  const gl::HeadlessContext context;  // one GL context for every case
   for (const char* name :
        {"none", "albedo", "tracks", "noise", "heightColours", "latLon", "overlay"})
     benchmark::RegisterBenchmark(

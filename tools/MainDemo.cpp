@@ -1,9 +1,9 @@
 #include "MainDemo.hpp"
 
-#include <regolith/clod/Image.hpp>
 #include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/gl/Image.hpp>
 #include <regolith/rover/Traverse.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/Pager.hpp>
@@ -214,13 +214,13 @@ RoverViews renderRoverViews(const MainDemoOptions& o, const demo::MarsVictoriaOp
   // Mast: 2.1 m up, looking back along the tracks and down at the ground 15 m behind.
   view.camera = scenegraph::Pose::lookAt(p + 2.1 * up + 0.4 * fwd, p - 15.0 * fwd, up);
   v.mast = o.outDir / "rover_view.png";
-  clod::writePng(v.mast.string(), demo::renderSceneView(view));
+  gl::writePng(v.mast.string(), demo::renderSceneView(view));
   out << "  " << v.mast.string() << std::endl;
   // Chase: 9 m ahead and 3.5 m up, looking back at the rover.
   view.camera = scenegraph::Pose::lookAt(p + 9.0 * fwd + 3.5 * up, p - 4.0 * fwd + 0.5 * up, up);
   view.near = 0.1;
   v.chase = o.outDir / "rover_chase.png";
-  clod::writePng(v.chase.string(), demo::renderSceneView(view));
+  gl::writePng(v.chase.string(), demo::renderSceneView(view));
   out << "  " << v.chase.string() << std::endl;
   return v;
 }

@@ -2,9 +2,9 @@
 // Kept apart from ClipmapTerrain.cpp so the bare pipeline reads as before.
 
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/GlError.hpp>
 #include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/GlError.hpp>
 
 #include "ClipmapEffectState.hpp"
 #include "ClipmapLevel.hpp"
@@ -97,14 +97,14 @@ void ClipmapTerrain::initEffects() {
     const int n = options_.trackWindow;
     GLuint id = 0;
     glCreateTextures(GL_TEXTURE_2D, 1, &id);
-    effects_->tracks = Texture(id);
+    effects_->tracks = gl::Texture(id);
     glTextureStorage2D(id, 1, GL_R32F, n, n);
     glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_BORDER);
     glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_BORDER);
     effects_->trackWindow = n;
-    checkGl("ClipmapTerrain(): track texture");
+    gl::checkGl("ClipmapTerrain(): track texture");
   }
 }
 
@@ -265,7 +265,7 @@ void ClipmapTerrain::setEffectUniforms(const Camera& camera, ClipmapFrame& frame
                                         ? ratio * ratio
                                         : 1.0));
   }
-  checkGl("ClipmapTerrain::draw(): effects");
+  gl::checkGl("ClipmapTerrain::draw(): effects");
 }
 
 void ClipmapTerrain::setLevelUniforms(std::size_t k) const {

@@ -1,6 +1,6 @@
 #include "ClipmapLevel.hpp"
 
-#include <regolith/clod/GlError.hpp>
+#include <regolith/gl/GlError.hpp>
 
 #include <glm/geometric.hpp>
 
@@ -36,7 +36,7 @@ ClipmapLevel::ClipmapLevel(const HeightPyramid& pyramid, std::size_t level, int 
   glTextureParameteri(texture_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(texture_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   heights_.assign(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), kNaN);
-  checkGl("ClipmapLevel()");
+  gl::checkGl("ClipmapLevel()");
 }
 
 const topo::TopoGrid& ClipmapLevel::grid() const noexcept { return pyramid_.level(level_).grid; }
@@ -306,7 +306,7 @@ std::size_t ClipmapLevel::apply(const Plan& p) {
     count += w * h;
   }
   glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
-  checkGl("ClipmapLevel::apply()");
+  gl::checkGl("ClipmapLevel::apply()");
   updateRange();
   return count;
 }

@@ -3,8 +3,8 @@
 // toroidally addressed RGBA32F texture (xyz: scene position relative to the level's double
 // anchor, w: height or NaN for nodata). Private to clod.
 
-#include <regolith/clod/GlObjects.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/gl/GlObjects.hpp>
 
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
@@ -116,7 +116,7 @@ class ClipmapLevel {
   glm::dvec3 anchor_{0.0};
   std::vector<float> heights_;  // CPU mirror of w, toroidal like the texture
   float minH_ = 0.0F, maxH_ = 0.0F;
-  Texture texture_;
+  gl::Texture texture_;
 };
 
 }  // namespace regolith::clod

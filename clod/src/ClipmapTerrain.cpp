@@ -1,6 +1,6 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/GlError.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/GlError.hpp>
 
 #include "ClipmapEffectState.hpp"
 #include "ClipmapLevel.hpp"
@@ -24,13 +24,13 @@
 
 namespace regolith::clod {
 
-ShaderSources ClipmapTerrain::bareSources() {
-  return ShaderSources{shaders::kClipmapVertex, shaders::kDropNodataGeometry,
-                       shaders::kLitFragment};
+gl::ShaderSources ClipmapTerrain::bareSources() {
+  return gl::ShaderSources{shaders::kClipmapVertex, shaders::kDropNodataGeometry,
+                           shaders::kLitFragment};
 }
 
-ShaderSources ClipmapTerrain::programSourcesFor(const ClipmapOptions& options, bool planet) {
-  ShaderSources s = composeClipmapSources(options.effects, planet);
+gl::ShaderSources ClipmapTerrain::programSourcesFor(const ClipmapOptions& options, bool planet) {
+  gl::ShaderSources s = composeClipmapSources(options.effects, planet);
   // Scene graph: the cut-out test (CutOutShader.hpp) only where a DEM may win over this
   // terrain; inert until SceneRenderer sets its uniforms.
   if (options.cutOuts) s.fragment = shaders::withCutOuts(s.fragment);
@@ -322,7 +322,7 @@ void ClipmapTerrain::buildMesh() {
   glEnableVertexArrayAttrib(vao_.id(), 0);
   glVertexArrayAttribIFormat(vao_.id(), 0, 3, GL_INT, 0);
   glVertexArrayAttribBinding(vao_.id(), 0, 0);
-  checkGl("ClipmapTerrain::buildMesh()");
+  gl::checkGl("ClipmapTerrain::buildMesh()");
 }
 
 std::size_t ClipmapTerrain::setFocus(const glm::dvec3& focus) {
@@ -422,7 +422,7 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
     ++frame.levelsDrawn;
   }
   glBindVertexArray(0);
-  checkGl("ClipmapTerrain::draw()");
+  gl::checkGl("ClipmapTerrain::draw()");
   return frame;
 }
 

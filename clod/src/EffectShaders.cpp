@@ -1,6 +1,6 @@
 #include "EffectShaders.hpp"
 
-#include <regolith/clod/GlError.hpp>
+#include <regolith/gl/GlError.hpp>
 
 #include "Shaders.hpp"
 
@@ -16,8 +16,8 @@ void insertAt(std::string& src, const char* stage, const std::string& anchor,
               const std::string& text, bool before = false) {
   const auto at = src.find(anchor);
   if (at == std::string::npos || src.find(anchor, at + 1) != std::string::npos)
-    throw GlError(std::string("composeClipmapSources(): the bare ") + stage +
-                  " shader has no unique anchor '" + anchor + "'");
+    throw gl::GlError(std::string("composeClipmapSources(): the bare ") + stage +
+                      " shader has no unique anchor '" + anchor + "'");
   // Rebuilt rather than std::string::insert, which trips GCC 12's -Wrestrict.
   const std::size_t cut = before ? at : at + anchor.size();
   src = src.substr(0, cut) + text + src.substr(cut);
@@ -234,8 +234,8 @@ EffectNeeds EffectNeeds::of(const Effects& e, bool planet) noexcept {
   return n;
 }
 
-ShaderSources composeClipmapSources(const Effects& e, bool planet) {
-  ShaderSources s{shaders::kClipmapVertex, shaders::kDropNodataGeometry, shaders::kLitFragment};
+gl::ShaderSources composeClipmapSources(const Effects& e, bool planet) {
+  gl::ShaderSources s{shaders::kClipmapVertex, shaders::kDropNodataGeometry, shaders::kLitFragment};
   const EffectNeeds need = EffectNeeds::of(e, planet);
   const bool gridPerFragment = planet && need.grid;
   const bool surface = e.albedo || e.noise || e.tracks;

@@ -3,7 +3,7 @@
 // declared effect. Private to clod.
 
 #include <regolith/clod/Effects.hpp>
-#include <regolith/clod/Program.hpp>
+#include <regolith/gl/Program.hpp>
 
 namespace regolith::clod {
 
@@ -21,6 +21,6 @@ struct EffectNeeds {
 /// declared effect's declarations, varyings and code inserted at fixed anchors. No effect:
 /// exactly the bare sources. `planet`: the terrain is a Planet pyramid. Throws GlError if an
 /// anchor is missing (the bare shaders were edited without updating the composer).
-[[nodiscard]] ShaderSources composeClipmapSources(const Effects& effects, bool planet);
+[[nodiscard]] gl::ShaderSources composeClipmapSources(const Effects& effects, bool planet);
 
 }  // namespace regolith::clod

@@ -48,7 +48,7 @@ const char* glyph(char c) {
   }
 }
 
-void put(RgbaImage& img, int x, int y, std::array<std::uint8_t, 4> c) {
+void put(gl::RgbaImage& img, int x, int y, std::array<std::uint8_t, 4> c) {
   if (x < 0 || y < 0 || x >= img.width || y >= img.height) return;
   auto* p =
       img.rgba.data() + 4 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(img.width) +
@@ -56,7 +56,7 @@ void put(RgbaImage& img, int x, int y, std::array<std::uint8_t, 4> c) {
   std::copy(c.begin(), c.end(), p);
 }
 
-void text(RgbaImage& img, int x, int y, const std::string& s) {
+void text(gl::RgbaImage& img, int x, int y, const std::string& s) {
   for (char ch : s) {
     const char* g = glyph(ch);
     for (int r = 0; r < 5; ++r)
@@ -110,8 +110,8 @@ double Legend::heightAtRow(int y) const {
          t * static_cast<double>(heights_->maxHeight - heights_->minHeight);
 }
 
-RgbaImage Legend::image() const {
-  RgbaImage img;
+gl::RgbaImage Legend::image() const {
+  gl::RgbaImage img;
   if (empty()) {
     img.width = img.height = 1;
     img.rgba.assign(4, 0);
@@ -144,9 +144,9 @@ RgbaImage Legend::image() const {
   return img;
 }
 
-void Legend::drawInto(RgbaImage& target) const {
+void Legend::drawInto(gl::RgbaImage& target) const {
   if (empty()) return;
-  const RgbaImage img = image();
+  const gl::RgbaImage img = image();
   const int x0 = target.width - img.width - 8, y0 = 8;
   for (int y = 0; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x) {

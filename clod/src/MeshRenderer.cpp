@@ -1,6 +1,6 @@
-#include <regolith/clod/GlError.hpp>
 #include <regolith/clod/MeshRenderer.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/GlError.hpp>
 
 #include "Shaders.hpp"
 
@@ -15,8 +15,8 @@ namespace regolith::clod {
 
 MeshRenderer::MeshRenderer(const topo::TopoGrid& grid, const topo::SampleSource& source)
     : grid_(grid),
-      program_("mesh", ShaderSources{shaders::kMeshVertex, shaders::kDropNodataGeometry,
-                                     shaders::kLitFragment}) {
+      program_("mesh", gl::ShaderSources{shaders::kMeshVertex, shaders::kDropNodataGeometry,
+                                         shaders::kLitFragment}) {
   if (source.rows() != grid.rows() || source.cols() != grid.cols())
     throw InvalidArgument("MeshRenderer(): source is " + std::to_string(source.rows()) + " x " +
                           std::to_string(source.cols()) + ", grid is " +
@@ -36,7 +36,7 @@ MeshRenderer::MeshRenderer(const topo::TopoGrid& grid, const topo::SampleSource&
                       static_cast<GLsizei>(rows), GL_RED, GL_FLOAT, h.data());
   glTextureParameteri(heights_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(heights_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  checkGl("MeshRenderer()");
+  gl::checkGl("MeshRenderer()");
 }
 
 std::size_t MeshRenderer::draw(const Camera& camera) const {
@@ -55,7 +55,7 @@ std::size_t MeshRenderer::draw(const Camera& camera) const {
   const auto strips = static_cast<GLsizei>(grid_.rows() - 1);
   glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, perStrip, strips);
   glBindVertexArray(0);
-  checkGl("MeshRenderer::draw()");
+  gl::checkGl("MeshRenderer::draw()");
   return static_cast<std::size_t>(perStrip) * static_cast<std::size_t>(strips);
 }
 

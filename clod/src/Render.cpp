@@ -1,8 +1,8 @@
-#include <regolith/clod/HeadlessContext.hpp>
 #include <regolith/clod/Legend.hpp>
 #include <regolith/clod/Render.hpp>
-#include <regolith/clod/RenderTarget.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/HeadlessContext.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 
 #include <EGL/egl.h>
 #include <glm/geometric.hpp>
@@ -89,8 +89,8 @@ Camera cameraLookingAt(const HeightPyramid& pyramid, const glm::dvec3& target,
 
 namespace {
 
-RgbaImage render(std::shared_ptr<const HeightPyramid> pyramid, const RenderRequest& request,
-                 std::optional<Legend>* legendOut) {
+gl::RgbaImage render(std::shared_ptr<const HeightPyramid> pyramid, const RenderRequest& request,
+                     std::optional<Legend>* legendOut) {
   if (!pyramid) throw InvalidArgument("renderImage(): pyramid is null");
   const Camera& cam = request.camera;
   if (!(cam.fovYDegrees > 0.0 && cam.fovYDegrees < 180.0))
@@ -99,13 +99,13 @@ RgbaImage render(std::shared_ptr<const HeightPyramid> pyramid, const RenderReque
   if (!(cam.near > 0.0))
     throw InvalidArgument("renderImage(): near plane " + std::to_string(cam.near) +
                           " m, expected > 0");
-  std::unique_ptr<HeadlessContext> context;
-  if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<HeadlessContext>();
-  RgbaImage image;
+  std::unique_ptr<gl::HeadlessContext> context;
+  if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<gl::HeadlessContext>();
+  gl::RgbaImage image;
   {
     ClipmapTerrain terrain(std::move(pyramid), request.clipmap);
     terrain.setFocus(request.focus.value_or(cam.target));
-    RenderTarget target(cam.width, cam.height);
+    gl::RenderTarget target(cam.width, cam.height);
     target.clear(request.background);
     terrain.draw(cam);
     image = target.readColor();
@@ -120,14 +120,15 @@ RgbaImage render(std::shared_ptr<const HeightPyramid> pyramid, const RenderReque
 
 }  // namespace
 
-RgbaImage renderImage(std::shared_ptr<const HeightPyramid> pyramid, const RenderRequest& request) {
+gl::RgbaImage renderImage(std::shared_ptr<const HeightPyramid> pyramid,
+                          const RenderRequest& request) {
   return render(std::move(pyramid), request, nullptr);
 }
 
 void renderToPng(std::shared_ptr<const HeightPyramid> pyramid, const RenderRequest& request,
                  const std::string& path) {
   std::optional<Legend> legend;
-  writePng(path, render(std::move(pyramid), request, &legend));
+  gl::writePng(path, render(std::move(pyramid), request, &legend));
   if (legend) legend->writeJson(path + ".legend.json");
 }
 

@@ -1,7 +1,7 @@
-#include <regolith/clod/GlError.hpp>
-#include <regolith/clod/RenderTarget.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/GlError.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 
 #include "CutOutShader.hpp"
 
@@ -68,7 +68,7 @@ struct SkirtVertex {
   glm::vec3 flange{0.0F};  // pit flanges: outward direction, mitred at corners (sum of normals)
 };
 
-void setupVao(const VertexArray& vao, const Buffer& buffer, GLsizei stride) {
+void setupVao(const gl::VertexArray& vao, const gl::Buffer& buffer, GLsizei stride) {
   glVertexArrayVertexBuffer(vao.id(), 0, buffer.id(), 0, stride);
   glEnableVertexArrayAttrib(vao.id(), 0);
   glVertexArrayAttribFormat(vao.id(), 0, 3, GL_FLOAT, GL_FALSE, 0);
@@ -145,8 +145,8 @@ Camera cameraInItem(const scenegraph::Pose& pose, const SceneView& view) {
 }
 
 struct SceneRenderer::Skirt {
-  Buffer buffer;
-  VertexArray vao;
+  gl::Buffer buffer;
+  gl::VertexArray vao;
   GLsizei count = 0;
   glm::dvec3 anchor{0.0};  // grid frame
 };
@@ -157,7 +157,7 @@ struct SceneRenderer::Terrain {
   ClipmapOptions options;
   std::vector<int> cutBy;  // planets: the DEMs that win over them
   // DEMs that cut a planet: the finest level's cell mask and border skirt.
-  std::unique_ptr<Texture> mask;
+  std::unique_ptr<gl::Texture> mask;
   std::unique_ptr<Skirt> skirt;
   float edgeLow = 0.0F, edgeHigh = 0.0F;  // border heights (grid frame h)
   float lowest = 0.0F;                    // lowest sample
@@ -165,14 +165,14 @@ struct SceneRenderer::Terrain {
 };
 
 struct SceneRenderer::Mesh {
-  Buffer buffer;
-  VertexArray vao;
+  gl::Buffer buffer;
+  gl::VertexArray vao;
   GLsizei count = 0;
   glm::vec3 albedo{0.7F};
 };
 
 SceneRenderer::SceneRenderer()
-    : meshProgram_("scene mesh", ShaderSources{kMeshVertex, "", kMeshFragment}) {}
+    : meshProgram_("scene mesh", gl::ShaderSources{kMeshVertex, "", kMeshFragment}) {}
 
 SceneRenderer::~SceneRenderer() = default;
 
@@ -206,7 +206,7 @@ void SceneRenderer::addMesh(int drawable, const std::vector<MeshVertex>& vertice
   setupVao(m->vao, m->buffer, sizeof(SkirtVertex));
   m->count = static_cast<GLsizei>(vertices.size());
   m->albedo = albedo;
-  checkGl("SceneRenderer::addMesh()");
+  gl::checkGl("SceneRenderer::addMesh()");
   meshes_.emplace(drawable, std::move(m));
 }
 
@@ -268,7 +268,7 @@ void SceneRenderer::addCutOut(int planet, int dem) {
                                  !std::isnan(at(r + 1, c)) && !std::isnan(at(r + 1, c + 1))
                              ? 255
                              : 0;
-  t.mask = std::make_unique<Texture>();
+  t.mask = std::make_unique<gl::Texture>();
   glTextureStorage2D(t.mask->id(), 1, GL_R8, static_cast<GLsizei>(cc), static_cast<GLsizei>(cr));
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   glTextureSubImage2D(t.mask->id(), 0, 0, 0, static_cast<GLsizei>(cc), static_cast<GLsizei>(cr),
@@ -357,7 +357,7 @@ void SceneRenderer::addCutOut(int planet, int dem) {
   setupVao(skirt->vao, skirt->buffer, sizeof(SkirtVertex));
   skirt->count = static_cast<GLsizei>(verts.size());
   t.skirt = std::move(skirt);
-  checkGl("SceneRenderer::addCutOut()");
+  gl::checkGl("SceneRenderer::addCutOut()");
 }
 
 const ClipmapTerrain* SceneRenderer::terrain(int drawable) const {
@@ -374,7 +374,7 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
                           "°: expected a non-empty viewport, near > 0 and fov in (0, 180)");
   SceneFrame frame;
   glViewport(view.x, view.y, view.width, view.height);
-  useReversedZ();
+  gl::useReversedZ();
   const double f = 1.0 / std::tan(0.5 * view.fovYDegrees * std::numbers::pi / 180.0);
   const double aspect = static_cast<double>(view.width) / view.height;
 
@@ -392,7 +392,7 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
     t.clipmap->setOptions(opts);
 
     // Cut-outs: for every DEM over this planet that is in the list, eye → DEM mask cell.
-    const Program& prog = t.clipmap->program();
+    const gl::Program& prog = t.clipmap->program();
     int cuts = 0;
     for (const int dem : t.cutBy) {
       const scenegraph::RenderItem* d = list.findDrawable(dem);
@@ -532,7 +532,7 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
     ++frame.meshesDrawn;
   }
   glBindVertexArray(0);
-  checkGl("SceneRenderer::draw()");
+  gl::checkGl("SceneRenderer::draw()");
   return frame;
 }
 

@@ -1,7 +1,7 @@
-#include <regolith/clod/GlError.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/TextureClipmap.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/GlError.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -74,8 +74,8 @@ TextureClipmap::TextureClipmap(const DrapedTexture& texture, std::string name,
   }
   count = std::min<std::size_t>(count, 16);  // the shader's window array
   windows_.resize(count);
-  texture_ = Texture(makeArray(window_, static_cast<int>(count)));
-  checkGl("TextureClipmap()");
+  texture_ = gl::Texture(makeArray(window_, static_cast<int>(count)));
+  gl::checkGl("TextureClipmap()");
 }
 
 double TextureClipmap::spacing0() const noexcept {
@@ -184,7 +184,7 @@ void TextureClipmap::read(Layer& layer) const {
 void TextureClipmap::upload(const Layer& layer) {
   glTextureSubImage3D(texture_.id(), 0, 0, 0, static_cast<GLint>(layer.level), window_, window_, 1,
                       GL_RGBA, GL_UNSIGNED_BYTE, layer.rgba.data());
-  checkGl("TextureClipmap: upload");
+  gl::checkGl("TextureClipmap: upload");
   windows_[layer.level] = Window{layer.row0, layer.col0, true};
   uploaded_ += layer.rgba.size() / 4;
 }

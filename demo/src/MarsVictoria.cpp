@@ -1,7 +1,7 @@
-#include <regolith/clod/HeadlessContext.hpp>
-#include <regolith/clod/RenderTarget.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/gl/HeadlessContext.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Pager.hpp>
@@ -206,13 +206,13 @@ scenegraph::Pose flyoverCamera(double t, const glm::dvec3& rover) {
   return scenegraph::Pose::lookAt(target + dist * dir, target, up);
 }
 
-clod::RgbaImage renderSceneView(const SceneViewOptions& options) {
+gl::RgbaImage renderSceneView(const SceneViewOptions& options) {
   if (options.width < 1 || options.height < 1)
     throw InvalidArgument("renderSceneView(): image " + std::to_string(options.width) + "×" +
                           std::to_string(options.height) + ", expected a non-empty image");
-  std::unique_ptr<clod::HeadlessContext> context;
-  if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<clod::HeadlessContext>();
-  clod::RgbaImage image;
+  std::unique_ptr<gl::HeadlessContext> context;
+  if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<gl::HeadlessContext>();
+  gl::RgbaImage image;
   {
     MarsVictoriaScene scene(options.scene);
     scene.placeRover(options.roverX, options.roverY, options.roverHeadingDeg);
@@ -222,7 +222,7 @@ clod::RgbaImage renderSceneView(const SceneViewOptions& options) {
         g.add(n.victoria, "view_camera", options.camera, scenegraph::NodeKind::Camera);
     clod::SceneRenderer renderer;
     scene.registerWith(renderer);
-    clod::RenderTarget target(options.width, options.height);
+    gl::RenderTarget target(options.width, options.height);
     clod::SceneView view;
     view.fovYDegrees = options.fovYDegrees;
     view.near = options.near;
@@ -252,8 +252,8 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   FlyoverSummary summary;
   std::filesystem::create_directories(options.outputDir);
-  std::unique_ptr<clod::HeadlessContext> context;
-  if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<clod::HeadlessContext>();
+  std::unique_ptr<gl::HeadlessContext> context;
+  if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<gl::HeadlessContext>();
   {
     MarsVictoriaScene scene(options.scene);
     if (options.rover) scene.placeRover(options.rover->x, options.rover->y, options.rover->z);
@@ -264,7 +264,7 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
                                          scenegraph::NodeKind::Camera);
     clod::SceneRenderer renderer;
     scene.registerWith(renderer);
-    clod::RenderTarget target(options.width, options.height);
+    gl::RenderTarget target(options.width, options.height);
     double renderSeconds = 0.0;
     for (int i = 0; i < options.frames; ++i) {
       const double t = static_cast<double>(i) / (options.frames - 1);
@@ -285,12 +285,12 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
       const auto r0 = std::chrono::steady_clock::now();
       target.clear({0.02F, 0.02F, 0.04F, 1.0F});
       renderer.draw(g.renderList(focus, cam), view);
-      const clod::RgbaImage image = target.readColor();
+      const gl::RgbaImage image = target.readColor();
       renderSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
       char name[32];
       std::snprintf(name, sizeof name, "frame_%04d.png", i);
       const auto path = options.outputDir / name;
-      clod::writePng(path.string(), image);
+      gl::writePng(path.string(), image);
       summary.files.push_back(path);
       if (options.progress) options.progress(i + 1, options.frames, path);
     }
@@ -308,7 +308,7 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
         renderer.draw(g.renderList(n.victoria, camera), view);
       }
       const auto path = options.outputDir / "multiview.png";
-      clod::writePng(path.string(), target.readColor());
+      gl::writePng(path.string(), target.readColor());
       summary.files.push_back(path);
     }
     summary.renderSeconds = renderSeconds;

@@ -14,7 +14,7 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/FocusController.hpp>
 #include <regolith/clod/Render.hpp>
-#include <regolith/clod/RenderTarget.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 
@@ -135,7 +135,7 @@ int main(int argc, char** argv) {
       FocusController focus;
       int width = 1280, height = 720;
       focus.addCamera(orbitCamera(orbit, *pyramid, width, height), glfwGetTime());
-      auto target = std::make_unique<RenderTarget>(width, height);
+      auto target = std::make_unique<gl::RenderTarget>(width, height);
       // A scripted run (--frames) loads synchronously so its frames are deterministic.
       bool async = frameLimit == 0, tiedPrev = false, screenshotPrev = false, asyncPrev = false;
       long frames = 0;
@@ -150,7 +150,7 @@ int main(int argc, char** argv) {
         if (fw > 0 && fh > 0 && (fw != width || fh != height)) {
           width = fw;
           height = fh;
-          target = std::make_unique<RenderTarget>(width, height);
+          target = std::make_unique<gl::RenderTarget>(width, height);
         }
         // Mouse orbit.
         double mx = 0.0, my = 0.0;
@@ -224,19 +224,19 @@ int main(int argc, char** argv) {
         if (shotKey && !screenshotPrev) {
           char name[64];
           std::snprintf(name, sizeof name, "viewer-%03d.png", shots++);
-          writePng(name, target->readColor());
+          gl::writePng(name, target->readColor());
           std::printf("saved %s\n", name);
         }
         screenshotPrev = shotKey;
         if (frameLimit > 0 && ++frames >= frameLimit) {
-          const RgbaImage last = target->readColor();
+          const gl::RgbaImage last = target->readColor();
           std::size_t covered = 0;
           for (int y = 8; y < last.height; ++y)  // below the frame-time bar
             for (int x = 0; x < last.width; ++x) covered += last.is(x, y, 5, 5, 13) ? 0U : 1U;
           const double share =
               100.0 * static_cast<double>(covered) /
               (static_cast<double>(last.width) * static_cast<double>(last.height - 8));
-          if (!finalShot.empty()) writePng(finalShot, last);
+          if (!finalShot.empty()) gl::writePng(finalShot, last);
           std::printf("%ld frames in a %dx%d window; terrain on %.0f%% of pixels%s%s\n", frames,
                       width, height, share, finalShot.empty() ? "" : "; saved ", finalShot.c_str());
           glfwSetWindowShouldClose(window, GLFW_TRUE);

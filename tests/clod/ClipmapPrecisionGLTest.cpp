@@ -3,10 +3,10 @@
 // the rendered surface by 1 mm, not by float noise (float spacing is 0.25 m at 3.4e6 m).
 
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/RenderTarget.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Body.hpp>
 
-#include "GlContext.hpp"
+#include "gl/GlContext.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -40,7 +40,7 @@ TEST(ClipmapPrecisionGLTest, OneMillimetreAtMarsRadiusMovesTheSurfaceOneMillimet
   terrain.setFocus(cam.target);
   ASSERT_GT(glm::length(cam.position), 3.39e6);
 
-  RenderTarget target(cam.width, cam.height);
+  gl::RenderTarget target(cam.width, cam.height);
   const auto shoot = [&](const Camera& c) {
     target.clear({1.0F, 0.0F, 1.0F, 1.0F});
     terrain.draw(c);

@@ -1,11 +1,11 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/FocusController.hpp>
 #include <regolith/clod/MeshRenderer.hpp>
-#include <regolith/clod/RenderTarget.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Placement.hpp>
 
-#include "GlContext.hpp"
 #include "TerrainFixtures.hpp"
+#include "gl/GlContext.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -22,12 +22,12 @@ namespace {
 const glm::vec4 kMagenta{1.0F, 0.0F, 1.0F, 1.0F};
 
 struct Shot {
-  RgbaImage color;
-  DepthImage depth;
+  gl::RgbaImage color;
+  gl::DepthImage depth;
 };
 
 Shot render(const Camera& cam, const std::function<void()>& draw) {
-  RenderTarget target(cam.width, cam.height);
+  gl::RenderTarget target(cam.width, cam.height);
   target.clear(kMagenta);
   draw();
   return {target.readColor(), target.readDepth()};
@@ -37,13 +37,13 @@ Shot renderClipmap(ClipmapTerrain& terrain, const Camera& cam) {
   return render(cam, [&] { terrain.draw(cam); });
 }
 
-bool magenta(const RgbaImage& img, int x, int y) { return img.is(x, y, 255, 0, 255); }
+bool magenta(const gl::RgbaImage& img, int x, int y) { return img.is(x, y, 255, 0, 255); }
 
 /// Pixels where `reference` drew terrain and so did every pixel within `r` of them, and
 /// whose reference surface point lies at least `margin` metres inside the DEM's square
 /// extent of half-width `halfWidth` (at the DEM's own edge, coarse levels legitimately end
 /// up to a coarse cell short of the full-resolution mesh).
-std::vector<bool> interior(const DepthImage& reference, int r, const Camera& cam = {},
+std::vector<bool> interior(const gl::DepthImage& reference, int r, const Camera& cam = {},
                            double halfWidth = 0.0, double margin = 0.0) {
   const int w = reference.width, h = reference.height;
   std::vector<bool> in(static_cast<std::size_t>(w * h), false);
@@ -63,7 +63,7 @@ std::vector<bool> interior(const DepthImage& reference, int r, const Camera& cam
   return in;
 }
 
-int countMagentaInside(const RgbaImage& img, const std::vector<bool>& inside) {
+int countMagentaInside(const gl::RgbaImage& img, const std::vector<bool>& inside) {
   int count = 0;
   for (int y = 0; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x)
@@ -187,7 +187,7 @@ TEST(ClipmapTerrainGLTest, NoGapsBetweenLevelsStaticAndWhileTheFocusMoves) {
     worst = std::max(worst, holes);
     EXPECT_EQ(holes, 0) << "step " << step;
     if (holes > 0) {
-      RgbaImage marked = shot.color;
+      gl::RgbaImage marked = shot.color;
       for (int y = 0; y < marked.height; ++y)
         for (int x = 0; x < marked.width; ++x)
           if (inside[static_cast<std::size_t>(y * marked.width + x)] && magenta(marked, x, y)) {
@@ -219,7 +219,7 @@ struct DepthStats {
 /// Relative view-distance differences between two renders, over pixels both drew where the
 /// reference has no depth discontinuity (its 4 neighbours within 2 % of it).
 /// `within` (optional) selects pixels by the reference's surface point.
-DepthStats compareDepth(const Camera& cam, const DepthImage& a, const DepthImage& ref,
+DepthStats compareDepth(const Camera& cam, const gl::DepthImage& a, const gl::DepthImage& ref,
                         const std::function<bool(const glm::dvec3&)>& within = {}) {
   std::vector<double> diffs;
   for (int y = 1; y + 1 < ref.height; ++y)
@@ -427,7 +427,7 @@ TEST(ClipmapTerrainGLTest, InnerLevelsSwitchOffFarAwayAndVerticesDoNotGrowWithTh
     ClipmapTerrain terrain(pyramid, opt);
     terrain.setFocus(cam.target);
     cam.position = {0.0, -40.0, 60.0};
-    RenderTarget target(cam.width, cam.height);
+    gl::RenderTarget target(cam.width, cam.height);
     target.clear(kMagenta);
     const ClipmapFrame near = terrain.draw(cam);
     EXPECT_EQ(near.firstLevel, 0U);
@@ -440,7 +440,7 @@ TEST(ClipmapTerrainGLTest, InnerLevelsSwitchOffFarAwayAndVerticesDoNotGrowWithTh
     EXPECT_GE(far.firstLevel, 2U);
     EXPECT_EQ(far.firstLevel + far.levelsDrawn, 6U);
     EXPECT_LT(far.vertices, near.vertices);
-    const RgbaImage img = target.readColor();
+    const gl::RgbaImage img = target.readColor();
     EXPECT_FALSE(magenta(img, cam.width / 2, cam.height / 2));  // the centre is drawn
   }
   EXPECT_EQ(vertices[0], vertices[1]);
@@ -576,7 +576,7 @@ TEST(ClipmapTerrainGLTest, NoSlitsBetweenLevelsAtGrazingAngles) {
     EXPECT_EQ(countMagentaInside(shotPushed.color, inside), 0) << "step " << step << ", pushed";
     if (step == 5) test::savePng("clipmap_grazing5_pushed", shotPushed.color);
     if (step == 0 || step == 5 || holes > 0) {
-      RgbaImage marked = shot.color;
+      gl::RgbaImage marked = shot.color;
       for (int y = 0; y < marked.height; ++y)
         for (int x = 0; x < marked.width; ++x)
           if (inside[static_cast<std::size_t>(y * marked.width + x)] && magenta(marked, x, y)) {

@@ -3,7 +3,7 @@
 // point under a pixel, compare images.
 
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/RenderTarget.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 
 #include <glm/geometric.hpp>
 
@@ -15,12 +15,12 @@
 namespace regolith::test {
 
 struct Shot {
-  clod::RgbaImage color;
-  clod::DepthImage depth;
+  gl::RgbaImage color;
+  gl::DepthImage depth;
 };
 
 inline Shot renderShot(const clod::ClipmapTerrain& terrain, const clod::Camera& cam) {
-  clod::RenderTarget target(cam.width, cam.height);
+  gl::RenderTarget target(cam.width, cam.height);
   target.clear({1.0F, 0.0F, 1.0F, 1.0F});
   (void)terrain.draw(cam);
   return {target.readColor(), target.readDepth()};
@@ -35,7 +35,7 @@ inline std::optional<glm::dvec3> groundAt(const Shot& s, const clod::Camera& cam
 }
 
 /// Largest per-channel difference between pixel (x, y) of two images.
-inline int pixelDiff(const clod::RgbaImage& a, const clod::RgbaImage& b, int x, int y) {
+inline int pixelDiff(const gl::RgbaImage& a, const gl::RgbaImage& b, int x, int y) {
   int worst = 0;
   for (int c = 0; c < 3; ++c)
     worst = std::max(worst, std::abs(int{a.pixel(x, y)[c]} - int{b.pixel(x, y)[c]}));

@@ -9,8 +9,8 @@
 #include <regolith/topo/Placement.hpp>
 
 #include "EffectFixtures.hpp"
-#include "GlContext.hpp"
 #include "TerrainFixtures.hpp"
+#include "gl/GlContext.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -46,7 +46,7 @@ TEST(EffectImagesGLTest, HeightColoursMatchTheLegendAtSampledPixels) {
   test::Shot shot = test::renderShot(terrain, cam);
   const Legend legend = Legend::of(terrain, cam);
   ASSERT_FALSE(legend.empty());
-  const RgbaImage key = legend.image();
+  const gl::RgbaImage key = legend.image();
   const Legend::Bar bar = legend.bar();
   // Reads a pixel's height off the legend: the bar row of the nearest colour.
   const auto legendHeight = [&](const std::uint8_t* p) {
@@ -106,7 +106,7 @@ TEST(EffectImagesGLTest, RenderToPngDrawsTheLegendAndWritesItBeside) {
   const auto path =
       (std::filesystem::temp_directory_path() / "regolith_legend_render.png").string();
   renderToPng(pyramid, req, path);
-  const RgbaImage img = readPng(path);
+  const gl::RgbaImage img = gl::readPng(path);
   std::ifstream in(path + ".legend.json");
   ASSERT_TRUE(in.good());
   std::stringstream text;
@@ -116,7 +116,7 @@ TEST(EffectImagesGLTest, RenderToPngDrawsTheLegendAndWritesItBeside) {
   EXPECT_EQ(text.str(), Legend(req.clipmap.effects.heightColours, std::nullopt).json());
   // The legend sits in the top-right corner: its bar's top row is the ramp's last stop.
   const Legend legend(req.clipmap.effects.heightColours, std::nullopt);
-  const RgbaImage key = legend.image();
+  const gl::RgbaImage key = legend.image();
   const int x0 = img.width - key.width - 8, y0 = 8;
   const auto b = legend.bar();
   for (int y = b.y0; y < b.y1; y += 9) {
@@ -133,8 +133,8 @@ glm::dvec3 onSphere(double r, double latDeg, double lonDeg) {
   return r * glm::dvec3(std::cos(la) * std::cos(lo), std::cos(la) * std::sin(lo), std::sin(la));
 }
 
-bool isLine(const RgbaImage& img, int x, int y) { return img.is(x, y, 0, 255, 255); }
-bool lineNear(const RgbaImage& img, double px, double py) {
+bool isLine(const gl::RgbaImage& img, int x, int y) { return img.is(x, y, 0, 255, 255); }
+bool lineNear(const gl::RgbaImage& img, double px, double py) {
   const int x = static_cast<int>(std::floor(px)), y = static_cast<int>(std::floor(py));
   for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx)
@@ -210,7 +210,7 @@ TEST(EffectImagesGLTest, LatLonLinesFallAtTheirProjectedPixelsAndAdaptToZoom) {
   EXPECT_LT(near / degPerPixel, 3.0 * 80.0);
   EXPECT_EQ(Legend::of(zoomed, close).latLonSpacing(), near);
   zoomed.setFocus(onSphere(r, 0.0, 0.0));
-  RgbaImage closeImage = test::renderShot(zoomed, close).color;
+  gl::RgbaImage closeImage = test::renderShot(zoomed, close).color;
   Legend::of(zoomed, close).drawInto(closeImage);
   test::savePng("effects_latlon_planet_zoomed", closeImage);
 }

@@ -7,8 +7,8 @@
 #include <regolith/topo/Placement.hpp>
 
 #include "EffectFixtures.hpp"
-#include "GlContext.hpp"
 #include "TerrainFixtures.hpp"
+#include "gl/GlContext.hpp"
 
 #include <gtest/gtest.h>
 
@@ -97,15 +97,15 @@ TEST(EffectsGLTest, NoEffectIsTheBarePipeline) {
   opt.size = 31;
   ClipmapTerrain terrain(pyramid, opt);
   terrain.setFocus(pyramid->position(0.0, 0.0, 0.0));
-  const ShaderSources bare = ClipmapTerrain::bareSources();
+  const gl::ShaderSources bare = ClipmapTerrain::bareSources();
   EXPECT_EQ(terrain.programSources().vertex, bare.vertex);
   EXPECT_EQ(terrain.programSources().geometry, bare.geometry);
   EXPECT_EQ(terrain.programSources().fragment, bare.fragment);
   EXPECT_EQ(terrain.passes(), std::vector<std::string>{"terrain"});
-  const Program reference("bare", bare);
+  const gl::Program reference("bare", bare);
   EXPECT_EQ(activeUniforms(terrain.program().id()), activeUniforms(reference.id()));
   const Camera cam = placedCamera(*pyramid);
-  RenderTarget target(cam.width, cam.height);
+  gl::RenderTarget target(cam.width, cam.height);
   target.clear({0.0F, 0.0F, 0.0F, 1.0F});
   const ClipmapFrame frame = terrain.draw(cam);
   ASSERT_GT(frame.levelsDrawn, 1U);
@@ -116,7 +116,7 @@ TEST(EffectsGLTest, EachEffectAddsOnlyItsOwnCodeUniformsBindsAndPasses) {
   test::glContext();
   const auto pyramid = placedHills();
   const std::set<std::string> bareUniforms =
-      activeUniforms(Program("bare", ClipmapTerrain::bareSources()).id());
+      activeUniforms(gl::Program("bare", ClipmapTerrain::bareSources()).id());
   const std::map<std::string, std::size_t> extraBinds{{"albedo", 1}, {"tracks", 1},
                                                       {"noise", 0},  {"heightColours", 0},
                                                       {"latLon", 0}, {"overlay", 1}};
@@ -133,7 +133,7 @@ TEST(EffectsGLTest, EachEffectAddsOnlyItsOwnCodeUniformsBindsAndPasses) {
     ASSERT_EQ(opt.effects.declared(), std::vector<std::string>{name});
     ClipmapTerrain terrain(pyramid, opt);
     terrain.setFocus(pyramid->position(0.0, 0.0, 0.0));
-    const ShaderSources& s = terrain.programSources();
+    const gl::ShaderSources& s = terrain.programSources();
     const std::string all = s.vertex + s.geometry + s.fragment;
     const std::set<std::string> uniforms = activeUniforms(terrain.program().id());
     for (const auto& [other, otherWords] : effectWords()) {
@@ -154,7 +154,7 @@ TEST(EffectsGLTest, EachEffectAddsOnlyItsOwnCodeUniformsBindsAndPasses) {
     passes.emplace_back("terrain");
     EXPECT_EQ(terrain.passes(), passes);
     const Camera cam = placedCamera(*pyramid);
-    RenderTarget target(cam.width, cam.height);
+    gl::RenderTarget target(cam.width, cam.height);
     target.clear({0.0F, 0.0F, 0.0F, 1.0F});
     const ClipmapFrame frame = terrain.draw(cam);
     EXPECT_EQ(frame.textureBinds, frame.levelsDrawn + extraBinds.at(name));

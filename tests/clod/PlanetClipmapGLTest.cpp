@@ -2,10 +2,10 @@
 // the north pole, the south pole and the ±180° meridian, with the focus moving across both.
 
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/RenderTarget.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Body.hpp>
 
-#include "GlContext.hpp"
+#include "gl/GlContext.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -68,11 +68,11 @@ Check renderAndCheck(ClipmapTerrain& terrain, const Camera& cam, const std::stri
   if (glm::length(east) < 1e-6) east = {0.0, 1.0, 0.0};
   opt.lightDirection = glm::vec3(glm::normalize(0.35 * focus + glm::normalize(east)));
   terrain.setOptions(opt);
-  RenderTarget target(cam.width, cam.height);
+  gl::RenderTarget target(cam.width, cam.height);
   target.clear(kMagenta);
   terrain.draw(cam);
-  const RgbaImage color = target.readColor();
-  const DepthImage depth = target.readDepth();
+  const gl::RgbaImage color = target.readColor();
+  const gl::DepthImage depth = target.readDepth();
   test::savePng(png, color);
   Check c;
   const double inner = kR - 5000.0;

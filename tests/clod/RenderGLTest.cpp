@@ -2,8 +2,8 @@
 #include <regolith/clod/Render.hpp>
 #include <regolith/core/Error.hpp>
 
-#include "GlContext.hpp"
 #include "TerrainFixtures.hpp"
+#include "gl/GlContext.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -29,7 +29,7 @@ TEST(RenderGLTest, RendersAPngThatShowsTheTerrainWhereTheCameraLooks) {
   req.background = {0.0F, 0.0F, 1.0F, 1.0F};
   const auto path = (std::filesystem::temp_directory_path() / "regolith_render_test.png").string();
   renderToPng(pyramid, req, path);
-  const RgbaImage img = readPng(path);
+  const gl::RgbaImage img = gl::readPng(path);
   std::remove(path.c_str());
   test::savePng("render_to_png", img);
   ASSERT_EQ(img.width, 320);
@@ -124,7 +124,7 @@ TEST(RenderGLTest, CamerasAtNadirAtThePoleAndFarAwayRenderThePlanet) {
     req.camera.near = std::max(0.05, 1e-3 * glm::length(v.target - v.eye));
     req.clipmap.size = 257;  // a window of 360° at this grid's 1.40625°, all round the pole
     req.background = {0.0F, 0.0F, 1.0F, 1.0F};
-    const RgbaImage img = renderImage(pyramid, req);
+    const gl::RgbaImage img = renderImage(pyramid, req);
     test::savePng(std::string("edge_camera_") + v.name, img);
     int terrain = 0;
     for (int y = 0; y < img.height; ++y) {

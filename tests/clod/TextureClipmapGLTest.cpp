@@ -9,8 +9,8 @@
 #include <regolith/store/Store.hpp>
 
 #include "EffectFixtures.hpp"
-#include "GlContext.hpp"
 #include "TerrainFixtures.hpp"
+#include "gl/GlContext.hpp"
 #include "support/StoreScratch.hpp"
 
 #include <gtest/gtest.h>

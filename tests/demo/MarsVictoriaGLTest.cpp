@@ -1,12 +1,12 @@
 // demo::MarsVictoriaScene and demo::renderFlyover(): the fly-over writes readable PNGs
 // from Mars whole down to the rover, switching the focus on the way.
-#include <regolith/clod/Image.hpp>
 #include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/gl/Image.hpp>
 #include <regolith/store/Generate.hpp>
 
-#include "clod/GlContext.hpp"
+#include "gl/GlContext.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -56,8 +56,8 @@ TEST(MarsVictoriaGLTest, FlyoverGoesFromMarsWholeToTheRover) {
   EXPECT_LT(s.focusSwitchFrame, 5);
   EXPECT_NEAR(s.startDistance, 8.0e6, 1.0);
   EXPECT_NEAR(s.endDistance, 6.0, 0.5);
-  const clod::RgbaImage first = clod::readPng(s.files.front().string());
-  const clod::RgbaImage last = clod::readPng(s.files[4].string());
+  const gl::RgbaImage first = gl::readPng(s.files.front().string());
+  const gl::RgbaImage last = gl::readPng(s.files[4].string());
   EXPECT_EQ(first.width, 96);
   EXPECT_EQ(first.height, 64);
   // First frame: Mars whole, in the middle, with space in the corners.
@@ -105,8 +105,8 @@ TEST(MarsVictoriaGLTest, FlyoverEndsAtTheGivenRoverWithItsTracks) {
   ASSERT_EQ(plain.files.size(), 3U);
   ASSERT_EQ(tracked.files.size(), 3U);
   EXPECT_NEAR(tracked.endDistance, 6.0, 0.5);
-  const clod::RgbaImage a = clod::readPng(plain.files.back().string());
-  const clod::RgbaImage b = clod::readPng(tracked.files.back().string());
+  const gl::RgbaImage a = gl::readPng(plain.files.back().string());
+  const gl::RgbaImage b = gl::readPng(tracked.files.back().string());
   const auto* centre = a.pixel(48, 32);  // the rover, grey
   EXPECT_NEAR(centre[0], centre[1], 8);
   EXPECT_NEAR(centre[1], centre[2], 8);
@@ -182,8 +182,8 @@ TEST(MarsVictoriaGLTest, SceneFromStoresEqualsTheGeneratedScene) {
   const FlyoverSummary s2 = renderFlyover(o);
   ASSERT_EQ(s1.files.size(), s2.files.size());
   for (std::size_t i = 0; i < s1.files.size(); ++i) {
-    const clod::RgbaImage x = clod::readPng(s1.files[i].string());
-    const clod::RgbaImage y = clod::readPng(s2.files[i].string());
+    const gl::RgbaImage x = gl::readPng(s1.files[i].string());
+    const gl::RgbaImage y = gl::readPng(s2.files[i].string());
     double diff = 0.0;
     for (std::size_t k = 0; k < x.rgba.size(); ++k)
       diff += std::abs(static_cast<int>(x.rgba[k]) - static_cast<int>(y.rgba[k]));

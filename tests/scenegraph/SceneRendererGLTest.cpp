@@ -1,13 +1,13 @@
 // clod::SceneRenderer drawing the paper's scene (demo::MarsVictoriaScene): the DEM wins over
 // the planet with no gap at the border, sits at its geodetic place and height, two DEMs on
 // one planet, several cameras, and a focus switch that changes nothing on screen.
-#include <regolith/clod/RenderTarget.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Projection.hpp>
 
-#include "clod/GlContext.hpp"
+#include "gl/GlContext.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -66,8 +66,8 @@ class SceneGLTest : public ::testing::Test {
   }
 
   struct Shot {
-    clod::RgbaImage color;
-    clod::DepthImage depth;
+    gl::RgbaImage color;
+    gl::DepthImage depth;
     clod::Camera marsCamera;  // the camera in Mars's body-fixed frame (double)
   };
 
@@ -75,7 +75,7 @@ class SceneGLTest : public ::testing::Test {
   static Shot shoot(NodeId camera, NodeId focus, int w, int h, double fov = 45.0,
                     double near = 0.5) {
     test::glContext();
-    clod::RenderTarget target(w, h);
+    gl::RenderTarget target(w, h);
     target.clear(kMagenta);
     clod::SceneView view;
     view.width = w;
@@ -91,22 +91,21 @@ class SceneGLTest : public ::testing::Test {
     return s;
   }
 
-  static bool isDem(const clod::RgbaImage& im, int x, int y) {
+  static bool isDem(const gl::RgbaImage& im, int x, int y) {
     const auto* p = im.pixel(x, y);
     return p[1] > p[0] && !(p[0] == 255 && p[2] == 255);
   }
-  static bool isPlanet(const clod::RgbaImage& im, int x, int y) {
+  static bool isPlanet(const gl::RgbaImage& im, int x, int y) {
     const auto* p = im.pixel(x, y);
     return p[0] > p[1] && p[2] < 200;
   }
-  static std::size_t count(const clod::RgbaImage& im,
-                           bool (*pred)(const clod::RgbaImage&, int, int)) {
+  static std::size_t count(const gl::RgbaImage& im, bool (*pred)(const gl::RgbaImage&, int, int)) {
     std::size_t n = 0;
     for (int y = 0; y < im.height; ++y)
       for (int x = 0; x < im.width; ++x) n += pred(im, x, y) ? 1U : 0U;
     return n;
   }
-  static std::size_t magenta(const clod::RgbaImage& im) {
+  static std::size_t magenta(const gl::RgbaImage& im) {
     std::size_t n = 0;
     for (int y = 0; y < im.height; ++y)
       for (int x = 0; x < im.width; ++x) n += im.is(x, y, 255, 0, 255) ? 1U : 0U;
@@ -272,7 +271,7 @@ TEST_F(SceneRendererGLTest, OrbitAndMastCamerasRenderTheSameSceneAsViewports) {
   const auto& n = scene_->nodes();
   scene_->placeRover(0.0, -395.0, 0.0);
   test::glContext();
-  clod::RenderTarget target(320, 120);
+  gl::RenderTarget target(320, 120);
   target.clear(kMagenta);
   for (const auto& [camera, x] : {std::pair{n.orbitCamera, 0}, {n.mastCamera, 160}}) {
     clod::SceneView view;
@@ -283,7 +282,7 @@ TEST_F(SceneRendererGLTest, OrbitAndMastCamerasRenderTheSameSceneAsViewports) {
     view.lightInFocus = scene_->lightInFocus(n.victoria);
     renderer_->draw(scene_->graph().renderList(n.victoria, camera), view);
   }
-  const clod::RgbaImage im = target.readColor();
+  const gl::RgbaImage im = target.readColor();
   test::savePng("scene_two_viewports", im);
   // Orbit view (left): Victoria in the middle, planet around it.
   EXPECT_TRUE(isDem(im, 80, 60));
@@ -399,14 +398,14 @@ TEST_F(SceneRendererGLTest, LargeDemCutsThePlanetThroughACoarserMask) {
   const NodeId cam =
       g.add(d, "camera", Pose::lookAt({-1500.0, -1500.0, 1200.0}, {-900.0, -900.0, 0.0}, {0, 0, 1}),
             NodeKind::Camera);
-  clod::RenderTarget target(200, 150);
+  gl::RenderTarget target(200, 150);
   target.clear(kMagenta);
   clod::SceneView view;
   view.width = 200;
   view.height = 150;
   view.near = 1.0;
   r.draw(g.renderList(d, cam), view);
-  const clod::RgbaImage im = target.readColor();
+  const gl::RgbaImage im = target.readColor();
   test::savePng("scene_large_dem", im);
   EXPECT_EQ(magenta(im), 0U);
   std::size_t far = 0;
@@ -443,14 +442,14 @@ TEST_F(SceneRendererGLTest, DemWinsWhereItHasDataEvenBelowThePlanet) {
     o.albedo = MarsVictoriaScene::kDemAlbedo;
     r.addTerrain(1, scene_->victoria(), o);
     if (cut) r.addCutOut(0, 1);
-    clod::RenderTarget target(200, 150);
+    gl::RenderTarget target(200, 150);
     target.clear(kMagenta);
     clod::SceneView view;
     view.width = 200;
     view.height = 150;
     view.near = 1.0;
     r.draw(g.renderList(d, cam), view);
-    const clod::RgbaImage im = target.readColor();
+    const gl::RgbaImage im = target.readColor();
     test::savePng(cut ? "scene_sunk_dem_cut" : "scene_sunk_dem_nocut", im);
     demPixels[cut ? 1 : 0] = count(im, isDem);
     EXPECT_EQ(magenta(im), 0U) << (cut ? "with" : "without") << " the cut-out";

@@ -15,9 +15,9 @@
 #include <optional>
 #include <string>
 
-namespace regolith::clod {
+namespace regolith::gl {
 struct RgbaImage;
-}  // namespace regolith::clod
+}  // namespace regolith::gl
 
 namespace regolith::python {
 
@@ -48,7 +48,7 @@ using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecas
 /// "(2, 3)", "(5,)": an array's shape as Python prints it, for messages.
 [[nodiscard]] std::string shapeOf(const py::array& a);
 /// A rendered image as a (height, width, 4) uint8 RGBA array (a copy).
-[[nodiscard]] py::array_t<std::uint8_t> imageArray(const clod::RgbaImage& img);
+[[nodiscard]] py::array_t<std::uint8_t> imageArray(const gl::RgbaImage& img);
 
 void bindErrors(py::module_& m);
 void bindStore(py::module_& m);

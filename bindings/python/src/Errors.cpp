@@ -1,6 +1,6 @@
 // regolith::Error and its subclasses as Python exceptions that keep the C++ message.
-#include <regolith/clod/GlError.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/GlError.hpp>
 #include <regolith/store/Import.hpp>
 
 #include "Common.hpp"
@@ -60,7 +60,7 @@ void bindErrors(py::module_& m) {
       PyErr_SetString(storeError, e.what());
     } catch (const IoError& e) {
       PyErr_SetString(ioError, e.what());
-    } catch (const clod::GlError& e) {
+    } catch (const gl::GlError& e) {
       PyErr_SetString(glError, e.what());
     } catch (const InvalidArgument& e) {
       PyErr_SetString(invalid, e.what());

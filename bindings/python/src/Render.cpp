@@ -61,7 +61,7 @@ py::array_t<std::uint8_t> render(const Terrain& t, const std::array<double, 3>& 
                                               pitch.value_or(0.0), fov, width, height);
   }
   req.camera.near = near;
-  clod::RgbaImage img;
+  gl::RgbaImage img;
   {
     const py::gil_scoped_release release;
     img = clod::renderImage(pyramid, req);
@@ -71,7 +71,7 @@ py::array_t<std::uint8_t> render(const Terrain& t, const std::array<double, 3>& 
 
 }  // namespace
 
-py::array_t<std::uint8_t> imageArray(const clod::RgbaImage& img) {
+py::array_t<std::uint8_t> imageArray(const gl::RgbaImage& img) {
   py::array_t<std::uint8_t> out(
       {static_cast<py::ssize_t>(img.height), static_cast<py::ssize_t>(img.width), py::ssize_t{4}});
   std::memcpy(out.mutable_data(), img.rgba.data(), img.rgba.size());

@@ -240,7 +240,7 @@ void bindScene(py::module_& m) {
         const glm::dvec3 e{eye[0], eye[1], eye[2]}, t{lookAt[0], lookAt[1], lookAt[2]};
         v.camera = scenegraph::Pose::lookAt(e, t, {up[0], up[1], up[2]});
         if (!tracks.is_none()) v.scene.victoriaEffects.tracks = trackLayerOf(tracks);
-        clod::RgbaImage img;
+        gl::RgbaImage img;
         {
           const py::gil_scoped_release release;
           img = demo::renderSceneView(v);

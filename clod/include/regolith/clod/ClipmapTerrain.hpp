@@ -4,10 +4,10 @@
 
 #include <regolith/clod/Camera.hpp>
 #include <regolith/clod/Effects.hpp>
-#include <regolith/clod/GlObjects.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
-#include <regolith/clod/Program.hpp>
 #include <regolith/core/Executor.hpp>
+#include <regolith/gl/GlObjects.hpp>
+#include <regolith/gl/Program.hpp>
 
 #include <glm/vec3.hpp>
 
@@ -144,15 +144,16 @@ class ClipmapTerrain {
   [[nodiscard]] const HeightPyramid& pyramid() const noexcept { return *pyramid_; }
   /// The GL program: to inspect its active uniforms; SceneRenderer sets the cut-out
   /// uniforms on it, which keep their values across draw() calls.
-  [[nodiscard]] const Program& program() const noexcept { return program_; }
+  [[nodiscard]] const gl::Program& program() const noexcept { return program_; }
 
   /// The sources the program was built from: the bare clipmap shaders plus one snippet per
   /// declared effect (identical to bareSources() when none is declared).
-  [[nodiscard]] const ShaderSources& programSources() const noexcept { return sources_; }
+  [[nodiscard]] const gl::ShaderSources& programSources() const noexcept { return sources_; }
   /// The clipmap program without any effect: the pipeline before effects existed.
-  [[nodiscard]] static ShaderSources bareSources();
+  [[nodiscard]] static gl::ShaderSources bareSources();
   /// The sources a terrain with these options compiles (effects, cut-outs).
-  [[nodiscard]] static ShaderSources programSourcesFor(const ClipmapOptions& options, bool planet);
+  [[nodiscard]] static gl::ShaderSources programSourcesFor(const ClipmapOptions& options,
+                                                           bool planet);
   /// The GPU work a frame does, in order: "terrain" always; "albedo-clipmap",
   /// "overlay-clipmap" (texture windows following the focus) and "track-upload" (new ruts)
   /// only when those effects are declared.
@@ -185,10 +186,10 @@ class ClipmapTerrain {
   std::shared_ptr<const HeightPyramid> pyramid_;
   ClipmapOptions options_;
   std::vector<std::unique_ptr<ClipmapLevel>> levels_;
-  ShaderSources sources_;
-  Program program_;
-  VertexArray vao_;
-  Buffer vertices_, indices_;
+  gl::ShaderSources sources_;
+  gl::Program program_;
+  gl::VertexArray vao_;
+  gl::Buffer vertices_, indices_;
   std::size_t holeIndices_ = 0, ringIndices_ = 0, skirtIndices_ = 0;
   int hole_ = 0;
   std::size_t uploaded_ = 0;

@@ -5,7 +5,7 @@
 
 #include <regolith/clod/Camera.hpp>
 #include <regolith/clod/Effects.hpp>
-#include <regolith/clod/Image.hpp>
+#include <regolith/gl/Image.hpp>
 
 #include <optional>
 #include <string>
@@ -27,9 +27,9 @@ class Legend {
 
   [[nodiscard]] bool empty() const noexcept { return !heights_ && !latLon_; }
   /// The legend alone (1 × 1 transparent if empty).
-  [[nodiscard]] RgbaImage image() const;
+  [[nodiscard]] gl::RgbaImage image() const;
   /// Copies image() into `target` at its top-right corner, 8 pixels in (clipped).
-  void drawInto(RgbaImage& target) const;
+  void drawInto(gl::RgbaImage& target) const;
   /// JSON: {"heightColours": {"min": m, "max": m, "stops": [[r, g, b], ...]},
   ///        "latLonSpacingDegrees": d} (members present only for declared effects).
   [[nodiscard]] std::string json() const;

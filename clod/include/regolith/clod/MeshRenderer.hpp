@@ -3,8 +3,8 @@
 /// Brute-force reference renderer: every sample of a plane DEM is a vertex.
 
 #include <regolith/clod/Camera.hpp>
-#include <regolith/clod/GlObjects.hpp>
-#include <regolith/clod/Program.hpp>
+#include <regolith/gl/GlObjects.hpp>
+#include <regolith/gl/Program.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
 #include <glm/vec3.hpp>
@@ -35,9 +35,9 @@ class MeshRenderer {
 
  private:
   topo::TopoGrid grid_;
-  Program program_;
-  VertexArray vao_;
-  Texture heights_;
+  gl::Program program_;
+  gl::VertexArray vao_;
+  gl::Texture heights_;
 };
 
 }  // namespace regolith::clod

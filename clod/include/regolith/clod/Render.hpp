@@ -5,7 +5,7 @@
 #include <regolith/clod/Camera.hpp>
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
-#include <regolith/clod/Image.hpp>
+#include <regolith/gl/Image.hpp>
 
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
@@ -52,8 +52,8 @@ struct RenderRequest {
 /// Renders the terrain headless: creates an EGL surfaceless context if none is current on
 /// this thread, loads every level synchronously around the focus, draws once. Throws
 /// GlError if no GL 4.5 context can be made, InvalidArgument for a bad request.
-[[nodiscard]] RgbaImage renderImage(std::shared_ptr<const HeightPyramid> pyramid,
-                                    const RenderRequest& request);
+[[nodiscard]] gl::RgbaImage renderImage(std::shared_ptr<const HeightPyramid> pyramid,
+                                        const RenderRequest& request);
 
 /// renderImage(), then writePng() to `path` (crash-safe: temporary name, then rename).
 void renderToPng(std::shared_ptr<const HeightPyramid> pyramid, const RenderRequest& request,

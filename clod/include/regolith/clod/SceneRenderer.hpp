@@ -5,9 +5,9 @@
 
 #include <regolith/clod/Camera.hpp>
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/GlObjects.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
-#include <regolith/clod/Program.hpp>
+#include <regolith/gl/GlObjects.hpp>
+#include <regolith/gl/Program.hpp>
 #include <regolith/scenegraph/RenderList.hpp>
 
 #include <glm/vec3.hpp>
@@ -107,7 +107,7 @@ class SceneRenderer {
   struct Skirt;
   std::map<int, std::unique_ptr<Terrain>> terrains_;
   std::map<int, std::unique_ptr<Mesh>> meshes_;
-  Program meshProgram_;
+  gl::Program meshProgram_;
   bool skirts_ = true;
 };
 

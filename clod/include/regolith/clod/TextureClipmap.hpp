@@ -4,8 +4,8 @@
 /// fixed-size window per pyramid level, paged from its sources like the heights.
 
 #include <regolith/clod/Effects.hpp>
-#include <regolith/clod/GlObjects.hpp>
 #include <regolith/core/Executor.hpp>
+#include <regolith/gl/GlObjects.hpp>
 
 #include <glm/vec2.hpp>
 #include <glm/vec4.hpp>
@@ -94,7 +94,7 @@ class TextureClipmap {
   std::string name_;
   int window_;
   std::vector<Window> windows_;
-  Texture texture_;
+  gl::Texture texture_;
   std::size_t uploaded_ = 0;
   std::shared_ptr<core::Executor> executor_;
   std::future<std::vector<Layer>> job_;

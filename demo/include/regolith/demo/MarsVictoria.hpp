@@ -5,8 +5,8 @@
 
 #include <regolith/clod/Effects.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
-#include <regolith/clod/Image.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
+#include <regolith/gl/Image.hpp>
 #include <regolith/scenegraph/PaperScene.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
 
@@ -146,7 +146,7 @@ struct SceneViewOptions {
 
 /// Renders one view headless (an EGL context is made if none is current), focus on
 /// Victoria. Throws InvalidArgument for an empty image, GlError without GL.
-clod::RgbaImage renderSceneView(const SceneViewOptions& options);
+gl::RgbaImage renderSceneView(const SceneViewOptions& options);
 
 /// The fly-over camera's pose in the Victoria DEM frame at t ∈ [0, 1] for a rover at `rover`.
 [[nodiscard]] scenegraph::Pose flyoverCamera(double t, const glm::dvec3& rover);

@@ -4,7 +4,7 @@
 
 #include <regolith/core/Error.hpp>
 
-namespace regolith::clod {
+namespace regolith::gl {
 
 /// A GL or EGL call failed: no display, no 4.5 core context, a shader that does not
 /// compile (the message carries the info log), an incomplete framebuffer.
@@ -13,4 +13,4 @@ class GlError : public regolith::Error {
   using regolith::Error::Error;
 };
 
-}  // namespace regolith::clod
+}  // namespace regolith::gl

@@ -1,13 +1,13 @@
-#include <regolith/clod/GlError.hpp>
-#include <regolith/clod/RenderTarget.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/GlError.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 
 #include <algorithm>
 #include <cstddef>
 #include <string>
 #include <vector>
 
-namespace regolith::clod {
+namespace regolith::gl {
 
 void useReversedZ() noexcept {
   glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
@@ -71,4 +71,4 @@ DepthImage RenderTarget::readDepth() const {
   return out;
 }
 
-}  // namespace regolith::clod
+}  // namespace regolith::gl

@@ -1,6 +1,6 @@
-#include <regolith/clod/Image.hpp>
 #include <regolith/core/AtomicFile.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/Image.hpp>
 
 #include <png.h>
 
@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-namespace regolith::clod {
+namespace regolith::gl {
 
 namespace {
 
@@ -116,4 +116,4 @@ RgbaImage readPng(const std::string& path) {
   return image;
 }
 
-}  // namespace regolith::clod
+}  // namespace regolith::gl

@@ -14,7 +14,7 @@
 #include <string>
 #include <string_view>
 
-namespace regolith::clod {
+namespace regolith::gl {
 
 /// Throws GlError naming `operation` and the GL error code if glGetError() reports one
 /// (all pending errors are drained).
@@ -24,4 +24,4 @@ void checkGl(std::string_view operation);
 [[nodiscard]] std::string glVersion();
 [[nodiscard]] std::string glRenderer();
 
-}  // namespace regolith::clod
+}  // namespace regolith::gl

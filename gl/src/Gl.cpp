@@ -1,9 +1,9 @@
-#include <regolith/clod/Gl.hpp>
-#include <regolith/clod/GlError.hpp>
+#include <regolith/gl/Gl.hpp>
+#include <regolith/gl/GlError.hpp>
 
 #include <string>
 
-namespace regolith::clod {
+namespace regolith::gl {
 
 namespace {
 
@@ -42,4 +42,4 @@ void checkGl(std::string_view operation) {
 std::string glVersion() { return glString(GL_VERSION); }
 std::string glRenderer() { return glString(GL_RENDERER); }
 
-}  // namespace regolith::clod
+}  // namespace regolith::gl

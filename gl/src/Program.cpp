@@ -1,5 +1,5 @@
-#include <regolith/clod/GlError.hpp>
-#include <regolith/clod/Program.hpp>
+#include <regolith/gl/GlError.hpp>
+#include <regolith/gl/Program.hpp>
 
 #include <glm/gtc/type_ptr.hpp>
 
@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-namespace regolith::clod {
+namespace regolith::gl {
 
 namespace {
 
@@ -117,4 +117,4 @@ void Program::set(const char* name, const glm::mat3& m) const noexcept {
   glProgramUniformMatrix3fv(id_, uniform(name), 1, GL_FALSE, glm::value_ptr(m));
 }
 
-}  // namespace regolith::clod
+}  // namespace regolith::gl

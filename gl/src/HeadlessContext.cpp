@@ -1,6 +1,6 @@
-#include <regolith/clod/Gl.hpp>
-#include <regolith/clod/GlError.hpp>
-#include <regolith/clod/HeadlessContext.hpp>
+#include <regolith/gl/Gl.hpp>
+#include <regolith/gl/GlError.hpp>
+#include <regolith/gl/HeadlessContext.hpp>
 
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <string>
 
-namespace regolith::clod {
+namespace regolith::gl {
 
 namespace {
 
@@ -79,4 +79,4 @@ std::string HeadlessContext::version() const {
   return std::to_string(major) + "." + std::to_string(minor);
 }
 
-}  // namespace regolith::clod
+}  // namespace regolith::gl

@@ -4,7 +4,7 @@
 
 #include <string>
 
-namespace regolith::clod {
+namespace regolith::gl {
 
 /// Owns an EGL display and an OpenGL 4.5 core context with no surface (EGL_MESA_platform_
 /// surfaceless); everything renders into framebuffer objects (RenderTarget). On a machine
@@ -33,4 +33,4 @@ class HeadlessContext {
   void* context_ = nullptr;
 };
 
-}  // namespace regolith::clod
+}  // namespace regolith::gl

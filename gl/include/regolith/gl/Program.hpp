@@ -2,7 +2,7 @@
 /// \file
 /// A linked GLSL program.
 
-#include <regolith/clod/Gl.hpp>
+#include <regolith/gl/Gl.hpp>
 
 #include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
@@ -13,7 +13,7 @@
 #include <string>
 #include <string_view>
 
-namespace regolith::clod {
+namespace regolith::gl {
 
 /// GLSL sources of one program; empty stages are left out.
 struct ShaderSources {
@@ -51,4 +51,4 @@ class Program {
   GLuint id_ = 0;
 };
 
-}  // namespace regolith::clod
+}  // namespace regolith::gl

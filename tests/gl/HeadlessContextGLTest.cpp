@@ -1,7 +1,7 @@
-#include <regolith/clod/Gl.hpp>
-#include <regolith/clod/GlError.hpp>
-#include <regolith/clod/Program.hpp>
-#include <regolith/clod/RenderTarget.hpp>
+#include <regolith/gl/Gl.hpp>
+#include <regolith/gl/GlError.hpp>
+#include <regolith/gl/Program.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 
 #include "GlContext.hpp"
 
@@ -11,7 +11,7 @@
 #include <filesystem>
 #include <string>
 
-namespace regolith::clod {
+namespace regolith::gl {
 namespace {
 
 TEST(HeadlessContextGLTest, GivesOpenGL45Core) {
@@ -81,4 +81,4 @@ TEST(HeadlessContextGLTest, PngRoundTripAndErrors) {
 }
 
 }  // namespace
-}  // namespace regolith::clod
+}  // namespace regolith::gl

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-namespace regolith::clod {
+namespace regolith::gl {
 
 /// An RGBA8 image, row-major, row 0 at the top (as a PNG stores it). Value type.
 struct RgbaImage {
@@ -64,4 +64,4 @@ void writePng(const std::string& path, const RgbaImage& image);
 /// regolith::Error naming the path if it is missing or not such a PNG.
 [[nodiscard]] RgbaImage readPng(const std::string& path);
 
-}  // namespace regolith::clod
+}  // namespace regolith::gl

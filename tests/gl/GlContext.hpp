@@ -1,8 +1,8 @@
 #pragma once
 // The one headless GL context the clod GL tests share, and PNG output for people to look at.
 
-#include <regolith/clod/HeadlessContext.hpp>
-#include <regolith/clod/Image.hpp>
+#include <regolith/gl/HeadlessContext.hpp>
+#include <regolith/gl/Image.hpp>
 
 #include <cstdlib>
 #include <string>
@@ -16,17 +16,17 @@ namespace regolith::test {
 /// from an "<unknown module>" that no suppression can name (tests/clod/lsan.supp names the
 /// driver libraries, which stay loaded this way). The pointer stays reachable, so the
 /// context itself is not reported.
-inline clod::HeadlessContext& glContext() {
-  static clod::HeadlessContext* const context = new clod::HeadlessContext();
+inline gl::HeadlessContext& glContext() {
+  static gl::HeadlessContext* const context = new gl::HeadlessContext();
   context->makeCurrent();
   return *context;
 }
 
 /// Writes `image` to $REGOLITH_TEST_PNG_DIR/<name>.png if that variable is set.
-inline void savePng(const std::string& name, const clod::RgbaImage& image) {
+inline void savePng(const std::string& name, const gl::RgbaImage& image) {
   const char* dir = std::getenv("REGOLITH_TEST_PNG_DIR");
   if (dir == nullptr || *dir == '\0') return;
-  clod::writePng(std::string(dir) + "/" + name + ".png", image);
+  gl::writePng(std::string(dir) + "/" + name + ".png", image);
 }
 
 }  // namespace regolith::test

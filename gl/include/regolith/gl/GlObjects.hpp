@@ -7,11 +7,11 @@
 /// calling thread for construction and destruction. Not thread-safe (GL objects belong to
 /// their context's thread).
 
-#include <regolith/clod/Gl.hpp>
+#include <regolith/gl/Gl.hpp>
 
 #include <utility>
 
-namespace regolith::clod {
+namespace regolith::gl {
 
 /// The kinds of GL object a GlObject can own.
 enum class GlKind { Buffer, VertexArray, Texture2D, Framebuffer, Renderbuffer };
@@ -57,4 +57,4 @@ extern template class GlObject<GlKind::Texture2D>;
 extern template class GlObject<GlKind::Framebuffer>;
 extern template class GlObject<GlKind::Renderbuffer>;
 
-}  // namespace regolith::clod
+}  // namespace regolith::gl

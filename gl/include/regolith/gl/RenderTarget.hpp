@@ -2,12 +2,12 @@
 /// \file
 /// An offscreen framebuffer with colour and depth, and its read-back.
 
-#include <regolith/clod/GlObjects.hpp>
-#include <regolith/clod/Image.hpp>
+#include <regolith/gl/GlObjects.hpp>
+#include <regolith/gl/Image.hpp>
 
 #include <glm/vec4.hpp>
 
-namespace regolith::clod {
+namespace regolith::gl {
 
 /// A framebuffer object with an RGBA8 colour texture and a 32-bit float depth texture,
 /// set up for Camera's reversed-Z projection (glClipControl zero-to-one, depth test
@@ -42,4 +42,4 @@ class RenderTarget {
 /// GL_GREATER, depth writes on). Window renders call it too.
 void useReversedZ() noexcept;
 
-}  // namespace regolith::clod
+}  // namespace regolith::gl

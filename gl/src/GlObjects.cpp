@@ -1,6 +1,6 @@
-#include <regolith/clod/GlObjects.hpp>
+#include <regolith/gl/GlObjects.hpp>
 
-namespace regolith::clod {
+namespace regolith::gl {
 
 template <GlKind K>
 GlObject<K>::GlObject() {
@@ -29,4 +29,4 @@ template class GlObject<GlKind::Texture2D>;
 template class GlObject<GlKind::Framebuffer>;
 template class GlObject<GlKind::Renderbuffer>;
 
-}  // namespace regolith::clod
+}  // namespace regolith::gl
