@@ -170,8 +170,7 @@ TEST(TopoPlanet, LatitudeBeyondNinetyAndNonFiniteInputThrow) {
     (void)p.height({90.5, 0.0});
     FAIL();
   } catch (const InvalidArgument& e) {
-    EXPECT_STREQ(e.what(),
-                 "TopoPlanet::height(): latitude is 90.500000 deg, expected within [-90, 90]");
+    EXPECT_STREQ(e.what(), "TopoPlanet::height(): latitude is 90.5 deg, expected within [-90, 90]");
   }
   EXPECT_THROW((void)p.surface({0.0, std::nan("")}), InvalidArgument);
   std::vector<double> lats{0.0, std::numeric_limits<double>::infinity()}, lons{0.0, 0.0}, out(2);

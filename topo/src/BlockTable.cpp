@@ -1,4 +1,5 @@
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/topo/BlockTable.hpp>
 
 #include <linux/membarrier.h>
@@ -15,10 +16,9 @@ BlockTable::BlockTable(std::size_t rows, std::size_t cols, std::size_t blockRows
                        std::size_t blockCols)
     : rows_(rows), cols_(cols), blockRows_(blockRows), blockCols_(blockCols), blocksPerRow_(0) {
   if (rows == 0 || cols == 0 || blockRows == 0 || blockCols == 0) {
-    throw InvalidArgument("topo::BlockTable(): " + std::to_string(rows) + " x " +
-                          std::to_string(cols) + " samples in blocks of " +
-                          std::to_string(blockRows) + " x " + std::to_string(blockCols) +
-                          ", expected every size > 0");
+    throw InvalidArgument("topo::BlockTable(): " + core::number(rows) + " x " + core::number(cols) +
+                          " samples in blocks of " + core::number(blockRows) + " x " +
+                          core::number(blockCols) + ", expected every size > 0");
   }
   blocksPerRow_ = (cols + blockCols - 1) / blockCols;
   pow2_ = std::has_single_bit(blockRows) && std::has_single_bit(blockCols);

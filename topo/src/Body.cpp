@@ -1,4 +1,5 @@
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/topo/Body.hpp>
 
 #include <cmath>
@@ -12,7 +13,7 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 
 void requireFinite(double v, const char* operation, const char* field) {
   if (!std::isfinite(v)) {
-    throw InvalidArgument(std::string(operation) + ": " + field + " is " + std::to_string(v) +
+    throw InvalidArgument(std::string(operation) + ": " + field + " is " + core::number(v) +
                           ", expected a finite number");
   }
 }
@@ -40,8 +41,8 @@ Body::Body(std::string name, double a, double b)
 
 Body Body::sphere(std::string name, double radius) {
   if (!(std::isfinite(radius) && radius > 0.0)) {
-    throw InvalidArgument("Body::sphere(): body '" + name + "' has radius " +
-                          std::to_string(radius) + " m, expected finite and > 0");
+    throw InvalidArgument("Body::sphere(): body '" + name + "' has radius " + core::number(radius) +
+                          " m, expected finite and > 0");
   }
   return Body(std::move(name), radius, radius);
 }
@@ -50,8 +51,8 @@ Body Body::ellipsoid(std::string name, double equatorialRadius, double polarRadi
   if (!(std::isfinite(equatorialRadius) && std::isfinite(polarRadius) && polarRadius > 0.0 &&
         polarRadius <= equatorialRadius)) {
     throw InvalidArgument(
-        "Body::ellipsoid(): body '" + name + "' has radii a = " + std::to_string(equatorialRadius) +
-        " m, b = " + std::to_string(polarRadius) + " m, expected finite 0 < b <= a");
+        "Body::ellipsoid(): body '" + name + "' has radii a = " + core::number(equatorialRadius) +
+        " m, b = " + core::number(polarRadius) + " m, expected finite 0 < b <= a");
   }
   return Body(std::move(name), equatorialRadius, polarRadius);
 }

@@ -1,4 +1,5 @@
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/topo/Mesh.hpp>
 
 #include <bit>
@@ -15,14 +16,14 @@ GridWindow resolve(const TopoGrid& g, GridWindow w, const char* op) {
   if (w.rows == 0 && w.row0 < g.rows()) w.rows = g.rows() - w.row0;
   if (w.cols == 0 && w.col0 < g.cols()) w.cols = g.cols() - w.col0;
   if (w.row0 + w.rows > g.rows() || w.col0 + w.cols > g.cols() || w.rows < 2 || w.cols < 2) {
-    throw InvalidArgument(std::string(op) + ": window rows " + std::to_string(w.row0) + "+" +
-                          std::to_string(w.rows) + ", cols " + std::to_string(w.col0) + "+" +
-                          std::to_string(w.cols) + " does not fit the " + std::to_string(g.rows()) +
-                          "x" + std::to_string(g.cols()) +
+    throw InvalidArgument(std::string(op) + ": window rows " + core::number(w.row0) + "+" +
+                          core::number(w.rows) + ", cols " + core::number(w.col0) + "+" +
+                          core::number(w.cols) + " does not fit the " + core::number(g.rows()) +
+                          "x" + core::number(g.cols()) +
                           " grid, expected at least 2x2 samples inside it");
   }
   if (w.rows * w.cols > std::numeric_limits<std::uint32_t>::max()) {
-    throw InvalidArgument(std::string(op) + ": window has " + std::to_string(w.rows * w.cols) +
+    throw InvalidArgument(std::string(op) + ": window has " + core::number(w.rows * w.cols) +
                           " samples, expected fewer than 2^32 (uint32 indices)");
   }
   return w;

@@ -1,4 +1,5 @@
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/topo/Placement.hpp>
 
 #include <glm/geometric.hpp>
@@ -27,9 +28,9 @@ Placement::Placement(const Body& body, TransverseMercator projection)
     throw InvalidArgument(
         "Placement(): the transverse Mercator projection is on an ellipsoid of "
         "a = " +
-        std::to_string(projection.equatorialRadius()) + " m, e^2 = " +
-        std::to_string(projection.eccentricitySquared()) + ", expected the body's (" + body.name() +
-        ": a = " + std::to_string(a) + " m, e^2 = " + std::to_string(e2) + ")");
+        core::number(projection.equatorialRadius()) +
+        " m, e^2 = " + core::number(projection.eccentricitySquared()) + ", expected the body's (" +
+        body.name() + ": a = " + core::number(a) + " m, e^2 = " + core::number(e2) + ")");
   }
 }
 

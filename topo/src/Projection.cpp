@@ -1,4 +1,5 @@
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/topo/Projection.hpp>
 
 #include <glm/geometric.hpp>
@@ -18,7 +19,7 @@ constexpr double kHalfPi = std::numbers::pi / 2.0;
 void requireLatitude(double latDeg, const char* op) {
   requireFinite(latDeg, op, "latitude");
   if (std::abs(latDeg) > 90.0) {
-    throw InvalidArgument(std::string(op) + ": latitude is " + std::to_string(latDeg) +
+    throw InvalidArgument(std::string(op) + ": latitude is " + core::number(latDeg) +
                           " deg, expected within [-90, 90]");
   }
 }
@@ -52,12 +53,12 @@ Equirectangular::Equirectangular(double radius, double latTrueScaleDeg, double l
   requireFinite(lonCentreDeg, op, "centre longitude");
   requireFinite(latOriginDeg, op, "latitude of origin");
   if (radius <= 0.0) {
-    throw InvalidArgument(std::string(op) + ": radius is " + std::to_string(radius) +
+    throw InvalidArgument(std::string(op) + ": radius is " + core::number(radius) +
                           " m, expected > 0");
   }
   if (std::abs(latTrueScaleDeg) >= 90.0) {
     throw InvalidArgument(std::string(op) + ": latitude of true scale is " +
-                          std::to_string(latTrueScaleDeg) + " deg, expected |lat| < 90");
+                          core::number(latTrueScaleDeg) + " deg, expected |lat| < 90");
   }
   cosTs_ = std::cos(latTrueScaleDeg * kDeg);
 }
@@ -84,8 +85,8 @@ LatLon Equirectangular::inverse(const glm::dvec2& xy) const {
   requireFinite(xy.y, "Equirectangular::inverse()", "y");
   const double lat = lat0Deg_ + xy.y / r_ / kDeg;
   if (std::abs(lat) > 90.0 + 1e-9) {
-    throw DomainError("Equirectangular::inverse(): y = " + std::to_string(xy.y) +
-                      " m gives latitude " + std::to_string(lat) + " deg, beyond the pole");
+    throw DomainError("Equirectangular::inverse(): y = " + core::number(xy.y) +
+                      " m gives latitude " + core::number(lat) + " deg, beyond the pole");
   }
   const double lon = lon0Deg_ + xy.x / (r_ * cosTs_) / kDeg;
   return {std::clamp(lat, -90.0, 90.0), wrapLongitude180(lon)};
@@ -114,7 +115,7 @@ PolarStereographic PolarStereographic::withTrueScaleLatitude(const Body& body, P
   const bool north = pole == Pole::North;
   if ((north && latTrueScaleDeg <= 0.0) || (!north && latTrueScaleDeg >= 0.0)) {
     throw InvalidArgument(std::string(op) + ": latitude of true scale is " +
-                          std::to_string(latTrueScaleDeg) +
+                          core::number(latTrueScaleDeg) +
                           " deg, expected in the hemisphere of the projection's pole");
   }
   const double e = std::sqrt(body.eccentricitySquared());
@@ -140,7 +141,7 @@ PolarStereographic PolarStereographic::withScaleFactor(const Body& body, Pole po
   requireFinite(falseEasting, op, "false easting");
   requireFinite(falseNorthing, op, "false northing");
   if (k0 <= 0.0) {
-    throw InvalidArgument(std::string(op) + ": scale factor is " + std::to_string(k0) +
+    throw InvalidArgument(std::string(op) + ": scale factor is " + core::number(k0) +
                           ", expected > 0");
   }
   return {body.equatorialRadius(),
@@ -161,7 +162,7 @@ glm::dvec2 PolarStereographic::forward(const LatLon& ll) const {
   const double latN = north ? ll.latDeg : -ll.latDeg;
   if (latN == 90.0) return {fe_, fn_};
   if (latN == -90.0) {
-    throw DomainError(std::string(op) + ": latitude " + std::to_string(ll.latDeg) +
+    throw DomainError(std::string(op) + ": latitude " + core::number(ll.latDeg) +
                       " deg is the pole opposite the projection's centre; it maps to infinity");
   }
   const double rho = rhoFactor_ * stereoT(latN * kDeg, e_);
@@ -260,7 +261,7 @@ TransverseMercator::TransverseMercator(const Body& body, double lonCentreDeg, do
   requireFinite(falseEasting, op, "false easting");
   requireFinite(falseNorthing, op, "false northing");
   if (scaleFactor <= 0.0) {
-    throw InvalidArgument(std::string(op) + ": scale factor is " + std::to_string(scaleFactor) +
+    throw InvalidArgument(std::string(op) + ": scale factor is " + core::number(scaleFactor) +
                           ", expected > 0");
   }
   const double f = body.flattening();
@@ -293,7 +294,7 @@ TransverseMercator::TransverseMercator(const Body& body, double lonCentreDeg, do
 
 TransverseMercator TransverseMercator::utm(const Body& body, int zone, bool north) {
   if (zone < 1 || zone > 60) {
-    throw InvalidArgument("TransverseMercator::utm(): zone is " + std::to_string(zone) +
+    throw InvalidArgument("TransverseMercator::utm(): zone is " + core::number(zone) +
                           ", expected 1 to 60");
   }
   return {body, 6.0 * zone - 183.0, 0.0, 0.9996, 500000.0, north ? 0.0 : 10000000.0};
@@ -322,9 +323,9 @@ glm::dvec2 TransverseMercator::forward(const LatLon& ll) const {
   requireFinite(ll.lonDeg, op, "longitude");
   const double dl = wrapLongitude180(reducedLongitude(ll.lonDeg) - lon0Deg_);
   if (std::abs(dl) >= 90.0 && std::abs(ll.latDeg) != 90.0) {
-    throw DomainError(std::string(op) + ": longitude " + std::to_string(ll.lonDeg) + " deg is " +
-                      std::to_string(std::abs(dl)) + " deg from the central meridian " +
-                      std::to_string(lon0Deg_) + " deg, expected less than 90");
+    throw DomainError(std::string(op) + ": longitude " + core::number(ll.lonDeg) + " deg is " +
+                      core::number(std::abs(dl)) + " deg from the central meridian " +
+                      core::number(lon0Deg_) + " deg, expected less than 90");
   }
   const glm::dvec2 z = conformalMap(ll.latDeg * kDeg, dl * kDeg);
   return {fe_ + kA_ * z.y, fn_ + kA_ * (z.x - xi0_)};
@@ -348,7 +349,7 @@ LatLon TransverseMercator::inverse(const glm::dvec2& xy) const {
   // cos ξ' < 0 (or |ξ'| > π): beyond the poles' images, where the points more than 90° from
   // the central meridian would map; forward() does not go there either.
   if (!std::isfinite(sh) || cRaw < -1e-12 || std::abs(xip) > std::numbers::pi) {
-    throw DomainError(std::string(op) + ": (" + std::to_string(xy.x) + ", " + std::to_string(xy.y) +
+    throw DomainError(std::string(op) + ": (" + core::number(xy.x) + ", " + core::number(xy.y) +
                       ") m maps 90 deg or more from the central meridian, outside the "
                       "projection's domain");
   }

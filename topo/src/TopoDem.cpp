@@ -1,4 +1,5 @@
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/topo/TopoDem.hpp>
 
 #include "Kernels.hpp"
@@ -77,8 +78,8 @@ inline void requirePoint(double x, double y, const char* op) {
 
 void requireSameLength(std::size_t n, std::size_t m, const char* op, const char* field) {
   if (n != m) {
-    throw InvalidArgument(std::string(op) + ": " + field + " has " + std::to_string(m) +
-                          " elements, expected " + std::to_string(n));
+    throw InvalidArgument(std::string(op) + ": " + field + " has " + core::number(m) +
+                          " elements, expected " + core::number(n));
   }
 }
 
@@ -92,8 +93,8 @@ void requireFiniteArray(std::span<const double> a, const char* op, const char* f
   if ((bad >> 63U) == 0) return;
   for (std::size_t i = 0; i < a.size(); ++i) {
     if (!std::isfinite(a[i])) {
-      throw InvalidArgument(std::string(op) + ": " + field + "[" + std::to_string(i) + "] is " +
-                            std::to_string(a[i]) + ", expected a finite number");
+      throw InvalidArgument(std::string(op) + ": " + field + "[" + core::number(i) + "] is " +
+                            core::number(a[i]) + ", expected a finite number");
     }
   }
 }
@@ -139,9 +140,9 @@ TopoDem::TopoDem(TopoGrid grid, Placement placement, std::shared_ptr<const Sampl
     : grid_(std::move(grid)), placement_(std::move(placement)), samples_(std::move(samples)) {
   if (!samples_) throw InvalidArgument("TopoDem(): samples is null, expected a SampleSource");
   if (samples_->rows() != grid_.rows() || samples_->cols() != grid_.cols()) {
-    throw InvalidArgument("TopoDem(): samples are " + std::to_string(samples_->rows()) + "x" +
-                          std::to_string(samples_->cols()) + ", expected the grid's " +
-                          std::to_string(grid_.rows()) + "x" + std::to_string(grid_.cols()));
+    throw InvalidArgument("TopoDem(): samples are " + core::number(samples_->rows()) + "x" +
+                          core::number(samples_->cols()) + ", expected the grid's " +
+                          core::number(grid_.rows()) + "x" + core::number(grid_.cols()));
   }
   resident_ = samples_->contiguous();
   sourceId_ = samples_->id();
@@ -390,9 +391,9 @@ void TopoDem::surfaces(std::span<const double> xs, std::span<const double> ys,
 
 glm::dvec3 TopoDem::samplePosition(std::size_t row, std::size_t col) const {
   if (row >= grid_.rows() || col >= grid_.cols()) {
-    throw InvalidArgument("TopoDem::samplePosition(): sample (" + std::to_string(row) + ", " +
-                          std::to_string(col) + ") is outside the " + std::to_string(grid_.rows()) +
-                          "x" + std::to_string(grid_.cols()) + " grid");
+    throw InvalidArgument("TopoDem::samplePosition(): sample (" + core::number(row) + ", " +
+                          core::number(col) + ") is outside the " + core::number(grid_.rows()) +
+                          "x" + core::number(grid_.cols()) + " grid");
   }
   const float s = samples_->sample(row, col);
   const glm::dvec2 xy = grid_.sampleCentre(static_cast<double>(row), static_cast<double>(col));

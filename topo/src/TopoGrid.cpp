@@ -1,4 +1,5 @@
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/topo/Body.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
@@ -18,16 +19,16 @@ TopoGrid::TopoGrid(std::size_t rows, std::size_t cols, double x0, double y0, dou
     : rows_(rows), cols_(cols), x0_(x0), y0_(y0), dx_(dx), dy_(dy), nodata_(nodata) {
   constexpr const char* op = "TopoGrid()";
   if (rows == 0 || cols == 0) {
-    throw InvalidArgument(std::string(op) + ": grid is " + std::to_string(rows) + "x" +
-                          std::to_string(cols) + " samples, expected at least 1x1");
+    throw InvalidArgument(std::string(op) + ": grid is " + core::number(rows) + "x" +
+                          core::number(cols) + " samples, expected at least 1x1");
   }
   requireFinite(x0, op, "x0");
   requireFinite(y0, op, "y0");
   requireFinite(dx, op, "spacing x");
   requireFinite(dy, op, "spacing y");
   if (dx <= 0.0 || dy <= 0.0) {
-    throw InvalidArgument(std::string(op) + ": spacing is (" + std::to_string(dx) + ", " +
-                          std::to_string(dy) + "), expected both > 0");
+    throw InvalidArgument(std::string(op) + ": spacing is (" + core::number(dx) + ", " +
+                          core::number(dy) + "), expected both > 0");
   }
   if (!std::isnormal(dx) || !std::isnormal(dy)) {
     // A subnormal spacing makes every fractional index infinite: every point "outside".
@@ -44,13 +45,12 @@ TopoGrid TopoGrid::fromGeoTransform(const std::array<double, 6>& gt, std::size_t
                                     std::size_t cols, std::optional<float> nodata) {
   if (gt[2] != 0.0 || gt[4] != 0.0) {
     throw InvalidArgument("TopoGrid::fromGeoTransform(): rotation terms are (" +
-                          std::to_string(gt[2]) + ", " + std::to_string(gt[4]) +
+                          core::number(gt[2]) + ", " + core::number(gt[4]) +
                           "), expected 0 (north-up rasters only)");
   }
   if (!(gt[1] > 0.0) || !(gt[5] < 0.0)) {
-    throw InvalidArgument("TopoGrid::fromGeoTransform(): pixel size is (" + std::to_string(gt[1]) +
-                          ", " + std::to_string(gt[5]) +
-                          "), expected dx > 0 and dy < 0 (north-up)");
+    throw InvalidArgument("TopoGrid::fromGeoTransform(): pixel size is (" + core::number(gt[1]) +
+                          ", " + core::number(gt[5]) + "), expected dx > 0 and dy < 0 (north-up)");
   }
   const double dx = gt[1], dy = -gt[5];
   return TopoGrid(rows, cols, gt[0] + 0.5 * dx, gt[3] - 0.5 * dy, dx, dy, nodata);
@@ -95,8 +95,8 @@ void SampleSource::readWindow(std::size_t row0, std::size_t col0, std::size_t nr
 InMemorySamples::InMemorySamples(std::size_t rows, std::size_t cols, std::vector<float> data)
     : rows_(rows), cols_(cols), data_(std::move(data)) {
   if (rows == 0 || cols == 0 || data_.size() != rows * cols) {
-    throw InvalidArgument("InMemorySamples(): " + std::to_string(data_.size()) + " samples for a " +
-                          std::to_string(rows) + "x" + std::to_string(cols) +
+    throw InvalidArgument("InMemorySamples(): " + core::number(data_.size()) + " samples for a " +
+                          core::number(rows) + "x" + core::number(cols) +
                           " grid, expected rows*cols > 0");
   }
 }

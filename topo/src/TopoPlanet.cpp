@@ -1,4 +1,5 @@
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
 
 #include "Kernels.hpp"
@@ -48,19 +49,19 @@ TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
   if (!samples_)
     throw InvalidArgument(std::string(op) + ": samples is null, expected a SampleSource");
   if (samples_->rows() != grid_.rows() || samples_->cols() != grid_.cols()) {
-    throw InvalidArgument(std::string(op) + ": samples are " + std::to_string(samples_->rows()) +
-                          "x" + std::to_string(samples_->cols()) + ", expected the grid's " +
-                          std::to_string(grid_.rows()) + "x" + std::to_string(grid_.cols()));
+    throw InvalidArgument(std::string(op) + ": samples are " + core::number(samples_->rows()) +
+                          "x" + core::number(samples_->cols()) + ", expected the grid's " +
+                          core::number(grid_.rows()) + "x" + core::number(grid_.cols()));
   }
   const double poleTol = kPoleOverhangPixels * grid_.spacingY();
   if (grid_.north() > 90.0 + poleTol || grid_.south() < -90.0 - poleTol) {
     throw InvalidArgument(std::string(op) + ": grid spans latitudes " +
-                          std::to_string(grid_.south()) + " to " + std::to_string(grid_.north()) +
+                          core::number(grid_.south()) + " to " + core::number(grid_.north()) +
                           " deg, expected within [-90, 90]");
   }
   const double span = static_cast<double>(grid_.cols()) * grid_.spacingX();
   if (span > 360.0 + kEdgeTol) {
-    throw InvalidArgument(std::string(op) + ": grid spans " + std::to_string(span) +
+    throw InvalidArgument(std::string(op) + ": grid spans " + core::number(span) +
                           " deg of longitude, expected at most 360");
   }
   global_ = std::abs(span - 360.0) <= kEdgeTol;
@@ -141,7 +142,7 @@ void requireLatLon(const LatLon& ll, const char* op) {
   requireFinite(ll.latDeg, op, "latitude");
   requireFinite(ll.lonDeg, op, "longitude");
   if (std::abs(ll.latDeg) > 90.0) {
-    throw InvalidArgument(std::string(op) + ": latitude is " + std::to_string(ll.latDeg) +
+    throw InvalidArgument(std::string(op) + ": latitude is " + core::number(ll.latDeg) +
                           " deg, expected within [-90, 90]");
   }
 }
@@ -151,7 +152,7 @@ void requireLatLons(std::span<const double> lats, std::span<const double> lons, 
     try {
       requireLatLon({lats[i], lons[i]}, op);
     } catch (const InvalidArgument& e) {
-      throw InvalidArgument(std::string(e.what()) + " (point " + std::to_string(i) + ")");
+      throw InvalidArgument(std::string(e.what()) + " (point " + core::number(i) + ")");
     }
   }
 }
@@ -294,9 +295,9 @@ void TopoPlanet::heights(std::span<const double> latsDeg, std::span<const double
   constexpr const char* op = "TopoPlanet::heights()";
   const std::size_t n = latsDeg.size();
   if (lonsDeg.size() != n || out.size() != n || (!status.empty() && status.size() != n)) {
-    throw InvalidArgument(std::string(op) + ": arrays have lengths " + std::to_string(n) + ", " +
-                          std::to_string(lonsDeg.size()) + ", " + std::to_string(out.size()) +
-                          ", " + std::to_string(status.size()) + ", expected equal lengths");
+    throw InvalidArgument(std::string(op) + ": arrays have lengths " + core::number(n) + ", " +
+                          core::number(lonsDeg.size()) + ", " + core::number(out.size()) + ", " +
+                          core::number(status.size()) + ", expected equal lengths");
   }
   requireLatLons(latsDeg, lonsDeg, op);
   for (std::size_t i = 0; i < n; ++i) {
@@ -316,7 +317,7 @@ void TopoPlanet::surfaces(std::span<const double> latsDeg, std::span<const doubl
       (!status.empty() && status.size() != n) ||
       (!normalStatus.empty() && normalStatus.size() != n)) {
     throw InvalidArgument(std::string(op) + ": arrays differ in length, expected " +
-                          std::to_string(n) + " elements each");
+                          core::number(n) + " elements each");
   }
   requireLatLons(latsDeg, lonsDeg, op);
   for (std::size_t i = 0; i < n; ++i) {
