@@ -98,4 +98,19 @@ void parallelFor(Executor& executor, std::size_t n, const std::function<void(std
   if (loop->error) std::rethrow_exception(loop->error);
 }
 
+void parallelFor(Executor* executor, std::size_t n, const std::function<void(std::size_t)>& body,
+                 unsigned threads) {
+  if (executor != nullptr) {
+    parallelFor(*executor, n, body, threads);
+    return;
+  }
+  const std::size_t workers = std::min<std::size_t>(threads, n);
+  if (workers <= 1) {
+    for (std::size_t i = 0; i < n; ++i) body(i);
+    return;
+  }
+  ThreadPool pool(static_cast<unsigned>(workers - 1));
+  parallelFor(pool, n, body, threads);
+}
+
 }  // namespace regolith::core

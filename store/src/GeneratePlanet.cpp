@@ -450,12 +450,7 @@ void MarsPlanetGenerator::Impl::evaluateParallel(const Lattice& l, double* out) 
     p.nr = std::min(per, l.nr - k * per);
     evaluate(p, out + k * per * l.nc);
   };
-  if (executor != nullptr) {
-    core::parallelFor(*executor, parts, part, static_cast<unsigned>(threads));
-  } else {
-    core::ThreadPool pool(static_cast<unsigned>(threads - 1));
-    core::parallelFor(pool, parts, part, static_cast<unsigned>(threads));
-  }
+  core::parallelFor(executor, parts, part, static_cast<unsigned>(threads));
 }
 
 namespace {

@@ -513,18 +513,7 @@ unsigned threadCount(const WriteOptions& o) {
 /// options' executor, or on a pool made for the call; rethrows the first exception once all
 /// have stopped.
 void parallelFor(std::size_t n, const WriteOptions& o, const std::function<void(std::size_t)>& f) {
-  const unsigned threads = threadCount(o);
-  if (o.executor != nullptr) {
-    core::parallelFor(*o.executor, n, f, threads);
-    return;
-  }
-  const std::size_t helpers = std::min<std::size_t>(threads, n);
-  if (helpers <= 1) {
-    for (std::size_t i = 0; i < n; ++i) f(i);
-    return;
-  }
-  core::ThreadPool pool(static_cast<unsigned>(helpers - 1));
-  core::parallelFor(pool, n, f, threads);
+  core::parallelFor(o.executor, n, f, threadCount(o));
 }
 
 /// A chunk of cr × cc floats as H5Z-ZFP (filter 32013) stores it in reversible mode: one bare

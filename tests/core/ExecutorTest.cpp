@@ -76,3 +76,32 @@ TEST(Executor, ThreadPoolRunsQueuedTasksBeforeItIsDestroyed) {
   }
   EXPECT_EQ(done.load(), 100);
 }
+
+TEST(Executor, WithoutAnExecutorParallelForRunsOnAPoolMadeForTheCall) {
+  std::mutex m;
+  std::set<std::thread::id> ids;
+  std::vector<std::atomic<int>> hits(64);
+  parallelFor(
+      nullptr, hits.size(),
+      [&](std::size_t i) {
+        hits[i].fetch_add(1);
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        const std::lock_guard lock(m);
+        ids.insert(std::this_thread::get_id());
+      },
+      3);
+  for (const auto& h : hits) EXPECT_EQ(h.load(), 1);
+  EXPECT_GE(ids.size(), 2U);  // the caller and the pool's workers
+  // One thread: the caller runs every index itself.
+  ids.clear();
+  parallelFor(
+      nullptr, 5, [&](std::size_t) { ids.insert(std::this_thread::get_id()); }, 1);
+  EXPECT_EQ(ids, std::set<std::thread::id>{std::this_thread::get_id()});
+  EXPECT_THROW(parallelFor(
+                   nullptr, 8,
+                   [](std::size_t i) {
+                     if (i == 5) throw std::runtime_error("index 5");
+                   },
+                   2),
+               std::runtime_error);
+}

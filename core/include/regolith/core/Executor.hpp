@@ -85,4 +85,10 @@ template <typename F>
 void parallelFor(Executor& executor, std::size_t n, const std::function<void(std::size_t)>& body,
                  unsigned maxTasks = 0);
 
+/// As above, on `executor` if it is not null, else on a core::ThreadPool of up to
+/// `threads` − 1 workers made for the call (none when `threads` or `n` is at most 1: the
+/// caller then runs every index). `threads` counts the caller and must be ≥ 1.
+void parallelFor(Executor* executor, std::size_t n, const std::function<void(std::size_t)>& body,
+                 unsigned threads);
+
 }  // namespace regolith::core
