@@ -30,6 +30,9 @@ std::shared_ptr<const Patch> loadPatch(const Store& store, const GridInfo& info,
   return p;
 }
 
+static_assert(kMaxPatchesPerGrid <= topo::BlockTable::kMaxBlocks,
+              "every grid a store may hold has a block table");
+
 // One level of one grid, paged through the cache. Holds the store and the cache, so it
 // stays usable after the Pager that made it is gone.
 class PagedSource final : public topo::SampleSource {

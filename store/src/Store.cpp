@@ -163,6 +163,10 @@ void readAttributes(hid_t g, GridEntry& entry, const Context& ctx, const std::st
   info.cols = hdf5::readCount(g, format::kCols, ctx, owner);
   for (const auto& [name, v] : {std::pair{"rows", info.rows}, std::pair{"cols", info.cols}}) {
     if (v == 0) fail(ctx, owner + " has " + name + " 0, expected > 0");
+    if (v > kMaxGridSide) {
+      fail(ctx, owner + " has " + name + " " + std::to_string(v) + ", expected at most " +
+                    std::to_string(kMaxGridSide) + " (the limit of docs/store-format.md)");
+    }
   }
   info.x0 = finiteNumber(g, format::kX0, ctx, owner);
   info.y0 = finiteNumber(g, format::kY0, ctx, owner);
@@ -239,6 +243,13 @@ void readAttributes(hid_t g, GridEntry& entry, const Context& ctx, const std::st
   }
   info.patchRows = static_cast<std::size_t>(patch[0]);
   info.patchCols = static_cast<std::size_t>(patch[1]);
+  if (const std::size_t n = patchCount(info.rows, info.cols, info.patchRows, info.patchCols);
+      n > kMaxPatchesPerGrid) {
+    fail(ctx, owner + " has " + dims(info.rows, info.cols) + " samples in patches of " +
+                  dims(info.patchRows, info.patchCols) + ": " + std::to_string(n) +
+                  " patches, expected at most " + std::to_string(kMaxPatchesPerGrid) +
+                  " (attribute patch_shape; the limit of docs/store-format.md)");
+  }
   if (hdf5::hasAttribute(g, format::kProvenance, ctx)) {  // format 1.3
     info.provenance = hdf5::readString(g, format::kProvenance, ctx, owner);
   }

@@ -175,6 +175,20 @@ Prepared prepare(const GridSource& src, const WriteOptions& o,
     invalid(ctx, owner + " has " + std::to_string(info.rows) + "x" + std::to_string(info.cols) +
                      " samples, expected both > 0");
   }
+  for (const auto& [field, v] : {std::pair{"rows", info.rows}, std::pair{"cols", info.cols}}) {
+    if (v > kMaxGridSide) {
+      invalid(ctx, owner + " has " + field + " " + std::to_string(v) + ", expected at most " +
+                       std::to_string(kMaxGridSide) + " (the limit of docs/store-format.md)");
+    }
+  }
+  if (const std::size_t n = patchCount(info.rows, info.cols, o.patchRows, o.patchCols);
+      n > kMaxPatchesPerGrid) {
+    invalid(ctx, owner + " has " + std::to_string(info.rows) + "x" + std::to_string(info.cols) +
+                     " samples in patches of " + std::to_string(o.patchRows) + "x" +
+                     std::to_string(o.patchCols) + ": " + std::to_string(n) +
+                     " patches, expected at most " + std::to_string(kMaxPatchesPerGrid) +
+                     " (use larger patches; the limit of docs/store-format.md)");
+  }
   if (!tiled && (src.samples->rows() != info.rows || src.samples->cols() != info.cols)) {
     invalid(ctx, owner + " describes " + std::to_string(info.rows) + "x" +
                      std::to_string(info.cols) + " samples but its source holds " +

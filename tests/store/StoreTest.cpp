@@ -4,7 +4,10 @@
 // with its message, crash safety under SIGKILL, cancellation and progress.
 // (tests/store/test_store_h5py.py checks the same layout with h5py as an outside oracle.)
 #include <regolith/core/Error.hpp>
+#include <regolith/store/Pager.hpp>
+#include <regolith/store/PatchCache.hpp>
 #include <regolith/store/Store.hpp>
+#include <regolith/topo/TopoDem.hpp>
 
 #include "support/StoreScratch.hpp"
 
@@ -27,6 +30,7 @@
 #include <iterator>
 #include <limits>
 #include <optional>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -1087,6 +1091,18 @@ TEST(StoreWriter, RejectsInvalidGridsAndLeavesNoFile) {
   GridSource mismatched = source(demInfo("crater", 4, 4), crater);
   mismatched.info.rows = 5;
   expectInvalid({mismatched}, "grid 'crater' describes 5x4 samples but its source holds 4x4");
+  mismatched.info.rows = kMaxGridSide + 1;  // refused before the sizes are compared
+  expectInvalid({mismatched},
+                "grid 'crater' has rows 2147483649, expected at most 2147483648 "
+                "(the limit of docs/store-format.md)");
+  mismatched.info.rows = mismatched.info.cols = kMaxGridSide;
+  WriteOptions tiny;
+  tiny.patchRows = tiny.patchCols = 2;
+  expectInvalid({mismatched},
+                "grid 'crater' has 2147483648x2147483648 samples in patches of 2x2: "
+                "1152921504606846976 patches, expected at most 34359738368 (use larger patches; "
+                "the limit of docs/store-format.md)",
+                tiny);
   expectInvalid({source(demInfo("a", 4, 4), crater), source(demInfo("a", 4, 4), crater)},
                 "grid 'a' appears twice");
   expectInvalid({source(demInfo("a/b", 4, 4), crater)},
@@ -1457,4 +1473,74 @@ TEST(Store, RejectsABadTransverseMercatorPlacementNamingTheField) {
   const std::vector<GridSource> grids{source(noK0, crater)};
   EXPECT_THROW(writeStore(q, grids), InvalidArgument);
   EXPECT_FALSE(fs::exists(q));
+}
+
+// ---- Grids that declare sizes near the limits (issue 17) -------------------------------------
+
+namespace {
+
+/// Re-declares the standard store's DEM 'crater' as rows × cols samples: every level's dataset
+/// is replaced by an empty chunked one of the halved shape (HDF5 allocates no chunk until one
+/// is written, so the file stays a few kB) and one level is kept.
+void declareCraterSize(const fs::path& p, hsize_t rows, hsize_t cols) {
+  editRaw(p, [&](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
+    for (int k = 1; k < 4; ++k) {
+      const std::string name = "level" + std::to_string(k);
+      if (H5Lexists(g, name.c_str(), H5P_DEFAULT) > 0) ok(H5Ldelete(g, name.c_str(), H5P_DEFAULT));
+    }
+    rawDataset(g, "level0", {rows, cols}, {16, 8}, H5T_IEEE_F32LE, {});
+    rawSetNumbers(g, "rows", {static_cast<double>(rows)}, H5T_STD_I64LE);
+    rawSetNumbers(g, "cols", {static_cast<double>(cols)}, H5T_STD_I64LE);
+    rawSetNumbers(g, "levels", {1.0}, H5T_STD_I64LE);
+  });
+}
+
+}  // namespace
+
+TEST(Store, RefusesAGridBeyondTheDocumentedSizeLimitNamingTheField) {
+  // Near 2^33 samples a side, patch counts used to wrap and the first query read out of bounds.
+  const fs::path p = writeStandardStore("huge-rows.h5");
+  declareCraterSize(p, hsize_t{1} << 33, 4096);
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'crater' has rows 8589934592, expected at most 2147483648 "
+                              "(the limit of docs/store-format.md)");
+  declareCraterSize(p, 4096, (hsize_t{1} << 31) + 1);
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'crater' has cols 2147483649, expected at most 2147483648 "
+                              "(the limit of docs/store-format.md)");
+}
+
+TEST(Store, RefusesMorePatchesThanTheBlockTableCanHoldNamingThePatchShape) {
+  const fs::path p = writeStandardStore("huge-patches.h5");
+  declareCraterSize(p, hsize_t{1} << 31, hsize_t{1} << 31);  // 2^55 patches of 16 x 8
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'crater' has 2147483648x2147483648 samples in patches of "
+                              "16x8: 36028797018963968 patches, expected at most 34359738368 "
+                              "(attribute patch_shape; the limit of docs/store-format.md)");
+}
+
+TEST(Store, AGridOfTwoToTheFortySamplesOpensAndPagesWithinItsBudget) {
+  // 2^20 × 2^20 samples in 16 × 8 patches is 2^33 patches: a block table sized for the whole
+  // grid would take 192 GiB before the first query. It must cost nothing until patches load.
+  const fs::path p = writeStandardStore("huge-grid.h5");
+  declareCraterSize(p, hsize_t{1} << 20, hsize_t{1} << 20);
+  auto store = std::make_shared<const Store>(Store::open(p));
+  auto cache = std::make_shared<PatchCache>(std::size_t{1} << 20);
+  const Pager pager(store, cache);
+  const topo::TopoDem dem = pager.dem("crater");
+  const GridInfo& info = store->grid("crater");
+  // Unwritten chunks read as HDF5's fill value; the point is that every query answers.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int i = 0; i < 2000; ++i) {
+    const double x = info.x0 + u(rng) * static_cast<double>(info.cols - 1) * info.spacingX;
+    const double y = info.y0 - u(rng) * static_cast<double>(info.rows - 1) * info.spacingY;
+    const topo::SurfaceSample s =
+        dem.surface(x, y, topo::Interpolation::Bilinear, topo::NormalFrame::BodyFixed);
+    ASSERT_TRUE(s.status == topo::QueryStatus::Ok || s.status == topo::QueryStatus::Nodata)
+        << x << "," << y;
+    ASSERT_LE(cache->stats().residentBytes, cache->capacityBytes());
+  }
+  EXPECT_GT(cache->stats().loads, 1000u);
 }

@@ -88,4 +88,12 @@ TEST(InMemorySamples, StoresRowMajorAndReadsWindows) {
   s->readWindow(1, 2, 2, 2, w);
   EXPECT_EQ(w, (std::vector<float>{12.0f, 13.0f, 22.0f, 23.0f}));
   EXPECT_THROW(InMemorySamples(2, 2, std::vector<float>(3)), InvalidArgument);
+  // rows × cols wraps to 0 (or to 1): the sizes must not be taken as an empty (or a 1-sample)
+  // grid, which every read would then overrun.
+  constexpr std::size_t k32 = std::size_t{1} << 32;
+  EXPECT_THROW(InMemorySamples(k32, k32, {}), InvalidArgument);
+  EXPECT_THROW(InMemorySamples(k32 + 1, k32 * (k32 - 1) + 1, std::vector<float>(1)),
+               InvalidArgument);
+  EXPECT_THROW((void)InMemorySamples::fromFunction(k32, k32, [](auto, auto) { return 0.0f; }),
+               InvalidArgument);
 }

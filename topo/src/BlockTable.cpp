@@ -3,10 +3,13 @@
 #include <regolith/topo/BlockTable.hpp>
 
 #include <linux/membarrier.h>
+#include <sys/mman.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 
 #include <bit>
+#include <cerrno>
+#include <cstring>
 #include <mutex>
 #include <string>
 
@@ -14,23 +17,43 @@ namespace regolith::topo {
 
 BlockTable::BlockTable(std::size_t rows, std::size_t cols, std::size_t blockRows,
                        std::size_t blockCols)
-    : rows_(rows), cols_(cols), blockRows_(blockRows), blockCols_(blockCols), blocksPerRow_(0) {
+    : rows_(rows), cols_(cols), blockRows_(blockRows), blockCols_(blockCols) {
+  const auto sizes = [&] {
+    return core::number(rows) + " x " + core::number(cols) + " samples in blocks of " +
+           core::number(blockRows) + " x " + core::number(blockCols);
+  };
   if (rows == 0 || cols == 0 || blockRows == 0 || blockCols == 0) {
-    throw InvalidArgument("topo::BlockTable(): " + core::number(rows) + " x " + core::number(cols) +
-                          " samples in blocks of " + core::number(blockRows) + " x " +
-                          core::number(blockCols) + ", expected every size > 0");
+    throw InvalidArgument("topo::BlockTable(): " + sizes() + ", expected every size > 0");
   }
-  blocksPerRow_ = (cols + blockCols - 1) / blockCols;
+  blocksPerRow_ = cols / blockCols + (cols % blockCols != 0 ? 1 : 0);
+  blocksPerCol_ = rows / blockRows + (rows % blockRows != 0 ? 1 : 0);
   pow2_ = std::has_single_bit(blockRows) && std::has_single_bit(blockCols);
   if (pow2_) {
     rowShift_ = static_cast<unsigned>(std::countr_zero(blockRows));
     colShift_ = static_cast<unsigned>(std::countr_zero(blockCols));
   }
-  const std::size_t n = ((rows + blockRows - 1) / blockRows) * blocksPerRow_;
-  slots_ = std::make_unique<Slot[]>(n);
-  for (std::size_t i = 0; i < n; ++i) slots_[i].store(nullptr, std::memory_order_relaxed);
-  hints_ = std::make_unique<Hint[]>(n);
+  static_assert(kMaxBlocks * sizeof(Entry) <= kMaxReservedBytes);
+  std::size_t blocks = 0, bytes = 0;
+  if (__builtin_mul_overflow(blocksPerRow_, blocksPerCol_, &blocks) ||
+      __builtin_mul_overflow(blocks, sizeof(Entry), &bytes) || bytes > kMaxReservedBytes) {
+    throw InvalidArgument(
+        "topo::BlockTable(): " + sizes() + " need " +
+        core::number(static_cast<double>(blocksPerRow_) * static_cast<double>(blocksPerCol_)) +
+        " blocks, expected at most " + core::number(kMaxBlocks) + " (use larger blocks)");
+  }
+  // Zero pages on demand: see the class comment.
+  void* p = mmap(nullptr, bytes, PROT_READ | PROT_WRITE,
+                 MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+  if (p == MAP_FAILED) {
+    const int err = errno;
+    throw Error("topo::BlockTable(): " + sizes() + ": could not reserve " + core::number(bytes) +
+                " bytes of address space (" + std::strerror(err) + ")");
+  }
+  entries_ = static_cast<Entry*>(p);
+  mappedBytes_ = bytes;
 }
+
+BlockTable::~BlockTable() { munmap(entries_, mappedBytes_); }
 
 namespace hazard {
 namespace {

@@ -114,7 +114,7 @@ bool straddlingBilinear(const ResidentBilinear& f, const BlockTable& table, std:
   std::array<double, 4> s{};           // samples (r, c), (r, c + 1), (r + 1, c), (r + 1, c + 1)
   for (std::size_t k = 4; k-- > 0;) {  // (r, c) last: its block stays protected
     const std::size_t sr = r + k / 2, sc = c + k % 2;
-    const BlockTable::Slot& slot = table.slot(sr, sc);
+    const BlockTable::Slot slot = table.slot(sr, sc);
     const PublishedBlock* b = slot.load(std::memory_order_acquire);
     if (b == nullptr) return false;
     if (rec->ptr.load(std::memory_order_relaxed) != b) {

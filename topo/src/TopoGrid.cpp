@@ -94,7 +94,8 @@ void SampleSource::readWindow(std::size_t row0, std::size_t col0, std::size_t nr
 
 InMemorySamples::InMemorySamples(std::size_t rows, std::size_t cols, std::vector<float> data)
     : rows_(rows), cols_(cols), data_(std::move(data)) {
-  if (rows == 0 || cols == 0 || data_.size() != rows * cols) {
+  std::size_t n = 0;
+  if (rows == 0 || cols == 0 || __builtin_mul_overflow(rows, cols, &n) || data_.size() != n) {
     throw InvalidArgument("InMemorySamples(): " + core::number(data_.size()) + " samples for a " +
                           core::number(rows) + "x" + core::number(cols) +
                           " grid, expected rows*cols > 0");
@@ -103,7 +104,12 @@ InMemorySamples::InMemorySamples(std::size_t rows, std::size_t cols, std::vector
 
 std::shared_ptr<InMemorySamples> InMemorySamples::fromFunction(
     std::size_t rows, std::size_t cols, const std::function<float(std::size_t, std::size_t)>& f) {
-  std::vector<float> data(rows * cols);
+  std::size_t n = 0;
+  if (__builtin_mul_overflow(rows, cols, &n)) {
+    throw InvalidArgument("InMemorySamples::fromFunction(): a " + core::number(rows) + "x" +
+                          core::number(cols) + " grid, expected rows*cols below 2^64");
+  }
+  std::vector<float> data(n);
   for (std::size_t r = 0; r < rows; ++r) {
     for (std::size_t c = 0; c < cols; ++c) data[r * cols + c] = f(r, c);
   }

@@ -46,6 +46,24 @@ struct HeightStatistics {
   std::uint64_t validSamples = 0;
 };
 
+/// The most rows, and the most columns, a grid may have: 2^31 (2,147,483,648), far above
+/// the JPL paper's 100K × 100K and LOLA's 184,320 × 92,160 at 512 px/deg. Stores that
+/// declare more are refused when opened and when written (docs/store-format.md), so every
+/// product of sizes in the reader (samples of a level, patches of a grid, bytes of a
+/// window) fits 64 bits with room to spare.
+inline constexpr std::size_t kMaxGridSide = std::size_t{1} << 31;
+/// The most patches level 0 of a grid may have: 2^35 (34 billion; a 2^31 × 2^31 grid needs
+/// patches of 256 × 512 samples or more). The pager's block table reserves 24 bytes of
+/// address space per patch (topo/BlockTable.hpp), 768 GiB at this limit, touched only where
+/// patches are loaded.
+inline constexpr std::size_t kMaxPatchesPerGrid = std::size_t{1} << 35;
+/// The patches of level 0 of a grid of rows × cols samples in patchRows × patchCols patches
+/// (sizes up to kMaxGridSide, patch sizes > 0).
+[[nodiscard]] constexpr std::size_t patchCount(std::size_t rows, std::size_t cols,
+                                               std::size_t patchRows, std::size_t patchCols) {
+  return ((rows + patchRows - 1) / patchRows) * ((cols + patchCols - 1) / patchCols);
+}
+
 /// One grid's configuration. Sample (row, col) of level 0 sits at (x0 + col·dx,
 /// y0 − row·dy) (docs/grid-convention.md); for a planet x is longitude and y latitude in
 /// degrees. Level k has ⌈rows/2^k⌉ × ⌈cols/2^k⌉ samples with spacing 2^k·dx, its sample

@@ -54,21 +54,41 @@ struct PublishedBlock {
 
 /// The resident blocks of one source, one slot per aligned blockRows × blockCols block.
 /// Readers: find(). Writers (the cache, under its own lock): publish() and retract().
+///
+/// Memory: the slots are one anonymous mapping of the whole table, reserved without backing
+/// (MAP_NORESERVE), so the operating system gives a page (170 slots) only when a block in it
+/// is first published: a table costs nothing at construction and grows with the area ever
+/// paged, 24 bytes per block of it, not with the grid (a 2^20 × 2^20 grid in 16 × 8 patches
+/// would otherwise take 192 GiB up front). Why not a radix tree: its extra dependent loads
+/// on every block switch would slow random queries, and the kernel's lazy zero pages give
+/// the same sparseness with none.
 class BlockTable {
  public:
-  /// Throws InvalidArgument for zero sizes.
+  /// The most bytes of address space one table may reserve (2^40, 1 TiB; the table of a
+  /// 2^31 × 2^31 grid in 64 × 64 patches takes 24 GiB).
+  static constexpr std::size_t kMaxReservedBytes = std::size_t{1} << 40;
+  /// The most blocks a table may hold (24 bytes of address space each).
+  static constexpr std::size_t kMaxBlocks = kMaxReservedBytes / 24;
+
+  /// Throws InvalidArgument for zero sizes or a table that would reserve more than
+  /// kMaxReservedBytes, and Error if the address space cannot be reserved.
   BlockTable(std::size_t rows, std::size_t cols, std::size_t blockRows, std::size_t blockCols);
+  ~BlockTable();
+  BlockTable(const BlockTable&) = delete;
+  BlockTable& operator=(const BlockTable&) = delete;
 
   [[nodiscard]] std::size_t rows() const noexcept { return rows_; }
   [[nodiscard]] std::size_t cols() const noexcept { return cols_; }
   [[nodiscard]] std::size_t blockRows() const noexcept { return blockRows_; }
   [[nodiscard]] std::size_t blockCols() const noexcept { return blockCols_; }
 
-  using Slot = std::atomic<const PublishedBlock*>;
+  /// An atomic view of one slot (the slots are plain pointers in zero-filled pages, so they
+  /// are accessed through std::atomic_ref).
+  using Slot = std::atomic_ref<const PublishedBlock*>;
   /// The slot of the block holding sample (r, c); load it with acquire. Requires
   /// r < rows(), c < cols().
-  [[nodiscard]] const Slot& slot(std::size_t r, std::size_t c) const noexcept {
-    return slots_[index(r, c)];
+  [[nodiscard]] Slot slot(std::size_t r, std::size_t c) const noexcept {
+    return Slot(entries_[index(r, c)].block);
   }
   /// The published block holding sample (r, c), or null. Requires r < rows(), c < cols().
   [[nodiscard]] const PublishedBlock* find(std::size_t r, std::size_t c) const noexcept {
@@ -76,20 +96,20 @@ class BlockTable {
   }
   /// Whether (blockRow, blockCol) names a block of the table.
   [[nodiscard]] bool hasBlock(std::size_t blockRow, std::size_t blockCol) const noexcept {
-    return blockRow * blockRows_ < rows_ && blockCol < blocksPerRow_;
+    return blockRow < blocksPerCol_ && blockCol < blocksPerRow_;
   }
   /// Publishes block (blockRow, blockCol), which must be complete (data and geometry).
   void publish(std::size_t blockRow, std::size_t blockCol, const PublishedBlock* block) noexcept {
-    const std::size_t i = blockRow * blocksPerRow_ + blockCol;
-    hints_[i].stride.store(block->stride, std::memory_order_relaxed);
-    hints_[i].data.store(block->data, std::memory_order_relaxed);
-    slots_[i].store(block, std::memory_order_release);
+    Entry& e = entries_[blockRow * blocksPerRow_ + blockCol];
+    std::atomic_ref(e.hintStride).store(block->stride, std::memory_order_relaxed);
+    std::atomic_ref(e.hintData).store(block->data, std::memory_order_relaxed);
+    Slot(e.block).store(block, std::memory_order_release);
   }
   /// Removes block (blockRow, blockCol); readers may still use it until it is reclaimed.
   void retract(std::size_t blockRow, std::size_t blockCol) noexcept {
-    const std::size_t i = blockRow * blocksPerRow_ + blockCol;
-    hints_[i].data.store(nullptr, std::memory_order_relaxed);
-    slots_[i].store(nullptr, std::memory_order_seq_cst);
+    Entry& e = entries_[blockRow * blocksPerRow_ + blockCol];
+    std::atomic_ref(e.hintData).store(nullptr, std::memory_order_relaxed);
+    Slot(e.block).store(nullptr, std::memory_order_seq_cst);
   }
 
   /// Asks the processor to fetch the bilinear cell of sample (r, c) (rows r and r + 1) and
@@ -101,24 +121,27 @@ class BlockTable {
   void prefetchCell(std::size_t r, std::size_t c) const noexcept {
     const std::size_t br = pow2_ ? r >> rowShift_ : r / blockRows_;
     const std::size_t bc = pow2_ ? c >> colShift_ : c / blockCols_;
-    const std::size_t i = br * blocksPerRow_ + bc;
-    const float* data = hints_[i].data.load(std::memory_order_relaxed);
+    Entry& e = entries_[br * blocksPerRow_ + bc];
+    const float* data = std::atomic_ref(e.hintData).load(std::memory_order_relaxed);
     if (data == nullptr) return;
-    const std::size_t stride = hints_[i].stride.load(std::memory_order_relaxed);
+    const std::size_t stride = std::atomic_ref(e.hintStride).load(std::memory_order_relaxed);
     // Integer arithmetic: the pointer may be stale, so no pointer arithmetic on it.
     const std::uintptr_t p =
         reinterpret_cast<std::uintptr_t>(data) +
         ((r - br * blockRows_) * stride + (c - bc * blockCols_)) * sizeof(float);
     __builtin_prefetch(reinterpret_cast<const void*>(p));                           // NOLINT
     __builtin_prefetch(reinterpret_cast<const void*>(p + stride * sizeof(float)));  // NOLINT
-    __builtin_prefetch(slots_[i].load(std::memory_order_relaxed));
+    __builtin_prefetch(Slot(e.block).load(std::memory_order_relaxed));
   }
 
  private:
-  /// Copies of a published block's data pointer and row stride, for prefetchCell().
-  struct Hint {
-    std::atomic<const float*> data{nullptr};
-    std::atomic<std::size_t> stride{0};
+  /// One block's slot, with copies of its data pointer and row stride for prefetchCell().
+  /// Plain members (all zero = empty) accessed through std::atomic_ref, so that the zero
+  /// pages of the mapping are valid entries without being written.
+  struct Entry {
+    const PublishedBlock* block;
+    const float* hintData;
+    std::size_t hintStride;
   };
 
   /// The slot index of sample (r, c). Shifts for power-of-two blocks (the default 256): a
@@ -130,11 +153,11 @@ class BlockTable {
     return (r / blockRows_) * blocksPerRow_ + c / blockCols_;
   }
 
-  std::size_t rows_, cols_, blockRows_, blockCols_, blocksPerRow_;
+  std::size_t rows_, cols_, blockRows_, blockCols_, blocksPerRow_ = 0, blocksPerCol_ = 0;
   bool pow2_ = false;                     // both block sizes are powers of two
   unsigned rowShift_ = 0, colShift_ = 0;  // their log2 when pow2_
-  std::unique_ptr<Slot[]> slots_;
-  std::unique_ptr<Hint[]> hints_;
+  Entry* entries_ = nullptr;              // the mapping (mutable through atomic_ref)
+  std::size_t mappedBytes_ = 0;
 };
 
 /// Hazard records: one per thread, process-wide (the hazard domain is per-process

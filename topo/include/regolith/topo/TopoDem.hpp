@@ -102,7 +102,7 @@ inline const PublishedBlock* enterBlock(const BlockTable& table, std::uint64_t s
                                         std::size_t r, std::size_t c, bool promote) noexcept {
   hazard::Record* rec = hazard::tlFastRecord;
   if (rec == nullptr) return nullptr;
-  const BlockTable::Slot& slot = table.slot(r, c);
+  const BlockTable::Slot slot = table.slot(r, c);
   const PublishedBlock* b = slot.load(std::memory_order_acquire);
   if (b == nullptr) return nullptr;
   constexpr auto relaxed = std::memory_order_relaxed;
