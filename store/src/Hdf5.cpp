@@ -1,7 +1,17 @@
 #include "Hdf5.hpp"
 
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <array>
+#include <cerrno>
 #include <charconv>
+#include <chrono>
+#include <cstring>
 
 namespace regolith::store::hdf5 {
 
@@ -196,6 +206,101 @@ std::size_t readCount(hid_t obj, const char* name, const Context& ctx, const std
   return static_cast<std::size_t>(v);
 }
 
+namespace {
+
+/// The longest text attribute read (16 MiB: provenance JSON is a few kB).
+constexpr std::size_t kMaxStringBytes = std::size_t{16} << 20;
+/// How long a variable-length string read may take before it is taken for a hang.
+constexpr int kStringReadTimeoutMs = 10000;
+
+/// Writes all of `data` to fd (a pipe), or returns false.
+bool writeAll(int fd, const char* data, std::size_t n) {
+  while (n > 0) {
+    const ssize_t w = ::write(fd, data, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return false;
+    data += w;
+    n -= static_cast<std::size_t>(w);
+  }
+  return true;
+}
+
+/// Reads from fd until end of file, kMaxStringBytes + 1 bytes, or the deadline; false on a
+/// timeout.
+bool readUntilEof(int fd, std::string& out, std::chrono::steady_clock::time_point deadline) {
+  std::array<char, 4096> buf{};
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) return false;
+    pollfd pfd{fd, POLLIN, 0};
+    const int ready = ::poll(&pfd, 1, static_cast<int>(left.count()));
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready <= 0) return false;  // the deadline passed, or poll() failed
+    const ssize_t r = ::read(fd, buf.data(), buf.size());
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) return true;
+    out.append(buf.data(), static_cast<std::size_t>(r));
+    if (out.size() > kMaxStringBytes) return true;
+  }
+}
+
+}  // namespace
+
+std::string readVariableStringBounded(hid_t attr, hid_t mem, const Context& ctx,
+                                      const std::string& owner, const char* name) {
+  // Why a child process: a variable-length string lives in HDF5's global heap, which has no
+  // checksum, and HDF5 1.10 crashes (a huge object size, in H5HG_read) or loops forever (a
+  // free-space entry of size 0) on a damaged one; no HDF5 call validates a heap first.
+  // Stores since format 1.4 write fixed-length strings (inside checksummed object
+  // headers), so only older stores come here. The caller holds the HDF5 lock, so no other
+  // thread of this process is inside HDF5 when it forks; the child reads the attribute,
+  // writes the text to a pipe and exits without running any destructor or atexit handler.
+  const std::string what = "cannot read " + owner + " attribute '" + name + "'";
+  std::array<int, 2> fds{};
+  if (::pipe2(fds.data(), O_CLOEXEC) != 0) {
+    fail(ctx, what + ": pipe(): " + std::strerror(errno));
+  }
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(fds[0]);
+    char* p = nullptr;
+    if (H5Aread(attr, mem, static_cast<void*>(&p)) < 0) ::_exit(2);
+    const bool ok = p == nullptr || writeAll(fds[1], p, std::strlen(p));
+    ::_exit(ok ? 0 : 3);
+  }
+  ::close(fds[1]);
+  if (pid < 0) {
+    ::close(fds[0]);
+    fail(ctx, what + ": fork(): " + std::strerror(errno));
+  }
+  std::string text;
+  const bool finished = readUntilEof(
+      fds[0], text,
+      std::chrono::steady_clock::now() + std::chrono::milliseconds(kStringReadTimeoutMs));
+  ::close(fds[0]);
+  if (!finished) ::kill(pid, SIGKILL);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  const std::string heap =
+      " (a variable-length string, kept in the file's global heap, which has no checksum: "
+      "the heap is damaged)";
+  if (!finished) {
+    fail(ctx, what + ": HDF5 did not finish reading it within " +
+                  std::to_string(kStringReadTimeoutMs / 1000) + " s" + heap);
+  }
+  if (WIFSIGNALED(status)) {
+    fail(ctx, what + ": HDF5 crashed reading it (signal " + std::to_string(WTERMSIG(status)) + ")" +
+                  heap);
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) == 2) fail(ctx, what + heap);
+  if (WEXITSTATUS(status) != 0 || text.size() > kMaxStringBytes) {
+    fail(ctx, what + ": it is longer than " + std::to_string(kMaxStringBytes) + " bytes" + heap);
+  }
+  return text;
+}
+
 std::string readString(hid_t obj, const char* name, const Context& ctx, const std::string& owner) {
   const Lock lock;
   const OpenedAttribute a = openAttribute(obj, name, ctx, owner);
@@ -210,14 +315,14 @@ std::string readString(hid_t obj, const char* name, const Context& ctx, const st
   check(H5Tset_cset(mem.get(), H5Tget_cset(a.type.get())), ctx, what);
   if (variable > 0) {
     check(H5Tset_size(mem.get(), H5T_VARIABLE), ctx, what);
-    char* p = nullptr;
-    check(H5Aread(a.attr.get(), mem.get(), static_cast<void*>(&p)), ctx, what);
-    std::string s = p != nullptr ? std::string(p) : std::string();
-    H5free_memory(p);
-    return s;
+    return readVariableStringBounded(a.attr.get(), mem.get(), ctx, owner, name);
   }
   const std::size_t size = H5Tget_size(a.type.get());
   if (size == 0) failHdf5(ctx, what);
+  if (size > kMaxStringBytes) {
+    fail(ctx, owner + " attribute '" + name + "' is a string of " + std::to_string(size) +
+                  " bytes, expected at most " + std::to_string(kMaxStringBytes));
+  }
   check(H5Tset_size(mem.get(), size), ctx, what);
   check(H5Tset_strpad(mem.get(), H5T_STR_NULLPAD), ctx, what);
   std::string s(size, '\0');
@@ -275,13 +380,17 @@ void writeInt32s(hid_t obj, const char* name, const std::vector<int>& v, const C
 }
 
 void writeString(hid_t obj, const char* name, const std::string& v, const Context& ctx) {
+  // Fixed length (format 1.4): the text lives in the checksummed object header. A
+  // variable-length string lives in HDF5's global heap, which has no checksum, and a damaged
+  // heap crashes or hangs HDF5 1.10 when the attribute is read (readString()).
   const Lock lock;
   const std::string what = std::string("cannot write attribute '") + name + "'";
   const Datatype type(check(H5Tcopy(H5T_C_S1), ctx, what));
-  check(H5Tset_size(type.get(), H5T_VARIABLE), ctx, what);
+  check(H5Tset_size(type.get(), std::max<std::size_t>(v.size(), 1)), ctx, what);
+  check(H5Tset_strpad(type.get(), H5T_STR_NULLPAD), ctx, what);
   check(H5Tset_cset(type.get(), H5T_CSET_UTF8), ctx, what);
-  const char* p = v.c_str();
-  writeAttribute(obj, name, type.get(), type.get(), static_cast<const void*>(&p), 1, true, ctx);
+  const std::string padded = v.empty() ? std::string(1, '\0') : v;
+  writeAttribute(obj, name, type.get(), type.get(), padded.data(), 1, true, ctx);
 }
 
 std::string describeType(hid_t type) {

@@ -136,6 +136,11 @@ void check(herr_t status, const Context& ctx, const std::string& what);
 /// Exactly n integers (integer class).
 [[nodiscard]] std::vector<long long> readIntegers(hid_t obj, const char* name, std::size_t n,
                                                   const Context& ctx, const std::string& owner);
+/// A variable-length string attribute read in a child process under a timeout (the
+/// global heap it lives in has no checksum; see the definition). Call with the HDF5 lock
+/// held; `mem` is a variable-length C string type.
+[[nodiscard]] std::string readVariableStringBounded(hid_t attr, hid_t mem, const Context& ctx,
+                                                    const std::string& owner, const char* name);
 /// A string (fixed or variable length, one element).
 [[nodiscard]] std::string readString(hid_t obj, const char* name, const Context& ctx,
                                      const std::string& owner);

@@ -271,7 +271,7 @@ def test_import_raster_window_bbox_and_body(plane_tif, tmp_path):
     expected = ds.GetRasterBand(1).ReadAsArray()[10:40, 20:60]
     with h5py.File(out, "r") as f:
         np.testing.assert_array_equal(f["grids/w/level0"][...], expected)
-        assert f["grids/w"].attrs["body"] == "Mars"
+        assert f["grids/w"].attrs["body"] == b"Mars"  # fixed-length (format 1.4)
     dem = regolith.open(out)
     assert dem.extent == (520.0, 560.0, 1960.0, 1990.0)
     x, y = np.array([520.5, 559.5]), np.array([1989.5, 1960.5])

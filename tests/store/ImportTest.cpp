@@ -515,7 +515,7 @@ TEST(Import, Nad27UtmGeotiffIsATransverseMercatorDemOnClarke1866WithNodataMissin
   EXPECT_GT(nodata, 0U);
   EXPECT_EQ(rep.missingSamples, nodata);
   // Transverse Mercator needs 1.2; the import's height statistics make it 1.3.
-  EXPECT_EQ(Store::open(scratch("utm.h5")).formatVersion(), (std::array<int, 2>{1, 3}));
+  EXPECT_EQ(Store::open(scratch("utm.h5")).formatVersion(), (std::array<int, 2>{1, 4}));
 }
 
 namespace {
@@ -795,7 +795,7 @@ TEST(ImportTiles, TilesCutWithGdalImportAsOneGridEqualToTheSingleImport) {
     for (const fs::path& t : tiles) EXPECT_EQ(paths.count(t.string()), 1U) << t;
     // Imports store height statistics: format 1.3 (which reads tiles and transverse
     // Mercator too).
-    EXPECT_EQ(b.formatVersion(), (std::array<int, 2>{1, 3}));
+    EXPECT_EQ(b.formatVersion(), (std::array<int, 2>{1, 4}));
     EXPECT_EQ(b.grid(single.info.name).placement.kind, single.info.placement.kind);
   }
 }
@@ -1216,7 +1216,7 @@ TEST(ImportStatistics, TheStoreRecordsMinMaxMeanAndValidCountOfGdalsHeights) {
     EXPECT_EQ(st->max, hi);
     EXPECT_NEAR(st->mean, sum / static_cast<double>(valid),
                 1e-12 * std::abs(sum / static_cast<double>(valid)));
-    EXPECT_EQ(s.formatVersion(), (std::array<int, 2>{1, 3}));
+    EXPECT_EQ(s.formatVersion(), (std::array<int, 2>{1, 4}));
   }
 }
 
@@ -1253,5 +1253,5 @@ TEST(ImportProvenance, TheStoreRecordsSourceFilesDigestsGdalAndTheDecidingLabelF
   ASSERT_EQ(gt.Size(), 6);
   for (int i = 0; i < 6; ++i) EXPECT_EQ(gt[i].ToDouble(), o.gt[static_cast<std::size_t>(i)]);
   EXPECT_NE(root.GetString("crs_wkt").find("3396000"), std::string::npos);  // the sphere
-  EXPECT_EQ(Store::open(scratch("provenance.h5")).formatVersion(), (std::array<int, 2>{1, 3}));
+  EXPECT_EQ(Store::open(scratch("provenance.h5")).formatVersion(), (std::array<int, 2>{1, 4}));
 }

@@ -221,19 +221,18 @@ std::vector<double> rawAttrNumbers(hid_t obj, const char* name) {
   return v;
 }
 
+/// A text attribute as the writer writes it since format 1.4: a fixed-length, NUL-padded UTF-8
+/// string (inside the checksummed object header, not in the global heap).
 std::string rawAttrString(hid_t obj, const char* name) {
   const H5 a(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
   const H5 t(H5Aget_type(a), H5Tclose);
   EXPECT_EQ(H5Tget_class(t), H5T_STRING) << name;
-  EXPECT_GT(H5Tis_variable_str(t), 0) << name;
-  const H5 mem(H5Tcopy(H5T_C_S1), H5Tclose);
-  ok(H5Tset_size(mem, H5T_VARIABLE));
-  ok(H5Tset_cset(mem, H5T_CSET_UTF8));
+  EXPECT_EQ(H5Tis_variable_str(t), 0) << name;
   EXPECT_EQ(H5Tget_cset(t), H5T_CSET_UTF8) << name;
-  char* p = nullptr;
-  ok(H5Aread(a, mem, static_cast<void*>(&p)));
-  std::string s(p);
-  H5free_memory(p);
+  EXPECT_EQ(H5Tget_strpad(t), H5T_STR_NULLPAD) << name;
+  std::string s(H5Tget_size(t), '\0');
+  ok(H5Aread(a, t, s.data()));
+  s.resize(std::strlen(s.c_str()));
   return s;
 }
 
@@ -310,10 +309,10 @@ TEST(StoreWriter, WritesTheDocumentedLayoutReadBackWithTheRawHdf5Api) {
   const H5 root(H5Gopen2(file, "/", H5P_DEFAULT), H5Gclose);
   EXPECT_EQ(rawAttrString(root, "regolith_store"),
             "Regolith terrain store; see docs/store-format.md");
-  EXPECT_EQ(rawAttrNumbers(root, "format_version"), (std::vector<double>{1.0, 0.0}));
+  EXPECT_EQ(rawAttrNumbers(root, "format_version"), (std::vector<double>{1.0, 4.0}));
 
   const H5 g(H5Gopen2(file, "/grids/crater", H5P_DEFAULT), H5Gclose);
-  EXPECT_EQ(rawAttrNumbers(g, "format_version"), (std::vector<double>{1.0, 0.0}));
+  EXPECT_EQ(rawAttrNumbers(g, "format_version"), (std::vector<double>{1.0, 4.0}));
   EXPECT_EQ(rawAttrString(g, "kind"), "dem");
   EXPECT_EQ(rawAttrNumbers(g, "rows"), std::vector<double>{37.0});
   EXPECT_EQ(rawAttrNumbers(g, "cols"), std::vector<double>{53.0});
@@ -914,7 +913,7 @@ TEST(Store, RejectsANewerMajorFormatVersionButAcceptsANewerMinor) {
     rawSetNumbers(root, "format_version", {2.0, 0.0}, H5T_STD_I32LE);
   });
   EXPECT_EQ(openError(p), "store::open(): " + p.string() +
-                              ": the root group has format version 2.0, newer than 1.0 that this "
+                              ": the root group has format version 2.0, newer than 1.4 that this "
                               "library reads; a newer Regolith is needed");
   editRaw(p, [](hid_t f) {
     const H5 root(H5Gopen2(f, "/", H5P_DEFAULT), H5Gclose);
@@ -923,7 +922,7 @@ TEST(Store, RejectsANewerMajorFormatVersionButAcceptsANewerMinor) {
     rawSetNumbers(g, "format_version", {3.0, 1.0}, H5T_STD_I32LE);
   });
   EXPECT_EQ(openError(p), "store::open(): " + p.string() +
-                              ": grid 'moon' has format version 3.1, newer than 1.0 that this "
+                              ": grid 'moon' has format version 3.1, newer than 1.4 that this "
                               "library reads; a newer Regolith is needed");
 }
 
@@ -1363,16 +1362,16 @@ fs::path writeUtmStore(const std::string& file) {
 
 }  // namespace
 
-TEST(StoreWriter, TransverseMercatorPlacementIsWrittenAsDocumentedWithFormat12) {
+TEST(StoreWriter, TransverseMercatorPlacementIsWrittenAsDocumented) {
   const fs::path p = writeUtmStore("utm-layout.h5");
   const H5 file(H5Fopen(p.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
   const H5 root(H5Gopen2(file, "/", H5P_DEFAULT), H5Gclose);
-  // The file needs a 1.2 reader; the grid without the new placement stays 1.0.
-  EXPECT_EQ(rawAttrNumbers(root, "format_version"), (std::vector<double>{1.0, 2.0}));
+  // Every grid is written as 1.4 (fixed-length strings); the placement needs a 1.2 reader.
+  EXPECT_EQ(rawAttrNumbers(root, "format_version"), (std::vector<double>{1.0, 4.0}));
   const H5 other(H5Gopen2(file, "/grids/crater", H5P_DEFAULT), H5Gclose);
-  EXPECT_EQ(rawAttrNumbers(other, "format_version"), (std::vector<double>{1.0, 0.0}));
+  EXPECT_EQ(rawAttrNumbers(other, "format_version"), (std::vector<double>{1.0, 4.0}));
   const H5 g(H5Gopen2(file, "/grids/utm", H5P_DEFAULT), H5Gclose);
-  EXPECT_EQ(rawAttrNumbers(g, "format_version"), (std::vector<double>{1.0, 2.0}));
+  EXPECT_EQ(rawAttrNumbers(g, "format_version"), (std::vector<double>{1.0, 4.0}));
   EXPECT_EQ(rawAttrString(g, "placement"), "transverse_mercator");
   EXPECT_EQ(rawAttrNumbers(g, "lon_centre_deg"), std::vector<double>{-123.0});
   EXPECT_EQ(rawAttrNumbers(g, "lat_origin_deg"), std::vector<double>{0.5});
@@ -1391,7 +1390,7 @@ TEST(StoreWriter, TransverseMercatorPlacementIsWrittenAsDocumentedWithFormat12) 
 TEST(Store, TransverseMercatorPlacementRoundTripsAndPlacesSamplesLikeTheOriginal) {
   const fs::path p = writeUtmStore("utm-roundtrip.h5");
   const Store s = Store::open(p);
-  EXPECT_EQ(s.formatVersion(), (std::array<int, 2>{1, 2}));
+  EXPECT_EQ(s.formatVersion(), (std::array<int, 2>{1, 4}));
   const GridInfo want = utmInfo("utm");
   const GridInfo& g = s.grid("utm");
   EXPECT_EQ(g.placement.kind, PlacementInfo::Kind::TransverseMercator);
@@ -1543,4 +1542,104 @@ TEST(Store, AGridOfTwoToTheFortySamplesOpensAndPagesWithinItsBudget) {
     ASSERT_LE(cache->stats().residentBytes, cache->capacityBytes());
   }
   EXPECT_GT(cache->stats().loads, 1000u);
+}
+
+// ---- Stores before format 1.4: variable-length strings in the unchecksummed global heap -------
+
+namespace {
+
+void rawSetVlenString(hid_t obj, const char* name, const std::string& v) {
+  if (H5Aexists(obj, name) > 0) ok(H5Adelete(obj, name));
+  const H5 t(H5Tcopy(H5T_C_S1), H5Tclose);
+  ok(H5Tset_size(t, H5T_VARIABLE));
+  ok(H5Tset_cset(t, H5T_CSET_UTF8));
+  const H5 s(H5Screate(H5S_SCALAR), H5Sclose);
+  const H5 a(H5Acreate2(obj, name, t, s, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+  const char* p = v.c_str();
+  ok(H5Awrite(a, t, static_cast<const void*>(&p)));
+}
+
+/// Rewrites the standard store as stores before format 1.4 were written: every text
+/// attribute a variable-length string (kept in HDF5's global heap), versions 1.0.
+void makePre14(const fs::path& p) {
+  editRaw(p, [](hid_t f) {
+    const auto rewrite = [&](const char* path, std::initializer_list<const char*> names) {
+      const H5 g(H5Gopen2(f, path, H5P_DEFAULT), H5Gclose);
+      for (const char* n : names) rawSetVlenString(g, n, rawAttrString(g, n));
+      rawSetNumbers(g, "format_version", {1.0, 0.0}, H5T_STD_I32LE);
+    };
+    rewrite("/", {"regolith_store"});
+    rewrite("/grids/crater",
+            {"kind", "units", "sample_type", "body", "latitude_type", "placement"});
+    rewrite("/grids/moon", {"kind", "units", "sample_type", "body", "latitude_type"});
+  });
+}
+
+/// The offset in `bytes` of the size field of global-heap object `index` (0: the free space)
+/// of the file's first global heap collection ("GCOL"; HDF5 file format spec, III.E).
+std::size_t heapObjectSizeOffset(const std::string& bytes, std::uint16_t index) {
+  const std::size_t gcol = bytes.find("GCOL");
+  EXPECT_NE(gcol, std::string::npos);
+  std::uint64_t collectionSize = 0;
+  std::memcpy(&collectionSize, bytes.data() + gcol + 8, 8);
+  for (std::size_t off = gcol + 16; off + 16 <= gcol + collectionSize;) {
+    std::uint16_t idx = 0;
+    std::uint64_t size = 0;
+    std::memcpy(&idx, bytes.data() + off, 2);
+    std::memcpy(&size, bytes.data() + off + 8, 8);
+    if (idx == index) return off + 8;
+    off += 16 + (size + 7) / 8 * 8;
+  }
+  ADD_FAILURE() << "no global heap object " << index;
+  return 0;
+}
+
+void patchU64(const fs::path& p, std::size_t offset, std::uint64_t v) {
+  std::string bytes = fileBytes(p);
+  std::memcpy(bytes.data() + offset, &v, 8);
+  writeBytes(p, bytes);
+}
+
+}  // namespace
+
+TEST(Store, OpensStoresWrittenBeforeFormat14WithVariableLengthStrings) {
+  const fs::path fresh = writeStandardStore("fresh14.h5");
+  const fs::path p = writeStandardStore("pre14.h5");
+  makePre14(p);
+  const Store old = Store::open(p);
+  const Store now = Store::open(fresh);
+  EXPECT_EQ(old.formatVersion(), (std::array<int, 2>{1, 0}));
+  for (const std::string name : {"crater", "moon"}) {
+    const GridInfo& a = now.grid(name);
+    const GridInfo& b = old.grid(name);
+    EXPECT_EQ(a.kind, b.kind);
+    EXPECT_EQ(a.bodyName, b.bodyName);
+    EXPECT_EQ(a.units, b.units);
+    EXPECT_EQ(a.latitudeType, b.latitudeType);
+    EXPECT_EQ(a.placement.kind, b.placement.kind);
+    expectSameHeights(readLevel(old, name, 0), readLevel(now, name, 0), name);
+  }
+}
+
+TEST(Store, ADamagedGlobalHeapInAnOldStoreIsAnErrorNotACrashOrAHang) {
+  // HDF5 1.10 crashes in H5HG_read on a heap object whose size is huge, and loops forever on
+  // a free-space entry of size 0. The reader reads variable-length strings in a child process
+  // under a timeout, so either damage is an error naming the attribute.
+  const fs::path p = writeStandardStore("heap.h5");
+  makePre14(p);
+  const std::string good = fileBytes(p);
+  // Object 1 is the root's marker, object 2 the first one read: grid 'crater' kind.
+  patchU64(p, heapObjectSizeOffset(good, 2), std::uint64_t{1} << 62);
+  std::string e = openError(p);
+  EXPECT_EQ(e, "store::open(): " + p.string() +
+                   ": cannot read grid 'crater' attribute 'kind': HDF5 crashed reading it (signal "
+                   "11) (a variable-length string, kept in the file's global heap, which has no "
+                   "checksum: the heap is damaged)");
+  writeBytes(p, good);
+  patchU64(p, heapObjectSizeOffset(good, 0), 0);
+  e = openError(p);  // without the bound, ctest's timeout would end this test
+  EXPECT_EQ(e, "store::open(): " + p.string() +
+                   ": cannot read grid 'crater' attribute 'kind': HDF5 did not finish reading it "
+                   "within 10 s (a variable-length string, kept in the file's global heap, which "
+                   "has no checksum: the heap is damaged)");
 }

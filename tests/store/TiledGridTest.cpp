@@ -557,9 +557,8 @@ TEST(TiledGridErrors, AnExternalTileMustBeAPlainGrid) {
                            ", which is itself tiled; expected a plain grid"));
 }
 
-TEST(TiledGridErrors, UntiledStoresKeepFormatVersionOneZero) {
-  // Stores without tiled grids are written exactly as before (format 1.0); a tiled grid and
-  // its root say 1.1.
+TEST(TiledGridErrors, ATiledGridAndItsRootSayFormatOneFour) {
+  // Tiles need a 1.1 reader; every grid is written as 1.4 (fixed-length strings).
   const fs::path p = internalMosaic().path;
   const hid_t f = H5Fopen(p.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(f, 0);
@@ -569,7 +568,7 @@ TEST(TiledGridErrors, UntiledStoresKeepFormatVersionOneZero) {
     int v[2] = {0, 0};
     ASSERT_GE(H5Aread(a, H5T_NATIVE_INT, v), 0);
     EXPECT_EQ(v[0], 1);
-    EXPECT_EQ(v[1], 1);
+    EXPECT_EQ(v[1], 4);
     H5Aclose(a);
   }
   H5Fclose(f);

@@ -112,6 +112,13 @@ def mean2x2(fine):
         return np.where(n > 0, s / np.maximum(n, 1), np.nan)
 
 
+def text(v, what):
+    """A text attribute as docs/store-format.md specifies it since format 1.4: a fixed-length
+    UTF-8 string (h5py reads those as numpy bytes; a variable-length one would come as str)."""
+    check(isinstance(v, (bytes, np.bytes_)), f"{what}: {v!r} is not a fixed-length string")
+    return bytes(v).rstrip(b"\0").decode("utf-8")
+
+
 # ---- checks ----------------------------------------------------------------------------------
 
 def check_common(g, name, kind, rows, cols, x0, y0, spacing, patch, levels, nodata, body, a, b,
@@ -120,20 +127,20 @@ def check_common(g, name, kind, rows, cols, x0, y0, spacing, patch, levels, noda
         check(key in g.attrs, f"{name}: attribute {key} missing")
         return g.attrs[key]
 
-    check(list(attr("format_version")) == [1, 0], f"{name}: format_version")
-    check(attr("kind") == kind, f"{name}: kind {attr('kind')!r}")
+    check(list(attr("format_version")) == [1, 4], f"{name}: format_version")
+    check(text(attr("kind"), "kind") == kind, f"{name}: kind")
     check(int(attr("rows")) == rows and int(attr("cols")) == cols, f"{name}: rows/cols")
     check(float(attr("x0")) == x0 and float(attr("y0")) == y0, f"{name}: x0/y0")
     check([float(v) for v in attr("spacing")] == spacing, f"{name}: spacing")
-    check(attr("units") == "m", f"{name}: units")
-    check(attr("sample_type") == "float32", f"{name}: sample_type")
+    check(text(attr("units"), "units") == "m", f"{name}: units")
+    check(text(attr("sample_type"), "sample_type") == "float32", f"{name}: sample_type")
     check(float(attr("scale")) == 1.0 and float(attr("offset")) == 0.0, f"{name}: scale/offset")
     nd = float(attr("nodata"))
     check((np.isnan(nd) and nodata is None) or nd == nodata, f"{name}: nodata {nd}")
-    check(attr("body") == body, f"{name}: body")
+    check(text(attr("body"), "body") == body, f"{name}: body")
     check(float(attr("equatorial_radius")) == a and float(attr("polar_radius")) == b,
           f"{name}: radii")
-    check(attr("latitude_type") == lat_type, f"{name}: latitude_type")
+    check(text(attr("latitude_type"), "latitude_type") == lat_type, f"{name}: latitude_type")
     check(int(attr("levels")) == levels, f"{name}: levels {attr('levels')}")
     check([int(v) for v in attr("patch_shape")] == patch, f"{name}: patch_shape")
     for k in range(levels):
@@ -154,7 +161,7 @@ def check_pyramid(g, name, levels):
 def check_victoria(g):
     check_common(g, "victoria", "dem", 301, 203, -101.0, 300.0, [1.0, 2.0], [64, 48], 4,
                  -32768.0, "Mars", 3396190.0, 3376200.0, "planetodetic")
-    check(g.attrs["placement"] == "local_tangent_plane", "victoria: placement")
+    check(text(g.attrs["placement"], "placement") == "local_tangent_plane", "victoria: placement")
     for key, want in [("origin_lat_deg", -2.05), ("origin_lon_deg", -5.5),
                       ("origin_height", -1400.0), ("heading_deg", 0.0)]:
         check(float(g.attrs[key]) == want, f"victoria: {key}")
@@ -202,7 +209,7 @@ def check_mars(g):
 def check_tilt(g):
     check_common(g, "tilt", "dem", 97, 131, 1000.0, -2000.0, [5.0, 5.0], [64, 48], 3, None,
                  "Moon", 1737400.0, 1737400.0, "planetocentric")
-    check(g.attrs["placement"] == "polar_stereographic", "tilt: placement")
+    check(text(g.attrs["placement"], "placement") == "polar_stereographic", "tilt: placement")
     check(int(g.attrs["pole"]) == -1, "tilt: pole")
     check(float(g.attrs["lat_true_scale_deg"]) == -90.0, "tilt: lat_true_scale_deg")
     check("scale_factor" not in g.attrs, "tilt: only one of lat_true_scale_deg/scale_factor")
@@ -240,8 +247,8 @@ def read_level0(path, grid, r0, c0, nr, nc):
             if a0 >= a1 or b0 >= b1:
                 continue
             if "external_file" in t:
-                ext = os.path.join(os.path.dirname(path), t["external_file"])
-                h = read_level0(ext, t["external_grid"], a0 - tr0, b0 - tc0, a1 - a0, b1 - b0)
+                ext = os.path.join(os.path.dirname(path), text(t["external_file"], "external_file"))
+                h = read_level0(ext, text(t["external_grid"], "external_grid"), a0 - tr0, b0 - tc0, a1 - a0, b1 - b0)
             else:
                 a = g[f"tiles/{i}/level0"][a0 - tr0:a1 - tr0, b0 - tc0:b1 - tc0].astype(np.float64)
                 nodata = float(g.attrs.get("nodata", np.nan))
@@ -258,13 +265,13 @@ def mosaic_height(r, c):
 
 def check_tiled(path):
     with h5py.File(path, "r") as f:
-        check(list(f.attrs["format_version"]) == [1, 1], "tiled: root format_version")
+        check(list(f.attrs["format_version"]) == [1, 4], "tiled: root format_version")
         g = f["grids/mosaic"]
-        check(list(g.attrs["format_version"]) == [1, 1], "tiled: grid format_version")
+        check(list(g.attrs["format_version"]) == [1, 4], "tiled: grid format_version")
         check(int(g.attrs["tile_count"]) == 3, "tiled: tile_count")
         check("level0" not in g, "tiled: no level0 dataset")
         check(g["tiles/0/level0"].chunks == (64, 48), "tiled: tile 0 chunks")
-        check(g["tiles/2"].attrs["external_file"] == "tiled_ext.h5", "tiled: external_file")
+        check(text(g["tiles/2"].attrs["external_file"], "external_file") == "tiled_ext.h5", "tiled: external_file")
         rows, cols = int(g.attrs["rows"]), int(g.attrs["cols"])
         R, C = np.meshgrid(np.arange(rows), np.arange(cols), indexing="ij")
         want = mosaic_height(R, C)
@@ -290,11 +297,11 @@ def check_utm(path):
     from osgeo import osr
 
     with h5py.File(path, "r") as f:
-        check(list(f.attrs["format_version"]) == [1, 2], "utm: root format_version")
+        check(list(f.attrs["format_version"]) == [1, 4], "utm: root format_version")
         g = f["grids/utm"]
         a = g.attrs
-        check(list(a["format_version"]) == [1, 2], "utm: grid format_version")
-        check(a["placement"] == "transverse_mercator", "utm: placement")
+        check(list(a["format_version"]) == [1, 4], "utm: grid format_version")
+        check(text(a["placement"], "placement") == "transverse_mercator", "utm: placement")
         check(float(a["scale_factor"]) == 0.9996, "utm: scale_factor")
         check(float(a["false_northing"]) == 10000000.0, "utm: false_northing")
         for absent in ("pole", "lat_true_scale_deg", "projection_radius", "origin_lat_deg"):
@@ -343,8 +350,8 @@ def main():
             check(sorted(os.listdir(tmp)) == ["fixture.h5", "tiled.h5", "tiled_ext.h5", "utm.h5"],
                   "no temporary file left")
             with h5py.File(path, "r") as f:
-                check(f.attrs["regolith_store"].startswith("Regolith terrain store"), "marker")
-                check(list(f.attrs["format_version"]) == [1, 0], "root format_version")
+                check(text(f.attrs["regolith_store"], "marker").startswith("Regolith terrain store"), "marker")
+                check(list(f.attrs["format_version"]) == [1, 4], "root format_version")
                 check(sorted(f["grids"].keys()) == ["mars", "tilt", "victoria"], "grid names")
                 for name in ("victoria", "mars", "tilt"):
                     g = f["grids"][name]

@@ -143,10 +143,17 @@ def level0(path, grid):
         return f[f"grids/{grid}/level0"][...].astype(np.float64)
 
 
+def plain_attrs(obj):
+    """An HDF5 object's attributes, text as str: since format 1.4 the store writes fixed-length
+    strings, which h5py reads as bytes (stores written by h5py itself hold str)."""
+    return {k: (v.decode() if isinstance(v, bytes) else v)
+            for k, v in ((k, obj.attrs[k]) for k in obj.attrs)}
+
+
 def attrs(path, grid):
     with h5py.File(path, "r") as f:
         g = f[f"grids/{grid}"]
-        return {k: g.attrs[k] for k in g.attrs}
+        return plain_attrs(g)
 
 
 # ---- --help ---------------------------------------------------------------------------------
@@ -292,7 +299,7 @@ def check_info_against_h5py(path, info):
         assert [g["name"] for g in info["grids"]] == names
         for g in info["grids"]:
             h = f["grids"][g["name"]]
-            a = h.attrs
+            a = plain_attrs(h)
             assert g["kind"] == a["kind"]
             assert g["rows"] == int(a["rows"]) and g["cols"] == int(a["cols"])
             assert g["x0"] == float(a["x0"]) and g["y0"] == float(a["y0"])
@@ -354,14 +361,14 @@ def test_info_json_matches_h5py(victoria, planet, h5py_store, fixture_stores):
         check_info_against_h5py(path, info)
     info = json.loads(run("info", fixture_stores[1], "--json").stdout)
     assert any(g["tiled"] for g in info["grids"])  # the tiled fixture is reported as tiled
-    assert info["format_version"] == [1, 1]
+    assert info["format_version"] == [1, 4]
 
 
 def test_info_text(victoria, planet):
     text = run("info", victoria).stdout
     for needle in ["grid 'victoria'", "241 rows x 241 cols", "5 x 5 m", "local_tangent_plane",
                    "origin lat -2.05 deg, lon -5.5 deg", "planetodetic", "tiled:          no",
-                   "nodata:         none", "patch:          64 x 64", "format version: 1.0"]:
+                   "nodata:         none", "patch:          64 x 64", "format version: 1.4"]:
         assert needle in text, needle
     text = run("info", planet).stdout
     for needle in ["grid 'mars'", "60 rows x 120 cols", "3 x 3 deg", "planetocentric",
@@ -788,7 +795,7 @@ def test_info_statistics_corners_and_ground_size(work):
     out = work / "stats.h5"
     run("import", src, "--out", out)
     info = json.loads(run("info", out, "--json").stdout)
-    assert info["format_version"] == [1, 3]
+    assert info["format_version"] == [1, 4]
     g = info["grids"][0]
     check_info_against_h5py(out, info)
     # The statistics stored at import are numpy's over the stored level 0.
@@ -923,15 +930,15 @@ def test_utm_import_info_and_lonlat_query(work):
     out = work / "utm.h5"
     run("import", src, "--out", out)
     info = json.loads(run("info", out, "--json").stdout)
-    assert info["format_version"] == [1, 3]  # 1.2 for transverse Mercator, 1.3: statistics
+    assert info["format_version"] == [1, 4]  # 1.2: transverse Mercator, 1.3: statistics
     g = info["grids"][0]
     assert g["placement"] == {"kind": "transverse_mercator", "lon_centre_deg": -123.0,
                               "lat_origin_deg": 0.0, "scale_factor": 0.9996,
                               "false_easting": 500000.0, "false_northing": 0.0}
     with h5py.File(out, "r") as f:
         a = f["grids/dem_nodata"].attrs
-        assert list(a["format_version"]) == [1, 3] and list(f.attrs["format_version"]) == [1, 3]
-        assert a["placement"] == "transverse_mercator"
+        assert list(a["format_version"]) == [1, 4] and list(f.attrs["format_version"]) == [1, 4]
+        assert a["placement"] == b"transverse_mercator"  # a fixed-length string (format 1.4)
         for key in ("lon_centre_deg", "lat_origin_deg", "scale_factor", "false_easting",
                     "false_northing"):
             assert float(a[key]) == g["placement"][key], key

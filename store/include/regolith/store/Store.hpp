@@ -30,8 +30,10 @@ class StoreError : public regolith::Error {
 };
 
 /// Format version written by this library; a store with a newer major version is refused.
+/// Since 1.4 every text attribute is a fixed-length string (docs/store-format.md), so every
+/// grid written is at least 1.4; older stores, with variable-length strings, still open.
 inline constexpr int kFormatVersionMajor = 1;
-inline constexpr int kFormatVersionMinor = 0;
+inline constexpr int kFormatVersionMinor = 4;
 
 /// Byte counters of one Store (for cache statistics and benchmarks). A read of a tiled level 0
 /// counts one read per tile; bytes of external tiles are counted by their own Store.
