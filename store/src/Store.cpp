@@ -5,9 +5,13 @@
 #include "Hdf5.hpp"
 #include "StoreFormat.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <optional>
@@ -40,13 +44,38 @@ struct GridEntry {
   std::vector<Tile> tiles;            // empty for a plain grid
 };
 
-/// External stores opened while one store opens, by resolved path (several tiles may share a
-/// file), and the nesting depth of Store::open on this thread (a guard against cycles).
+/// One top-level Store::open and the external stores it opens, however deep: their files
+/// and bytes against the caller's budget, and the stores already open, by file identity
+/// (device and inode), so that a file named by many tiles, through any spelling, symlink or
+/// hard link, opens once. Without that, files nested 7 deep with 10 links each to the next
+/// opened 10^6 times.
 struct OpenState {
-  std::map<std::string, std::shared_ptr<const Store>> externals;
+  OpenLimits limits;
+  std::size_t files = 0;
+  std::uintmax_t bytes = 0;
+  std::map<std::pair<dev_t, ino_t>, std::shared_ptr<const Store>> externals;
 };
+/// The open in progress on this thread (nested opens of external tiles share it), and the
+/// nesting depth (a guard against cycles).
+thread_local OpenState* tlOpenState = nullptr;
 thread_local int tlOpenDepth = 0;
 constexpr int kMaxOpenDepth = 8;
+
+/// Counts one more file of `bytes` against the open's budget.
+void chargeBudget(OpenState& state, std::uintmax_t bytes, const Context& ctx) {
+  ++state.files;
+  state.bytes += bytes;
+  if (state.files > state.limits.maxFiles) {
+    fail(ctx, "the store and its external tiles take more than " +
+                  std::to_string(state.limits.maxFiles) +
+                  " files, the open's budget (store::OpenLimits::maxFiles)");
+  }
+  if (state.bytes > state.limits.maxBytes) {
+    fail(ctx, "the store and its external tiles take more than " +
+                  std::to_string(state.limits.maxBytes) +
+                  " bytes of files, the open's budget (store::OpenLimits::maxBytes)");
+  }
+}
 
 std::string tileRange(const Tile& t) {
   return "rows " + std::to_string(t.row0) + "-" + std::to_string(t.row0 + t.rows - 1) + ", cols " +
@@ -396,13 +425,18 @@ Tile openTile(hid_t tiles, std::size_t i, const GridEntry& entry, const Context&
   std::filesystem::path resolved(file);
   if (resolved.is_relative()) resolved = storePath.parent_path() / resolved;
   const std::string key = resolved.lexically_normal().string();
-  auto it = state.externals.find(key);
-  if (it == state.externals.end()) {
+  const auto openExternal = [&] {
     try {
-      it = state.externals.emplace(key, std::make_shared<const Store>(Store::open(resolved))).first;
+      return std::make_shared<const Store>(Store::open(resolved));
     } catch (const StoreError& e) {
       fail(ctx, towner + " has external_file '" + file + "' that cannot be opened: " + e.what());
     }
+  };
+  struct stat st {};
+  if (::stat(resolved.c_str(), &st) != 0) (void)openExternal();  // throws, explaining why
+  auto it = state.externals.find({st.st_dev, st.st_ino});
+  if (it == state.externals.end()) {
+    it = state.externals.emplace(std::pair{st.st_dev, st.st_ino}, openExternal()).first;
   }
   t.external = it->second;
   const std::string ext = "external_grid '" + t.externalGrid + "'";
@@ -586,7 +620,7 @@ Store::Store(Store&&) noexcept = default;
 Store& Store::operator=(Store&&) noexcept = default;
 Store::~Store() = default;
 
-Store Store::open(const std::filesystem::path& path) {
+Store Store::open(const std::filesystem::path& path, const OpenLimits& limits) {
   const Context ctx("store::open()", path);
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
@@ -596,15 +630,24 @@ Store Store::open(const std::filesystem::path& path) {
     fail(ctx, "external tiles nest more than " + std::to_string(kMaxOpenDepth) +
                   " stores deep (a cycle of external_file references?)");
   }
-  struct Depth {
-    Depth() { ++tlOpenDepth; }
-    ~Depth() { --tlOpenDepth; }
+  OpenState top{limits, 0, 0, {}};
+  struct Depth {  // the outermost open owns the state its nested opens share
+    explicit Depth(OpenState* top) : owner(tlOpenState == nullptr) {
+      if (owner) tlOpenState = top;
+      ++tlOpenDepth;
+    }
+    ~Depth() {
+      --tlOpenDepth;
+      if (owner) tlOpenState = nullptr;
+    }
     Depth(const Depth&) = delete;
     Depth& operator=(const Depth&) = delete;
     Depth(Depth&&) = delete;
     Depth& operator=(Depth&&) = delete;
-  } const depth;
-  OpenState state;
+    bool owner;
+  } const depth(&top);
+  OpenState& state = *tlOpenState;
+  chargeBudget(state, std::filesystem::file_size(path, ec), ctx);
 
   auto impl = std::make_unique<Impl>();
   impl->path = path;

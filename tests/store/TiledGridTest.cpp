@@ -573,3 +573,71 @@ TEST(TiledGridErrors, ATiledGridAndItsRootSayFormatOneFour) {
   }
   H5Fclose(f);
 }
+
+// ---- External tiles that fan out: each file opens once, within a budget (issue 17) ----------
+
+namespace {
+
+/// Writes `depth` + 1 stores f0 … f<depth> in `dir`: f<depth> holds a 1×1 plain grid 'p'; each
+/// other f<k> holds 'p' and a 1×`fanout` mosaic 'm' whose tiles all name grid 'p' of f<k+1>,
+/// each through its own symlink (l<k>_<i>.h5 → f<k+1>.h5). Opening f0 opened f1 `fanout`
+/// times, each of those f2 `fanout` times, and so on: fanout^depth opens.
+fs::path fanOutChain(const fs::path& dir, int depth, int fanout) {
+  fs::create_directories(dir);
+  // snprintf: GCC 12 warns falsely (-Wrestrict) on "f" + std::to_string(k) here.
+  const auto name = [](const char* format, int k, int i = 0) {
+    std::array<char, 32> buf{};
+    std::snprintf(buf.data(), buf.size(), format, k, i);
+    return std::string(buf.data());
+  };
+  const GridSource plain{mosaicInfo("p", 1, 1), tileSamples({10, 20, 1, 1})};
+  for (int k = depth; k >= 0; --k) {
+    std::vector<GridSource> grids{plain};
+    if (k < depth) {
+      GridSource m{mosaicInfo("m", 1, static_cast<std::size_t>(fanout)), nullptr};
+      for (int i = 0; i < fanout; ++i) {
+        const std::string link = name("l%d_%d.h5", k, i);
+        fs::remove(dir / link);
+        fs::create_symlink(name("f%d.h5", k + 1), dir / link);
+        m.tiles.push_back({0, static_cast<std::size_t>(i), nullptr, link, "p"});
+      }
+      grids.push_back(m);
+    }
+    writeStore(dir / name("f%d.h5", k), grids, options());
+  }
+  return dir / name("f%d.h5", 0);
+}
+
+}  // namespace
+
+TEST(TiledGridErrors, TilesThatFanOutOpenEachFileOnceWithinTheOpensBudget) {
+  // 10^6 opens before; now each of the 8 files opens once, whatever the links.
+  const fs::path top = fanOutChain(scratchDir() / "fanout", 7, 10);
+  OpenLimits eight;
+  eight.maxFiles = 8;
+  const Store s = Store::open(top, eight);
+  std::vector<float> v(10);
+  s.readWindow("m", 0, 0, 0, 1, 10, v);
+  const float h = tileSamples({10, 20, 1, 1})->sample(0, 0);
+  ASSERT_FALSE(std::isnan(h));
+  EXPECT_EQ(v, std::vector<float>(10, h));
+
+  OpenLimits seven;
+  seven.maxFiles = 7;
+  const std::string e = errorOf([&] { (void)Store::open(top, seven); });
+  EXPECT_TRUE(contains(e,
+                       "the store and its external tiles take more than 7 files, the open's "
+                       "budget (store::OpenLimits::maxFiles)"))
+      << e;
+  OpenLimits small;
+  small.maxBytes = fs::file_size(top) + 100;  // the top file fits, the next one does not
+  const std::string b = errorOf([&] { (void)Store::open(top, small); });
+  EXPECT_TRUE(contains(b, "the store and its external tiles take more than " +
+                              std::to_string(small.maxBytes) +
+                              " bytes of files, the open's budget (store::OpenLimits::maxBytes)"))
+      << b;
+  EXPECT_TRUE(contains(b, "store::open(): " + top.string() +
+                              ": grid 'm' tile 0 has external_file "
+                              "'l0_0.h5' that cannot be opened"))
+      << b;
+}

@@ -48,10 +48,20 @@ struct ReadCounters {
 /// Thread-safety: all const members may be called concurrently. HDF5 calls are serialised
 /// by one process-wide mutex (HDF5 keeps global state; Debian's build is thread-safe but
 /// serialises internally anyway).
+/// The budget of one Store::open: the files it may open (the store and its external tiles,
+/// however deeply nested; a file named by several tiles counts once) and their total size.
+/// An open that would exceed it is refused with a StoreError naming the limit, so a store
+/// whose tiles fan out (files nested 7 deep, each tile naming 10 links to the next) cannot
+/// make an open take unbounded time.
+struct OpenLimits {
+  std::size_t maxFiles = 4096;
+  std::uintmax_t maxBytes = std::uintmax_t{1} << 44;  // 16 TiB
+};
+
 class Store {
  public:
-  /// Throws StoreError naming the file and the reason.
-  static Store open(const std::filesystem::path& path);
+  /// Throws StoreError naming the file and the reason, or the limit of `limits` exceeded.
+  static Store open(const std::filesystem::path& path, const OpenLimits& limits = {});
   /// Whether `path` is a readable file that starts with the HDF5 signature (H5Fis_hdf5):
   /// false for a missing, unreadable or non-HDF5 file. Lets a caller tell a store (or a
   /// broken one, which open() then explains) from a file of another format.
