@@ -1,6 +1,7 @@
 // `regolith demo` (the main job, MainDemo.hpp) and `regolith walkthrough` (the topo
 // walkthrough, TopoDemo.hpp).
 #include "Commands.hpp"
+#include "FiniteRange.hpp"
 #include "MainDemo.hpp"
 #include "TopoDemo.hpp"
 
@@ -67,7 +68,7 @@ void addWalkthrough(CLI::App& app) {
       ->check(CLI::Range(16, 20001))
       ->capture_default_str();
   cmd->add_option("--spacing", args->demo.spacing, "Sample spacing in metres")
-      ->check(CLI::Range(0.01, 100.0))
+      ->check(FiniteRange(0.01, 100.0))
       ->capture_default_str();
   cmd->add_option("--queries", args->demo.queries, "Queries for the throughput measurement")
       ->check(CLI::Range(1000, 100000000))
