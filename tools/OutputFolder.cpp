@@ -16,6 +16,7 @@ void requireOutputFolder(std::string_view command, const std::string& out) {
     throw InvalidArgument(std::string(command) + ": --out " + out + ": folder " + dir.string() +
                           " does not exist");
   }
+  core::refuseOverwritingInput(out, {}, command);  // names a symlink loop
 }
 
 void refuseOverwritingInputs(std::string_view command,

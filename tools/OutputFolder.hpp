@@ -10,7 +10,8 @@
 namespace regolith::tools {
 
 /// Throws InvalidArgument "<command>: --out <out>: folder <dir> does not exist" unless the
-/// folder of `out` (the current folder for a bare name) is an existing directory.
+/// folder of `out` (the current folder for a bare name) is an existing directory, and
+/// IoError "<command>: <out>: symlink loop (...)" if `out` is a symlink loop.
 void requireOutputFolder(std::string_view command, const std::string& out);
 
 /// core::refuseOverwritingInput() for each of `outputs` against all of `inputs`: throws

@@ -275,23 +275,33 @@ def test_import_names_the_source_for_samples_beyond_float(work):
 
 # ---- 3. messages ----------------------------------------------------------------------------
 
-@pytest.mark.parametrize("command", [["info"], ["query", "--coords", "grid", "1,1"],
-                                     ["render", "-o", "OUT"], ["import", "--out", "OUT"]])
-def test_symlink_loops_are_named(work, command):
-    a, b = work / "loop-a.h5", work / "loop-b.h5"
+def symlink_loop(work, stem):
+    """<stem>-a.h5 -> <stem>-b.h5 -> <stem>-a.h5; returns the first."""
+    a, b = work / f"{stem}-a.h5", work / f"{stem}-b.h5"
     for link, target in [(a, b), (b, a)]:
         if not link.is_symlink():
             link.symlink_to(target)
+    return a
+
+
+@pytest.mark.parametrize("command", [["info"], ["query", "--coords", "grid", "1,1"],
+                                     ["render", "-o", "OUT"], ["import", "--out", "OUT"]])
+def test_symlink_loops_are_named(work, command):
+    a = symlink_loop(work, "loop")
     args = [command[0], a] + [str(work / "loop-out.h5") if x == "OUT" else x
                               for x in command[1:]]
     refused(*args, needle=f"{a}: symlink loop (too many levels of symbolic links)")
 
 
+def test_generate_output_that_is_a_symlink_loop_is_named(work):
+    a = symlink_loop(work, "gen-loop")
+    refused("generate", "victoria", "--out", a, "--size", 17,
+            needle=f"generate victoria: {a}: symlink loop (too many levels of symbolic links)")
+    assert a.is_symlink()  # not replaced by a store
+
+
 def test_render_output_that_is_a_symlink_loop_is_named(work, store):
-    a, b = work / "png-loop-a.png", work / "png-loop-b.png"
-    for link, target in [(a, b), (b, a)]:
-        if not link.is_symlink():
-            link.symlink_to(target)
+    a = symlink_loop(work, "png-loop")
     refused("render", store, "-o", a,
             needle=f"render: {a}: symlink loop (too many levels of symbolic links)")
 
