@@ -3,6 +3,7 @@
 #include "Commands.hpp"
 #include "FiniteRange.hpp"
 #include "MainDemo.hpp"
+#include "OutputFolder.hpp"
 #include "TopoDemo.hpp"
 
 #include <CLI/CLI.hpp>
@@ -47,6 +48,8 @@ void addMainDemo(CLI::App& app) {
   cmd->add_flag("--quick", args->demo.quick,
                 "Small stores and few frames: a smoke run in seconds (tests)");
   cmd->callback([args] {
+    requireFolderToWrite("demo", args->outDir);
+    if (!args->dataDir.empty()) requireFolderToWrite("demo", args->dataDir);
     args->demo.outDir = args->outDir;
     args->demo.dataDir = args->dataDir;
     runMainDemo(args->demo, std::cout);
@@ -75,6 +78,7 @@ void addWalkthrough(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--out", args->outDir, "Folder for output files")->capture_default_str();
   cmd->callback([args] {
+    requireFolderToWrite("walkthrough", args->outDir);
     args->demo.outDir = args->outDir;
     const int rc = runTopoDemo(args->demo, std::cout);
     if (rc != 0) throw CLI::RuntimeError(rc);

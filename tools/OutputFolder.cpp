@@ -19,6 +19,15 @@ void requireOutputFolder(std::string_view command, const std::string& out) {
   core::refuseOverwritingInput(out, {}, command);  // names a symlink loop
 }
 
+void requireFolderToWrite(std::string_view command, const std::string& dir) {
+  core::refuseOverwritingInput(dir, {}, command);  // names a symlink loop
+  std::error_code ec;
+  if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec)) {
+    throw InvalidArgument(std::string(command) + ": --out " + dir +
+                          " is a file, expected a folder (created if it does not exist)");
+  }
+}
+
 void refuseOverwritingInputs(std::string_view command,
                              std::initializer_list<std::filesystem::path> outputs,
                              std::initializer_list<std::filesystem::path> inputs) {

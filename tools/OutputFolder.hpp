@@ -14,6 +14,11 @@ namespace regolith::tools {
 /// IoError "<command>: <out>: symlink loop (...)" if `out` is a symlink loop.
 void requireOutputFolder(std::string_view command, const std::string& out);
 
+/// For commands whose --out names a folder they create (`demo`, `walkthrough`): throws
+/// IoError if `dir` is a symlink loop, InvalidArgument if it is an existing file, before any
+/// work.
+void requireFolderToWrite(std::string_view command, const std::string& dir);
+
 /// core::refuseOverwritingInput() for each of `outputs` against all of `inputs`: throws
 /// InvalidArgument if an output is the same file as an input (through symlinks and hard
 /// links).

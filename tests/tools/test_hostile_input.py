@@ -300,6 +300,18 @@ def test_generate_output_that_is_a_symlink_loop_is_named(work):
     assert a.is_symlink()  # not replaced by a store
 
 
+@pytest.mark.parametrize("command", [["walkthrough", "--size", 17, "--queries", 1000],
+                                     ["demo", "--quick", "--frames", 2]])
+def test_output_folders_that_are_symlink_loops_or_files_are_refused_first(work, small_tif,
+                                                                           command):
+    a = symlink_loop(work, "dir-loop")
+    err = refused(*command, "--out", a,
+                  needle=f"{command[0]}: {a}: symlink loop (too many levels of symbolic links)")
+    assert "filesystem error" not in err
+    refused(*command, "--out", small_tif,
+            needle=f"{command[0]}: --out {small_tif} is a file, expected a folder")
+
+
 def test_render_output_that_is_a_symlink_loop_is_named(work, store):
     a = symlink_loop(work, "png-loop")
     refused("render", store, "-o", a,
