@@ -4,6 +4,7 @@
 #include <regolith/store/Import.hpp>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace regolith::store::gdal {
@@ -41,7 +42,10 @@ void checkPlanet(const GridInfo& g, const std::string& prefix) {
 }
 
 void checkDem(const GridInfo& g, const std::string& prefix) {
-  const double circumference = 2.0 * std::numbers::pi * g.equatorialRadius;
+  // A grid on no body (no radius: a height map without georeferencing) has no bound.
+  const double circumference = g.equatorialRadius > 0.0
+                                   ? 2.0 * std::numbers::pi * g.equatorialRadius
+                                   : std::numeric_limits<double>::max();
   checkPixel(prefix, "pixel width", g.spacingX, circumference, " m");
   checkPixel(prefix, "pixel height", g.spacingY, circumference, " m");
   if (!std::isfinite(g.x0) || !std::isfinite(g.y0)) {
@@ -75,7 +79,10 @@ void checkGeoreferencing(const GridInfo& info, const std::string& prefix) {
   }
 }
 
-double plausibleHeightLimit(const GridInfo& info) noexcept { return 0.1 * info.equatorialRadius; }
+double plausibleHeightLimit(const GridInfo& info) noexcept {
+  return info.equatorialRadius > 0.0 ? 0.1 * info.equatorialRadius
+                                     : std::numeric_limits<double>::infinity();
+}
 
 CheckedHeights::CheckedHeights(std::shared_ptr<const topo::SampleSource> source,
                                const GridInfo& info, std::string prefix, bool strict)

@@ -23,7 +23,8 @@ namespace regolith::store::gdal {
 void checkGeoreferencing(const GridInfo& info, const std::string& prefix);
 
 /// The bound of plausible heights on `info`'s body: a tenth of its equatorial radius, in
-/// metres, either side of the reference surface.
+/// metres, either side of the reference surface; infinite for a grid on no body (radius 0).
+/// DEMs on no body also have no bound on their pixel size in checkGeoreferencing().
 [[nodiscard]] double plausibleHeightLimit(const GridInfo& info) noexcept;
 
 /// A raster's heights as they go to the writer, checked on the way: an infinite value (a
