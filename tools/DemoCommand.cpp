@@ -1,7 +1,9 @@
 // `regolith demo` (the main job, MainDemo.hpp) and `regolith walkthrough` (the topo
 // walkthrough, TopoDemo.hpp).
 #include "Commands.hpp"
+#include "FiniteRange.hpp"
 #include "MainDemo.hpp"
+#include "OutputFolder.hpp"
 #include "TopoDemo.hpp"
 
 #include <CLI/CLI.hpp>
@@ -46,6 +48,8 @@ void addMainDemo(CLI::App& app) {
   cmd->add_flag("--quick", args->demo.quick,
                 "Small stores and few frames: a smoke run in seconds (tests)");
   cmd->callback([args] {
+    requireFolderToWrite("demo", args->outDir);
+    if (!args->dataDir.empty()) requireFolderToWrite("demo", args->dataDir);
     args->demo.outDir = args->outDir;
     args->demo.dataDir = args->dataDir;
     runMainDemo(args->demo, std::cout);
@@ -67,13 +71,14 @@ void addWalkthrough(CLI::App& app) {
       ->check(CLI::Range(16, 20001))
       ->capture_default_str();
   cmd->add_option("--spacing", args->demo.spacing, "Sample spacing in metres")
-      ->check(CLI::Range(0.01, 100.0))
+      ->check(FiniteRange(0.01, 100.0))
       ->capture_default_str();
   cmd->add_option("--queries", args->demo.queries, "Queries for the throughput measurement")
       ->check(CLI::Range(1000, 100000000))
       ->capture_default_str();
   cmd->add_option("--out", args->outDir, "Folder for output files")->capture_default_str();
   cmd->callback([args] {
+    requireFolderToWrite("walkthrough", args->outDir);
     args->demo.outDir = args->outDir;
     const int rc = runTopoDemo(args->demo, std::cout);
     if (rc != 0) throw CLI::RuntimeError(rc);

@@ -4,6 +4,7 @@
 
 #include "CancelOnSignal.hpp"
 #include "Commands.hpp"
+#include "FiniteRange.hpp"
 #include "OutputFolder.hpp"
 #include "TerminalProgress.hpp"
 
@@ -91,12 +92,12 @@ void addPlanet(CLI::App& generate) {
   cmd->add_option("--resolution", a->resolution,
                   "Sample spacing in degrees (instead of --size; 180/spacing must be a whole "
                   "number)")
-      ->check(CLI::PositiveNumber)
+      ->check(FinitePositive())
       ->excludes(size);
   cmd->add_flag("--ellipsoid", a->ellipsoid,
                 "Use the IAU Mars ellipsoid (3396190/3376200 m) instead of the sphere");
   cmd->add_option("--craters", a->craters, "Crater density multiplier (0: no craters)")
-      ->check(CLI::Range(0.0, 100.0))
+      ->check(FiniteRange(0.0, 100.0))
       ->capture_default_str();
   cmd->add_option("--threads", a->threads, "Threads computing samples (0: all cores)")
       ->capture_default_str();
@@ -147,7 +148,7 @@ void addVictoria(CLI::App& generate) {
       ->check(CLI::Range(std::size_t{2}, std::size_t{1} << 20U))
       ->capture_default_str();
   cmd->add_option("--resolution", a->resolution, "Sample spacing in metres")
-      ->check(CLI::PositiveNumber)
+      ->check(FinitePositive())
       ->capture_default_str();
   cmd->add_option("--grid", a->w.grid, "Name of the grid in the store")->capture_default_str();
   cmd->callback([a] {

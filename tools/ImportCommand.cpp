@@ -36,6 +36,7 @@ struct Args {
   std::string body;
   std::vector<std::size_t> window;
   std::vector<double> bbox;
+  bool strict = false;
 };
 
 void printSummary(const std::string& out, const store::ImportReport& r, std::ostream& os) {
@@ -69,6 +70,12 @@ void printSummary(const std::string& out, const store::ImportReport& r, std::ost
   os << "  missing:        " << r.missingSamples << " samples ("
      << shortestNumber(std::round(1000.0 * static_cast<double>(r.missingSamples) / total) / 10.0)
      << "%" << (r.tiles > 1 ? ", gaps between tiles included" : "") << ")\n";
+  if (r.implausibleSamples > 0) {
+    os << "  warning:        " << r.implausibleSamples << " samples beyond +-"
+       << shortestNumber(r.plausibleLimit)
+       << " m (a tenth of the body's radius): a spike, or a wrong scale or unit? --strict "
+          "refuses them\n";
+  }
   os << "  levels:         " << g.levels << ", patch " << g.patchRows << " x " << g.patchCols
      << "\n";
   os << "  tiles:          " << r.tiles << "\n";
@@ -123,6 +130,9 @@ void addImportCommand(CLI::App& app) {
       ->delimiter(',')
       ->expected(4)
       ->excludes(window);
+  cmd->add_flag("--strict", a->strict,
+                "Refuse heights beyond +-(equatorial radius / 10) instead of importing them "
+                "with a warning and a count");
   cmd->footer(
       "Examples:\n"
       "  regolith import dtm.cub --out dtm.h5 --deflate 4\n"
@@ -134,6 +144,7 @@ void addImportCommand(CLI::App& app) {
       "Ctrl-C cancels cleanly (no partial file).");
   cmd->callback([a, cmd] {
     requireOutputFolder("import", a->out);
+    for (const std::string& source : a->sources) refuseStdoutOverInput("import", source);
     store::ImportOptions o;
     o.gridName = a->grid;
     o.patchRows = o.patchCols = a->patch;
@@ -143,6 +154,7 @@ void addImportCommand(CLI::App& app) {
     o.threads = a->threads;
     if (cmd->count("--nodata") > 0) o.nodata = a->nodata;
     o.body = a->body;
+    o.strict = a->strict;
     if (a->window.size() == 4) {
       o.window = store::SampleWindow{a->window[0], a->window[1], a->window[2], a->window[3]};
     }

@@ -4,6 +4,7 @@
 #include <regolith/store/Store.hpp>
 
 #include "Commands.hpp"
+#include "OutputFolder.hpp"
 #include "ReportText.hpp"
 
 #include <CLI/CLI.hpp>
@@ -407,6 +408,7 @@ void addInfoCommand(CLI::App& app) {
       "  regolith info mars.h5 --json | python3 -c 'import json,sys; "
       "print(json.load(sys.stdin)[\"grids\"][0][\"rows\"])'");
   cmd->callback([a] {
+    refuseStdoutOverInput("info", a->store);
     std::error_code ec;
     // GDAL's virtual paths (/vsizip/, /vsicurl/, ...) are rasters: `import` accepts them.
     const bool virtualPath = a->store.rfind("/vsi", 0) == 0;

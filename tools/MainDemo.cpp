@@ -10,6 +10,7 @@
 #include <regolith/store/Store.hpp>
 
 #include "CancelOnSignal.hpp"
+#include "OutputFolder.hpp"
 #include "TerminalProgress.hpp"
 
 #include <glm/geometric.hpp>
@@ -234,6 +235,8 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
 
   out << "[1/4] Default data in " << dataDir.string() << "\n";
   const DefaultData data = ensureData(o, dataDir, out);
+  refuseOverwritingInputs("demo", {o.outDir / "rover_view.png", o.outDir / "rover_chase.png"},
+                          {data.mars, data.victoria});
   out << "  " << data.mars.string() << ": " << data.marsNote << "\n  " << data.victoria.string()
       << ": " << data.victoriaNote << "\n";
 

@@ -4,6 +4,7 @@
 #include <regolith/store/Store.hpp>
 
 #include "Commands.hpp"
+#include "OutputFolder.hpp"
 #include "StoreGrid.hpp"
 
 #include <CLI/CLI.hpp>
@@ -101,6 +102,8 @@ std::vector<Point> readStdin(Coords coords) {
   bool first = true;
   while (std::getline(std::cin, line)) {
     ++lineNo;
+    // A UTF-8 byte-order mark (spreadsheets write one) is not part of the first field.
+    if (lineNo == 1 && line.starts_with("\xEF\xBB\xBF")) line.erase(0, 3);
     const std::string_view t = trim(line);
     if (t.empty() || t[0] == '#') continue;
     if (first) {
@@ -392,7 +395,10 @@ void addQueryCommand(CLI::App& app) {
       "  printf 'lon,lat\\n-5.5,-2.05\\n' | regolith query victoria.h5 --frame body\n"
       "Exit status: 0 on success; non-zero, with 'regolith: error: ...' on stderr and nothing "
       "on stdout, for malformed input (the message names the argument or stdin line).");
-  cmd->callback([a] { runQuery(*a); });
+  cmd->callback([a] {
+    refuseStdoutOverInput("query", a->store);
+    runQuery(*a);
+  });
 }
 
 }  // namespace regolith::tools

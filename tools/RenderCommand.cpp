@@ -1,10 +1,13 @@
 // `regolith render STORE`: one headless clipmap image of a store's grid, as a PNG.
 #include <regolith/clod/Render.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 
 #include "Commands.hpp"
+#include "FiniteRange.hpp"
+#include "OutputFolder.hpp"
 #include "StoreGrid.hpp"
 
 #include <CLI/CLI.hpp>
@@ -55,6 +58,8 @@ std::optional<double> surfaceHeight(const store::Pager& pager, const std::string
 
 void runRender(const Args& a) {
   const auto start = std::chrono::steady_clock::now();
+  refuseOverwritingInputs("render", {a.out, a.out + ".legend.json"}, {a.store});
+  refuseStdoutOverInput("render", a.store);
   auto store = std::make_shared<const store::Store>(store::Store::open(a.store));
   const std::string gridName = chooseGrid(*store, a.grid, "render");
   const store::GridInfo& info = store->grid(gridName);
@@ -109,8 +114,15 @@ void runRender(const Args& a) {
   } else {
     // A camera at a position: --look-at aims it at a surface point, else heading and pitch.
     const Ground p = ground(a.position[0], a.position[1], "--position");
-    if (!std::isfinite(a.position[2]))
-      throw InvalidArgument("render: --position altitude must be a finite number");
+    if (!(a.position[2] >= 0.0 && std::isfinite(a.position[2]))) {
+      throw InvalidArgument(core::format(
+          {"render",
+           {},
+           "--position altitude",
+           core::number(a.position[2]) + " m",
+           "finite and >= 0 (below the surface the camera is inside the body and sees no "
+           "terrain)"}));
+    }
     const glm::dvec3 eye = pyramid->position(p.a, p.b, p.h + a.position[2]);
     view << "from " << (planet ? "lon,lat " : "x,y ") << p.a << "," << p.b << " at "
          << a.position[2] << " m above the surface (height " << p.h << " m), ";
@@ -187,7 +199,8 @@ void addRenderCommand(CLI::App& app) {
                   "Look-at point 'a,b' on the surface: x,y in metres for a DEM, lon,lat in "
                   "degrees for a planet (default: the grid's centre)")
       ->delimiter(',')
-      ->expected(2);
+      ->expected(2)
+      ->check(FiniteRange());
   cmd->add_option("--position", a->position,
                   "Camera position 'a,b,altitude': a grid point as for --look-at and the "
                   "height above the surface there, in metres. The camera then looks at "
@@ -198,22 +211,22 @@ void addRenderCommand(CLI::App& app) {
   cmd->add_option("--distance", a->distance,
                   "Orbit: camera distance from the look-at point in metres (default: a DEM's "
                   "larger extent × 1.2; a planet's equatorial radius × 2)")
-      ->check(CLI::Range(1e-3, 1e13));
+      ->check(FiniteRange(1e-3, 1e13));
   cmd->add_option("--heading", a->heading,
                   "Direction the camera looks in, degrees clockwise from north")
-      ->check(CLI::Range(-360.0, 360.0))
+      ->check(FiniteRange(-360.0, 360.0))
       ->capture_default_str();
   cmd->add_option("--elevation", a->elevation,
                   "Orbit: camera elevation above the look-at point's horizon in degrees, "
                   "(0, 90]; 90 looks straight down with north up (default: 35 for a DEM, 90 "
                   "for a planet)")
-      ->check(CLI::Range(1e-3, 90.0));
+      ->check(FiniteRange(1e-3, 90.0));
   cmd->add_option("--pitch", a->pitch,
                   "With --position and no --look-at: view pitch in degrees, (-90, 90), "
                   "negative looks down (default: -20)")
-      ->check(CLI::Range(-89.999, 89.999));
+      ->check(FiniteRange(-89.999, 89.999));
   cmd->add_option("--fov", a->fov, "Vertical field of view in degrees")
-      ->check(CLI::Range(1.0, 170.0))
+      ->check(FiniteRange(1.0, 170.0))
       ->capture_default_str();
   cmd->add_option("--clipmap-size", a->clipmapSize,
                   "Vertices per clipmap level side (odd, 15 to 2047)")

@@ -8,6 +8,27 @@
 #include <iostream>
 #include <string>
 
+namespace {
+
+/// CLI11 takes an unknown first word for a stray argument: "A subcommand is required", and
+/// with --help it prints the main help and exits 0. Name the word, in both cases, as a usage
+/// error (exit code 109, CLI11's for unexpected arguments).
+void refuseUnknownSubcommand(const CLI::App& app, int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.starts_with("-")) continue;  // the main command's options: --help
+    std::string names;
+    for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+      if (sub->get_name() == word) return;
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    throw CLI::ParseError("unknown subcommand '" + word + "', expected one of: " + names,
+                          CLI::ExitCodes::ExtrasError);
+  }
+}
+
+}  // namespace
+
 int main(int argc, char** argv) try {
   CLI::App app{"Regolith: planetary terrain for simulation and visualization"};
   app.name("regolith");
@@ -32,6 +53,7 @@ int main(int argc, char** argv) try {
   regolith::tools::addRenderCommand(app);
 
   try {
+    refuseUnknownSubcommand(app, argc, argv);
     app.parse(argc, argv);
   } catch (const CLI::Error& e) {
     // Usage errors print the failure message above; --help prints help and returns 0;

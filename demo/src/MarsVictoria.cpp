@@ -1,4 +1,6 @@
 #include <regolith/core/Error.hpp>
+#include <regolith/core/FileIdentity.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
 #include <regolith/gl/RenderTarget.hpp>
@@ -17,6 +19,7 @@
 #include <cstdio>
 #include <numbers>
 #include <string>
+#include <vector>
 
 namespace regolith::demo {
 
@@ -65,6 +68,55 @@ std::shared_ptr<const clod::HeightPyramid> secondDemPyramid(const MarsVictoriaOp
   so.gridName = "victoria2";
   so.originHeight = originHeight;
   return demPyramid(store::VictoriaGenerator(so));
+}
+
+/// Every number of a scene view: finite, and the field of view and near plane in range.
+void refuseBadView(const SceneViewOptions& o) {
+  const char* op = "renderSceneView()";
+  const glm::dvec3& t = o.camera.translation;
+  const glm::dquat& q = o.camera.rotation;
+  if (!(std::isfinite(t.x) && std::isfinite(t.y) && std::isfinite(t.z) && std::isfinite(q.w) &&
+        std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z))) {
+    throw InvalidArgument(core::format(
+        {op,
+         {},
+         "camera pose",
+         "(" + core::number(t.x) + ", " + core::number(t.y) + ", " + core::number(t.z) + ") m",
+         "finite (eye, look-at point and up all finite)"}));
+  }
+  if (!(o.fovYDegrees > 0.0 && o.fovYDegrees < 180.0)) {
+    throw InvalidArgument(core::format(
+        {op, {}, "field of view", core::number(o.fovYDegrees) + " deg", "inside (0, 180)"}));
+  }
+  if (!(o.near > 0.0 && std::isfinite(o.near))) {
+    throw InvalidArgument(
+        core::format({op, {}, "near plane", core::number(o.near) + " m", "finite and > 0"}));
+  }
+  if (!(std::isfinite(o.roverX) && std::isfinite(o.roverY) && std::isfinite(o.roverHeadingDeg))) {
+    throw InvalidArgument(core::format({op,
+                                        {},
+                                        "rover",
+                                        core::number(o.roverX) + ", " + core::number(o.roverY) +
+                                            ", " + core::number(o.roverHeadingDeg) + " deg",
+                                        "a finite grid x, y and heading"}));
+  }
+}
+
+/// The file of fly-over frame i in `dir`: frame_NNNN.png.
+std::filesystem::path framePath(const std::filesystem::path& dir, int i) {
+  char name[32];
+  std::snprintf(name, sizeof name, "frame_%04d.png", i);
+  return dir / name;
+}
+
+/// No frame may be written over one of the scene's stores (core::refuseOverwritingInput()).
+void refuseOverwritingStores(const FlyoverOptions& o) {
+  if (o.scene.marsStore.empty()) return;
+  const std::vector<std::filesystem::path> stores{o.scene.marsStore, o.scene.victoriaStore};
+  for (int i = 0; i < o.frames; ++i) {
+    core::refuseOverwritingInput(framePath(o.outputDir, i), stores, "renderFlyover()");
+  }
+  core::refuseOverwritingInput(o.outputDir / "multiview.png", stores, "renderFlyover()");
 }
 
 }  // namespace
@@ -210,6 +262,7 @@ gl::RgbaImage renderSceneView(const SceneViewOptions& options) {
   if (options.width < 1 || options.height < 1)
     throw InvalidArgument("renderSceneView(): image " + std::to_string(options.width) + "×" +
                           std::to_string(options.height) + ", expected a non-empty image");
+  refuseBadView(options);
   std::unique_ptr<gl::HeadlessContext> context;
   if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<gl::HeadlessContext>();
   gl::RgbaImage image;
@@ -249,6 +302,7 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
                           std::to_string(options.rover->y) + ", " +
                           std::to_string(options.rover->z) +
                           "), expected a finite grid x, y and heading");
+  refuseOverwritingStores(options);
   const auto t0 = std::chrono::steady_clock::now();
   FlyoverSummary summary;
   std::filesystem::create_directories(options.outputDir);
@@ -287,9 +341,7 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
       renderer.draw(g.renderList(focus, cam), view);
       const gl::RgbaImage image = target.readColor();
       renderSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
-      char name[32];
-      std::snprintf(name, sizeof name, "frame_%04d.png", i);
-      const auto path = options.outputDir / name;
+      const auto path = framePath(options.outputDir, i);
       gl::writePng(path.string(), image);
       summary.files.push_back(path);
       if (options.progress) options.progress(i + 1, options.frames, path);

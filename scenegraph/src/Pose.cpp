@@ -1,4 +1,5 @@
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/scenegraph/Pose.hpp>
 
 #include <glm/geometric.hpp>
@@ -21,6 +22,20 @@ Pose Pose::fromAxes(const glm::dvec3& origin, const glm::dvec3& xAxis, const glm
 }
 
 Pose Pose::lookAt(const glm::dvec3& eye, const glm::dvec3& target, const glm::dvec3& up) {
+  const auto finite = [](const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+  };
+  const auto refuse = [](const char* field, const glm::dvec3& v) {
+    throw InvalidArgument(
+        core::format({"Pose::lookAt()",
+                      {},
+                      field,
+                      core::number(v.x) + ", " + core::number(v.y) + ", " + core::number(v.z),
+                      "finite"}));
+  };
+  if (!finite(eye)) refuse("eye", eye);
+  if (!finite(target)) refuse("target", target);
+  if (!finite(up)) refuse("up", up);
   const glm::dvec3 d = target - eye;
   if (!(glm::length(d) > 0.0))
     throw InvalidArgument("Pose::lookAt(): eye and target coincide, expected distinct points");

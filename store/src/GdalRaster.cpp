@@ -3,8 +3,11 @@
 #include "GdalRaster.hpp"
 
 #include <regolith/core/Error.hpp>
+#include <regolith/core/FileIdentity.hpp>
 #include <regolith/topo/Placement.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
+
+#include "ImportChecks.hpp"
 
 #include <cpl_conv.h>
 #include <cpl_error.h>
@@ -217,17 +220,14 @@ void Raster::open(const ImportOptions& options, bool pdsShift) {
     }
   }
   if (ds == nullptr) {
-    std::error_code ec;
-    const std::string why =
-        !std::filesystem::exists(path_, ec)
-            ? "no such file"
-            : "GDAL cannot open it as a raster" + (errors.messages().empty()
-                                                       ? std::string()
-                                                       : " (GDAL: " + errors.messages() + ")");
+    const std::string why = core::pathProblem(path_).value_or(
+        "GDAL cannot open it as a raster" +
+        (errors.messages().empty() ? std::string() : " (GDAL: " + errors.messages() + ")"));
     throw ImportError(prefix_ + ": " + why);
   }
   ds_.reset(ds);
   analyse(options);
+  checkGeoreferencing(layout_.info, prefix_);
   // A planet grid reaching half a pixel or more beyond a pole: a PDS3 label in the other
   // offset convention (GDAL puts the MOLA MEGDR one pixel north and west).
   const GridInfo& i = layout_.info;
@@ -781,6 +781,15 @@ std::pair<std::uint64_t, std::string> sizeAndSha256(const std::string& path,
 }
 
 }  // namespace
+
+std::vector<std::filesystem::path> Raster::files() const {
+  const std::lock_guard lock(mutex_);
+  std::vector<std::filesystem::path> out{path_};
+  char** files = GDALGetFileList(ds_.get());
+  for (char** f = files; f != nullptr && *f != nullptr; ++f) out.emplace_back(*f);
+  CSLDestroy(files);
+  return out;
+}
 
 std::string Raster::provenance() const {
   const std::lock_guard lock(mutex_);

@@ -16,6 +16,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace regolith::store::gdal {
 
@@ -107,6 +108,8 @@ class Raster final : public topo::SampleSource {
   /// group (PDS3 IMAGE_MAP_PROJECTION, ISIS3 Mapping), the geotransform and the CRS.
   /// Throws ImportError if a file cannot be read.
   [[nodiscard]] std::string provenance() const;
+  /// The path opened and every file GDAL reads for it (a label and its data file, ...).
+  [[nodiscard]] std::vector<std::filesystem::path> files() const;
 
  private:
   std::filesystem::path path_;

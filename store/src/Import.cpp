@@ -1,7 +1,9 @@
 // GDAL import (docs/import.md): describeRaster(), importRaster(), importTiles().
+#include <regolith/core/FileIdentity.hpp>
 #include <regolith/store/Import.hpp>
 
 #include "GdalRaster.hpp"
+#include "ImportChecks.hpp"
 
 #include <cpl_json.h>
 
@@ -85,6 +87,33 @@ std::string mismatch(const GridInfo& a, const GridInfo& b) {
   return {};
 }
 
+/// The rasters' heights as the writer reads them: checked (ImportChecks.hpp), and counted.
+struct Checked {
+  std::vector<std::shared_ptr<const gdal::CheckedHeights>> sources;
+
+  Checked(const std::vector<std::shared_ptr<gdal::Raster>>& rasters, const ImportOptions& o) {
+    for (const auto& r : rasters) {
+      sources.push_back(
+          std::make_shared<const gdal::CheckedHeights>(r, r->layout().info, r->prefix(), o.strict));
+    }
+  }
+  void report(ImportReport& rep) const {
+    rep.plausibleLimit = gdal::plausibleHeightLimit(rep.info);
+    for (const auto& s : sources) rep.implausibleSamples += s->implausible();
+  }
+};
+
+/// No import may write over one of the files it reads (core::refuseOverwritingInput()).
+void refuseOverwritingSources(const std::vector<std::shared_ptr<gdal::Raster>>& rasters,
+                              const std::filesystem::path& store, const std::string& op) {
+  std::vector<std::filesystem::path> inputs;
+  for (const auto& r : rasters) {
+    const std::vector<std::filesystem::path> files = r->files();
+    inputs.insert(inputs.end(), files.begin(), files.end());
+  }
+  core::refuseOverwritingInput(store, inputs, op);
+}
+
 }  // namespace
 
 GridInfo describeRaster(const std::filesystem::path& raster, const ImportOptions& options) {
@@ -100,11 +129,15 @@ ImportReport inspectRaster(const std::filesystem::path& raster, const ImportOpti
 ImportReport importRaster(const std::filesystem::path& raster, const std::filesystem::path& store,
                           const ImportOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
-  auto r = std::make_shared<gdal::Raster>(raster, options, "store::importRaster()");
+  const std::string op = "store::importRaster()";
+  auto r = std::make_shared<gdal::Raster>(raster, options, op);
+  refuseOverwritingSources({r}, store, op);
   ImportReport rep = reportOf(*r);
   rep.info.provenance = r->provenance();
-  const std::vector<GridSource> grids{GridSource{rep.info, r, {}}};
+  const Checked checked({r}, options);
+  const std::vector<GridSource> grids{GridSource{rep.info, checked.sources.front(), {}}};
   writeStore(store, grids, writeOptionsOf(options));
+  checked.report(rep);
   rep.missingSamples = r->missingRead();
   rep.voidMarkerAssumed = r->voidsRead() > 0;  // the note only where such voids exist
   rep.info = writtenInfo(store, rep.info.name);
@@ -123,6 +156,8 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   }
   std::vector<std::shared_ptr<gdal::Raster>> rasters;
   for (const auto& t : tiles) rasters.push_back(std::make_shared<gdal::Raster>(t, options, op));
+  refuseOverwritingSources(rasters, store, op);
+  const Checked checked(rasters, options);
   const GridInfo& first = rasters.front()->layout().info;
   const gdal::Layout& firstLayout = rasters.front()->layout();
   // The mosaic's extent, in samples of the first tile's lattice.
@@ -168,7 +203,7 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
     TileSource t;
     t.row0 = static_cast<std::size_t>(offsets[i].first - minRow);
     t.col0 = static_cast<std::size_t>(offsets[i].second - minCol);
-    t.samples = rasters[i];
+    t.samples = checked.sources[i];
     rows = std::max(rows, t.row0 + rasters[i]->rows());
     cols = std::max(cols, t.col0 + rasters[i]->cols());
     for (std::size_t j = 0; j < src.tiles.size(); ++j) {
@@ -203,6 +238,7 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   rep.tiles = rasters.size();
   const std::vector<GridSource> grids{src};
   writeStore(store, grids, writeOptionsOf(options));
+  checked.report(rep);
   // Missing: what the tiles held as missing, plus the gaps no tile covers.
   std::size_t covered = 0, voids = 0;
   for (const auto& r : rasters) {

@@ -1,4 +1,5 @@
 // Store: opens and validates a store file, and reads windows of its levels by hyperslab.
+#include <regolith/core/FileIdentity.hpp>
 #include <regolith/core/Message.hpp>
 #include <regolith/store/Store.hpp>
 
@@ -624,7 +625,7 @@ Store Store::open(const std::filesystem::path& path, const OpenLimits& limits) {
   const Context ctx("store::open()", path);
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
-  if (!std::filesystem::exists(status)) fail(ctx, "no such file");
+  if (const auto problem = core::pathProblem(path)) fail(ctx, *problem);
   if (std::filesystem::is_directory(status)) fail(ctx, "is a directory, expected a file");
   if (tlOpenDepth >= kMaxOpenDepth) {
     fail(ctx, "external tiles nest more than " + std::to_string(kMaxOpenDepth) +

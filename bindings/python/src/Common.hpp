@@ -37,8 +37,19 @@ struct Terrain {
 struct DemTerrain : Terrain {};
 struct PlanetTerrain : Terrain {};
 
-/// C-contiguous float64 view of any array-like (copies only if it is not one already).
-using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+/// C-contiguous float64 view of any array-like of real numbers (copies only if it is not
+/// one already). Its caster (below) refuses, with InvalidArgument (ValueError), what numpy
+/// would cast with a loss: complex numbers (the imaginary part dropped), objects (None
+/// becomes NaN), booleans, strings. Every call that takes arrays takes them as DoubleArray.
+class DoubleArray : public py::array_t<double, py::array::c_style | py::array::forcecast> {
+ public:
+  using array_t::array_t;
+  DoubleArray() = default;
+  explicit DoubleArray(array_t&& a) : array_t(std::move(a)) {}
+};
+
+/// Throws InvalidArgument unless `a`'s dtype holds real numbers (numpy kinds i, u, f).
+void requireRealDtype(const py::array& a);
 
 [[nodiscard]] topo::Interpolation parseInterpolation(const std::string& name);
 [[nodiscard]] topo::NormalFrame parseFrame(const std::string& name);
@@ -61,3 +72,30 @@ void bindRover(py::module_& m);
 void bindScene(py::module_& m);
 
 }  // namespace regolith::python
+
+namespace pybind11::detail {
+
+/// Loads a DoubleArray: what numpy makes of the argument (np.asarray), refused unless its
+/// dtype holds real numbers, then converted to C-contiguous float64.
+template <>
+struct type_caster<regolith::python::DoubleArray> {
+  PYBIND11_TYPE_CASTER(regolith::python::DoubleArray, const_name("numpy.ndarray[float64]"));
+
+  bool load(handle src, bool convert) {
+    using Base = regolith::python::DoubleArray::array_t;
+    if (!convert && !Base::check_(src)) return false;
+    const array any = array::ensure(src);
+    if (!any) return false;
+    regolith::python::requireRealDtype(any);
+    Base a = Base::ensure(any);
+    if (!a) return false;
+    value = regolith::python::DoubleArray(std::move(a));
+    return true;
+  }
+
+  static handle cast(const regolith::python::DoubleArray& src, return_value_policy, handle) {
+    return src.inc_ref();
+  }
+};
+
+}  // namespace pybind11::detail

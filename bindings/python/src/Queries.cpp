@@ -19,6 +19,17 @@ std::string shapeOf(const py::array& a) {
   return s + ")";
 }
 
+void requireRealDtype(const py::array& a) {
+  const char kind = a.dtype().kind();
+  if (kind == 'i' || kind == 'u' || kind == 'f') return;
+  const std::string name = py::str(a.dtype());
+  const char* why = kind == 'c'   ? " (its imaginary part would be dropped)"
+                    : kind == 'O' ? " (None and other objects are not numbers)"
+                                  : "";
+  throw InvalidArgument("regolith: an array argument has dtype " + name + why +
+                        ", expected real numbers (an integer or floating-point dtype)");
+}
+
 namespace {
 
 static_assert(sizeof(glm::dvec3) == 3 * sizeof(double), "glm::dvec3 must be three packed doubles");

@@ -85,6 +85,8 @@ py::dict reportDict(const store::ImportReport& r) {
     d["window"] = py::make_tuple(r.window->row0, r.window->col0, r.window->rows, r.window->cols);
   }
   d["missing_samples"] = r.missingSamples;
+  d["implausible_samples"] = r.implausibleSamples;
+  d["plausible_limit"] = r.plausibleLimit;
   d["seconds"] = r.seconds;
   return d;
 }
@@ -234,10 +236,11 @@ void bindStore(py::module_& m) {
          const std::string& grid, std::size_t levels, std::size_t patch, int deflate,
          std::optional<double> nodata, const std::string& compression,
          std::optional<std::array<std::size_t, 4>> window,
-         std::optional<std::array<double, 4>> bbox, const std::string& body) {
+         std::optional<std::array<double, 4>> bbox, const std::string& body, bool strict) {
         store::ImportOptions o;
         o.gridName = grid;
         o.body = body;
+        o.strict = strict;
         if (window) {
           o.window = store::SampleWindow{(*window)[0], (*window)[1], (*window)[2], (*window)[3]};
         }
@@ -257,14 +260,16 @@ void bindStore(py::module_& m) {
       py::arg("raster"), py::arg("store"), py::arg("grid") = "", py::arg("levels") = 0,
       py::arg("patch_size") = 256, py::arg("deflate") = 0, py::arg("nodata") = py::none(),
       py::arg("compression") = "deflate", py::arg("window") = py::none(),
-      py::arg("bbox") = py::none(), py::arg("body") = "",
+      py::arg("bbox") = py::none(), py::arg("body") = "", py::arg("strict") = false,
       "Imports a single-band raster GDAL reads (GeoTIFF, PDS3, PDS4, ISIS3...) as one grid of a "
       "new store, written crash-safely. compression: 'deflate' (shuffle + deflate at `deflate`) "
       "or 'zfp' (ZFP reversible, lossless and smaller; readers need HDF5's ZFP filter plugin, "
       "and deflate must be 0). window: (row0, col0, rows, cols) of the grid `regolith info RASTER` "
       "shows; bbox: (west, south, east, north) degrees, the samples whose centres lie inside "
-      "(at most one of the two); body: the body's name where the CRS lacks it. Returns the "
-      "import report as a dict. Raises RasterImportError, "
+      "(at most one of the two); body: the body's name where the CRS lacks it. Heights beyond "
+      "+-(equatorial radius / 10) are counted in the report's implausible_samples, or refused "
+      "(RasterImportError) with strict=True. The store may not be one of the raster's files "
+      "(ValueError). Returns the import report as a dict. Raises RasterImportError, "
       "StoreError or ValueError (a bad option).");
 
   m.def(

@@ -127,8 +127,9 @@ struct FlyoverSummary {
 /// descends on a smooth logarithmic path to a few metres from the rover on Victoria's rim,
 /// the focus switching from Mars to Victoria on the way. Writes frame_NNNN.png files (and
 /// multiview.png) into outputDir, creating it. Creates an EGL context if none is current.
-/// Throws InvalidArgument for fewer than 2 frames or an empty image, GlError without GL,
-/// regolith::Error if a PNG cannot be written.
+/// Throws InvalidArgument for fewer than 2 frames or an empty image, or if a frame would be
+/// written over one of the scene's stores (core::refuseOverwritingInput()); GlError without
+/// GL, regolith::Error if a PNG cannot be written.
 FlyoverSummary renderFlyover(const FlyoverOptions& options);
 
 /// One view of the scene, for a single image.
@@ -145,7 +146,8 @@ struct SceneViewOptions {
 };
 
 /// Renders one view headless (an EGL context is made if none is current), focus on
-/// Victoria. Throws InvalidArgument for an empty image, GlError without GL.
+/// Victoria. Throws InvalidArgument for an empty image, a camera pose, near plane or rover
+/// that is not finite, or a field of view outside (0, 180) degrees; GlError without GL.
 gl::RgbaImage renderSceneView(const SceneViewOptions& options);
 
 /// The fly-over camera's pose in the Victoria DEM frame at t ∈ [0, 1] for a rover at `rover`.

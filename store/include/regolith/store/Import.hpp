@@ -51,6 +51,9 @@ struct ImportOptions : WriteOptions {
   /// A source value (before scale/offset) that also means "missing", beside the ones the
   /// file declares.
   std::optional<double> nodata{};
+  /// Refuse (ImportError) a height beyond +-(equatorial radius / 10) instead of counting it
+  /// in ImportReport::implausibleSamples.
+  bool strict = false;
 };
 
 /// What an import found and did.
@@ -84,6 +87,11 @@ struct ImportReport {
   /// Level-0 samples that are missing (nodata, special pixels, NaN); for importTiles() also
   /// the samples of gaps that no tile covers.
   std::size_t missingSamples = 0;
+  /// Level-0 heights beyond +-plausibleLimit (a tenth of the body's equatorial radius, in
+  /// metres): written as they are, and worth a look (a spike, a wrong scale or unit);
+  /// ImportOptions::strict refuses them instead.
+  std::size_t implausibleSamples = 0;
+  double plausibleLimit = 0.0;
   /// Number of source files.
   std::size_t tiles = 1;
   /// Wall time of the import.
@@ -103,13 +111,17 @@ struct ImportReport {
 
 /// Imports one raster as one grid of a new store at `store` (written crash-safely: no file
 /// appears under that name unless the import completes). Throws ImportError for input it
-/// cannot import, StoreError for a failed or cancelled write.
+/// cannot import (impossible georeferencing, a value beyond float's range, with
+/// options.strict a height beyond the plausible range), StoreError for a failed or cancelled
+/// write, InvalidArgument if `store` is one of the files GDAL reads for the raster
+/// (core::refuseOverwritingInput(): through symlinks and hard links).
 ImportReport importRaster(const std::filesystem::path& raster, const std::filesystem::path& store,
                           const ImportOptions& options = {});
 
 /// Imports several rasters that tile one grid (same CRS, spacing and sample alignment, no
 /// overlaps; gaps read as missing) as one tiled grid (docs/store-format.md, "Tiled grids").
-/// Throws ImportError naming the offending file for tiles that do not fit together.
+/// Throws ImportError naming the offending file for tiles that do not fit together, and as
+/// importRaster() otherwise.
 ImportReport importTiles(std::span<const std::filesystem::path> tiles,
                          const std::filesystem::path& store, const ImportOptions& options = {});
 
