@@ -78,7 +78,8 @@ std::string mismatch(const GridInfo& a, const GridInfo& b) {
     if (p.kind != q.kind || p.pole != q.pole || p.latTrueScaleDeg != q.latTrueScaleDeg ||
         p.scaleFactor != q.scaleFactor || p.lonCentreDeg != q.lonCentreDeg ||
         p.falseEasting != q.falseEasting || p.falseNorthing != q.falseNorthing ||
-        p.projectionRadius != q.projectionRadius || p.latOriginDeg != q.latOriginDeg) {
+        p.projectionRadius != q.projectionRadius || p.latOriginDeg != q.latOriginDeg ||
+        p.crs != q.crs) {
       return "projection parameters";
     }
   }
@@ -122,7 +123,9 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
                       ": a window or bounding box is for one raster; expected none with tiles");
   }
   std::vector<std::shared_ptr<gdal::Raster>> rasters;
-  for (const auto& t : tiles) rasters.push_back(std::make_shared<gdal::Raster>(t, options, op));
+  for (const auto& t : tiles) {
+    rasters.push_back(std::make_shared<gdal::Raster>(t, options, op, true));
+  }
   const GridInfo& first = rasters.front()->layout().info;
   const gdal::Layout& firstLayout = rasters.front()->layout();
   // The mosaic's extent, in samples of the first tile's lattice.
@@ -186,6 +189,10 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   // Tiles of a global equirectangular grid: the mosaic is a planet grid.
   rep.spacingSnapped =
       gdal::globalToPlanet(src.info, firstLayout.labelPixelsPerDegree) || rep.spacingSnapped;
+  // The beyond-a-pole rule and the snap onto the poles apply to the mosaic's extent.
+  rep.poleShiftPixels = gdal::shiftOntoPoles(src.info);
+  gdal::requireWithinPoles(src.info, op + ": " + tiles.front().string() + " and " +
+                                         std::to_string(tiles.size() - 1) + " more tile(s)");
   // Provenance: the first tile's, with every tile's files.
   CPLJSONDocument doc;
   if (!doc.LoadMemory(rasters.front()->provenance())) {
