@@ -86,6 +86,21 @@ std::string mismatch(const GridInfo& a, const GridInfo& b) {
   return {};
 }
 
+/// Tiles in a geographic CRS (a tile that is a planet grid: tiles leave equirectangular
+/// sources to the mosaic's globalToPlanet()): the mosaic's rows snap to 180°/rows when they span
+/// 180° within half a pixel, placed by their pixel offsets from the equator, as one
+/// geographic file's rows do (GdalRaster.cpp). Returns whether it snapped.
+bool snapGeographicRows(GridInfo& g) {
+  const double rows = static_cast<double>(g.rows), span = rows * g.spacingY;
+  if (g.kind != GridKind::Planet || span == 180.0 || std::abs(span - 180.0) > 0.5 * g.spacingY) {
+    return false;
+  }
+  const double dy = 180.0 / rows;
+  g.y0 = g.y0 / g.spacingY * dy;
+  g.spacingY = dy;
+  return true;
+}
+
 }  // namespace
 
 GridInfo describeRaster(const std::filesystem::path& raster, const ImportOptions& options) {
@@ -189,6 +204,8 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   // Tiles of a global equirectangular grid: the mosaic is a planet grid.
   rep.spacingSnapped =
       gdal::globalToPlanet(src.info, firstLayout.labelPixelsPerDegree) || rep.spacingSnapped;
+  if (first.kind == GridKind::Planet)
+    rep.spacingSnapped = snapGeographicRows(src.info) || rep.spacingSnapped;
   // The beyond-a-pole rule and the snap onto the poles apply to the mosaic's extent.
   rep.poleShiftPixels = gdal::shiftOntoPoles(src.info);
   gdal::requireWithinPoles(src.info, op + ": " + tiles.front().string() + " and " +

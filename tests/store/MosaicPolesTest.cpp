@@ -79,6 +79,24 @@ TEST(MosaicPoles, GeographicTilesOfAGridOverhangingThePoleSnapOntoItAsAWhole) {
   test::expectExact(scratch("geographic_tiles.h5"), rep, test::readGdal(scratch("geographic.tif")));
 }
 
+TEST(MosaicPoles, GeographicTilesWhoseRowsSpan180WithinHalfAPixelSnapAsTheWholeFile) {
+  // A pixel height of 0.5000001° (a rounded geotransform): 360 rows span 180.000036°. The
+  // whole file snaps to 0.5° and onto the poles; so does the mosaic of its two halves (each
+  // spans 90°, so tile by tile nothing snapped).
+  test::Spec full;
+  full.rows = 360;
+  full.cols = 720;
+  full.gt = {-180.0, 0.5, 0.0, 90.1, 0.0, -0.5000001};
+  full.crs = "+proj=longlat +R=1737400 +no_defs";
+  full.values = test::indexValues(full.rows, full.cols);
+  const ImportReport rep = importBothWays("rounded", full);
+  EXPECT_EQ(rep.info.spacingY, 0.5);
+  EXPECT_EQ(rep.info.y0, 89.75);
+  EXPECT_TRUE(rep.spacingSnapped);
+  EXPECT_GT(rep.poleShiftPixels, 0.1);
+  test::expectExact(scratch("rounded_tiles.h5"), rep, test::readGdal(scratch("rounded.tif")));
+}
+
 TEST(MosaicPoles, EquirectangularTilesWithARoundedMapScaleBecomeOneGlobalGridOnThePoles) {
   // 12125 m pixels on the Moon (0.4° is 12129.4 m), corner at 90°N in metres: 450 × 900
   // samples. Each half spans 360° of longitude but only half the latitudes: the snap to
