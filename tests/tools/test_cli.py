@@ -1551,6 +1551,13 @@ def test_projected_crs_import_info_and_lonlat_query(work, name, proj4, body):
     points = [f"{lon!r},{lat!r}" for lon, lat in osr_lonlat(src, pixels)]
     _, rows = parse_csv(run("query", out, "--interp", "nearest", "--", *points).stdout)
     assert [row[2] for row in rows] == [float(values[r, c]) for r, c in pixels]
+    # render draws it (straight down on its centre: terrain fills the image's centre).
+    png = work / f"{name}.png"
+    p = run("render", out, "-o", png, "--width", 160, "--height", 120, "--elevation", 90,
+            "--distance", 12000)
+    assert "Wrote" in p.stdout
+    mask = terrain_mask(read_png(png))
+    assert mask[60, 80] and mask.sum() > 0.05 * mask.size and not mask[0, 0]
 
 
 def test_height_map_png_imports_with_the_flags_and_is_refused_without_them(work):
