@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,7 +38,51 @@ struct Args {
   std::vector<std::size_t> window;
   std::vector<double> bbox;
   bool strict = false;
+  // A height map without georeferencing (store::HeightMapOptions).
+  std::vector<double> spacing, origin;
+  double heightScale = 1.0, heightOffset = 0.0, heading = 0.0;
 };
+
+/// The height-map flags, which place a raster without georeferencing.
+void addHeightMapOptions(CLI::App& cmd, Args& a) {
+  auto* spacing = cmd.add_option("--spacing", a.spacing,
+                                 "Height map without georeferencing (PNG, GeoTIFF without a CRS): "
+                                 "metres between samples, DX or DX,DY")
+                      ->delimiter(',')
+                      ->expected(1, 2);
+  auto* origin = cmd.add_option("--origin", a.origin,
+                                "Height map: LAT,LON (planetodetic degrees) of its centre sample; "
+                                "with --body (Mars, Moon or Earth)")
+                     ->delimiter(',')
+                     ->expected(2);
+  spacing->needs(origin);
+  origin->needs(spacing);
+  cmd.add_option("--height-scale", a.heightScale,
+                 "Height map: metres per raster value (heights = offset + scale * value)")
+      ->needs(spacing)
+      ->capture_default_str();
+  cmd.add_option("--height-offset", a.heightOffset, "Height map: metres added to every height")
+      ->needs(spacing)
+      ->capture_default_str();
+  cmd.add_option("--heading", a.heading,
+                 "Height map: azimuth of the grid's y axis (up the rows), degrees clockwise "
+                 "from north")
+      ->needs(spacing)
+      ->capture_default_str();
+}
+
+std::optional<store::HeightMapOptions> heightMapOf(const Args& a) {
+  if (a.spacing.empty()) return std::nullopt;
+  store::HeightMapOptions h;
+  h.spacingX = a.spacing.front();
+  h.spacingY = a.spacing.back();
+  h.heightScale = a.heightScale;
+  h.heightOffset = a.heightOffset;
+  h.originLatDeg = a.origin.at(0);
+  h.originLonDeg = a.origin.at(1);
+  h.headingDeg = a.heading;
+  return h;
+}
 
 void printSummary(const std::string& out, const store::ImportReport& r, std::ostream& os) {
   const store::GridInfo& g = r.info;
@@ -133,12 +178,15 @@ void addImportCommand(CLI::App& app) {
   cmd->add_flag("--strict", a->strict,
                 "Refuse heights beyond +-(equatorial radius / 10) instead of importing them "
                 "with a warning and a count");
+  addHeightMapOptions(*cmd, *a);
   cmd->footer(
       "Examples:\n"
       "  regolith import dtm.cub --out dtm.h5 --deflate 4\n"
       "  regolith import dtm.cub --out dtm.h5 --compression zfp   (smaller, needs the ZFP plugin)\n"
       "  regolith import N00E010.hgt N00E011.hgt N01E010.hgt --out tiles.h5 --grid srtm\n"
       "  regolith import mola.lbl --out crater.h5 --bbox 137.2,-5.6,137.6,-5.2\n"
+      "  regolith import height.png --out h.h5 --spacing 2 --height-scale 0.1 --origin -4.6,137.4 "
+      "--body Mars\n"
       "  regolith info dtm.cub      (what an import would make of a raster)\n"
       "A summary goes to stdout. A progress bar is drawn on stderr when it is a terminal; "
       "Ctrl-C cancels cleanly (no partial file).");
@@ -159,6 +207,7 @@ void addImportCommand(CLI::App& app) {
       o.window = store::SampleWindow{a->window[0], a->window[1], a->window[2], a->window[3]};
     }
     if (a->bbox.size() == 4) o.bbox = {a->bbox[0], a->bbox[1], a->bbox[2], a->bbox[3]};
+    o.heightMap = heightMapOf(*a);
     TerminalProgress progress = TerminalProgress::forStderr();
     o.progress = progress.callback();
     o.cancel = CancelOnSignal::flag();

@@ -1,6 +1,7 @@
 // `regolith info FILE [--json]`: what a store holds, or what an import would make of a raster.
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Import.hpp>
+#include <regolith/store/ProjPlacement.hpp>
 #include <regolith/store/Store.hpp>
 
 #include "Commands.hpp"
@@ -37,13 +38,7 @@ std::string latitudeTypeName(topo::LatitudeType t) {
 }
 
 std::string placementName(PlacementInfo::Kind k) {
-  switch (k) {
-    case PlacementInfo::Kind::LocalTangentPlane: return "local_tangent_plane";
-    case PlacementInfo::Kind::PolarStereographic: return "polar_stereographic";
-    case PlacementInfo::Kind::Equirectangular: return "equirectangular";
-    case PlacementInfo::Kind::TransverseMercator: return "transverse_mercator";
-  }
-  return "unknown";
+  return std::string(store::placementKindName(k));
 }
 
 ordered_json placementJson(const GridInfo& g) {
@@ -78,6 +73,11 @@ ordered_json placementJson(const GridInfo& g) {
       j["scale_factor"] = p.scaleFactor ? ordered_json(*p.scaleFactor) : nullptr;
       j["false_easting"] = p.falseEasting;
       j["false_northing"] = p.falseNorthing;
+      break;
+    case PlacementInfo::Kind::Projected:
+      j["crs_name"] = store::projProjection(p.crs)->name();
+      j["proj_string"] = store::projString(p.crs);
+      j["crs_wkt"] = p.crs;
       break;
   }
   return j;
@@ -231,6 +231,10 @@ void printPlacement(const GridInfo& g, std::ostream& out) {
           << shortestNumber(p.scaleFactor.value_or(std::numeric_limits<double>::quiet_NaN()))
           << ", false easting " << shortestNumber(p.falseEasting) << " m, false northing "
           << shortestNumber(p.falseNorthing) << " m\n";
+      break;
+    case PlacementInfo::Kind::Projected:
+      out << " through PROJ, CRS '" << store::projProjection(p.crs)->name() << "'\n"
+          << "  proj string:    " << store::projString(p.crs) << "\n";
       break;
   }
 }

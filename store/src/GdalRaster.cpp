@@ -127,6 +127,30 @@ std::string rowsText(std::size_t first, std::size_t last) {
 
 }  // namespace
 
+double shiftOntoPoles(GridInfo& i) {
+  // A pole-to-pole grid (rows × spacing = 180°) whose offsets, through a rounded map scale,
+  // place it up to 0.9 pixel beyond a pole: its edges are the poles.
+  if (i.kind != GridKind::Planet ||
+      std::abs(static_cast<double>(i.rows) * i.spacingY - 180.0) > 1e-9 * 180.0) {
+    return 0.0;
+  }
+  const double over = poleOverhang(i);
+  if (!(over > topo::kPoleOverhangPixels && over <= 0.9)) return 0.0;
+  const double y0 = 90.0 - 0.5 * i.spacingY;
+  const double shift = (i.y0 - y0) / i.spacingY;
+  i.y0 = y0;
+  return shift;
+}
+
+void requireWithinPoles(const GridInfo& i, const std::string& prefix) {
+  if (i.kind == GridKind::Planet && poleOverhang(i) > topo::kPoleOverhangPixels) {
+    throw ImportError(prefix + ": georeferencing places the grid's edges at latitudes " +
+                      number(i.y0 + 0.5 * i.spacingY) + " to " +
+                      number(i.y0 - (static_cast<double>(i.rows) - 0.5) * i.spacingY) +
+                      " deg, beyond a pole; expected within -90 to 90");
+  }
+}
+
 bool globalToPlanet(GridInfo& info, std::optional<double> labelPixelsPerDegree) {
   const PlacementInfo& pl = info.placement;
   if (info.kind != GridKind::Dem || pl.kind != PlacementInfo::Kind::Equirectangular) return false;
@@ -188,8 +212,8 @@ void ErrorCapture::handler(CPLErr cls, CPLErrorNum /*num*/, const char* msg) {
 // ---- Raster ----------------------------------------------------------------------------------
 
 Raster::Raster(const std::filesystem::path& path, const ImportOptions& options,
-               std::string operation)
-    : path_(path), prefix_(std::move(operation) + ": " + path.string()) {
+               std::string operation, bool mosaicTile)
+    : path_(path), prefix_(std::move(operation) + ": " + path.string()), tile_(mosaicTile) {
   registerOnce();
   open(options, false);
 }
@@ -342,17 +366,8 @@ void Raster::resolvePoles() {
                    i.placement.projectionRadius > 0.0;
   if (!planet && !eqc) return;  // other projections have no rows beyond a pole
   const double tol = topo::kPoleOverhangPixels;
-  const double rows = static_cast<double>(i.rows);
-  // A pole-to-pole grid (rows × spacing = 180°) whose offsets, through a rounded map scale,
-  // place it up to 0.9 pixel beyond a pole: its edges are the poles.
-  if (planet && std::abs(rows * i.spacingY - 180.0) <= 1e-9 * 180.0) {
-    const double over = poleOverhang(i);
-    if (over > tol && over <= 0.9) {
-      const double y0 = 90.0 - 0.5 * i.spacingY;
-      layout_.poleShiftPixels = (i.y0 - y0) / i.spacingY;
-      i.y0 = y0;
-    }
-  }
+  // A tile's edges are checked with the mosaic's (importTiles()), not tile by tile.
+  if (!tile_) layout_.poleShiftPixels = shiftOntoPoles(i);
   // Latitude (degrees) of the centre of row r, and the pole tolerance in degrees.
   const double degPerY = planet ? 1.0 : kRadToDeg / i.placement.projectionRadius;
   const double lat0 = planet ? 0.0 : i.placement.latOriginDeg;
@@ -387,12 +402,7 @@ void Raster::resolvePoles() {
   i.y0 -= static_cast<double>(north) * i.spacingY;
   i.rows -= north + south;
   // What is left of a planet grid must lie within the poles as TopoPlanet requires.
-  if (planet && poleOverhang(i) > tol) {
-    throw ImportError(prefix_ + ": georeferencing places the grid's edges at latitudes " +
-                      number(i.y0 + 0.5 * i.spacingY) + " to " +
-                      number(i.y0 - (static_cast<double>(i.rows) - 0.5) * i.spacingY) +
-                      " deg, beyond a pole; expected within -90 to 90");
-  }
+  if (!tile_) requireWithinPoles(i, prefix_);
 }
 
 void Raster::dropRepeatedColumns() {
@@ -502,6 +512,12 @@ void Raster::analyse(const ImportOptions& options) {
   l.readMask = (maskFlags & GMF_ALL_VALID) == 0 && maskFlags != GMF_NODATA;
   // The int16 void marker of SRTM-style DEMs, when the file declares no nodata at all.
   l.voidMarker = hasNodata == 0 && !l.readMask && !options.nodata;
+  // No CRS: a height map placed by the caller, or refused naming the options (HeightMap.cpp).
+  if (GDALGetSpatialRef(ds) == nullptr || options.heightMap) {
+    placeHeightMap(ds, options, l, p);
+    layout_ = std::move(l);
+    return;  // heights by definition: no look for radii
+  }
 
   // Georeferencing.
   std::array<double, 6> gt{};
@@ -575,11 +591,7 @@ void Raster::analyse(const ImportOptions& options) {
     const double lon0 = projParm(srs, SRS_PP_CENTRAL_MERIDIAN, 0.0);
     const double lat0 = projParm(srs, SRS_PP_LATITUDE_OF_ORIGIN, 0.0);
     PlacementInfo& pl = info.placement;
-    if (method == SRS_PT_EQUIRECTANGULAR) {
-      if (a != b) {
-        throw ImportError(p + ": projection " + l.projection + " is on an ellipsoid (" + number(a) +
-                          " / " + number(b) + " m); equirectangular is supported on a sphere only");
-      }
+    if (method == SRS_PT_EQUIRECTANGULAR && a == b) {
       const double latTs = projParm(srs, SRS_PP_STANDARD_PARALLEL_1, 0.0);
       info.kind = GridKind::Dem;
       pl.kind = PlacementInfo::Kind::Equirectangular;
@@ -591,7 +603,8 @@ void Raster::analyse(const ImportOptions& options) {
       info.spacingY = dyM;
       info.x0 = gt[0] * lf + 0.5 * dxM - fe;
       info.y0 = gt[3] * lf - 0.5 * dyM - fn;
-      l.spacingSnapped = globalToPlanet(info, l.labelPixelsPerDegree);
+      // A mosaic's tiles: the mosaic as a whole becomes a planet grid (importTiles()).
+      if (!tile_) l.spacingSnapped = globalToPlanet(info, l.labelPixelsPerDegree);
     } else if (method == SRS_PT_POLAR_STEREOGRAPHIC ||
                ((method == SRS_PT_STEREOGRAPHIC || method == SRS_PT_OBLIQUE_STEREOGRAPHIC) &&
                 std::abs(lat0) == 90.0)) {
@@ -625,9 +638,7 @@ void Raster::analyse(const ImportOptions& options) {
       info.x0 = gt[0] * lf + 0.5 * dxM;
       info.y0 = gt[3] * lf - 0.5 * dyM;
     } else {
-      throw ImportError(p + ": unsupported projection " + l.projection +
-                        "; supported: geographic, equirectangular (simple cylindrical) on a "
-                        "sphere, polar stereographic, transverse Mercator (UTM)");
+      placeThroughProj(srs, gt, lf, info, p, l.projection);  // anything else PROJ knows
     }
   } else {
     throw ImportError(p + ": CRS '" + crs + "' is neither geographic nor projected");

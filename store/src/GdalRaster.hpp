@@ -10,6 +10,7 @@
 #include <gdal.h>
 #include <ogr_srs_api.h>
 
+#include <array>
 #include <atomic>
 #include <filesystem>
 #include <memory>
@@ -30,6 +31,33 @@ namespace regolith::store::gdal {
 /// offsets from the projection's origin. Returns whether the spacing was snapped; leaves
 /// other grids alone.
 bool globalToPlanet(GridInfo& info, std::optional<double> labelPixelsPerDegree = std::nullopt);
+
+/// A projected CRS without an analytic placement in topo (sinusoidal, Lambert conformal conic,
+/// orthographic, equirectangular on an ellipsoid, ...), placed through PROJ: info becomes a DEM
+/// with a PlacementInfo::Kind::Projected placement (the CRS as WKT2), its x, y the map's metres
+/// (false easting/northing included) from GDAL's geotransform `gt` in units of
+/// `metresPerUnit`. Throws ImportError ("<prefix>: ...") if PROJ cannot use the CRS or the
+/// grid's centre has no position on the body. GdalProjected.cpp.
+void placeThroughProj(OGRSpatialReferenceH srs, const std::array<double, 6>& gt,
+                      double metresPerUnit, GridInfo& info, const std::string& prefix,
+                      const std::string& projection);
+
+struct Layout;
+
+/// A raster without a CRS, or one given ImportOptions::heightMap: placed as a height map on a
+/// local tangent plane (Layout's grid, scale and offset set), or refused with an ImportError
+/// ("<prefix>: ...") that names the options that would place it. HeightMap.cpp.
+void placeHeightMap(GDALDatasetH ds, const ImportOptions& options, Layout& layout,
+                    const std::string& prefix);
+
+/// A planet grid whose rows span 180° (pole to pole) and whose edge lies beyond a pole by more
+/// than topo::kPoleOverhangPixels and at most 0.9 pixel (offsets through a rounded map scale)
+/// moved onto the poles; returns the shift in pixels (positive: south; 0: not moved).
+double shiftOntoPoles(GridInfo& info);
+
+/// Throws ImportError ("<prefix>: ...") if a planet grid's edges lie beyond a pole by more than
+/// topo::kPoleOverhangPixels, which TopoPlanet refuses.
+void requireWithinPoles(const GridInfo& info, const std::string& prefix);
 
 /// Runs GDALAllRegister() once.
 void registerOnce();
@@ -81,8 +109,10 @@ struct Layout {
 /// dataset handle is not thread-safe).
 class Raster final : public topo::SampleSource {
  public:
-  /// Opens and analyses; throws ImportError naming the file and the reason.
-  Raster(const std::filesystem::path& path, const ImportOptions& options, std::string operation);
+  /// Opens and analyses; throws ImportError naming the file and the reason. A mosaic's tile
+  /// leaves the pole shift and the check of its edges against the poles to the mosaic.
+  Raster(const std::filesystem::path& path, const ImportOptions& options, std::string operation,
+         bool mosaicTile = false);
   ~Raster() override;
   Raster(const Raster&) = delete;
   Raster& operator=(const Raster&) = delete;
@@ -114,6 +144,7 @@ class Raster final : public topo::SampleSource {
  private:
   std::filesystem::path path_;
   std::string prefix_;
+  bool tile_ = false;
   Dataset ds_;
   GDALRasterBandH band_ = nullptr;
   Layout layout_;

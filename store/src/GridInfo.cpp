@@ -1,11 +1,25 @@
 #include <regolith/core/Error.hpp>
 #include <regolith/store/GridInfo.hpp>
+#include <regolith/store/ProjPlacement.hpp>
+
+#include "StoreFormat.hpp"
 
 #include <cmath>
 #include <limits>
 #include <string>
 
 namespace regolith::store {
+
+std::string_view placementKindName(PlacementInfo::Kind kind) noexcept {
+  switch (kind) {
+    case PlacementInfo::Kind::LocalTangentPlane: return format::kLocalTangentPlane;
+    case PlacementInfo::Kind::PolarStereographic: return format::kPolarStereographic;
+    case PlacementInfo::Kind::Equirectangular: return format::kEquirectangular;
+    case PlacementInfo::Kind::TransverseMercator: return format::kTransverseMercator;
+    case PlacementInfo::Kind::Projected: return format::kProjected;
+  }
+  return "unknown";
+}
 
 topo::Body bodyOf(const GridInfo& info) {
   if (info.equatorialRadius == info.polarRadius) {
@@ -68,6 +82,7 @@ topo::Placement placementOf(const GridInfo& info) {
               topo::Equirectangular(p.projectionRadius, p.latTrueScaleDeg.value_or(0.0),
                                     p.lonCentreDeg, p.latOriginDeg),
               info.latitudeType};
+    case PlacementInfo::Kind::Projected: return projPlacement(body, p.crs);
   }
   throw InvalidArgument("store::placementOf(): grid '" + info.name + "' has an unknown placement");
 }
@@ -100,6 +115,9 @@ PlacementInfo placementInfoOf(const topo::Placement& placement) {
     p.scaleFactor = tm->scaleFactor();
     p.falseEasting = tm->falseEasting();
     p.falseNorthing = tm->falseNorthing();
+  } else if (const auto* mp = placement.mapProjection()) {
+    p.kind = PlacementInfo::Kind::Projected;
+    p.crs = mp->definition();
   }
   return p;
 }

@@ -80,7 +80,8 @@ std::string mismatch(const GridInfo& a, const GridInfo& b) {
     if (p.kind != q.kind || p.pole != q.pole || p.latTrueScaleDeg != q.latTrueScaleDeg ||
         p.scaleFactor != q.scaleFactor || p.lonCentreDeg != q.lonCentreDeg ||
         p.falseEasting != q.falseEasting || p.falseNorthing != q.falseNorthing ||
-        p.projectionRadius != q.projectionRadius || p.latOriginDeg != q.latOriginDeg) {
+        p.projectionRadius != q.projectionRadius || p.latOriginDeg != q.latOriginDeg ||
+        p.crs != q.crs) {
       return "projection parameters";
     }
   }
@@ -112,6 +113,21 @@ void refuseOverwritingSources(const std::vector<std::shared_ptr<gdal::Raster>>& 
     inputs.insert(inputs.end(), files.begin(), files.end());
   }
   core::refuseOverwritingInput(store, inputs, op);
+}
+
+/// Tiles in a geographic CRS (a tile that is a planet grid: tiles leave equirectangular
+/// sources to the mosaic's globalToPlanet()): the mosaic's rows snap to 180°/rows when they span
+/// 180° within half a pixel, placed by their pixel offsets from the equator, as one
+/// geographic file's rows do (GdalRaster.cpp). Returns whether it snapped.
+bool snapGeographicRows(GridInfo& g) {
+  const double rows = static_cast<double>(g.rows), span = rows * g.spacingY;
+  if (g.kind != GridKind::Planet || span == 180.0 || std::abs(span - 180.0) > 0.5 * g.spacingY) {
+    return false;
+  }
+  const double dy = 180.0 / rows;
+  g.y0 = g.y0 / g.spacingY * dy;
+  g.spacingY = dy;
+  return true;
 }
 
 }  // namespace
@@ -155,7 +171,9 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
                       ": a window or bounding box is for one raster; expected none with tiles");
   }
   std::vector<std::shared_ptr<gdal::Raster>> rasters;
-  for (const auto& t : tiles) rasters.push_back(std::make_shared<gdal::Raster>(t, options, op));
+  for (const auto& t : tiles) {
+    rasters.push_back(std::make_shared<gdal::Raster>(t, options, op, true));
+  }
   refuseOverwritingSources(rasters, store, op);
   const Checked checked(rasters, options);
   const GridInfo& first = rasters.front()->layout().info;
@@ -221,6 +239,12 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   // Tiles of a global equirectangular grid: the mosaic is a planet grid.
   rep.spacingSnapped =
       gdal::globalToPlanet(src.info, firstLayout.labelPixelsPerDegree) || rep.spacingSnapped;
+  if (first.kind == GridKind::Planet)
+    rep.spacingSnapped = snapGeographicRows(src.info) || rep.spacingSnapped;
+  // The beyond-a-pole rule and the snap onto the poles apply to the mosaic's extent.
+  rep.poleShiftPixels = gdal::shiftOntoPoles(src.info);
+  gdal::requireWithinPoles(src.info, op + ": " + tiles.front().string() + " and " +
+                                         std::to_string(tiles.size() - 1) + " more tile(s)");
   // Provenance: the first tile's, with every tile's files.
   CPLJSONDocument doc;
   if (!doc.LoadMemory(rasters.front()->provenance())) {

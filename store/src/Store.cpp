@@ -162,10 +162,13 @@ void readPlacement(hid_t g, GridInfo& info, const Context& ctx, const std::strin
     p.scaleFactor = finiteNumber(g, format::kScaleFactor, ctx, owner);
     p.falseEasting = finiteNumber(g, format::kFalseEasting, ctx, owner);
     p.falseNorthing = finiteNumber(g, format::kFalseNorthing, ctx, owner);
+  } else if (kind == format::kProjected) {
+    p.kind = PlacementInfo::Kind::Projected;
+    p.crs = hdf5::readString(g, format::kCrsWkt, ctx, owner);
   } else {
     fail(ctx, owner + " has placement '" + kind +
-                  "', expected 'local_tangent_plane', 'polar_stereographic', 'equirectangular' "
-                  "or 'transverse_mercator'");
+                  "', expected 'local_tangent_plane', 'polar_stereographic', 'equirectangular', "
+                  "'transverse_mercator' or 'projected'");
   }
   try {
     (void)placementOf(info);

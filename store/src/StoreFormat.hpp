@@ -53,6 +53,7 @@ inline constexpr const char* kFalseEasting = "false_easting";
 inline constexpr const char* kFalseNorthing = "false_northing";
 inline constexpr const char* kProjectionRadius = "projection_radius";
 inline constexpr const char* kLatOrigin = "lat_origin_deg";
+inline constexpr const char* kCrsWkt = "crs_wkt";
 
 // Tiled grids (format 1.1): the grid's attribute tile_count, its group tiles/<i> per tile
 // with the attributes below, and either a dataset level0 or the two external attributes.
@@ -74,6 +75,7 @@ inline constexpr std::string_view kLocalTangentPlane = "local_tangent_plane";
 inline constexpr std::string_view kPolarStereographic = "polar_stereographic";
 inline constexpr std::string_view kEquirectangular = "equirectangular";
 inline constexpr std::string_view kTransverseMercator = "transverse_mercator";
+inline constexpr std::string_view kProjected = "projected";
 
 // Transverse Mercator placements (format 1.2): a grid with one has format_version [1, 2].
 inline constexpr int kTransverseMercatorFormatMinor = 2;
@@ -87,11 +89,18 @@ inline constexpr const char* kValidSamples = "valid_samples";
 // Provenance (format 1.3, optional): a JSON string.
 inline constexpr const char* kProvenance = "provenance";
 
+// Placements in any projected CRS through PROJ (format 1.4): placement "projected" and the
+// CRS as WKT2 in crs_wkt.
+inline constexpr int kProjectedFormatMinor = 4;
+
 /// The minor format version a grid needs: 0, 1 for a tiled grid, 2 for a transverse
-/// Mercator placement, 3 with height statistics (minor versions are cumulative: a 1.2
-/// reader reads tiles too).
+/// Mercator placement, 3 with height statistics, 4 for a PROJ placement (minor versions are
+/// cumulative: a 1.2 reader reads tiles too).
 [[nodiscard]] inline int gridFormatMinor(const GridInfo& info, bool tiled,
                                          bool statistics = false) noexcept {
+  if (info.kind == GridKind::Dem && info.placement.kind == PlacementInfo::Kind::Projected) {
+    return kProjectedFormatMinor;
+  }
   if (statistics || !info.provenance.empty()) return kStatisticsFormatMinor;
   if (info.kind == GridKind::Dem &&
       info.placement.kind == PlacementInfo::Kind::TransverseMercator) {

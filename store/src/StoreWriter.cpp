@@ -244,16 +244,6 @@ Prepared prepare(const GridSource& src, const WriteOptions& o,
   return p;
 }
 
-std::string_view placementName(PlacementInfo::Kind k) {
-  switch (k) {
-    case PlacementInfo::Kind::LocalTangentPlane: return format::kLocalTangentPlane;
-    case PlacementInfo::Kind::PolarStereographic: return format::kPolarStereographic;
-    case PlacementInfo::Kind::Equirectangular: return format::kEquirectangular;
-    case PlacementInfo::Kind::TransverseMercator: return format::kTransverseMercator;
-  }
-  return "?";
-}
-
 void writeAttributes(hid_t g, const GridInfo& info, bool tiled, bool statistics,
                      const Context& ctx) {
   using namespace hdf5;
@@ -288,7 +278,7 @@ void writeAttributes(hid_t g, const GridInfo& info, bool tiled, bool statistics,
   if (!info.provenance.empty()) writeString(g, format::kProvenance, info.provenance, ctx);
   if (info.kind != GridKind::Dem) return;
   const PlacementInfo& p = info.placement;
-  writeString(g, format::kPlacement, std::string(placementName(p.kind)), ctx);
+  writeString(g, format::kPlacement, std::string(placementKindName(p.kind)), ctx);
   switch (p.kind) {
     case PlacementInfo::Kind::LocalTangentPlane:
       writeDouble(g, format::kOriginLat, p.originLatDeg, ctx);
@@ -318,6 +308,7 @@ void writeAttributes(hid_t g, const GridInfo& info, bool tiled, bool statistics,
       writeDouble(g, format::kFalseEasting, p.falseEasting, ctx);
       writeDouble(g, format::kFalseNorthing, p.falseNorthing, ctx);
       break;
+    case PlacementInfo::Kind::Projected: writeString(g, format::kCrsWkt, p.crs, ctx); break;
   }
 }
 

@@ -307,6 +307,52 @@ def test_import_raster_with_the_zfp_codec_reads_the_same_samples(plane_tif, tmp_
     assert not (tmp_path / "x.h5").exists()
 
 
+def test_import_raster_of_a_height_map_and_a_sinusoidal_dem(tmp_path):
+    # An 8-bit PNG height map placed by keywords: samples GDAL's value x scale + offset.
+    values = (np.arange(7 * 9).reshape(7, 9) * 37 % 256).astype(np.uint8)
+    mem = gdal.GetDriverByName("MEM").Create("", 9, 7, 1, gdal.GDT_Byte)
+    mem.GetRasterBand(1).WriteArray(values)
+    png = tmp_path / "h.png"
+    gdal.GetDriverByName("PNG").CreateCopy(str(png), mem)
+    mem = None
+    with pytest.raises(regolith.RasterImportError, match="spacing=, origin=, body="):
+        regolith.import_raster(png, tmp_path / "x.h5")
+    with pytest.raises(ValueError, match="needs both spacing= and origin="):
+        regolith.import_raster(png, tmp_path / "x.h5", spacing=2.0, body="Moon")
+    out = tmp_path / "h.h5"
+    regolith.import_raster(png, out, spacing=(2.0, 3.0), origin=(10.0, 20.0), body="Moon",
+                           height_scale=0.5, height_offset=-7.0, heading=90.0)
+    info = regolith.Store(out).grid("h")
+    assert info.placement == "local_tangent_plane" and info.crs is None
+    assert (info.spacing_x, info.spacing_y, info.body) == (2.0, 3.0, "Moon")
+    with h5py.File(out, "r") as f:
+        np.testing.assert_array_equal(f["grids/h/level0"][...],
+                                      (values * 0.5 - 7.0).astype(np.float32))
+    # A sinusoidal DEM goes through PROJ; its CRS is recorded as WKT2.
+    from osgeo import osr
+    ds = gdal.GetDriverByName("GTiff").Create(str(tmp_path / "s.tif"), 6, 5, 1, gdal.GDT_Float32)
+    srs = osr.SpatialReference()
+    srs.ImportFromProj4("+proj=sinu +lon_0=137 +R=3396190 +units=m +no_defs")
+    ds.SetProjection(srs.ExportToWkt())
+    ds.SetGeoTransform([24000.0, 25.0, 0.0, -272000.0, 0.0, -25.0])
+    ds.GetRasterBand(1).WriteArray(np.full((5, 6), 3.0, dtype=np.float32))
+    ds = None
+    regolith.import_raster(tmp_path / "s.tif", tmp_path / "s.h5", body="Mars")
+    info = regolith.Store(tmp_path / "s.h5").grid("s")
+    assert info.placement == "projected" and info.crs.startswith("PROJCRS[")
+    dem = regolith.open(tmp_path / "s.h5")
+    p = dem.to_body_fixed(np.array([24012.5]), np.array([-272012.5]), np.array([0.0]))[0]
+    # OSR's lon/lat of that pixel centre, on the sphere.
+    geo = srs.CloneGeogCS()
+    srs.SetAxisMappingStrategy(osr.OAMS_TRADITIONAL_GIS_ORDER)
+    geo.SetAxisMappingStrategy(osr.OAMS_TRADITIONAL_GIS_ORDER)
+    lon, lat, _ = osr.CoordinateTransformation(srs, geo).TransformPoint(24012.5, -272012.5)
+    phi, lam = math.radians(lat), math.radians(lon)
+    want = 3396190.0 * np.array([math.cos(phi) * math.cos(lam), math.cos(phi) * math.sin(lam),
+                                 math.sin(phi)])
+    np.testing.assert_allclose(p, want, rtol=0, atol=1e-6)
+
+
 def test_import_of_a_non_raster_raises_raster_import_error(tmp_path):
     bad = tmp_path / "not-a-raster.tif"
     bad.write_text("hello")

@@ -4,9 +4,11 @@
 // with its message, crash safety under SIGKILL, cancellation and progress.
 // (tests/store/test_store_h5py.py checks the same layout with h5py as an outside oracle.)
 #include <regolith/core/Error.hpp>
+#include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/PatchCache.hpp>
 #include <regolith/store/Store.hpp>
+#include <regolith/topo/Placement.hpp>
 #include <regolith/topo/TopoDem.hpp>
 
 #include "support/StoreScratch.hpp"
@@ -1463,8 +1465,8 @@ TEST(Store, RejectsABadTransverseMercatorPlacementNamingTheField) {
   });
   EXPECT_EQ(openError(p), pre +
                               "has placement 'transverse_mercator_south_orientated', expected "
-                              "'local_tangent_plane', 'polar_stereographic', 'equirectangular' "
-                              "or 'transverse_mercator'");
+                              "'local_tangent_plane', 'polar_stereographic', 'equirectangular', "
+                              "'transverse_mercator' or 'projected'");
   // A writer given a transverse Mercator placement without k0 refuses it and writes nothing.
   GridInfo noK0 = utmInfo("utm");
   noK0.placement.scaleFactor.reset();
@@ -1642,4 +1644,49 @@ TEST(Store, ADamagedGlobalHeapInAnOldStoreIsAnErrorNotACrashOrAHang) {
                    ": cannot read grid 'crater' attribute 'kind': HDF5 did not finish reading it "
                    "within 10 s (a variable-length string, kept in the file's global heap, which "
                    "has no checksum: the heap is damaged)");
+}
+
+// ---- placements through PROJ (format 1.4) ---------------------------------------------------
+
+TEST(Store, AProjectedPlacementIsWrittenAsWkt2AndReopensAsTheSamePlacement) {
+  GridInfo g = demInfo("sinu", 9, 7);
+  g.equatorialRadius = g.polarRadius = 3396190.0;
+  g.x0 = 24000.0;
+  g.y0 = -272000.0;
+  g.placement = {};
+  g.placement.kind = PlacementInfo::Kind::Projected;
+  g.placement.crs = "+proj=sinu +lon_0=137 +R=3396190 +units=m +no_defs +type=crs";
+  const fs::path p = scratch("projected.h5");
+  writeStore(p, std::vector<GridSource>{source(g, crater)});
+  const GridInfo back = [&] {
+    const Store s = Store::open(p);  // closed before the edits below
+    EXPECT_EQ(s.formatVersion(), (std::array<int, 2>{1, 4}));
+    return s.grid("sinu");
+  }();
+  EXPECT_EQ(back.placement.kind, PlacementInfo::Kind::Projected);
+  EXPECT_EQ(back.placement.crs, g.placement.crs);  // as given; PROJ reads it back
+  const topo::Placement a = placementOf(g), b = placementOf(back);
+  EXPECT_EQ(b.kind(), topo::Placement::Kind::Projected);
+  EXPECT_EQ(a.toBodyFixed(24100.0, -272300.0, 5.0), b.toBodyFixed(24100.0, -272300.0, 5.0));
+  // placementInfoOf gives the CRS as WKT2, which places the same.
+  const PlacementInfo info = placementInfoOf(b);
+  EXPECT_EQ(info.crs.rfind("PROJCRS[", 0), 0U) << info.crs;
+  GridInfo wkt = back;
+  wkt.placement = info;
+  EXPECT_EQ(placementOf(wkt).toBodyFixed(24100.0, -272300.0, 5.0),
+            b.toBodyFixed(24100.0, -272300.0, 5.0));
+  // A CRS PROJ cannot read, or none: the store is refused naming the grid and field.
+  const std::string pre = "store::open(): " + p.string() + ": grid 'sinu' ";
+  editRaw(p, [](hid_t f) {
+    const H5 grp(H5Gopen2(f, "/grids/sinu", H5P_DEFAULT), H5Gclose);
+    rawSetString(grp, "crs_wkt", "PROJCRS[nonsense");
+  });
+  const std::string msg = openError(p);
+  EXPECT_EQ(msg.rfind(pre + "has an unusable placement (store::projProjection(): CRS is "
+                            "unreadable (PROJ: ",
+                      0),
+            0U)
+      << msg;
+  editRaw(p, [](hid_t f) { ok(H5Adelete_by_name(f, "/grids/sinu", "crs_wkt", H5P_DEFAULT)); });
+  EXPECT_EQ(openError(p), pre + "has no attribute 'crs_wkt'");
 }

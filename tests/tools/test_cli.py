@@ -865,23 +865,13 @@ def test_info_statistics_corners_and_ground_size(work):
     assert json.loads(run("info", old, "--json").stdout)["grids"][0]["provenance"] is None
 
 
-def sinusoidal_tif(path):
+def orthographic_off_the_map_tif(path):
+    """An orthographic grid centred beyond the horizon: no sample has a place on the body."""
     ds = gdal.GetDriverByName("GTiff").Create(str(path), 20, 10, 1, gdal.GDT_Float32)
     srs = osr.SpatialReference()
-    srs.ImportFromProj4("+proj=sinu +lon_0=0 +R=3396190 +units=m +no_defs")
+    srs.ImportFromProj4("+proj=ortho +lat_0=0 +lon_0=0 +R=3396190 +units=m +no_defs")
     ds.SetProjection(srs.ExportToWkt())
-    ds.SetGeoTransform([0.0, 100.0, 0.0, 5000.0, 0.0, -100.0])
-    ds.GetRasterBand(1).WriteArray(np.ones((10, 20), dtype=np.float32))
-    ds = None
-
-
-def lambert_conformal_conic_tif(path):
-    ds = gdal.GetDriverByName("GTiff").Create(str(path), 20, 10, 1, gdal.GDT_Float32)
-    srs = osr.SpatialReference()
-    srs.ImportFromProj4("+proj=lcc +lat_1=33 +lat_2=45 +lat_0=39 +lon_0=-96 +x_0=0 +y_0=0 "
-                        "+ellps=GRS80 +units=m +no_defs")
-    ds.SetProjection(srs.ExportToWkt())
-    ds.SetGeoTransform([100000.0, 100.0, 0.0, 50000.0, 0.0, -100.0])
+    ds.SetGeoTransform([5.0e6, 100.0, 0.0, 5000.0, 0.0, -100.0])
     ds.GetRasterBand(1).WriteArray(np.ones((10, 20), dtype=np.float32))
     ds = None
 
@@ -889,14 +879,11 @@ def lambert_conformal_conic_tif(path):
 def test_import_errors(work):
     junk = work / "junk.tif"
     junk.write_bytes(b"II*\0 this is not really a TIFF")
-    sinu = work / "sinusoidal.tif"
-    sinusoidal_tif(sinu)
-    lcc = work / "lcc.tif"
-    lambert_conformal_conic_tif(lcc)
+    ortho = work / "ortho.tif"
+    orthographic_off_the_map_tif(ortho)
     cases = [
         (junk, "GDAL cannot open it as a raster"),
-        (sinu, "unsupported projection"),
-        (lcc, "unsupported projection unknown (Lambert_Conformal_Conic_2SP)"),
+        (ortho, "is off the map of unknown (Orthographic)"),
         (work / "no-such.tif", "no such file"),
     ]
     for src, needle in cases:
@@ -907,7 +894,7 @@ def test_import_errors(work):
         assert p.stderr.startswith("regolith: error: store::importRaster(): ") and \
             str(src) in p.stderr and needle in p.stderr, p.stderr
         assert not out.exists() and list(work.glob("failed.h5*")) == []
-        if needle.startswith("unsupported projection"):
+        if "off the map" in needle:
             # info on the same raster: the same reason, non-zero, nothing on stdout.
             p = run("info", src, check=False)
             assert p.returncode != 0 and p.stdout == "" and needle in p.stderr
@@ -1523,3 +1510,87 @@ def test_demo_generates_then_reuses_its_data_and_writes_every_image(work):
     assert first_frame[45, 80] and not first_frame[0, 0] and not first_frame[-1, -1]
     second = run(*args, env_render=True)
     assert second.stdout.count("reused") == 2 and "generated in" not in second.stdout
+
+
+# ---- projections through PROJ, height maps (issue 21) ----------------------------------------
+
+def osr_lonlat(path, pixels):
+    """OSR's lon/lat (the CRS's geographic CRS) of GDAL's pixel centres (row, col)."""
+    ds = gdal.Open(str(path))
+    gt = ds.GetGeoTransform()
+    srs = ds.GetSpatialRef()
+    srs.SetAxisMappingStrategy(osr.OAMS_TRADITIONAL_GIS_ORDER)
+    geo = srs.CloneGeogCS()
+    geo.SetAxisMappingStrategy(osr.OAMS_TRADITIONAL_GIS_ORDER)
+    ct = osr.CoordinateTransformation(srs, geo)
+    return [ct.TransformPoint(gt[0] + (c + 0.5) * gt[1], gt[3] + (r + 0.5) * gt[5])[:2]
+            for r, c in pixels]
+
+
+@pytest.mark.parametrize("name,proj4,body", [
+    ("sinusoidal", "+proj=sinu +lon_0=137 +R=3396190 +units=m +no_defs", "Mars"),
+    ("lcc", "+proj=lcc +lat_1=-20 +lat_2=-40 +lat_0=-30 +lon_0=30 +R=1737400 +units=m +no_defs",
+     "Moon"),
+])
+def test_projected_crs_import_info_and_lonlat_query(work, name, proj4, body):
+    """A sinusoidal (Mars) and an LCC (Moon) DEM import through PROJ; `info` shows the CRS, the
+    store records it as WKT2 (format 1.4), and `query` at OSR's lon/lat of pixel centres
+    returns GDAL's values there."""
+    values = (np.arange(12 * 17).reshape(12, 17) * 1.5 - 300.0).astype(np.float32)
+    src = work / f"{name}.tif"
+    projected_tif(src, proj4, (24000.0, -150000.0), values, spacing=250.0)
+    out = work / f"{name}.h5"
+    run("import", src, "--out", out, "--body", body)
+    info = json.loads(run("info", out, "--json").stdout)
+    assert info["format_version"] == [1, 4]
+    g = info["grids"][0]
+    assert g["body"]["name"] == body
+    assert g["placement"]["kind"] == "projected"
+    assert g["placement"]["proj_string"].startswith("+proj=" + proj4.split()[0][6:])
+    assert g["placement"]["crs_wkt"].startswith("PROJCRS[")
+    with h5py.File(out, "r") as f:
+        a = f[f"grids/{name}"].attrs
+        assert a["placement"] == "projected" and a["crs_wkt"] == g["placement"]["crs_wkt"]
+    text = run("info", out).stdout
+    assert "placement:      projected through PROJ, CRS 'unknown'" in text
+    assert "proj string:    " + g["placement"]["proj_string"] in text
+    pixels = [(r, c) for r in range(12) for c in range(17)]
+    points = [f"{lon!r},{lat!r}" for lon, lat in osr_lonlat(src, pixels)]
+    _, rows = parse_csv(run("query", out, "--interp", "nearest", "--", *points).stdout)
+    assert [row[2] for row in rows] == [float(values[r, c]) for r, c in pixels]
+    # render draws it (straight down on its centre: terrain fills the image's centre).
+    png = work / f"{name}.png"
+    p = run("render", out, "-o", png, "--width", 160, "--height", 120, "--elevation", 90,
+            "--distance", 12000)
+    assert "Wrote" in p.stdout
+    mask = terrain_mask(read_png(png))
+    assert mask[60, 80] and mask.sum() > 0.05 * mask.size and not mask[0, 0]
+
+
+def test_height_map_png_imports_with_the_flags_and_is_refused_without_them(work):
+    """A 16-bit PNG height map: refused without --spacing/--origin/--body (the message names
+    them), imported with them: every sample GDAL's value x scale + offset, at (x, y) queries."""
+    values = (np.arange(9 * 11).reshape(9, 11) * 311 % 65536).astype(np.uint16)
+    mem = gdal.GetDriverByName("MEM").Create("", 11, 9, 1, gdal.GDT_UInt16)
+    mem.GetRasterBand(1).WriteArray(values)
+    png = work / "height.png"
+    gdal.GetDriverByName("PNG").CreateCopy(str(png), mem)
+    mem = None
+    out = work / "height.h5"
+    p = run("import", png, "--out", out, check=False)
+    assert p.returncode != 0 and not out.exists()
+    assert "--spacing, --origin and --body" in p.stderr and "--height-scale" in p.stderr
+    run("import", png, "--out", out, "--spacing", "2,3", "--height-scale", "0.01",
+        "--height-offset", "-1400", "--origin", "-2.05,-5.5", "--heading", "30", "--body", "Mars")
+    g = json.loads(run("info", out, "--json").stdout)["grids"][0]
+    assert g["placement"]["kind"] == "local_tangent_plane"
+    assert (g["placement"]["origin_lat_deg"], g["placement"]["origin_lon_deg"]) == (-2.05, -5.5)
+    assert g["placement"]["heading_deg"] == 30.0 and g["spacing"] == [2.0, 3.0]
+    assert g["geodetic"]["centre"] == {"lat": pytest.approx(-2.05, abs=1e-12),
+                                       "lon": pytest.approx(-5.5, abs=1e-12)}
+    pixels = [(r, c) for r in range(9) for c in range(11)]
+    points = [f"{g['x0'] + 2.0 * c!r},{g['y0'] - 3.0 * r!r}" for r, c in pixels]
+    _, rows = parse_csv(run("query", out, "--coords", "xy", "--interp", "nearest", "--",
+                            *points).stdout)
+    want = [float(np.float32(float(values[r, c]) * 0.01 + -1400.0)) for r, c in pixels]
+    assert [row[2] for row in rows] == want

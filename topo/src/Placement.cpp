@@ -18,20 +18,34 @@ Placement::Placement(const Body& body, PolarStereographic projection)
 Placement::Placement(const Body& body, Equirectangular projection, LatitudeType latitudeType)
     : body_(body), latType_(latitudeType), proj_(projection) {}
 
+namespace {
+
+/// Throws InvalidArgument unless a projection's ellipsoid (its latitudes are planetodetic on
+/// it) is the body's: another body would put every sample somewhere else.
+void requireBodysEllipsoid(const Body& body, double a, double e2, const char* what) {
+  const double ba = body.equatorialRadius(), be2 = body.eccentricitySquared();
+  if (std::abs(a - ba) > 1e-9 * ba || std::abs(e2 - be2) > 1e-12) {
+    throw InvalidArgument(std::string("Placement(): the ") + what +
+                          " projection is on an ellipsoid of a = " + core::number(a) +
+                          " m, e^2 = " + core::number(e2) + ", expected the body's (" +
+                          body.name() + ": a = " + core::number(ba) +
+                          " m, e^2 = " + core::number(be2) + ")");
+  }
+}
+
+}  // namespace
+
 Placement::Placement(const Body& body, TransverseMercator projection)
     : body_(body), latType_(LatitudeType::Planetodetic), proj_(projection) {
-  // The projection's latitudes are planetodetic on its own ellipsoid: another body would put
-  // every sample somewhere else.
-  const double a = body.equatorialRadius(), e2 = body.eccentricitySquared();
-  if (std::abs(projection.equatorialRadius() - a) > 1e-9 * a ||
-      std::abs(projection.eccentricitySquared() - e2) > 1e-12) {
-    throw InvalidArgument(
-        "Placement(): the transverse Mercator projection is on an ellipsoid of "
-        "a = " +
-        core::number(projection.equatorialRadius()) +
-        " m, e^2 = " + core::number(projection.eccentricitySquared()) + ", expected the body's (" +
-        body.name() + ": a = " + core::number(a) + " m, e^2 = " + core::number(e2) + ")");
-  }
+  requireBodysEllipsoid(body, projection.equatorialRadius(), projection.eccentricitySquared(),
+                        "transverse Mercator");
+}
+
+Placement::Placement(const Body& body, std::shared_ptr<const MapProjection> projection)
+    : body_(body), latType_(LatitudeType::Planetodetic), proj_(projection) {
+  if (!projection) throw InvalidArgument("Placement(): the map projection is null");
+  requireBodysEllipsoid(body, projection->equatorialRadius(), projection->eccentricitySquared(),
+                        ("'" + projection->name() + "'").c_str());
 }
 
 Placement::Kind Placement::kind() const noexcept {
@@ -39,7 +53,8 @@ Placement::Kind Placement::kind() const noexcept {
     case 0: return Kind::LocalTangentPlane;
     case 1: return Kind::PolarStereographic;
     case 2: return Kind::Equirectangular;
-    default: return Kind::TransverseMercator;
+    case 3: return Kind::TransverseMercator;
+    default: return Kind::Projected;
   }
 }
 
@@ -55,6 +70,10 @@ const Equirectangular* Placement::equirectangular() const noexcept {
 const TransverseMercator* Placement::transverseMercator() const noexcept {
   return std::get_if<TransverseMercator>(&proj_);
 }
+const MapProjection* Placement::mapProjection() const noexcept {
+  const auto* p = std::get_if<std::shared_ptr<const MapProjection>>(&proj_);
+  return p != nullptr ? p->get() : nullptr;
+}
 
 Geodetic Placement::toGeodetic(double x, double y, double h) const {
   if (const auto* ltp = localTangentPlane()) return ltp->inverse({x, y, h});
@@ -63,6 +82,8 @@ Geodetic Placement::toGeodetic(double x, double y, double h) const {
     ll = ps->inverse({x, y});
   } else if (const auto* tm = transverseMercator()) {
     ll = tm->inverse({x, y});
+  } else if (const auto* mp = mapProjection()) {
+    ll = mp->inverse({x, y});
   } else {
     ll = equirectangular()->inverse({x, y});
     ll.latDeg = body_.toPlanetodetic(ll.latDeg, latType_);
@@ -87,6 +108,8 @@ glm::dvec3 Placement::fromGeodetic(const Geodetic& g) const {
     xy = ps->forward({g.latDeg, g.lonDeg});
   } else if (const auto* tm = transverseMercator()) {
     xy = tm->forward({g.latDeg, g.lonDeg});
+  } else if (const auto* mp = mapProjection()) {
+    xy = mp->forward({g.latDeg, g.lonDeg});
   } else {
     xy = equirectangular()->forward({body_.fromPlanetodetic(g.latDeg, latType_), g.lonDeg});
   }

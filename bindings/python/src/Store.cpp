@@ -91,6 +91,37 @@ py::dict reportDict(const store::ImportReport& r) {
   return d;
 }
 
+/// ImportOptions::heightMap from import_raster()'s keywords: none without spacing and origin.
+std::optional<store::HeightMapOptions> heightMapOf(const py::object& spacing,
+                                                   std::optional<std::array<double, 2>> origin,
+                                                   double scale, double offset, double heading) {
+  if (spacing.is_none() && !origin) {
+    if (scale != 1.0 || offset != 0.0 || heading != 0.0) {
+      throw InvalidArgument(
+          "regolith.import_raster(): height_scale, height_offset and heading place a height "
+          "map, expected them with spacing= and origin=");
+    }
+    return std::nullopt;
+  }
+  if (spacing.is_none() || !origin) {
+    throw InvalidArgument("regolith.import_raster(): a height map needs both spacing= and origin=");
+  }
+  store::HeightMapOptions h;
+  if (py::isinstance<py::sequence>(spacing)) {
+    const auto s = spacing.cast<std::array<double, 2>>();
+    h.spacingX = s[0];
+    h.spacingY = s[1];
+  } else {
+    h.spacingX = h.spacingY = spacing.cast<double>();
+  }
+  h.originLatDeg = (*origin)[0];
+  h.originLonDeg = (*origin)[1];
+  h.heightScale = scale;
+  h.heightOffset = offset;
+  h.headingDeg = heading;
+  return h;
+}
+
 py::object openTerrain(std::shared_ptr<const store::Store> file,
                        std::shared_ptr<store::PatchCache> cache, const std::string& gridArg,
                        std::size_t level) {
@@ -154,6 +185,22 @@ void bindStore(py::module_& m) {
                                if (g.nodata) return py::float_(static_cast<double>(*g.nodata));
                                return py::none();
                              })
+      .def_property_readonly(
+          "placement",
+          [](const store::GridInfo& g) -> py::object {
+            if (g.kind != store::GridKind::Dem) return py::none();
+            return py::str(std::string(store::placementKindName(g.placement.kind)));
+          },
+          "A DEM's placement: 'local_tangent_plane', 'polar_stereographic', "
+          "'equirectangular', 'transverse_mercator' or 'projected' (any "
+          "other CRS, through PROJ); None for a planet")
+      .def_property_readonly(
+          "crs",
+          [](const store::GridInfo& g) -> py::object {
+            if (g.placement.crs.empty()) return py::none();
+            return py::str(g.placement.crs);
+          },
+          "A 'projected' DEM's CRS as WKT2; None otherwise")
       .def_property_readonly(
           "extent",
           [](const store::GridInfo& g) {
@@ -236,8 +283,11 @@ void bindStore(py::module_& m) {
          const std::string& grid, std::size_t levels, std::size_t patch, int deflate,
          std::optional<double> nodata, const std::string& compression,
          std::optional<std::array<std::size_t, 4>> window,
-         std::optional<std::array<double, 4>> bbox, const std::string& body, bool strict) {
+         std::optional<std::array<double, 4>> bbox, const std::string& body, bool strict,
+         const py::object& spacing, std::optional<std::array<double, 2>> origin, double heightScale,
+         double heightOffset, double heading) {
         store::ImportOptions o;
+        o.heightMap = heightMapOf(spacing, origin, heightScale, heightOffset, heading);
         o.gridName = grid;
         o.body = body;
         o.strict = strict;
@@ -261,6 +311,8 @@ void bindStore(py::module_& m) {
       py::arg("patch_size") = 256, py::arg("deflate") = 0, py::arg("nodata") = py::none(),
       py::arg("compression") = "deflate", py::arg("window") = py::none(),
       py::arg("bbox") = py::none(), py::arg("body") = "", py::arg("strict") = false,
+      py::arg("spacing") = py::none(), py::arg("origin") = py::none(),
+      py::arg("height_scale") = 1.0, py::arg("height_offset") = 0.0, py::arg("heading") = 0.0,
       "Imports a single-band raster GDAL reads (GeoTIFF, PDS3, PDS4, ISIS3...) as one grid of a "
       "new store, written crash-safely. compression: 'deflate' (shuffle + deflate at `deflate`) "
       "or 'zfp' (ZFP reversible, lossless and smaller; readers need HDF5's ZFP filter plugin, "
@@ -268,8 +320,12 @@ void bindStore(py::module_& m) {
       "shows; bbox: (west, south, east, north) degrees, the samples whose centres lie inside "
       "(at most one of the two); body: the body's name where the CRS lacks it. Heights beyond "
       "+-(equatorial radius / 10) are counted in the report's implausible_samples, or refused "
-      "(RasterImportError) with strict=True. The store may not be one of the raster's files "
-      "(ValueError). Returns the import report as a dict. Raises RasterImportError, "
+      "(RasterImportError) with strict=True. A height map without georeferencing (PNG, "
+      "GeoTIFF without a CRS) needs spacing (metres, dx or (dx, dy)), origin ((lat, lon) of "
+      "its centre sample) and body ('Mars', 'Moon', 'Earth'); heights are height_offset + "
+      "height_scale * value, its y axis at azimuth heading. The store may not be one of the "
+      "raster's files (ValueError). Returns the import report as a dict. Raises "
+      "RasterImportError, "
       "StoreError or ValueError (a bad option).");
 
   m.def(

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 
 namespace regolith::store {
 
@@ -19,7 +20,13 @@ enum class GridKind { Dem, Planet };
 
 /// How a DEM is placed on its body (mirrors topo::Placement, as plain values).
 struct PlacementInfo {
-  enum class Kind { LocalTangentPlane, PolarStereographic, Equirectangular, TransverseMercator };
+  enum class Kind {
+    LocalTangentPlane,
+    PolarStereographic,
+    Equirectangular,
+    TransverseMercator,
+    Projected
+  };
   Kind kind = Kind::LocalTangentPlane;
   // LocalTangentPlane: origin (planetodetic degrees, metres) and heading (degrees from north).
   double originLatDeg = 0.0, originLonDeg = 0.0, originHeight = 0.0, headingDeg = 0.0;
@@ -35,6 +42,9 @@ struct PlacementInfo {
   // latitude of origin latOriginDeg, scale factor k0 on the central meridian scaleFactor
   // (required), falseEasting, falseNorthing.
   double projectionRadius = 0.0, latOriginDeg = 0.0;
+  // Projected (any other projected CRS, through PROJ: store/ProjPlacement.hpp): the CRS as
+  // WKT2 (format 1.4); x, y are its map metres, false easting/northing included.
+  std::string crs;
 };
 
 /// Level 0's heights summarised once, when the grid was written (format 1.3; absent in
@@ -98,6 +108,11 @@ struct GridInfo {
     return (cols + (std::size_t{1} << level) - 1) >> level;
   }
 };
+
+/// The placement kind's name, as the store records it and `info` prints it:
+/// "local_tangent_plane", "polar_stereographic", "equirectangular", "transverse_mercator",
+/// "projected".
+[[nodiscard]] std::string_view placementKindName(PlacementInfo::Kind kind) noexcept;
 
 /// The body a grid is on. Throws regolith::InvalidArgument for bad radii.
 [[nodiscard]] topo::Body bodyOf(const GridInfo& info);

@@ -30,6 +30,22 @@ struct SampleWindow {
   std::size_t row0 = 0, col0 = 0, rows = 0, cols = 0;
 };
 
+/// How to place a height map that has no georeferencing (a PNG, a GeoTIFF without a CRS):
+/// a DEM on a local tangent plane of the body ImportOptions::body names, its centre sample at
+/// the origin, its rows and columns along the plane's axes (columns east, rows south when the
+/// heading is 0).
+struct HeightMapOptions {
+  /// Metres between samples along x (columns) and y (rows); finite and > 0.
+  double spacingX = 0.0, spacingY = 0.0;
+  /// Heights in metres are heightOffset + heightScale · (the value GDAL reads, after the
+  /// file's own scale/offset if it has one); scale finite and non-zero.
+  double heightScale = 1.0, heightOffset = 0.0;
+  /// Planetodetic latitude/longitude (degrees) of the grid's centre, on the reference surface.
+  double originLatDeg = 0.0, originLonDeg = 0.0;
+  /// Azimuth of the grid's y axis (up the rows), degrees clockwise from north.
+  double headingDeg = 0.0;
+};
+
 /// What to import and how to write it: the store's WriteOptions (patch size, levels, codec,
 /// deflate level, threads and executor, progress, cancel; 0 levels: until a level fits one
 /// patch), and the import's own choices.
@@ -54,6 +70,9 @@ struct ImportOptions : WriteOptions {
   /// Refuse (ImportError) a height beyond +-(equatorial radius / 10) instead of counting it
   /// in ImportReport::implausibleSamples.
   bool strict = false;
+  /// A raster without georeferencing is placed by these (with `body`: Mars, Moon or Earth);
+  /// without them it is refused, and a georeferenced raster given them too.
+  std::optional<HeightMapOptions> heightMap{};
 };
 
 /// What an import found and did.

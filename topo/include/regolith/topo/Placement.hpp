@@ -3,11 +3,13 @@
 /// Where a planar DEM sits on its body.
 
 #include <regolith/topo/Body.hpp>
+#include <regolith/topo/MapProjection.hpp>
 #include <regolith/topo/Projection.hpp>
 
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
+#include <memory>
 #include <variant>
 
 namespace regolith::topo {
@@ -21,11 +23,19 @@ namespace regolith::topo {
 ///   metres (false easting/northing included); h is the height
 ///   above the body's reference surface along its normal at the inverse-projected point.
 ///   For Equirectangular the placement also says how the projection's latitude is read.
+/// - Projected: any other map projection, through a MapProjection that another module
+///   implements (store's PROJ-backed one); (x, y) and h as for the analytic projections.
 ///
-/// Immutable and thread-safe.
+/// Immutable and thread-safe (a Projected placement shares its MapProjection, which is).
 class Placement {
  public:
-  enum class Kind { LocalTangentPlane, PolarStereographic, Equirectangular, TransverseMercator };
+  enum class Kind {
+    LocalTangentPlane,
+    PolarStereographic,
+    Equirectangular,
+    TransverseMercator,
+    Projected
+  };
 
   explicit Placement(LocalTangentPlane plane);
   Placement(const Body& body, PolarStereographic projection);
@@ -34,6 +44,9 @@ class Placement {
   /// `projection` must be made on `body` (its latitudes are planetodetic on that ellipsoid);
   /// throws InvalidArgument if its radius or eccentricity differ.
   Placement(const Body& body, TransverseMercator projection);
+  /// Any projection `projection` implements, on `body`; throws InvalidArgument for a null
+  /// projection or one whose ellipsoid is not the body's.
+  Placement(const Body& body, std::shared_ptr<const MapProjection> projection);
 
   [[nodiscard]] Kind kind() const noexcept;
   [[nodiscard]] const Body& body() const noexcept { return body_; }
@@ -45,6 +58,7 @@ class Placement {
   [[nodiscard]] const PolarStereographic* polarStereographic() const noexcept;
   [[nodiscard]] const Equirectangular* equirectangular() const noexcept;
   [[nodiscard]] const TransverseMercator* transverseMercator() const noexcept;
+  [[nodiscard]] const MapProjection* mapProjection() const noexcept;
 
   /// Body-fixed position of grid point (x, y) at height h.
   [[nodiscard]] glm::dvec3 toBodyFixed(double x, double y, double h) const;
@@ -73,7 +87,9 @@ class Placement {
  private:
   Body body_;
   LatitudeType latType_;
-  std::variant<LocalTangentPlane, PolarStereographic, Equirectangular, TransverseMercator> proj_;
+  std::variant<LocalTangentPlane, PolarStereographic, Equirectangular, TransverseMercator,
+               std::shared_ptr<const MapProjection>>
+      proj_;
 };
 
 }  // namespace regolith::topo
