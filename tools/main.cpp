@@ -1,5 +1,6 @@
 // The `regolith` command: one subcommand per file (*Command.cpp), registered here.
 #include <regolith/core/Error.hpp>
+#include <regolith/store/Store.hpp>
 
 #include "Commands.hpp"
 
@@ -30,6 +31,7 @@ void refuseUnknownSubcommand(const CLI::App& app, int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) try {
+  regolith::store::skipHdf5ShutdownAtExit();  // no HDF5 junk after a clear error (Store.hpp)
   CLI::App app{"Regolith: planetary terrain for simulation and visualization"};
   app.name("regolith");
   app.require_subcommand(1);

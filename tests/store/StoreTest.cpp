@@ -590,6 +590,60 @@ TEST(Store, ReadsEverySampleTypeWithScaleOffsetAndNodataFromACraftedFile) {
 
 // ---- round trips --------------------------------------------------------------------------
 
+TEST(Store, NonFiniteSamplesAndHeightsAreMissingNotValid) {
+  // The writer refuses ±inf, but a crafted file may hold it: +inf used to read as a valid
+  // sample (valid=1, NaN values downstream). So does a float64 sample whose height overflows
+  // float32. All of them read as missing (NaN), in every conversion path.
+  const double inf = std::numeric_limits<double>::infinity();
+  const fs::path p = scratch("nonfinite.h5");
+  const std::vector<Crafted> grids{
+      {"plain",
+       H5T_IEEE_F32LE,
+       "float32",
+       1.0,
+       0.0,
+       std::nullopt,
+       {inf, -inf, 1, 2, 3, 4, 5, 6, 7, 8, 9, kNanD}},
+      {"nodata",
+       H5T_IEEE_F32LE,
+       "float32",
+       1.0,
+       0.0,
+       -9999.0,
+       {-9999, -inf, 1, 2, 3, 4, 5, 6, 7, 8, 9, inf}},
+      {"scaled",
+       H5T_IEEE_F32LE,
+       "float32",
+       2.0,
+       1.0,
+       std::nullopt,
+       {inf, 3e38, 1, 2, 3, 4, 5, 6, 7, 8, 9, -inf}},
+      {"f64",
+       H5T_IEEE_F64LE,
+       "float64",
+       1.0,
+       0.0,
+       std::nullopt,
+       {inf, 1e300, -1e300, 2, 3, 4, 5, 6, 7, 8, 9, -inf}},
+  };
+  craftStore(p, grids);
+  const Store s = Store::open(p);
+  for (const Crafted& c : grids) {
+    std::vector<float> got(12);
+    s.readWindow(c.name, 0, 0, 0, 3, 4, got);
+    for (std::size_t i = 0; i < 12; ++i) {
+      const double h = c.offset + c.scale * c.stored[i];
+      const bool missing =
+          !std::isfinite(static_cast<float>(h)) || (c.nodata && c.stored[i] == *c.nodata);
+      if (missing) {
+        EXPECT_TRUE(std::isnan(got[i])) << c.name << " sample " << i << " read " << got[i];
+      } else {
+        EXPECT_EQ(got[i], static_cast<float>(h)) << c.name << " sample " << i;
+      }
+    }
+  }
+}
+
 TEST(Store, RoundTripsEveryLevelIncludingThePyramidWithMissingSamplesAndOddSizes) {
   const fs::path p = writeStandardStore("roundtrip.h5");
   const Store s = Store::open(p);
@@ -1689,4 +1743,53 @@ TEST(Store, AProjectedPlacementIsWrittenAsWkt2AndReopensAsTheSamePlacement) {
       << msg;
   editRaw(p, [](hid_t f) { ok(H5Adelete_by_name(f, "/grids/sinu", "crs_wkt", H5P_DEFAULT)); });
   EXPECT_EQ(openError(p), pre + "has no attribute 'crs_wkt'");
+}
+
+// ---- No HDF5 identifier outlives a failed open (issue 17) -------------------------------------
+
+namespace {
+
+/// Identifiers of every kind HDF5 has open in this process (files, groups, datasets, types,
+/// attributes), across all files.
+ssize_t openHdf5Identifiers() { return H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL); }
+
+}  // namespace
+
+TEST(Store, AFailedOpenLeavesNoHdf5IdentifierOpen) {
+  // An identifier left open on an error path keeps the file open, and HDF5 then prints
+  // "infinite loop closing library" junk at exit. Each way an open can fail, after the error:
+  // nothing open.
+  ASSERT_EQ(openHdf5Identifiers(), 0);
+  const auto failsCleanly = [](const fs::path& p, const std::string& what) {
+    EXPECT_NE(openError(p), "(no error)") << what;
+    EXPECT_EQ(openHdf5Identifiers(), 0) << what;
+  };
+  fs::path p = writeStandardStore("leak-attr.h5");
+  editRaw(p, [](hid_t f) { ok(H5Adelete_by_name(f, "/grids/moon", "rows", H5P_DEFAULT)); });
+  failsCleanly(p, "a missing attribute of the second grid");
+  p = writeStandardStore("leak-rank.h5");
+  replaceCraterDataset(p, "level1", {19, 27, 2}, {10, 8, 2}, H5T_IEEE_F32LE);
+  failsCleanly(p, "a dataset of the wrong rank after the first level opened");
+  p = writeStandardStore("leak-type.h5");
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/crater", H5P_DEFAULT), H5Gclose);
+    rawSetString(g, "sample_type", "bfloat16");
+  });
+  failsCleanly(p, "an unknown sample type");
+  p = writeStandardStore("leak-truncated.h5");
+  const std::string bytes = fileBytes(p);
+  writeBytes(p, bytes.substr(0, bytes.size() / 2));
+  failsCleanly(p, "a truncated file");
+  p = writeStandardStore("leak-heap.h5");
+  makePre14(p);
+  patchU64(p, heapObjectSizeOffset(fileBytes(p), 2), std::uint64_t{1} << 62);
+  failsCleanly(p, "a damaged global heap (read in a child)");
+  p = writeStandardStore("leak-limit.h5");
+  declareCraterSize(p, hsize_t{1} << 33, 16);
+  failsCleanly(p, "a grid beyond the size limit");
+  {
+    const Store s = Store::open(writeStandardStore("leak-ok.h5"));
+    EXPECT_GT(openHdf5Identifiers(), 0);  // the counter sees an open store
+  }
+  EXPECT_EQ(openHdf5Identifiers(), 0);
 }

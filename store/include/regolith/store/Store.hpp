@@ -48,6 +48,15 @@ struct ReadCounters {
 /// Thread-safety: all const members may be called concurrently. HDF5 calls are serialised
 /// by one process-wide mutex (HDF5 keeps global state; Debian's build is thread-safe but
 /// serialises internally anyway).
+/// Tells HDF5 not to shut itself down when the process exits (H5dont_atexit). For programs
+/// (the `regolith` command calls it first thing): after a metadata checksum failure, HDF5
+/// 1.10.8 leaks an internal block, and its shutdown at exit then prints "HDF5: infinite loop
+/// closing library" and a line of junk after Regolith's clear error. The operating system
+/// frees the memory anyway; Regolith closes every file it writes before the rename that
+/// commits it, so nothing is left to flush. Effective only before the first HDF5 call of the
+/// process; later calls change nothing.
+void skipHdf5ShutdownAtExit() noexcept;
+
 /// The budget of one Store::open: the files it may open (the store and its external tiles,
 /// however deeply nested; a file named by several tiles counts once) and their total size.
 /// An open that would exceed it is refused with a StoreError naming the limit, so a store
