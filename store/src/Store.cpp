@@ -15,6 +15,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <type_traits>
 
@@ -251,6 +252,16 @@ void readAttributes(hid_t g, GridEntry& entry, const Context& ctx, const std::st
     fail(ctx, owner + " has equatorial_radius " + core::number(info.equatorialRadius) +
                   " m and polar_radius " + core::number(info.polarRadius) +
                   " m, expected 0 < polar_radius <= equatorial_radius");
+  }
+  // A sample larger than its body (1e308 m) made every query "outside" or blamed the point.
+  const bool planet = info.kind == GridKind::Planet;
+  const double maxSpacing = planet ? 360.0 : 2.0 * std::numbers::pi * info.equatorialRadius;
+  for (const double sp : {info.spacingX, info.spacingY}) {
+    if (sp > maxSpacing) {
+      fail(ctx, owner + " has spacing " + core::number(sp) + unit + ", expected at most " +
+                    core::number(maxSpacing) + unit +
+                    (planet ? "" : " (the circumference of its body, " + info.bodyName + ")"));
+    }
   }
   const std::string lat = hdf5::readString(g, format::kLatitudeType, ctx, owner);
   if (lat == format::kPlanetocentric) {

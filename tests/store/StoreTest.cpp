@@ -890,6 +890,21 @@ TEST(Store, RejectsNonPositiveSpacing) {
   EXPECT_EQ(openError(p), "store::open(): " + p.string() +
                               ": grid 'victoria' has spacing 5e-324 m, expected "
                               "a normal double (at least 2.2250738585072014e-308)");
+  // Issue 17: a spacing of 1e308 m made the grid span more than the universe; queries then
+  // blamed the query point. A sample larger than its body is the store's fault.
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/victoria", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(g, "spacing", {1.0, 1e308}, H5T_IEEE_F64LE);
+  });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'victoria' has spacing 1e+308 m, expected at most "
+                              "21338891.108390238 m (the circumference of its body, Mars)");
+  editRaw(p, [](hid_t f) {
+    const H5 g(H5Gopen2(f, "/grids/moon", H5P_DEFAULT), H5Gclose);
+    rawSetNumbers(g, "spacing", {400.0, 4.0}, H5T_IEEE_F64LE);
+  });
+  EXPECT_EQ(openError(p), "store::open(): " + p.string() +
+                              ": grid 'moon' has spacing 400 deg, expected at most 360 deg");
 }
 
 TEST(Store, RejectsADatasetOfTheWrongRank) {
