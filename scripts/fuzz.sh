@@ -45,7 +45,9 @@ configure_and_build() {
 if [[ ${1:-} == --seeds ]]; then
   configure_and_build
   corpus=tests/fuzz/corpus
-  rm -rf "$corpus/fuzz_store" "$corpus/fuzz_info_json"
+  # regression_* seeds are inputs of fixed findings: kept.
+  find "$corpus/fuzz_store" "$corpus/fuzz_info_json" -type f ! -name 'regression_*' -delete \
+    2>/dev/null || true
   "$build/tests/fuzz/make_store_seeds" tests/data/dem "$corpus/fuzz_store" "$corpus/fuzz_info_json"
   /usr/bin/python3 tests/fuzz/make_corpus.py tests/data/dem
   du -sh "$corpus"
