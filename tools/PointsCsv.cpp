@@ -29,6 +29,13 @@ std::vector<std::string_view> splitFields(std::string_view line) {
   return fields;
 }
 
+[[noreturn]] void failHeader(const std::string& where, std::string_view line,
+                             const std::string& header) {
+  throw InvalidArgument("query: " + where + ": header '" + std::string(line) +
+                        "' does not match the expected '" + header +
+                        "' (--coords decides the columns and their order)");
+}
+
 }  // namespace
 
 std::pair<const char*, const char*> coordNames(Coords c) {
@@ -88,9 +95,7 @@ std::vector<Point> readPoints(std::istream& in, const std::string& source, Coord
       const std::vector<std::string_view> f = splitFields(t);
       if (f.size() == 2 && f[0] == nameA && f[1] == nameB) continue;
       if (!f.empty() && (f[0] == nameB || (f.size() > 1 && f[1] == nameA))) {
-        throw InvalidArgument("query: " + source + " line " + std::to_string(lineNo) +
-                              ": header '" + std::string(t) + "' does not match the expected '" +
-                              header + "' (--coords decides the columns and their order)");
+        failHeader(source + " line " + std::to_string(lineNo), t, header);
       }
     }
     points.push_back(parsePoint(t, source + " line " + std::to_string(lineNo), coords));
