@@ -10,6 +10,18 @@ target_compile_options(regolith_warnings INTERFACE
   $<$<BOOL:${REGOLITH_WERROR}>:-Werror>)
 
 add_library(regolith_sanitizers INTERFACE)
+# Fuzzing (tests/fuzz, docs/reliability.md): every library is built with libFuzzer's coverage
+# instrumentation (fuzzer-no-link) beside ASan and UBSan; the fuzz targets link libFuzzer.
+if(REGOLITH_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang" OR NOT CMAKE_C_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "REGOLITH_FUZZ needs clang (CC=clang CXX=clang++), not "
+                        "${CMAKE_CXX_COMPILER_ID}: libFuzzer is clang's")
+  endif()
+  if(NOT REGOLITH_SANITIZE)
+    set(REGOLITH_SANITIZE address,undefined)
+  endif()
+  target_compile_options(regolith_sanitizers INTERFACE -fsanitize=fuzzer-no-link)
+endif()
 if(REGOLITH_SANITIZE)
   target_compile_options(regolith_sanitizers INTERFACE
     -fsanitize=${REGOLITH_SANITIZE} -fno-omit-frame-pointer -fno-sanitize-recover=all)

@@ -6,6 +6,8 @@ set -euo pipefail
 PACKAGES=(
   # toolchain
   build-essential cmake ninja-build pkg-config git clang-format clang-tidy
+  # fuzzing (scripts/fuzz.sh, tests/fuzz): clang 14 with libFuzzer and its sanitizer runtimes
+  clang libclang-rt-14-dev
   # compiler cache: scripts/test-all.sh reuses objects across runs on one machine
   ccache
   # I/O: HDF5 stores, GDAL import, PROJ (also the projection oracle in tests), libcrypto

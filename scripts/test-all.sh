@@ -7,12 +7,15 @@
 #   5. ASan+UBSan build of the core (topo, store, rover) and its tests -> build-asan/
 #      (REGOLITH_FULL_CHECKS=1: everything, with every test)
 #   6. TSan build of the store tests (pager, patch cache: the concurrent code) -> build-tsan/
-#   7. the Release tests, last, so the output ends with ctest's summary
+#   7. a short fuzz run: each libFuzzer target of tests/fuzz for REGOLITH_FUZZ_SECONDS (default
+#      30) s, clang + ASan + UBSan (scripts/fuzz.sh)  -> build-fuzz/
+#   8. the Release tests, last, so the output ends with ctest's summary
 #
 #   bash scripts/test-all.sh
 #
 # Environment (all optional): BUILD_DIR (default build), ASAN_BUILD_DIR (default
-# build-asan), TSAN_BUILD_DIR (default build-tsan), REGOLITH_CMAKE_ARGS (extra arguments for
+# build-asan), TSAN_BUILD_DIR (default build-tsan), FUZZ_BUILD_DIR (default build-fuzz),
+# REGOLITH_FUZZ_SECONDS (default 30 per fuzz target), REGOLITH_CMAKE_ARGS (extra arguments for
 # every configure step, split on spaces), REGOLITH_FULL_CHECKS=1 (sanitize and test every
 # module, and run clang-tidy's analyzer on every directory: longer than CI allows). Real-data fixtures come from
 # tests/data/dem unless REGOLITH_FIXTURES_DIR says otherwise.
@@ -126,6 +129,14 @@ cmake -S . -B "$tsan_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 cmake --build "$tsan_dir" -j"$jobs" --target store_tests
 run_shards "TSan store_tests" "$tsan_dir/tests/store/store_tests" \
   "TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$root/tests/tsan.supp"
+
+# The fuzz targets (docs/reliability.md, "Fuzzing"): store open and reads, raster import,
+# the query's CSV points, info --json; each from the committed seeds plus what earlier runs on
+# this machine added to build-fuzz/fuzz/<target>/corpus. Any crash, hang or leak fails CI,
+# and its input stays in build-fuzz/fuzz/<target>/run-*/.
+section "Fuzz targets, ${REGOLITH_FUZZ_SECONDS:-30} s each (scripts/fuzz.sh)"
+FUZZ_BUILD_DIR=${FUZZ_BUILD_DIR:-build-fuzz} FUZZ_JOBS=$jobs FUZZ_NICE=0 \
+  bash scripts/fuzz.sh "${REGOLITH_FUZZ_SECONDS:-30}"
 
 if [[ -n ${CCACHE_BASEDIR:-} ]]; then
   section "ccache"

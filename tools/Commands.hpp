@@ -4,6 +4,9 @@
 // (regolith::Error and its kin for bad input, CLI::Error for usage errors); main() turns
 // that into "regolith: error: ..." on stderr and a non-zero exit code.
 
+#include <iosfwd>
+#include <string>
+
 namespace CLI {
 class App;
 }  // namespace CLI
@@ -20,6 +23,10 @@ void addDemoCommand(CLI::App& app);
 void addGenerateCommand(CLI::App& app);
 void addImportCommand(CLI::App& app);
 void addInfoCommand(CLI::App& app);
+/// What `regolith info FILE [--json]` prints (docs/cli.md), written to `out`: a store's grids,
+/// or what an import would make of a raster. Throws regolith::Error and its kinds for a
+/// file it cannot describe.
+void printInfo(const std::string& file, bool json, std::ostream& out);
 void addQueryCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);
 

@@ -127,6 +127,22 @@ ordered_json geodeticJson(const topo::Geodetic& p) {
   return {{"lat", p.latDeg}, {"lon", p.lonDeg}};
 }
 
+/// A grid's provenance attribute as JSON: null if not recorded, the text itself (a string)
+/// if it is not JSON (a damaged store: printing what parse() returns then, a "discarded"
+/// value, made `info --json` print `<discarded>`, found by tests/fuzz/fuzz_info_json).
+ordered_json provenanceJson(const std::string& text) {
+  if (text.empty()) return nullptr;
+  ordered_json p = ordered_json::parse(text, nullptr, false);
+  return p.is_discarded() ? ordered_json(text) : p;
+}
+
+/// JSON text of `j`, indented by 2. A store's strings (names, body, units, provenance) are
+/// bytes from the file: any that are not UTF-8 are printed as U+FFFD rather than making
+/// dump() throw type_error (tests/tools/InfoCommandTest.cpp).
+std::string jsonText(const ordered_json& j) {
+  return j.dump(2, ' ', false, ordered_json::error_handler_t::replace);
+}
+
 /// The grid's keys. `tiled` is set for a grid of a store (whether level 0 is tiled), and adds
 /// levels, patch shape and tiling; unset for the grid a raster would become.
 ordered_json gridJson(const GridInfo& g, std::optional<bool> tiled) {
@@ -177,8 +193,7 @@ ordered_json gridJson(const GridInfo& g, std::optional<bool> tiled) {
       j["statistics"] = nullptr;
     }
     // Recorded at import (format 1.3): sources, GDAL, label fields; null if not recorded.
-    j["provenance"] = g.provenance.empty() ? ordered_json(nullptr)
-                                           : ordered_json::parse(g.provenance, nullptr, false);
+    j["provenance"] = provenanceJson(g.provenance);
   }
   return j;
 }
@@ -198,7 +213,7 @@ void printJson(const store::Store& s, std::ostream& out) {
     grids.push_back(gridJson(s.grid(name), s.tiled(name)));
   }
   j["grids"] = grids;
-  out << j.dump(2) << '\n';
+  out << jsonText(j) << '\n';
 }
 
 void printPlacement(const GridInfo& g, std::ostream& out) {
@@ -236,6 +251,50 @@ void printPlacement(const GridInfo& g, std::ostream& out) {
       out << " through PROJ, CRS '" << store::projProjection(p.crs)->name() << "'\n"
           << "  proj string:    " << store::projString(p.crs) << "\n";
       break;
+  }
+}
+
+/// Field `key` of a JSON object as text: a string as it is, anything else as JSON, "" if
+/// `o` is no object or has no such field. The provenance is read from the file, so none of
+/// its fields may be trusted to have the type the importer wrote (a wrong one made
+/// nlohmann::json throw type_error out of `info`; tests/tools/InfoCommandTest.cpp).
+std::string fieldText(const ordered_json& o, const char* key) {
+  if (!o.is_object() || !o.contains(key)) return {};
+  const ordered_json& v = o[key];
+  return v.is_string() ? v.get<std::string>()
+                       : v.dump(-1, ' ', false, ordered_json::error_handler_t::replace);
+}
+
+/// The provenance lines of `info`: sources, GDAL, the label's fields.
+void printProvenance(const ordered_json& p, std::ostream& out) {
+  const char* label = "  sources:        ";
+  if (p.contains("sources") && p["sources"].is_array()) {
+    for (const auto& s : p["sources"]) {
+      out << label << fieldText(s, "file") << ", " << fieldText(s, "bytes") << " bytes, sha256 "
+          << fieldText(s, "sha256") << "\n";
+      label = "                  ";
+    }
+  }
+  out << "  made with:      GDAL " << fieldText(p, "gdal_version") << ", driver "
+      << fieldText(p, "gdal_driver") << "\n";
+  if (p.contains("label") && p["label"].is_object()) {
+    std::string fields;
+    for (const auto& [key, value] : p["label"].items()) {
+      // GDAL's "_type" and the like, and PDS3's end marker.
+      if ((!key.empty() && key.front() == '_') || key == "END_OBJECT") continue;
+      const auto json = [](const ordered_json& x) {
+        return x.dump(-1, ' ', false, ordered_json::error_handler_t::replace);
+      };
+      std::string v = value.is_object() && value.contains("value") ? json(value["value"])
+                      : value.is_string()                          ? value.get<std::string>()
+                                                                   : json(value);
+      if (value.is_object() && value.contains("value") && value.contains("unit")) {
+        v += " <" + fieldText(value, "unit") + ">";
+      }
+      if (!fields.empty()) fields += "; ";
+      fields.append(key).append(" = ").append(v);
+    }
+    out << "  label:          " << fields << "\n";
   }
 }
 
@@ -298,33 +357,11 @@ void printGrid(const GridInfo& g, std::optional<bool> tiled, std::ostream& out) 
     } else {
       out << "  heights:        no statistics stored (written before format 1.3)\n";
     }
-    const ordered_json p = g.provenance.empty() ? ordered_json(nullptr)
-                                                : ordered_json::parse(g.provenance, nullptr, false);
+    const ordered_json p = provenanceJson(g.provenance);
     if (p.is_object()) {
-      const char* label = "  sources:        ";
-      for (const auto& s : p.value("sources", ordered_json::array())) {
-        out << label << s.value("file", std::string()) << ", " << s.value("bytes", std::uint64_t{0})
-            << " bytes, sha256 " << s.value("sha256", std::string()) << "\n";
-        label = "                  ";
-      }
-      out << "  made with:      GDAL " << p.value("gdal_version", std::string()) << ", driver "
-          << p.value("gdal_driver", std::string()) << "\n";
-      if (p.contains("label") && p["label"].is_object()) {
-        std::string fields;
-        for (const auto& [key, value] : p["label"].items()) {
-          if (key.front() == '_' || key == "END_OBJECT") continue;  // GDAL's "_type", PDS3's end
-          std::string v;
-          if (value.is_object() && value.contains("value")) {
-            v = value["value"].dump();
-            if (value.contains("unit")) v += " <" + value["unit"].get<std::string>() + ">";
-          } else {
-            v = value.is_string() ? value.get<std::string>() : value.dump();
-          }
-          if (!fields.empty()) fields += "; ";
-          fields.append(key).append(" = ").append(v);
-        }
-        out << "  label:          " << fields << "\n";
-      }
+      printProvenance(p, out);
+    } else if (p.is_string()) {
+      out << "  provenance:     recorded, but not JSON (a damaged store?)\n";
     } else {
       out << "  provenance:     not recorded\n";
     }
@@ -371,7 +408,7 @@ void printRaster(const std::filesystem::path& path, bool json, std::ostream& out
     j["path"] = path.string();
     j["raster"] = rasterJson(r);
     j["grid"] = gridJson(r.info, std::nullopt);
-    out << j.dump(2) << '\n';
+    out << jsonText(j) << '\n';
     return;
   }
   out << "raster:         " << path.string() << " (not a store; what `regolith import` would "
@@ -413,21 +450,24 @@ void addInfoCommand(CLI::App& app) {
       "print(json.load(sys.stdin)[\"grids\"][0][\"rows\"])'");
   cmd->callback([a] {
     refuseStdoutOverInput("info", a->store);
-    std::error_code ec;
-    // GDAL's virtual paths (/vsizip/, /vsicurl/, ...) are rasters: `import` accepts them.
-    const bool virtualPath = a->store.rfind("/vsi", 0) == 0;
-    if (virtualPath ||
-        (std::filesystem::is_regular_file(a->store, ec) && !store::Store::isHdf5(a->store))) {
-      printRaster(a->store, a->json, std::cout);
-      return;
-    }
-    const store::Store s = store::Store::open(a->store);
-    if (a->json) {
-      printJson(s, std::cout);
-    } else {
-      printText(s, std::cout);
-    }
+    printInfo(a->store, a->json, std::cout);
   });
+}
+
+void printInfo(const std::string& file, bool json, std::ostream& out) {
+  std::error_code ec;
+  // GDAL's virtual paths (/vsizip/, /vsicurl/, ...) are rasters: `import` accepts them.
+  const bool virtualPath = file.rfind("/vsi", 0) == 0;
+  if (virtualPath || (std::filesystem::is_regular_file(file, ec) && !store::Store::isHdf5(file))) {
+    printRaster(file, json, out);
+    return;
+  }
+  const store::Store s = store::Store::open(file);
+  if (json) {
+    printJson(s, out);
+  } else {
+    printText(s, out);
+  }
 }
 
 }  // namespace regolith::tools

@@ -561,6 +561,67 @@ void toHeights(const T* in, std::span<float> out, double scale, double offset,
   }
 }
 
+/// Refuses a read whose chunks the file's chunk index describes impossibly: a chunk that
+/// ends beyond the end of the file; a chunk stored as is (no filter, or every filter but
+/// shuffle skipped by its filter mask) whose size is not the chunk's bytes; a compressed one
+/// more than twice that (deflate and ZFP never grow a chunk so much). HDF5 1.10 trusts
+/// these: a chunk of 123 bytes whose mask says "not compressed" makes H5Dread copy 128 bytes
+/// out of it (found by tests/fuzz/fuzz_store; StoreTest ReadRefusesAChunkIndexThatLies). Only
+/// the chunks the selection (start, step, count) meets are looked up, one B-tree search each.
+void checkChunks(hid_t ds, const Context& ctx, const std::string& what,
+                 const std::array<hsize_t, 2>& start, const std::array<hsize_t, 2>& step,
+                 const std::array<hsize_t, 2>& count) {
+  if (count[0] == 0 || count[1] == 0) return;
+  const hdf5::PropertyList dcpl(hdf5::check(H5Dget_create_plist(ds), ctx, what));
+  std::array<hsize_t, 2> chunk{};
+  if (H5Pget_layout(dcpl.get()) != H5D_CHUNKED || H5Pget_chunk(dcpl.get(), 2, chunk.data()) != 2 ||
+      chunk[0] == 0 || chunk[1] == 0) {
+    return;  // Store::open() accepts chunked datasets only
+  }
+  // Bit k of a chunk's filter mask set: filter k was skipped for it. Shuffle keeps the size.
+  unsigned sizeChanging = 0;
+  const int nfilters = std::min(H5Pget_nfilters(dcpl.get()), 32);
+  for (unsigned k = 0; k < static_cast<unsigned>(std::max(nfilters, 0)); ++k) {
+    unsigned flags = 0;
+    std::size_t nelmts = 0;
+    const H5Z_filter_t id =
+        H5Pget_filter2(dcpl.get(), k, &flags, &nelmts, nullptr, 0, nullptr, nullptr);
+    if (id != H5Z_FILTER_SHUFFLE) sizeChanging |= 1U << k;
+  }
+  const hdf5::Datatype type(hdf5::check(H5Dget_type(ds), ctx, what));
+  const hsize_t chunkBytes = chunk[0] * chunk[1] * H5Tget_size(type.get());
+  const hdf5::File file(hdf5::check(H5Iget_file_id(ds), ctx, what));
+  hsize_t fileSize = 0;
+  hdf5::check(H5Fget_filesize(file.get(), &fileSize), ctx, what);
+  const hsize_t lastRow = start[0] + (count[0] - 1) * step[0];
+  const hsize_t lastCol = start[1] + (count[1] - 1) * step[1];
+  for (hsize_t cr = start[0] / chunk[0]; cr <= lastRow / chunk[0]; ++cr) {
+    for (hsize_t cc = start[1] / chunk[1]; cc <= lastCol / chunk[1]; ++cc) {
+      const std::array<hsize_t, 2> offset{cr * chunk[0], cc * chunk[1]};
+      unsigned mask = 0;
+      haddr_t addr = HADDR_UNDEF;
+      hsize_t size = 0;
+      hdf5::check(H5Dget_chunk_info_by_coord(ds, offset.data(), &mask, &addr, &size), ctx, what);
+      if (addr == HADDR_UNDEF) continue;  // never written: reads the fill value
+      const bool fits = addr <= fileSize && size <= fileSize - addr;
+      const bool filtered = (sizeChanging & ~mask) != 0;
+      const bool sized = filtered ? size <= 2 * chunkBytes : size == chunkBytes;
+      if (!fits || !sized) {
+        fail(ctx, what + ": the chunk at row " + std::to_string(offset[0]) + ", col " +
+                      std::to_string(offset[1]) + " is recorded as " + std::to_string(size) +
+                      " bytes at byte " + std::to_string(addr) +
+                      (filtered ? " compressed"
+                                : " not compressed (filter mask " + std::to_string(mask) + ")") +
+                      ", expected " +
+                      (filtered ? "at most " + std::to_string(2 * chunkBytes)
+                                : std::to_string(chunkBytes)) +
+                      " bytes within the file's " + std::to_string(fileSize) +
+                      " (corrupt chunk index)");
+      }
+    }
+  }
+}
+
 /// Reads rows×cols samples at (row0, col0), every `stride`-th, of one dataset of a grid with
 /// one hyperslab read, into `out` as heights (NaN where missing).
 void readDataset(const GridEntry& e, hid_t ds, const Context& ctx, const std::string& what,
@@ -573,6 +634,7 @@ void readDataset(const GridEntry& e, hid_t ds, const Context& ctx, const std::st
   const std::array<hsize_t, 2> count{rows, cols};
   const auto read = [&](hid_t memType, void* buffer) {
     const hdf5::Lock lock;
+    checkChunks(ds, ctx, what, start, step, count);
     const hdf5::Dataspace fileSpace(hdf5::check(H5Dget_space(ds), ctx, what));
     hdf5::check(H5Sselect_hyperslab(fileSpace.get(), H5S_SELECT_SET, start.data(), step.data(),
                                     count.data(), nullptr),
