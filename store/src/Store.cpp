@@ -622,6 +622,27 @@ void checkChunks(hid_t ds, const Context& ctx, const std::string& what,
   }
 }
 
+/// Throws if the file of `ds` is now shorter than HDF5's end of allocation: cut after it was
+/// opened. HDF5's sec2 driver reads the missing bytes as zeros, so an uncompressed chunk
+/// past the cut would come back as zero heights without an error (issue 17). Called after
+/// each read, under the HDF5 lock: a cut before the read's end is caught, one after it did
+/// not touch the samples read.
+void checkNotTruncated(hid_t ds, const Context& ctx) {
+  const hdf5::File file(hdf5::check(H5Iget_file_id(ds), ctx, "cannot get the dataset's file"));
+  haddr_t eoa = 0;
+  void* handle = nullptr;
+  hdf5::check(H5Fget_eoa(file.get(), &eoa), ctx, "cannot get the end of allocation");
+  hdf5::check(H5Fget_vfd_handle(file.get(), H5P_DEFAULT, &handle), ctx,
+              "cannot get the file handle");
+  struct stat st {};
+  if (::fstat(*static_cast<const int*>(handle), &st) != 0)
+    fail(ctx, std::string("cannot stat the open file: ") + std::strerror(errno));
+  if (static_cast<unsigned long long>(st.st_size) < eoa)
+    fail(ctx, "the file is now " + std::to_string(st.st_size) + " bytes, expected at least " +
+                  std::to_string(eoa) +
+                  " (the end of its HDF5 allocation: truncated after it was opened?)");
+}
+
 /// Reads rows×cols samples at (row0, col0), every `stride`-th, of one dataset of a grid with
 /// one hyperslab read, into `out` as heights (NaN where missing).
 void readDataset(const GridEntry& e, hid_t ds, const Context& ctx, const std::string& what,
@@ -643,6 +664,7 @@ void readDataset(const GridEntry& e, hid_t ds, const Context& ctx, const std::st
         hdf5::check(H5Screate_simple(2, count.data(), nullptr), ctx, what));
     hdf5::check(H5Dread(ds, memType, memSpace.get(), fileSpace.get(), H5P_DEFAULT, buffer), ctx,
                 what);
+    checkNotTruncated(ds, ctx);
   };
   const auto readAs = [&]<typename T>(T /*tag*/) {
     if constexpr (std::is_same_v<T, float>) {
