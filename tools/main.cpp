@@ -21,10 +21,12 @@ void refuseUnknownSubcommand(const CLI::App& app, int argc, char** argv) {
     std::string names;
     for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
       if (sub->get_name() == word) return;
-      names += (names.empty() ? "" : ", ") + sub->get_name();
+      if (!names.empty()) names += ", ";
+      names += sub->get_name();
     }
-    throw CLI::ParseError("unknown subcommand '" + word + "', expected one of: " + names,
-                          CLI::ExitCodes::ExtrasError);
+    std::string message = "unknown subcommand '" + word + "', expected one of: ";
+    message += names;
+    throw CLI::ParseError(message, CLI::ExitCodes::ExtrasError);
   }
 }
 

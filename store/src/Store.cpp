@@ -258,9 +258,11 @@ void readAttributes(hid_t g, GridEntry& entry, const Context& ctx, const std::st
   const double maxSpacing = planet ? 360.0 : 2.0 * std::numbers::pi * info.equatorialRadius;
   for (const double sp : {info.spacingX, info.spacingY}) {
     if (sp > maxSpacing) {
-      fail(ctx, owner + " has spacing " + core::number(sp) + unit + ", expected at most " +
-                    core::number(maxSpacing) + unit +
-                    (planet ? "" : " (the circumference of its body, " + info.bodyName + ")"));
+      std::string why = owner + " has spacing ";
+      why += core::number(sp) + unit + ", expected at most ";
+      why += core::number(maxSpacing) + unit;
+      if (!planet) why += " (the circumference of its body, " + info.bodyName + ")";
+      fail(ctx, why);
     }
   }
   const std::string lat = hdf5::readString(g, format::kLatitudeType, ctx, owner);
