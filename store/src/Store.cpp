@@ -754,7 +754,8 @@ Store Store::open(const std::filesystem::path& path, const OpenLimits& limits) {
     bool owner;
   } const depth(&top);
   OpenState& state = *tlOpenState;
-  chargeBudget(state, std::filesystem::file_size(path, ec), ctx);
+  const std::uintmax_t bytes = std::filesystem::file_size(path, ec);  // -1 with ec: not regular
+  chargeBudget(state, ec ? 0 : bytes, ctx);
 
   auto impl = std::make_unique<Impl>();
   impl->path = path;

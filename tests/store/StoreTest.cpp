@@ -1109,6 +1109,9 @@ TEST(Store, RejectsFilesThatAreNotHdf5OrNotStoresOrMissing) {
   { const std::ofstream out(empty); }
   EXPECT_EQ(openError(empty),
             "store::open(): " + empty.string() + ": is not an HDF5 file (no HDF5 signature)");
+  // A file that is not regular has no size: it must not count against the open's byte budget.
+  EXPECT_EQ(openError("/dev/null"),
+            "store::open(): /dev/null: is not an HDF5 file (no HDF5 signature)");
 
   const fs::path plain = scratch("plain.h5");
   { const H5 f(H5Fcreate(plain.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose); }
