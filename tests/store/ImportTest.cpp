@@ -10,6 +10,7 @@
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/Placement.hpp>
 
+#include "RasterOracle.hpp"
 #include "support/Fixtures.hpp"
 #include "support/StoreScratch.hpp"
 
@@ -355,15 +356,7 @@ void checkFixture(const std::string& name, const Expect& e) {
   EXPECT_EQ(a.latitudeType, b.latitudeType) << name;
 }
 
-template <class F>
-std::string errorOf(F&& f) {
-  try {
-    f();
-  } catch (const ImportError& e) {
-    return e.what();
-  }
-  return "(no ImportError)";
-}
+using regolith::test::errorOf;  // tests/store/RasterOracle.hpp
 
 }  // namespace
 
