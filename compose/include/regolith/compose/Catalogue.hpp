@@ -1,0 +1,108 @@
+#pragma once
+/// \file
+/// The dataset catalogue of one body and its spatial index (White's dataset hierarchy, as a
+/// bounding-volume hierarchy over body-fixed boxes that include each dataset's heights).
+
+#include <regolith/compose/Dataset.hpp>
+
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <vector>
+
+namespace regolith::compose {
+
+/// A dataset's handle in its catalogue: never reused.
+using DatasetId = std::uint64_t;
+
+/// One registered dataset.
+struct CatalogueEntry {
+  DatasetId id = 0;
+  std::shared_ptr<const Dataset> dataset;
+};
+
+/// An immutable state of a catalogue: its datasets and a BVH over their bounds. Queries
+/// are O(log N + k) for N datasets of which k answer (a BVH whose boxes overlap little:
+/// datasets far apart on the body). Thread-safe (immutable).
+class Snapshot {
+ public:
+  Snapshot(topo::Body body, std::vector<CatalogueEntry> entries, std::uint64_t version);
+
+  [[nodiscard]] const topo::Body& body() const noexcept { return body_; }
+  [[nodiscard]] std::span<const CatalogueEntry> entries() const noexcept { return entries_; }
+  [[nodiscard]] std::size_t size() const noexcept { return entries_.size(); }
+  /// Counts changes of the catalogue: a snapshot with a higher version is newer.
+  [[nodiscard]] std::uint64_t version() const noexcept { return version_; }
+  /// Lowest and highest height of every dataset, metres (0, 0 when empty).
+  [[nodiscard]] double lowestHeight() const noexcept { return hLow_; }
+  [[nodiscard]] double highestHeight() const noexcept { return hHigh_; }
+
+  /// Appends to `out` the indices (into entries()) of the datasets of role `role` whose
+  /// bounds the body's normal line at a planetodetic latitude/longitude crosses between
+  /// the lowest and the highest height: every dataset that can cover the point, and a few
+  /// whose boxes merely reach it (Dataset::evaluate() decides).
+  void covering(double latDeg, double lonDeg, std::vector<std::uint32_t>& out,
+                Role role = Role::Height) const;
+  /// Appends the indices of the datasets whose bounds are not wholly outside one of the
+  /// `planes` (a, b, c, d: a·x + b·y + c·z + d ≥ 0 inside, body-fixed metres): "which
+  /// datasets can this view see", for a view frustum's six planes.
+  void visible(std::span<const glm::dvec4> planes, std::vector<std::uint32_t>& out) const;
+  /// Number of BVH nodes a query visited since construction (all threads): for tests that
+  /// check the index is used.
+  [[nodiscard]] std::uint64_t nodesVisited() const noexcept {
+    return visited_.load(std::memory_order_relaxed);
+  }
+
+ private:
+  struct Node {
+    glm::dvec3 lo, hi;
+    std::uint32_t first = 0, count = 0;  // leaf: entries order_[first, first + count)
+    std::uint32_t left = 0, right = 0;   // inner (count == 0): children
+  };
+  std::uint32_t build(std::uint32_t first, std::uint32_t count);
+
+  topo::Body body_;
+  std::vector<CatalogueEntry> entries_;
+  std::uint64_t version_;
+  std::vector<Node> nodes_;
+  std::vector<std::uint32_t> order_;
+  double hLow_ = 0.0, hHigh_ = 0.0;
+  mutable std::atomic<std::uint64_t> visited_{0};
+};
+
+/// The datasets of one body. add() and remove() may be called from any thread while other
+/// threads query and render (White's F03 and N03): each change publishes a new Snapshot,
+/// and readers keep the one they took for as long as they hold it (copy on write; a change
+/// costs O(N log N) to rebuild the index, a query nothing extra).
+class Catalogue {
+ public:
+  /// An empty catalogue of `body`.
+  explicit Catalogue(topo::Body body);
+
+  [[nodiscard]] const topo::Body& body() const noexcept { return body_; }
+  /// Registers a dataset. Throws InvalidArgument for a null dataset or one on another body
+  /// (radii differ by more than 1 mm).
+  DatasetId add(std::shared_ptr<const Dataset> dataset);
+  /// Unregisters a dataset; false if the id is not registered. Snapshots taken earlier keep
+  /// it alive.
+  bool remove(DatasetId id);
+  /// The current state.
+  [[nodiscard]] std::shared_ptr<const Snapshot> snapshot() const;
+
+ private:
+  topo::Body body_;
+  std::mutex writers_;
+  std::vector<CatalogueEntry> entries_;  // guarded by writers_
+  DatasetId nextId_ = 1;                 // guarded by writers_
+  std::uint64_t version_ = 0;            // guarded by writers_
+  std::atomic<std::shared_ptr<const Snapshot>> current_;
+};
+
+}  // namespace regolith::compose

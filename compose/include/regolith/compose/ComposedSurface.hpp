@@ -1,0 +1,109 @@
+#pragma once
+/// \file
+/// One surface from many datasets: the composition rule that CPU queries (the rover, Python,
+/// `regolith query`) and the renderers (clipmap levels) both evaluate (docs/composition.md).
+
+#include <regolith/compose/Catalogue.hpp>
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace regolith::compose {
+
+/// How covering datasets combine.
+/// - Weighted: within a priority tier, H = Σ wᵢhᵢ / Σ wᵢ with wᵢ = coverage × projection
+///   quality × (ground spacing)^−p; tiers are composited "over" (a higher tier's coverage
+///   hides what lies below it).
+/// - FinestWins: every dataset is its own tier, finer ones above coarser ones (after
+///   priority): the limit p → ∞ of Weighted, and the old cut-out's behaviour with a
+///   feather-wide blend at each border instead of a crack.
+enum class Policy : std::uint8_t { Weighted, FinestWins };
+
+/// Lower-case name ("weighted", "finest").
+[[nodiscard]] const char* policyName(Policy policy) noexcept;
+
+/// The rule's parameters.
+struct Rules {
+  Policy policy = Policy::Weighted;
+  /// p of the resolution term (spacing^−p), ≥ 0. 2: a 1 m DEM outweighs a 463 m planet
+  /// grid 2·10^5 to 1 where both have full coverage and quality.
+  double resolutionPower = 2.0;
+};
+
+/// A composed height and normal at one point, with the number of datasets that contributed.
+struct ComposedSample {
+  double height = std::numeric_limits<double>::quiet_NaN();
+  glm::dvec3 normal{std::numeric_limits<double>::quiet_NaN()};
+  topo::QueryStatus status = topo::QueryStatus::OutsideGrid;
+  topo::QueryStatus normalStatus = topo::QueryStatus::OutsideGrid;
+  std::uint32_t contributors = 0;  ///< datasets with a non-zero weight
+  [[nodiscard]] bool valid() const noexcept { return status == topo::QueryStatus::Ok; }
+};
+
+/// One dataset's share of a composed height (ComposedSurface::weights()).
+struct Share {
+  DatasetId id = 0;
+  double height = 0.0;    ///< the dataset's own height there
+  double coverage = 0.0;  ///< border feather × mask
+  double quality = 0.0;   ///< projection quality
+  double weight = 0.0;    ///< its share of the composed height: Σ shares = 1
+};
+
+/// The composed surface of one catalogue snapshot. Queries take a planetodetic latitude and
+/// a longitude in degrees (any longitude; it wraps) and answer heights above the body's
+/// reference surface along its normal. Normals are those of the composed surface: the
+/// gradient of H from each dataset's own gradient and the gradients of the weights, so they
+/// are continuous across a border wherever the weights are (feathered borders).
+///
+/// Thread-safety: immutable; queries may run on any number of threads at once.
+class ComposedSurface {
+ public:
+  /// Throws InvalidArgument for a null snapshot or a negative or non-finite p.
+  explicit ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules rules = {});
+
+  [[nodiscard]] const Snapshot& snapshot() const noexcept { return *snapshot_; }
+  [[nodiscard]] const topo::Body& body() const noexcept { return snapshot_->body(); }
+  [[nodiscard]] const Rules& rules() const noexcept { return rules_; }
+
+  /// Composed height. Throws InvalidArgument for NaN/inf or |lat| > 90.
+  [[nodiscard]] topo::HeightSample height(double latDeg, double lonDeg) const;
+  /// Composed height and unit normal, in the east-north-up frame of the point (Grid) or
+  /// body-fixed.
+  [[nodiscard]] ComposedSample surface(double latDeg, double lonDeg,
+                                       topo::NormalFrame frame = topo::NormalFrame::Grid) const;
+  /// The composed height at a ground resolution of `metres`: each dataset reads the pyramid
+  /// level that serves it (Dataset::levelFor()), with level-0 weights. What a renderer's
+  /// clipmap level of that spacing shows; metres ≤ 0 is level 0 (height()).
+  [[nodiscard]] topo::HeightSample heightAt(double latDeg, double lonDeg, double metres) const;
+
+  /// Batch heights: spans of one length (status may be empty). Each point has its own
+  /// status: a NaN or out-of-range coordinate gives OutsideGrid for that point, never a
+  /// failed batch. Throws InvalidArgument only for spans of different lengths.
+  void heights(std::span<const double> latsDeg, std::span<const double> lonsDeg,
+               std::span<double> out, std::span<topo::QueryStatus> status) const;
+  /// Batch heights and normals (normalStatus may be empty).
+  void surfaces(std::span<const double> latsDeg, std::span<const double> lonsDeg,
+                std::span<double> outHeights, std::span<glm::dvec3> outNormals,
+                std::span<topo::QueryStatus> status,
+                topo::NormalFrame frame = topo::NormalFrame::Grid,
+                std::span<topo::QueryStatus> normalStatus = {}) const;
+
+  /// Each contributing dataset's share of the height at a point (empty where nothing
+  /// covers it): the rule written out, for tests, `regolith query --explain` and Python.
+  [[nodiscard]] std::vector<Share> weights(double latDeg, double lonDeg) const;
+
+ private:
+  ComposedSample compose(double latDeg, double lonDeg, double metres, bool wantNormal,
+                         std::vector<Share>* shares) const;
+
+  std::shared_ptr<const Snapshot> snapshot_;
+  Rules rules_;
+};
+
+}  // namespace regolith::compose

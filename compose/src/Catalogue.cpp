@@ -1,0 +1,199 @@
+#include <regolith/compose/Catalogue.hpp>
+
+#include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
+
+#include <glm/common.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <string>
+#include <utility>
+
+namespace regolith::compose {
+
+namespace {
+/// True if the segment p0 + t·d, t ∈ [0, 1], meets the box [lo, hi] (slab test; a zero
+/// component of d gives ±inf or NaN bounds that the comparisons below treat as "no limit"
+/// or "outside" correctly).
+bool segmentHitsBox(const glm::dvec3& p0, const glm::dvec3& inv, const glm::dvec3& lo,
+                    const glm::dvec3& hi) noexcept {
+  double t0 = 0.0, t1 = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    if (std::isinf(inv[a])) {  // parallel to this slab: inside it or never
+      if (p0[a] < lo[a] || p0[a] > hi[a]) return false;
+      continue;
+    }
+    double ta = (lo[a] - p0[a]) * inv[a], tb = (hi[a] - p0[a]) * inv[a];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+bool boxOutsidePlane(const glm::dvec3& lo, const glm::dvec3& hi, const glm::dvec4& p) noexcept {
+  // The box corner farthest along the plane's normal.
+  const glm::dvec3 v(p.x >= 0.0 ? hi.x : lo.x, p.y >= 0.0 ? hi.y : lo.y, p.z >= 0.0 ? hi.z : lo.z);
+  return p.x * v.x + p.y * v.y + p.z * v.z + p.w < 0.0;
+}
+}  // namespace
+
+Snapshot::Snapshot(topo::Body body, std::vector<CatalogueEntry> entries, std::uint64_t version)
+    : body_(std::move(body)), entries_(std::move(entries)), version_(version) {
+  order_.resize(entries_.size());
+  std::iota(order_.begin(), order_.end(), 0U);
+  if (!entries_.empty()) {
+    hLow_ = std::numeric_limits<double>::infinity();
+    hHigh_ = -hLow_;
+    for (const auto& e : entries_) {
+      hLow_ = std::min(hLow_, e.dataset->heightRange()[0]);
+      hHigh_ = std::max(hHigh_, e.dataset->heightRange()[1]);
+    }
+    nodes_.reserve(2 * entries_.size());
+    build(0, static_cast<std::uint32_t>(entries_.size()));
+  }
+}
+
+std::uint32_t Snapshot::build(std::uint32_t first, std::uint32_t count) {
+  Node node;
+  node.lo = glm::dvec3(std::numeric_limits<double>::infinity());
+  node.hi = -node.lo;
+  for (std::uint32_t i = first; i < first + count; ++i) {
+    const auto& b = entries_[order_[i]].dataset->bounds();
+    node.lo = glm::min(node.lo, b[0]);
+    node.hi = glm::max(node.hi, b[1]);
+  }
+  const auto index = static_cast<std::uint32_t>(nodes_.size());
+  nodes_.push_back(node);
+  constexpr std::uint32_t kLeafSize = 2;
+  if (count <= kLeafSize) {
+    nodes_[index].first = first;
+    nodes_[index].count = count;
+    return index;
+  }
+  // Split at the median of the box centres along the longest axis of their spread.
+  glm::dvec3 clo(std::numeric_limits<double>::infinity()), chi(-clo);
+  for (std::uint32_t i = first; i < first + count; ++i) {
+    const auto& b = entries_[order_[i]].dataset->bounds();
+    const glm::dvec3 c = 0.5 * (b[0] + b[1]);
+    clo = glm::min(clo, c);
+    chi = glm::max(chi, c);
+  }
+  const glm::dvec3 spread = chi - clo;
+  const int axis = spread.x >= spread.y && spread.x >= spread.z ? 0 : (spread.y >= spread.z ? 1 : 2);
+  const std::uint32_t half = count / 2;
+  auto centre = [&](std::uint32_t e) {
+    const auto& b = entries_[e].dataset->bounds();
+    return b[0][axis] + b[1][axis];
+  };
+  std::nth_element(order_.begin() + first, order_.begin() + first + half,
+                   order_.begin() + first + count,
+                   [&](std::uint32_t a, std::uint32_t b) { return centre(a) < centre(b); });
+  const std::uint32_t left = build(first, half);
+  const std::uint32_t right = build(first + half, count - half);
+  nodes_[index].left = left;
+  nodes_[index].right = right;
+  return index;
+}
+
+void Snapshot::covering(double latDeg, double lonDeg, std::vector<std::uint32_t>& out,
+                        Role role) const {
+  if (nodes_.empty()) return;
+  const glm::dvec3 p0 = body_.toBodyFixed({latDeg, lonDeg, hLow_});
+  const glm::dvec3 p1 = body_.toBodyFixed({latDeg, lonDeg, hHigh_});
+  const glm::dvec3 d = p1 - p0;
+  const glm::dvec3 inv(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
+  std::uint32_t stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  std::uint64_t visited = 0;
+  while (top > 0) {
+    const Node& n = nodes_[stack[--top]];
+    ++visited;
+    if (!segmentHitsBox(p0, inv, n.lo, n.hi)) continue;
+    if (n.count > 0) {
+      for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
+        const std::uint32_t e = order_[i];
+        const auto& b = entries_[e].dataset->bounds();
+        if (entries_[e].dataset->options().role == role && segmentHitsBox(p0, inv, b[0], b[1])) {
+          out.push_back(e);
+        }
+      }
+    } else {  // median splits: depth ≤ log2(2^32) + 1, so 64 entries never overflow
+      stack[top++] = n.right;
+      stack[top++] = n.left;
+    }
+  }
+  visited_.fetch_add(visited, std::memory_order_relaxed);
+}
+
+void Snapshot::visible(std::span<const glm::dvec4> planes, std::vector<std::uint32_t>& out) const {
+  if (nodes_.empty()) return;
+  auto outside = [&](const glm::dvec3& lo, const glm::dvec3& hi) {
+    return std::any_of(planes.begin(), planes.end(),
+                       [&](const glm::dvec4& p) { return boxOutsidePlane(lo, hi, p); });
+  };
+  std::uint32_t stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  std::uint64_t visited = 0;
+  while (top > 0) {
+    const Node& n = nodes_[stack[--top]];
+    ++visited;
+    if (outside(n.lo, n.hi)) continue;
+    if (n.count > 0) {
+      for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
+        const auto& b = entries_[order_[i]].dataset->bounds();
+        if (!outside(b[0], b[1])) out.push_back(order_[i]);
+      }
+    } else {  // median splits: depth ≤ log2(2^32) + 1, so 64 entries never overflow
+      stack[top++] = n.right;
+      stack[top++] = n.left;
+    }
+  }
+  visited_.fetch_add(visited, std::memory_order_relaxed);
+}
+
+Catalogue::Catalogue(topo::Body body)
+    : body_(std::move(body)), current_(std::make_shared<const Snapshot>(body_, std::vector<CatalogueEntry>{}, 0)) {}
+
+DatasetId Catalogue::add(std::shared_ptr<const Dataset> dataset) {
+  if (!dataset) {
+    throw InvalidArgument(core::format(
+        {.operation = "compose::Catalogue::add()", .field = "dataset", .value = "null", .expected = "a dataset"}));
+  }
+  const topo::Body& b = dataset->body();
+  if (std::abs(b.equatorialRadius() - body_.equatorialRadius()) > 1e-3 ||
+      std::abs(b.polarRadius() - body_.polarRadius()) > 1e-3) {
+    throw InvalidArgument(core::format(
+        {.operation = "compose::Catalogue::add()",
+         .field = "dataset '" + dataset->name() + "' body radii",
+         .value = core::number(b.equatorialRadius()) + " / " + core::number(b.polarRadius()) + " m",
+         .expected = "the catalogue's body " + body_.name() + " (" +
+                     core::number(body_.equatorialRadius()) + " / " +
+                     core::number(body_.polarRadius()) + " m)"}));
+  }
+  const std::lock_guard lock(writers_);
+  const DatasetId id = nextId_++;
+  entries_.push_back({id, std::move(dataset)});
+  current_.store(std::make_shared<const Snapshot>(body_, entries_, ++version_));
+  return id;
+}
+
+bool Catalogue::remove(DatasetId id) {
+  const std::lock_guard lock(writers_);
+  const auto it = std::find_if(entries_.begin(), entries_.end(),
+                               [id](const CatalogueEntry& e) { return e.id == id; });
+  if (it == entries_.end()) return false;
+  entries_.erase(it);
+  current_.store(std::make_shared<const Snapshot>(body_, entries_, ++version_));
+  return true;
+}
+
+std::shared_ptr<const Snapshot> Catalogue::snapshot() const { return current_.load(); }
+
+}  // namespace regolith::compose

@@ -1,0 +1,317 @@
+#include <regolith/compose/ComposedSurface.hpp>
+
+#include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
+
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
+#include <glm/vec2.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+
+namespace regolith::compose {
+
+namespace {
+
+using topo::QueryStatus;
+
+struct Member {
+  std::uint32_t entry = 0;
+  Contribution c;
+  double resolution = 1.0;  // (finest spacing / spacing)^p
+  double spacing = 0.0;
+  int priority = 0;
+  glm::dvec2 gradC{0.0}, gradQ{0.0};  // ∂/∂east, ∂/∂north of coverage and quality
+};
+
+/// Per-thread scratch, so a query allocates nothing once warm.
+struct Scratch {
+  std::vector<std::uint32_t> candidates;
+  std::vector<Member> members;
+};
+thread_local Scratch tlScratch;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
+
+void checkPoint(double latDeg, double lonDeg, const char* op) {
+  topo::requireFinite(latDeg, op, "latitude");
+  topo::requireFinite(lonDeg, op, "longitude");
+  if (std::abs(latDeg) > 90.0) {
+    throw InvalidArgument(core::format({.operation = op,
+                                        .field = "latitude",
+                                        .value = core::number(latDeg) + " deg",
+                                        .expected = "within -90 .. 90"}));
+  }
+}
+
+bool pointOk(double latDeg, double lonDeg) noexcept {
+  return std::isfinite(latDeg) && std::isfinite(lonDeg) && std::abs(latDeg) <= 90.0;
+}
+
+}  // namespace
+
+const char* policyName(Policy policy) noexcept {
+  switch (policy) {
+    case Policy::Weighted: return "weighted";
+    case Policy::FinestWins: return "finest";
+  }
+  return "unknown";
+}
+
+ComposedSurface::ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules rules)
+    : snapshot_(std::move(snapshot)), rules_(rules) {
+  if (!snapshot_) {
+    throw InvalidArgument(core::format({.operation = "compose::ComposedSurface()",
+                                        .field = "snapshot",
+                                        .value = "null",
+                                        .expected = "a catalogue snapshot"}));
+  }
+  if (!(std::isfinite(rules_.resolutionPower) && rules_.resolutionPower >= 0.0)) {
+    throw InvalidArgument(core::format({.operation = "compose::ComposedSurface()",
+                                        .field = "rules.resolutionPower",
+                                        .value = core::number(rules_.resolutionPower),
+                                        .expected = "finite, >= 0"}));
+  }
+}
+
+ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double metres,
+                                        bool wantNormal, std::vector<Share>* shares) const {
+  Scratch& s = tlScratch;
+  s.candidates.clear();
+  s.members.clear();
+  snapshot_->covering(latDeg, lonDeg, s.candidates);
+  const auto entries = snapshot_->entries();
+  ComposedSample out;
+  bool sawNodata = false, sawUnmappable = false, sawOutside = false;
+  double finest = std::numeric_limits<double>::infinity();
+  for (const std::uint32_t e : s.candidates) {
+    const Dataset& d = *entries[e].dataset;
+    const std::size_t level = metres > 0.0 ? d.levelFor(metres) : 0;
+    Contribution c = d.evaluate(latDeg, lonDeg, level, wantNormal);
+    if (c.status != QueryStatus::Ok) {
+      sawNodata |= c.status == QueryStatus::Nodata;
+      sawUnmappable |= c.status == QueryStatus::Unmappable;
+      sawOutside |= c.status == QueryStatus::OutsideGrid;
+      continue;
+    }
+    if (!(c.coverage > 0.0)) continue;
+    finest = std::min(finest, d.groundSpacing());
+    s.members.push_back({e, c, 1.0, d.groundSpacing(), d.options().priority, {}, {}});
+  }
+  if (s.members.empty()) {
+    out.status = sawNodata ? QueryStatus::Nodata
+                 : (sawUnmappable && !sawOutside) ? QueryStatus::Unmappable
+                                                  : QueryStatus::OutsideGrid;
+    out.normalStatus = out.status;
+    return out;
+  }
+  for (Member& m : s.members) m.resolution = std::pow(finest / m.spacing, rules_.resolutionPower);
+  // Tiers: higher priority first; under FinestWins, finer datasets first within a priority.
+  const bool finestWins = rules_.policy == Policy::FinestWins;
+  auto sameTier = [&](const Member& a, const Member& b) {
+    if (a.priority != b.priority) return false;
+    return !finestWins || std::abs(a.spacing - b.spacing) <= 1e-9 * std::max(a.spacing, b.spacing);
+  };
+  std::stable_sort(s.members.begin(), s.members.end(), [&](const Member& a, const Member& b) {
+    if (a.priority != b.priority) return a.priority > b.priority;
+    if (finestWins && !sameTier(a, b)) return a.spacing < b.spacing;
+    return false;
+  });
+
+  const bool several = s.members.size() > 1;
+  if (wantNormal && several) {
+    // Gradients of each member's coverage and quality, by central differences along the
+    // point's east and north directions (body-fixed, so the poles need no special case),
+    // over a thousandth of the smaller of its ground spacing and its feather width: both
+    // terms change on those scales. The step is far above the rounding of the positions
+    // (1e-9 m), and keeps the error small where a term has a kink (the feather's start, a
+    // mask's or the quality lattice's cell edge), where it grows with the step.
+    const glm::dmat3 enu = body().enuFrame(latDeg, lonDeg);
+    const glm::dvec3 p = body().toBodyFixed({latDeg, lonDeg, 0.0});
+    for (Member& m : s.members) {
+      const Dataset& d = *entries[m.entry].dataset;
+      const double feather = d.options().featherMetres;
+      const double delta =
+          1e-3 * (feather > 0.0 ? std::min(d.groundSpacing(), feather) : d.groundSpacing());
+      for (int axis = 0; axis < 2; ++axis) {
+        const topo::Geodetic gp = body().toGeodetic(p + delta * enu[axis]);
+        const topo::Geodetic gm = body().toGeodetic(p - delta * enu[axis]);
+        const auto tp = d.coverageQuality(gp.latDeg, gp.lonDeg);
+        const auto tm = d.coverageQuality(gm.latDeg, gm.lonDeg);
+        m.gradC[axis] = (tp[0] - tm[0]) / (2.0 * delta);
+        m.gradQ[axis] = (tp[1] - tm[1]) / (2.0 * delta);
+      }
+    }
+  }
+
+  // Composite tiers bottom-up: acc = α_t·H_t + (1 − α_t)·acc, the lowest tier as it is.
+  double acc = 0.0;
+  glm::dvec2 accGrad(0.0);
+  bool normalOk = true;
+  QueryStatus badNormal = QueryStatus::Ok;
+  std::size_t end = s.members.size();
+  bool bottom = true;
+  // Scale of each tier's shares, applied after all tiers are known (top-down products).
+  std::vector<std::pair<std::size_t, std::size_t>> tiers;
+  std::vector<double> alphas;
+  while (end > 0) {
+    std::size_t begin = end - 1;
+    while (begin > 0 && sameTier(s.members[begin - 1], s.members[end - 1])) --begin;
+    double sumW = 0.0, sumWH = 0.0, keep = 1.0;
+    for (std::size_t i = begin; i < end; ++i) {
+      const Member& m = s.members[i];
+      const double w = m.c.coverage * m.c.quality * m.resolution;
+      sumW += w;
+      sumWH += w * m.c.height;
+      keep *= 1.0 - m.c.coverage;
+    }
+    // A tier of one keeps its member's height exactly (w·h/w may round).
+    const double ht = end - begin == 1 ? s.members[begin].c.height : sumWH / sumW;
+    const double alpha = bottom ? 1.0 : 1.0 - keep;
+    glm::dvec2 gradHt(0.0), gradAlpha(0.0);
+    if (wantNormal) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const Member& m = s.members[i];
+        if (m.c.normalStatus != QueryStatus::Ok) {
+          if (normalOk) badNormal = m.c.normalStatus;
+          normalOk = false;
+          continue;
+        }
+        const double w = m.c.coverage * m.c.quality * m.resolution;
+        gradHt += w * m.c.slope;
+        if (several) {
+          const glm::dvec2 gradW = m.resolution * (m.c.quality * m.gradC + m.c.coverage * m.gradQ);
+          gradHt += (m.c.height - ht) * gradW;
+          if (!bottom) {
+            double others = 1.0;
+            for (std::size_t j = begin; j < end; ++j) {
+              if (j != i) others *= 1.0 - s.members[j].c.coverage;
+            }
+            gradAlpha += others * m.gradC;
+          }
+        }
+      }
+      gradHt /= sumW;
+    }
+    if (bottom) {
+      acc = ht;
+      accGrad = gradHt;
+    } else {
+      accGrad = alpha * gradHt + (1.0 - alpha) * accGrad + (ht - acc) * gradAlpha;
+      acc = alpha * ht + (1.0 - alpha) * acc;
+    }
+    tiers.emplace_back(begin, end);
+    alphas.push_back(alpha);
+    bottom = false;
+    end = begin;
+  }
+  out.height = acc;
+  out.status = QueryStatus::Ok;
+  out.contributors = static_cast<std::uint32_t>(s.members.size());
+  if (wantNormal) {
+    if (normalOk) {
+      // In the point's east-north-up frame; surface() turns it body-fixed if asked.
+      out.normal = glm::normalize(glm::dvec3(-accGrad.x, -accGrad.y, 1.0));
+      out.normalStatus = std::isfinite(out.normal.x) ? QueryStatus::Ok : QueryStatus::Nodata;
+    } else {
+      out.normalStatus = badNormal;
+    }
+  }
+  if (shares != nullptr) {
+    // tiers[] runs bottom-up; a tier's members share α_t times what the tiers above leave.
+    double above = 1.0;
+    for (std::size_t t = tiers.size(); t-- > 0;) {
+      const auto [begin, tierEnd] = tiers[t];
+      double sumW = 0.0;
+      for (std::size_t i = begin; i < tierEnd; ++i) {
+        const Member& m = s.members[i];
+        sumW += m.c.coverage * m.c.quality * m.resolution;
+      }
+      for (std::size_t i = begin; i < tierEnd; ++i) {
+        const Member& m = s.members[i];
+        const double w = m.c.coverage * m.c.quality * m.resolution;
+        shares->push_back({entries[m.entry].id, m.c.height, m.c.coverage, m.c.quality,
+                           above * alphas[t] * w / sumW});
+      }
+      above *= 1.0 - alphas[t];
+    }
+  }
+  return out;
+}
+
+topo::HeightSample ComposedSurface::height(double latDeg, double lonDeg) const {
+  checkPoint(latDeg, lonDeg, "compose::ComposedSurface::height()");
+  const ComposedSample c = compose(latDeg, lonDeg, 0.0, false, nullptr);
+  return {c.height, c.status};
+}
+
+topo::HeightSample ComposedSurface::heightAt(double latDeg, double lonDeg, double metres) const {
+  checkPoint(latDeg, lonDeg, "compose::ComposedSurface::heightAt()");
+  const ComposedSample c = compose(latDeg, lonDeg, metres, false, nullptr);
+  return {c.height, c.status};
+}
+
+ComposedSample ComposedSurface::surface(double latDeg, double lonDeg,
+                                        topo::NormalFrame frame) const {
+  checkPoint(latDeg, lonDeg, "compose::ComposedSurface::surface()");
+  ComposedSample c = compose(latDeg, lonDeg, 0.0, true, nullptr);
+  if (frame == topo::NormalFrame::BodyFixed && c.normalStatus == QueryStatus::Ok) {
+    c.normal = body().enuFrame(latDeg, lonDeg) * c.normal;
+  }
+  return c;
+}
+
+std::vector<Share> ComposedSurface::weights(double latDeg, double lonDeg) const {
+  checkPoint(latDeg, lonDeg, "compose::ComposedSurface::weights()");
+  std::vector<Share> shares;
+  (void)compose(latDeg, lonDeg, 0.0, false, &shares);
+  return shares;
+}
+
+void ComposedSurface::heights(std::span<const double> latsDeg, std::span<const double> lonsDeg,
+                              std::span<double> out, std::span<topo::QueryStatus> status) const {
+  const std::size_t n = latsDeg.size();
+  if (lonsDeg.size() != n || out.size() != n || (!status.empty() && status.size() != n)) {
+    throw InvalidArgument(core::format({.operation = "compose::ComposedSurface::heights()",
+                                        .field = "array lengths",
+                                        .value = std::to_string(n) + " latitudes, " +
+                                                 std::to_string(lonsDeg.size()) + " longitudes, " +
+                                                 std::to_string(out.size()) + " outputs",
+                                        .expected = "equal (status empty or equal too)"}));
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    ComposedSample c;
+    if (pointOk(latsDeg[i], lonsDeg[i])) c = compose(latsDeg[i], lonsDeg[i], 0.0, false, nullptr);
+    out[i] = c.height;
+    if (!status.empty()) status[i] = c.status;
+  }
+}
+
+void ComposedSurface::surfaces(std::span<const double> latsDeg, std::span<const double> lonsDeg,
+                               std::span<double> outHeights, std::span<glm::dvec3> outNormals,
+                               std::span<topo::QueryStatus> status, topo::NormalFrame frame,
+                               std::span<topo::QueryStatus> normalStatus) const {
+  const std::size_t n = latsDeg.size();
+  if (lonsDeg.size() != n || outHeights.size() != n || outNormals.size() != n ||
+      (!status.empty() && status.size() != n) ||
+      (!normalStatus.empty() && normalStatus.size() != n)) {
+    throw InvalidArgument(core::format({.operation = "compose::ComposedSurface::surfaces()",
+                                        .field = "array lengths",
+                                        .value = std::to_string(n) + " latitudes, " +
+                                                 std::to_string(lonsDeg.size()) + " longitudes, " +
+                                                 std::to_string(outHeights.size()) + " heights, " +
+                                                 std::to_string(outNormals.size()) + " normals",
+                                        .expected = "equal (statuses empty or equal too)"}));
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    ComposedSample c;
+    if (pointOk(latsDeg[i], lonsDeg[i])) c = surface(latsDeg[i], lonsDeg[i], frame);
+    outHeights[i] = c.height;
+    outNormals[i] = c.normal;
+    if (!status.empty()) status[i] = c.status;
+    if (!normalStatus.empty()) normalStatus[i] = c.normalStatus;
+  }
+}
+
+}  // namespace regolith::compose

@@ -1,0 +1,425 @@
+#include <regolith/compose/Dataset.hpp>
+
+#include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
+
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <utility>
+
+namespace regolith::compose {
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+[[noreturn]] void bad(const std::string& op, const std::string& field, const std::string& value,
+                      const char* expected) {
+  throw InvalidArgument(
+      core::format({.operation = op, .field = field, .value = value, .expected = expected}));
+}
+
+double smoothstep(double t) noexcept {
+  t = std::clamp(t, 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
+}
+
+/// Bilinear read of a source at fractional (u, v) = (col, row), clamped to the grid; NaN
+/// samples count as 0 (mask semantics).
+double maskAt(const topo::SampleSource& mask, double u, double v) {
+  const auto cols = static_cast<double>(mask.cols()), rows = static_cast<double>(mask.rows());
+  u = std::clamp(u, 0.0, cols - 1.0);
+  v = std::clamp(v, 0.0, rows - 1.0);
+  const auto c0 = static_cast<std::size_t>(u), r0 = static_cast<std::size_t>(v);
+  const std::size_t c1 = std::min(c0 + 1, mask.cols() - 1), r1 = std::min(r0 + 1, mask.rows() - 1);
+  const double tu = u - static_cast<double>(c0), tv = v - static_cast<double>(r0);
+  auto s = [&](std::size_t r, std::size_t c) {
+    const auto x = static_cast<double>(mask.sample(r, c));
+    return std::isnan(x) ? 0.0 : std::clamp(x, 0.0, 1.0);
+  };
+  const double top = s(r0, c0) + tu * (s(r0, c1) - s(r0, c0));
+  const double bottom = s(r1, c0) + tu * (s(r1, c1) - s(r1, c0));
+  return top + tv * (bottom - top);
+}
+
+/// Height range of a pyramid from its coarsest level of at most 2^20 samples (see
+/// DatasetOptions::heightRange).
+std::array<double, 2> estimateHeightRange(const std::vector<topo::PyramidLevel>& levels,
+                                          const std::string& op) {
+  std::size_t pick = levels.size() - 1;
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    if (levels[i].grid.rows() * levels[i].grid.cols() <= (std::size_t{1} << 20)) {
+      pick = i;
+      break;
+    }
+  }
+  const auto& lv = levels[pick];
+  std::vector<float> buf(lv.grid.rows() * lv.grid.cols());
+  lv.source->readWindow(0, 0, lv.grid.rows(), lv.grid.cols(), buf);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (float s : buf) {
+    if (lv.grid.isNodata(s) || !std::isfinite(s)) continue;
+    lo = std::min(lo, static_cast<double>(s));
+    hi = std::max(hi, static_cast<double>(s));
+  }
+  if (!(lo <= hi)) {
+    bad(op, "level " + std::to_string(pick) + " samples", "all missing",
+        "some valid heights (or DatasetOptions::heightRange)");
+  }
+  if (pick == 0) return {lo, hi};
+  const double pad = 0.25 * (hi - lo) + 100.0;
+  return {lo - pad, hi + pad};
+}
+
+}  // namespace
+
+const char* roleName(Role role) noexcept {
+  switch (role) {
+    case Role::Height: return "height";
+    case Role::Albedo: return "albedo";
+    case Role::Overlay: return "overlay";
+  }
+  return "unknown";
+}
+
+double projectionQuality(double groundX, double groundY, double nominal, double n) noexcept {
+  if (!(groundX > 0.0 && groundY > 0.0 && nominal > 0.0 && n > 1.0)) return kMinQuality;
+  const double anisotropy = std::abs(std::log(groundX / groundY));
+  const double distortion = std::abs(std::log(std::sqrt(groundX * groundY) / nominal));
+  const double alpha = 1.0 - std::max(anisotropy, distortion) / std::log(n);
+  return std::clamp(alpha, kMinQuality, 1.0);
+}
+
+std::shared_ptr<const Dataset> Dataset::planet(const topo::GridPyramid& pyramid,
+                                               DatasetOptions options) {
+  if (!pyramid.planetBody) {
+    bad("compose::Dataset::planet()", "pyramid body", "unset",
+        "a planet pyramid (latitude/longitude levels on a body)");
+  }
+  return std::shared_ptr<const Dataset>(new Dataset(pyramid, std::nullopt, std::move(options)));
+}
+
+std::shared_ptr<const Dataset> Dataset::dem(const topo::GridPyramid& pyramid,
+                                            const topo::Placement& placement,
+                                            DatasetOptions options) {
+  if (pyramid.planetBody) {
+    bad("compose::Dataset::dem()", "pyramid body", pyramid.planetBody->name(),
+        "a planar pyramid (its placement puts it on the body)");
+  }
+  return std::shared_ptr<const Dataset>(new Dataset(pyramid, placement, std::move(options)));
+}
+
+Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement> placement,
+                 DatasetOptions options)
+    : options_(std::move(options)),
+      body_(placement ? placement->body() : *pyramid.planetBody),
+      placement_(std::move(placement)) {
+  const std::string op = isPlanet() ? "compose::Dataset::planet()" : "compose::Dataset::dem()";
+  const std::string who = "dataset '" + options_.name + "' ";
+  if (pyramid.levels.empty()) bad(op, who + "pyramid", "empty", "at least one level");
+  if (!(std::isfinite(options_.featherMetres) && options_.featherMetres >= 0.0)) {
+    bad(op, who + "feather width", core::number(options_.featherMetres) + " m", "finite, >= 0");
+  }
+  latType_ = isPlanet() ? pyramid.latitudeType : topo::LatitudeType::Planetodetic;
+  for (const auto& lv : pyramid.levels) {
+    Level l{lv, std::nullopt, std::nullopt};
+    if (isPlanet()) {
+      l.planet.emplace(lv.grid, body_, latType_, lv.source);
+    } else {
+      l.dem.emplace(lv.grid, *placement_, lv.source);
+    }
+    levels_.push_back(std::move(l));
+  }
+  const topo::TopoGrid& g0 = levels_.front().level.grid;
+  if (options_.mask &&
+      (options_.mask->rows() != g0.rows() || options_.mask->cols() != g0.cols())) {
+    bad(op, who + "mask size",
+        std::to_string(options_.mask->rows()) + " x " + std::to_string(options_.mask->cols()),
+        "the size of level 0");
+  }
+  if (isPlanet()) {
+    const auto& p = *levels_.front().planet;
+    globalLon_ = p.isGlobalInLongitude();
+    northPole_ = p.hasNorthCap();
+    southPole_ = p.hasSouthCap();
+    const double r = (2.0 * body_.equatorialRadius() + body_.polarRadius()) / 3.0;
+    groundSpacing_ = r * kDeg * std::sqrt(g0.spacingX() * g0.spacingY());
+  } else {
+    groundSpacing_ = std::sqrt(g0.spacingX() * g0.spacingY());
+  }
+  if (options_.heightRange) {
+    const auto [lo, hi] = *options_.heightRange;
+    if (!(std::isfinite(lo) && std::isfinite(hi) && lo <= hi)) {
+      bad(op, who + "height range", core::number(lo) + " .. " + core::number(hi) + " m",
+          "finite, lowest <= highest");
+    }
+    heightRange_ = *options_.heightRange;
+  } else {
+    std::vector<topo::PyramidLevel> lv;
+    lv.reserve(levels_.size());
+    for (const auto& l : levels_) lv.push_back(l.level);
+    heightRange_ = estimateHeightRange(lv, op + ": " + who);
+  }
+  buildQualityLattice();
+  computeBounds();
+}
+
+Dataset::GridPoint Dataset::locate(double latDeg, double lonDeg) const {
+  const topo::TopoGrid& g = levels_.front().level.grid;
+  GridPoint p;
+  if (isPlanet()) {
+    // The longitude in the turn nearest the grid's centre, so a grid spanning ±180° or
+    // 0…360° finds its points either way.
+    const double centre = 0.5 * (g.west() + g.east());
+    // (Kept as given when already in that turn: wrapping would round it by an ulp of 540.)
+    p.x = lonDeg >= centre - 180.0 && lonDeg < centre + 180.0
+              ? lonDeg
+              : centre + topo::wrapLongitude180(lonDeg - centre);
+    p.y = body_.fromPlanetodetic(latDeg, latType_);
+    p.mapped = true;
+    const bool inLon = globalLon_ || (p.x >= g.west() && p.x <= g.east());
+    p.inside = inLon && p.y >= g.south() - 1e-9 && p.y <= g.north() + 1e-9;
+    return p;
+  }
+  try {
+    const double h = 0.5 * (heightRange_[0] + heightRange_[1]);
+    const glm::dvec3 xyh =
+        placement_->fromGeodeticNear({latDeg, lonDeg, h}, 0.5 * (g.west() + g.east()));
+    p.x = xyh.x;
+    p.y = xyh.y;
+    p.mapped = std::isfinite(p.x) && std::isfinite(p.y);
+  } catch (const DomainError&) {
+    p.mapped = false;
+  }
+  p.inside = p.mapped && g.contains(p.x, p.y);
+  return p;
+}
+
+bool Dataset::contains(double latDeg, double lonDeg) const {
+  return locate(latDeg, lonDeg).inside;
+}
+
+double Dataset::coverageAt(const GridPoint& g, double latDeg) const {
+  if (!g.inside) return 0.0;
+  const topo::TopoGrid& grid = levels_.front().level.grid;
+  double c = 1.0;
+  if (options_.featherMetres > 0.0) {
+    double d = std::numeric_limits<double>::infinity();
+    if (isPlanet()) {
+      const double lat = latDeg * kDeg;
+      const double m = body_.meridianRadius(latDeg) * kDeg;
+      const double n = body_.primeVerticalRadius(latDeg) * std::cos(lat) * kDeg;
+      if (!northPole_) d = std::min(d, (grid.north() - g.y) * m);
+      if (!southPole_) d = std::min(d, (g.y - grid.south()) * m);
+      if (!globalLon_) d = std::min(d, std::min(g.x - grid.west(), grid.east() - g.x) * n);
+    } else {
+      d = std::min({g.x - grid.west(), grid.east() - g.x, g.y - grid.south(), grid.north() - g.y});
+    }
+    c = smoothstep(d / options_.featherMetres);
+  }
+  if (options_.mask && c > 0.0) {
+    const glm::dvec2 uv = grid.fractionalIndex(g.x, g.y);
+    c *= maskAt(*options_.mask, uv.x, uv.y);
+  }
+  return c;
+}
+
+double Dataset::planetQuality(double latDeg) const {
+  const topo::TopoGrid& grid = levels_.front().level.grid;
+  const double lat = std::clamp(latDeg, -90.0, 90.0);
+  const double gx = body_.primeVerticalRadius(lat) * std::cos(lat * kDeg) * grid.spacingX() * kDeg;
+  const double gy = body_.meridianRadius(lat) * grid.spacingY() * kDeg;
+  // A planet grid's nominal pixel is its size on the equator.
+  const double nominal = std::sqrt(body_.equatorialRadius() * grid.spacingX() * kDeg *
+                                   body_.meridianRadius(0.0) * grid.spacingY() * kDeg);
+  return projectionQuality(gx, gy, nominal, kQualityN);
+}
+
+double Dataset::qualityAt(const GridPoint& g) const {
+  const topo::TopoGrid& grid = levels_.front().level.grid;
+  if (isPlanet()) return planetQuality(body_.toPlanetodetic(std::clamp(g.y, -90.0, 90.0), latType_));
+  const double n = static_cast<double>(kQualityLattice - 1);
+  const double u = std::clamp((g.x - grid.west()) / (grid.east() - grid.west()), 0.0, 1.0) * n;
+  const double v = std::clamp((grid.north() - g.y) / (grid.north() - grid.south()), 0.0, 1.0) * n;
+  const auto c0 = std::min(static_cast<std::size_t>(u), kQualityLattice - 2);
+  const auto r0 = std::min(static_cast<std::size_t>(v), kQualityLattice - 2);
+  const double tu = u - static_cast<double>(c0), tv = v - static_cast<double>(r0);
+  const double* q = quality_.data() + r0 * kQualityLattice + c0;
+  const double top = q[0] + tu * (q[1] - q[0]);
+  const double bottom = q[kQualityLattice] + tu * (q[kQualityLattice + 1] - q[kQualityLattice]);
+  return top + tv * (bottom - top);
+}
+
+std::array<double, 2> Dataset::coverageQuality(double latDeg, double lonDeg) const {
+  const GridPoint g = locate(latDeg, lonDeg);
+  const double c = coverageAt(g, latDeg);
+  return {c, g.inside ? qualityAt(g) : kMinQuality};
+}
+
+void Dataset::buildQualityLattice() {
+  if (isPlanet()) return;  // planet grids compute theirs exactly (planetQuality())
+  const topo::TopoGrid& grid = levels_.front().level.grid;
+  quality_.assign(kQualityLattice * kQualityLattice, kMinQuality);
+  const double n = static_cast<double>(kQualityLattice - 1);
+  for (std::size_t r = 0; r < kQualityLattice; ++r) {
+    const double y = grid.north() - (grid.north() - grid.south()) * static_cast<double>(r) / n;
+    for (std::size_t c = 0; c < kQualityLattice; ++c) {
+      const double x = grid.west() + (grid.east() - grid.west()) * static_cast<double>(c) / n;
+      try {
+        const glm::dmat3 j = placement_->jacobian(x, y, 0.0);
+        const double gx = glm::length(j[0]) * grid.spacingX();
+        const double gy = glm::length(j[1]) * grid.spacingY();
+        quality_[r * kQualityLattice + c] = projectionQuality(gx, gy, groundSpacing_, kQualityN);
+      } catch (const DomainError&) {  // NOLINT(bugprone-empty-catch): no image, lowest quality
+      }
+    }
+  }
+}
+
+void Dataset::computeBounds() {
+  const double a = body_.equatorialRadius(), b = body_.polarRadius();
+  const auto [hlo, hhi] = heightRange_;
+  if (isPlanet() && globalLon_) {
+    const double lo = levels_.front().level.grid.south(), hi = levels_.front().level.grid.north();
+    const double zr = b + std::max(hhi, 0.0);
+    const double xr = a + std::max(hhi, 0.0);
+    const double zlo = lo <= -90.0 + 1e-9 ? -zr : std::sin(lo * kDeg) * zr - 0.01 * zr;
+    const double zhi = hi >= 90.0 - 1e-9 ? zr : std::sin(hi * kDeg) * zr + 0.01 * zr;
+    bounds_ = {glm::dvec3(-xr, -xr, std::max(-zr, zlo)), glm::dvec3(xr, xr, std::min(zr, zhi))};
+    return;
+  }
+  constexpr std::size_t kN = 17;
+  const topo::TopoGrid& grid = levels_.front().level.grid;
+  glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
+  double step = 0.0;
+  std::vector<glm::dvec3> prevRow(kN, glm::dvec3(std::numeric_limits<double>::quiet_NaN()));
+  for (std::size_t r = 0; r < kN; ++r) {
+    const double y = grid.north() - (grid.north() - grid.south()) * static_cast<double>(r) / (kN - 1);
+    glm::dvec3 prev(std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t c = 0; c < kN; ++c) {
+      const double x = grid.west() + (grid.east() - grid.west()) * static_cast<double>(c) / (kN - 1);
+      glm::dvec3 p0, p1;
+      try {
+        if (isPlanet()) {
+          const double lat = body_.toPlanetodetic(std::clamp(y, -90.0, 90.0), latType_);
+          p0 = body_.toBodyFixed({lat, x, hlo});
+          p1 = body_.toBodyFixed({lat, x, hhi});
+        } else {
+          p0 = placement_->toBodyFixed(x, y, hlo);
+          p1 = placement_->toBodyFixed(x, y, hhi);
+        }
+      } catch (const DomainError&) {
+        prev = glm::dvec3(std::numeric_limits<double>::quiet_NaN());
+        prevRow[c] = prev;
+        continue;
+      }
+      lo = glm::min(lo, glm::min(p0, p1));
+      hi = glm::max(hi, glm::max(p0, p1));
+      if (std::isfinite(prev.x)) step = std::max(step, glm::length(p1 - prev));
+      if (std::isfinite(prevRow[c].x)) step = std::max(step, glm::length(p1 - prevRow[c]));
+      prev = p1;
+      prevRow[c] = p1;
+    }
+  }
+  // Between lattice points the surface bulges by at most the sagitta of the step on the
+  // body (step²/8R), far less than the quarter step added here; a tangent-plane DEM is flat.
+  const glm::dvec3 pad(0.25 * step + 1.0);
+  bounds_ = {lo - pad, hi + pad};
+}
+
+std::size_t Dataset::levelFor(double metres) const noexcept {
+  std::size_t l = 0;
+  while (l + 1 < levels_.size() &&
+         groundSpacing_ * std::ldexp(1.0, static_cast<int>(l + 1)) <= metres * (1.0 + 1e-9)) {
+    ++l;
+  }
+  return l;
+}
+
+Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level,
+                               bool wantSlope) const {
+  Contribution out;
+  const GridPoint g = locate(latDeg, lonDeg);
+  if (!g.mapped) {
+    out.status = out.normalStatus = topo::QueryStatus::Unmappable;
+    return out;
+  }
+  if (!g.inside) return out;
+  const Level& lv = levels_[std::min(level, levels_.size() - 1)];
+  const auto bilinear = topo::Interpolation::Bilinear;
+  const auto bodyFixed = topo::NormalFrame::BodyFixed;
+  topo::SurfaceSample s;
+  if (isPlanet()) {
+    const topo::LatLon ll{g.y, g.x};
+    if (wantSlope) {
+      s = lv.planet->surface(ll, bilinear, bodyFixed);
+    } else {
+      const topo::HeightSample h = lv.planet->height(ll, bilinear);
+      s.height = h.height;
+      s.status = h.status;
+    }
+  } else if (const auto* ltp = placement_->localTangentPlane()) {
+    // Heights are along the plane's normal: find the height H on the query point's normal
+    // line whose plane coordinates (x, y, h) lie on the DEM (h = DEM(x, y)). The plane's
+    // normal and the body's differ by the DEM's extent over the radius, so each step shrinks
+    // the error by about that angle times the slope: a few steps reach 1e-6 m.
+    double height = 0.5 * (heightRange_[0] + heightRange_[1]);
+    double x = g.x, y = g.y;
+    for (int it = 0; it < 12; ++it) {
+      const glm::dvec3 p = ltp->forward({latDeg, lonDeg, height});
+      x = p.x;
+      y = p.y;
+      const topo::HeightSample h = lv.dem->height(x, y, bilinear);
+      if (!h.valid()) {
+        s.status = h.status;
+        break;
+      }
+      const double residual = h.height - p.z;
+      height += residual;
+      s.status = topo::QueryStatus::Ok;
+      if (std::abs(residual) < 1e-7) break;
+    }
+    if (s.status == topo::QueryStatus::Ok) {
+      s.height = height;
+      if (wantSlope) {
+        const topo::SurfaceSample n = lv.dem->surface(x, y, bilinear, bodyFixed);
+        s.normal = n.normal;
+        s.normalStatus = n.normalStatus;
+      }
+    }
+  } else {
+    if (wantSlope) {
+      s = lv.dem->surface(g.x, g.y, bilinear, bodyFixed);
+    } else {
+      const topo::HeightSample h = lv.dem->height(g.x, g.y, bilinear);
+      s.height = h.height;
+      s.status = h.status;
+    }
+  }
+  out.status = s.status;
+  if (!s.valid()) return out;
+  out.height = s.height;
+  out.coverage = coverageAt(g, latDeg);
+  out.quality = qualityAt(g);
+  if (wantSlope) {
+    out.normalStatus = s.normalStatus;
+    if (s.normalValid()) {
+      const glm::dmat3 enu = body_.enuFrame(latDeg, lonDeg);
+      const double ne = glm::dot(s.normal, enu[0]), nn = glm::dot(s.normal, enu[1]);
+      const double nu = glm::dot(s.normal, enu[2]);
+      if (nu > 1e-12) {
+        out.slope = {-ne / nu, -nn / nu};
+      } else {
+        out.normalStatus = topo::QueryStatus::Unmappable;  // a vertical face has no slope
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace regolith::compose

@@ -1,0 +1,289 @@
+// The composition rule (docs/composition.md) against analytic expectations: each test builds
+// datasets whose heights are simple functions, so the composed height, its weights and its
+// normal can be written down independently of the code under test.
+
+#include <regolith/compose/ComposedSurface.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/topo/Projection.hpp>
+#include <regolith/topo/TopoDem.hpp>
+
+#include "compose/ComposeFixtures.hpp"
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <vector>
+
+namespace regolith::compose {
+namespace {
+
+using testing::demPyramid;
+using testing::globalPlanet;
+using testing::named;
+using testing::planetPyramid;
+using topo::QueryStatus;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+const topo::Body kMoon = topo::Body::moon();
+const double kR = kMoon.equatorialRadius();
+
+/// A catalogue of the Moon with a 1° global grid of height g(lat, lon) and a 0.5° regional
+/// grid over lat −10…10, lon −10…10 of height f(lat, lon).
+struct TwoPlanets {
+  Catalogue catalogue{kMoon};
+  DatasetId global = 0, regional = 0;
+  TwoPlanets(const std::function<double(double, double)>& g,
+             const std::function<double(double, double)>& f, double feather = 0.0,
+             int regionalPriority = 0) {
+    global = catalogue.add(Dataset::planet(globalPlanet(kMoon, 1.0, g), named("global")));
+    regional = catalogue.add(Dataset::planet(planetPyramid(kMoon, 9.75, -9.75, 0.5, 40, 40, f),
+                                             named("regional", feather, regionalPriority)));
+  }
+  [[nodiscard]] ComposedSurface surface(Policy p) const {
+    return ComposedSurface(catalogue.snapshot(), Rules{p, 2.0});
+  }
+};
+
+TEST(ComposedSurface, OneDatasetAnswersItsOwnHeightAndNormal) {
+  auto f = [](double lat, double lon) { return 100.0 + 30.0 * lat - 12.0 * lon; };
+  auto pyr = planetPyramid(kMoon, 9.75, -9.75, 0.5, 40, 40, f);
+  topo::TopoPlanet own(pyr.levels[0].grid, kMoon, topo::LatitudeType::Planetodetic,
+                       pyr.levels[0].source);
+  Catalogue cat(kMoon);
+  cat.add(Dataset::planet(pyr, named("only")));
+  const ComposedSurface s(cat.snapshot());
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-9.9, 9.9);
+  for (int i = 0; i < 200; ++i) {
+    const double lat = u(rng), lon = u(rng);
+    const topo::SurfaceSample ref =
+        own.surface({lat, lon}, topo::Interpolation::Bilinear, topo::NormalFrame::BodyFixed);
+    const ComposedSample c = s.surface(lat, lon, topo::NormalFrame::BodyFixed);
+    ASSERT_EQ(c.status, QueryStatus::Ok);
+    EXPECT_EQ(c.height, ref.height);
+    EXPECT_EQ(c.contributors, 1U);
+    EXPECT_NEAR(glm::length(c.normal - ref.normal), 0.0, 1e-12);
+  }
+  EXPECT_EQ(s.height(40.0, 0.0).status, QueryStatus::OutsideGrid);
+}
+
+TEST(ComposedSurface, WeightedBlendFollowsResolutionAndQuality) {
+  TwoPlanets t([](double, double) { return 100.0; }, [](double, double) { return 200.0; });
+  const ComposedSurface s = t.surface(Policy::Weighted);
+  for (double lat : {0.3, 5.0, -8.0}) {
+    const double lon = 2.2;
+    // Both grids are square in degrees: at latitude φ a pixel is R·cos φ·Δ by R·Δ, nominal
+    // R·Δ on the equator (a sphere).
+    const double q = projectionQuality(std::cos(lat * kDeg), 1.0, 1.0, kQualityN);
+    const double wFine = q * 1.0, wCoarse = q * std::pow(0.5 / 1.0, 2.0);
+    const double expected = (wFine * 200.0 + wCoarse * 100.0) / (wFine + wCoarse);
+    const topo::HeightSample h = s.height(lat, lon);
+    ASSERT_EQ(h.status, QueryStatus::Ok);
+    EXPECT_NEAR(h.height, expected, 1e-3) << "lat " << lat;
+  }
+  EXPECT_NEAR(s.height(0.3, 2.2).height, 180.0, 1e-2);   // 200·1 + 100·¼ over 1¼
+  EXPECT_DOUBLE_EQ(s.height(30.0, 50.0).height, 100.0);  // only the global grid
+}
+
+TEST(ComposedSurface, FinestWinsInsideAndFeathersAcrossTheBorder) {
+  const double feather = 50e3;
+  TwoPlanets t([](double, double) { return 100.0; }, [](double, double) { return 200.0; }, feather);
+  const ComposedSurface s = t.surface(Policy::FinestWins);
+  EXPECT_DOUBLE_EQ(s.height(0.0, 0.0).height, 200.0);
+  EXPECT_DOUBLE_EQ(s.height(0.0, 30.0).height, 100.0);
+  const double east = 10.0;  // the regional grid's pixel-extent edge
+  for (double d : {0.0, 5e3, 12.5e3, 25e3, 40e3, 49e3, 60e3}) {
+    const double lon = east - d / (kR * kDeg);
+    const double c = testing::smoothstep(d / feather);
+    EXPECT_NEAR(s.height(0.0, lon).height, c * 200.0 + (1.0 - c) * 100.0, 1e-6) << "d " << d;
+  }
+  // No hard step anywhere across the border: along a line through it, neighbouring heights
+  // 100 m apart differ by at most the feather's steepest slope (1.5 × 100 m / 50 km).
+  double prev = s.height(0.0, east - 0.2).height;
+  for (int i = 1; i <= 400; ++i) {
+    const double lon = east - 0.2 + 0.4 * i / 400.0;
+    const double h = s.height(0.0, lon).height;
+    const double step = 0.4 / 400.0 * kDeg * kR;
+    EXPECT_LE(std::abs(h - prev), 1.5 * 100.0 / feather * step * 1.01 + 1e-9);
+    prev = h;
+  }
+}
+
+TEST(ComposedSurface, SharesSumToOneAndRebuildTheHeight) {
+  TwoPlanets t([](double lat, double) { return 100.0 + lat; },
+               [](double, double lon) { return 200.0 + lon; }, 80e3);
+  for (Policy p : {Policy::Weighted, Policy::FinestWins}) {
+    const ComposedSurface s = t.surface(p);
+    for (double lon : {0.0, 9.0, 9.8}) {
+      const auto shares = s.weights(1.0, lon);
+      ASSERT_EQ(shares.size(), 2U);
+      double sum = 0.0, h = 0.0;
+      for (const Share& sh : shares) {
+        sum += sh.weight;
+        h += sh.weight * sh.height;
+      }
+      EXPECT_NEAR(sum, 1.0, 1e-12);
+      EXPECT_NEAR(h, s.height(1.0, lon).height, 1e-9);
+    }
+  }
+}
+
+TEST(ComposedSurface, AHigherPriorityTierHidesALowerOne) {
+  // The coarse global grid is priority 0, the regional one −1: the global one wins although
+  // it is coarser, because tiers composite over each other.
+  TwoPlanets t([](double, double) { return 100.0; }, [](double, double) { return 200.0; }, 0.0, -1);
+  EXPECT_DOUBLE_EQ(t.surface(Policy::Weighted).height(0.0, 0.0).height, 100.0);
+  EXPECT_DOUBLE_EQ(t.surface(Policy::FinestWins).height(0.0, 0.0).height, 100.0);
+}
+
+TEST(ComposedSurface, NormalIsTheGradientOfTheComposedHeightAcrossAFeather) {
+  // Sloped datasets and a feathered border: the composed normal must be the normal of the
+  // composed height field, which a brute-force central difference of height() gives.
+  TwoPlanets t([](double lat, double lon) { return 30.0 * lon + 10.0 * lat; },
+               [](double lat, double) { return 200.0 + 20.0 * lat; }, 100e3);
+  for (Policy p : {Policy::Weighted, Policy::FinestWins}) {
+    const ComposedSurface s = t.surface(p);
+    for (double lon : {5.0, 8.0, 8.9, 9.5, 9.99, 10.02}) {
+      const double lat = 1.3;
+      const ComposedSample c = s.surface(lat, lon);
+      ASSERT_EQ(c.normalStatus, QueryStatus::Ok) << lon;
+      const double step = 1.0;  // metres
+      const double dLon = step / (kR * std::cos(lat * kDeg) * kDeg), dLat = step / (kR * kDeg);
+      const double dhde =
+          (s.height(lat, lon + dLon).height - s.height(lat, lon - dLon).height) / (2 * step);
+      const double dhdn =
+          (s.height(lat + dLat, lon).height - s.height(lat - dLat, lon).height) / (2 * step);
+      const glm::dvec3 ref = glm::normalize(glm::dvec3(-dhde, -dhdn, 1.0));
+      EXPECT_NEAR(glm::length(c.normal - ref), 0.0, 2e-6) << policyName(p) << " lon " << lon;
+    }
+  }
+}
+
+TEST(ComposedSurface, PoleIsOneHeightWhateverTheLongitude) {
+  // A global grid (poor at the pole) and a polar-stereographic cap, feathered.
+  auto g = [](double lat, double lon) {
+    return 100.0 + 50.0 * std::sin(lon * kDeg) * std::cos(lat * kDeg);
+  };
+  Catalogue cat(kMoon);
+  cat.add(Dataset::planet(globalPlanet(kMoon, 1.0, g), named("global")));
+  const auto ps = topo::PolarStereographic::withTrueScaleLatitude(
+      kMoon, topo::PolarStereographic::Pole::North, 90.0, 0.0);
+  cat.add(Dataset::dem(
+      demPyramid(500.0, 401, 401, [](double x, double y) { return 120.0 + 1e-4 * x - 2e-4 * y; }),
+      topo::Placement(kMoon, ps), named("north cap", 20e3)));
+  for (Policy p : {Policy::Weighted, Policy::FinestWins}) {
+    const ComposedSurface s(cat.snapshot(), Rules{p, 2.0});
+    const double h0 = s.height(90.0, 0.0).height;
+    // The cap's quality is 1 there and the global grid's kMinQuality: the cap all but wins.
+    EXPECT_NEAR(h0, 120.0, 1e-4);
+    for (double lon : {-180.0, -45.0, 90.0, 180.0, 359.0}) {
+      EXPECT_NEAR(s.height(90.0, lon).height, h0, 1e-6) << lon;
+      const ComposedSample c = s.surface(90.0, lon, topo::NormalFrame::BodyFixed);
+      ASSERT_EQ(c.normalStatus, QueryStatus::Ok);
+      EXPECT_NEAR(glm::length(c.normal), 1.0, 1e-12);
+    }
+    // Continuous towards the pole.
+    EXPECT_NEAR(s.height(89.99999, 10.0).height, h0, 1e-2);
+  }
+}
+
+TEST(ComposedSurface, SeamDoesNotSplitADatasetAcross180) {
+  Catalogue cat(kMoon);
+  cat.add(Dataset::planet(globalPlanet(kMoon, 1.0, [](double, double) { return 100.0; }),
+                          named("global")));
+  // A regional grid over longitudes 170…190, with height continuous across 180.
+  cat.add(Dataset::planet(
+      planetPyramid(kMoon, 9.75, 170.25, 0.5, 40, 40,
+                    [](double, double lon) { return 300.0 + 10.0 * (lon - 180.0); }),
+      named("across the seam")));
+  const ComposedSurface s(cat.snapshot(), Rules{Policy::FinestWins, 2.0});
+  EXPECT_NEAR(s.height(0.0, 180.0).height, 300.0, 1e-4);
+  EXPECT_NEAR(s.height(0.0, -180.0).height, 300.0, 1e-4);
+  EXPECT_NEAR(s.height(0.0, -175.0).height, 350.0, 1e-4);
+  EXPECT_NEAR(s.height(0.0, 185.0).height, 350.0, 1e-4);
+  EXPECT_NEAR(s.height(0.0, 175.0).height, 250.0, 1e-4);
+}
+
+TEST(ComposedSurface, TangentPlaneDemHeightsAreAlongTheBodyNormal) {
+  // A tangent-plane DEM stores heights along its plane's normal; the composed height is
+  // along the body's. Oracle: a sample's body-fixed position, converted by the body.
+  const topo::LocalTangentPlane ltp(kMoon, {10.0, 20.0, 0.0}, 30.0);
+  auto f = [](double x, double y) { return 50.0 + 0.02 * x + 0.01 * y; };
+  auto pyr = demPyramid(10.0, 201, 201, f);
+  const topo::TopoDem dem(pyr.levels[0].grid, topo::Placement(ltp), pyr.levels[0].source);
+  Catalogue cat(kMoon);
+  cat.add(Dataset::dem(pyr, topo::Placement(ltp), named("plane")));
+  const ComposedSurface s(cat.snapshot());
+  for (std::size_t r : {0UL, 37UL, 100UL, 199UL}) {
+    for (std::size_t c : {3UL, 100UL, 180UL}) {
+      const topo::Geodetic g = kMoon.toGeodetic(dem.samplePosition(r, c));
+      const topo::HeightSample h = s.height(g.latDeg, g.lonDeg);
+      ASSERT_EQ(h.status, QueryStatus::Ok);
+      EXPECT_NEAR(h.height, g.height, 1e-5) << r << "," << c;
+    }
+  }
+}
+
+TEST(ComposedSurface, BatchGivesEachPointItsOwnStatus) {
+  TwoPlanets t([](double, double) { return 100.0; }, [](double, double) { return 200.0; });
+  const ComposedSurface s = t.surface(Policy::FinestWins);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<double> lats{0.0, nan, 95.0, 45.0, 0.0};
+  const std::vector<double> lons{0.0, 0.0, 0.0, 400.0, std::numeric_limits<double>::infinity()};
+  std::vector<double> h(5);
+  std::vector<QueryStatus> st(5);
+  s.heights(lats, lons, h, st);
+  EXPECT_EQ(st[0], QueryStatus::Ok);
+  EXPECT_DOUBLE_EQ(h[0], 200.0);
+  EXPECT_EQ(st[1], QueryStatus::OutsideGrid);
+  EXPECT_TRUE(std::isnan(h[1]));
+  EXPECT_EQ(st[2], QueryStatus::OutsideGrid);
+  EXPECT_EQ(st[3], QueryStatus::Ok);  // 400° is 40°E
+  EXPECT_DOUBLE_EQ(h[3], 100.0);
+  EXPECT_EQ(st[4], QueryStatus::OutsideGrid);
+  std::vector<double> shortOut(4);
+  EXPECT_THROW(s.heights(lats, lons, shortOut, st), InvalidArgument);
+  EXPECT_THROW((void)s.height(nan, 0.0), InvalidArgument);
+  EXPECT_THROW((void)s.height(91.0, 0.0), InvalidArgument);
+}
+
+TEST(ComposedSurface, NodataFallsThroughToTheDatasetBelow) {
+  Catalogue cat(kMoon);
+  cat.add(Dataset::planet(globalPlanet(kMoon, 1.0, [](double, double) { return 100.0; }),
+                          named("global")));
+  // The regional grid has a hole (NaN) in its middle.
+  cat.add(Dataset::planet(planetPyramid(kMoon, 9.75, -9.75, 0.5, 40, 40,
+                                        [](double lat, double lon) {
+                                          return std::abs(lat) < 2.0 && std::abs(lon) < 2.0
+                                                     ? std::numeric_limits<double>::quiet_NaN()
+                                                     : 200.0;
+                                        }),
+                          named("holed")));
+  const ComposedSurface s(cat.snapshot(), Rules{Policy::FinestWins, 2.0});
+  EXPECT_DOUBLE_EQ(s.height(0.0, 0.0).height, 100.0);
+  EXPECT_DOUBLE_EQ(s.height(6.0, 6.0).height, 200.0);
+  // Alone, the holed grid answers Nodata in its hole.
+  Catalogue alone(kMoon);
+  alone.add(cat.snapshot()->entries()[1].dataset);
+  EXPECT_EQ(ComposedSurface(alone.snapshot()).height(0.0, 0.0).status, QueryStatus::Nodata);
+}
+
+TEST(ComposedSurface, RefusesBadRules) {
+  Catalogue cat(kMoon);
+  EXPECT_THROW(ComposedSurface(nullptr), InvalidArgument);
+  try {
+    (void)ComposedSurface(cat.snapshot(), Rules{Policy::Weighted, -1.0});
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("resolutionPower"), std::string::npos) << e.what();
+  }
+  // An empty catalogue composes nothing.
+  EXPECT_EQ(ComposedSurface(cat.snapshot()).height(0.0, 0.0).status, QueryStatus::OutsideGrid);
+}
+
+}  // namespace
+}  // namespace regolith::compose
