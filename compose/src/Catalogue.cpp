@@ -161,27 +161,44 @@ void Snapshot::visible(std::span<const glm::dvec4> planes, std::vector<std::uint
 Catalogue::Catalogue(topo::Body body)
     : body_(std::move(body)), current_(std::make_shared<const Snapshot>(body_, std::vector<CatalogueEntry>{}, 0)) {}
 
-DatasetId Catalogue::add(std::shared_ptr<const Dataset> dataset) {
+namespace {
+void checkBody(const topo::Body& body, const std::shared_ptr<const Dataset>& dataset) {
   if (!dataset) {
-    throw InvalidArgument(core::format(
-        {.operation = "compose::Catalogue::add()", .field = "dataset", .value = "null", .expected = "a dataset"}));
+    throw InvalidArgument(core::format({.operation = "compose::Catalogue::add()",
+                                        .field = "dataset",
+                                        .value = "null",
+                                        .expected = "a dataset"}));
   }
   const topo::Body& b = dataset->body();
-  if (std::abs(b.equatorialRadius() - body_.equatorialRadius()) > 1e-3 ||
-      std::abs(b.polarRadius() - body_.polarRadius()) > 1e-3) {
+  if (std::abs(b.equatorialRadius() - body.equatorialRadius()) > 1e-3 ||
+      std::abs(b.polarRadius() - body.polarRadius()) > 1e-3) {
     throw InvalidArgument(core::format(
         {.operation = "compose::Catalogue::add()",
          .field = "dataset '" + dataset->name() + "' body radii",
          .value = core::number(b.equatorialRadius()) + " / " + core::number(b.polarRadius()) + " m",
-         .expected = "the catalogue's body " + body_.name() + " (" +
-                     core::number(body_.equatorialRadius()) + " / " +
-                     core::number(body_.polarRadius()) + " m)"}));
+         .expected = "the catalogue's body " + body.name() + " (" +
+                     core::number(body.equatorialRadius()) + " / " +
+                     core::number(body.polarRadius()) + " m)"}));
   }
+}
+}  // namespace
+
+DatasetId Catalogue::add(std::shared_ptr<const Dataset> dataset) {
+  const std::shared_ptr<const Dataset> one[] = {std::move(dataset)};
+  return add(std::span<const std::shared_ptr<const Dataset>>(one)).front();
+}
+
+std::vector<DatasetId> Catalogue::add(std::span<const std::shared_ptr<const Dataset>> datasets) {
+  for (const auto& d : datasets) checkBody(body_, d);
   const std::lock_guard lock(writers_);
-  const DatasetId id = nextId_++;
-  entries_.push_back({id, std::move(dataset)});
+  std::vector<DatasetId> ids;
+  ids.reserve(datasets.size());
+  for (const auto& d : datasets) {
+    ids.push_back(nextId_++);
+    entries_.push_back({ids.back(), d});
+  }
   current_.store(std::make_shared<const Snapshot>(body_, entries_, ++version_));
-  return id;
+  return ids;
 }
 
 bool Catalogue::remove(DatasetId id) {

@@ -90,6 +90,9 @@ class Catalogue {
   /// Registers a dataset. Throws InvalidArgument for a null dataset or one on another body
   /// (radii differ by more than 1 mm).
   DatasetId add(std::shared_ptr<const Dataset> dataset);
+  /// Registers several datasets with one index rebuild (adding N one by one costs
+  /// O(N² log N)). All are checked before any is added. Returns their ids in order.
+  std::vector<DatasetId> add(std::span<const std::shared_ptr<const Dataset>> datasets);
   /// Unregisters a dataset; false if the id is not registered. Snapshots taken earlier keep
   /// it alive.
   bool remove(DatasetId id);
