@@ -129,6 +129,13 @@ Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement
   for (const auto& lv : pyramid.levels) {
     Level l{lv, std::nullopt, std::nullopt};
     if (isPlanet()) {
+      // A coarse level of a grid with an odd number of rows reaches past a pole (its last
+      // row averages one fine row): it is no valid planet grid, and neither is any coarser
+      // one, so the dataset stops at the level below. Level 0 must be valid.
+      if (!levels_.empty()) {
+        const double slack = topo::kPoleOverhangPixels * lv.grid.spacingY();
+        if (lv.grid.north() > 90.0 + slack || lv.grid.south() < -90.0 - slack) break;
+      }
       l.planet.emplace(lv.grid, body_, latType_, lv.source);
     } else {
       l.dem.emplace(lv.grid, *placement_, lv.source);

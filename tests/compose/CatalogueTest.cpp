@@ -1,11 +1,11 @@
 // The catalogue's spatial index against brute force: every dataset that covers a point (or
 // that a view can see) is found, and a query visits O(log N) nodes, not N.
 
-#include "compose/ComposeFixtures.hpp"
-
 #include <regolith/compose/Catalogue.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/topo/Projection.hpp>
+
+#include "compose/ComposeFixtures.hpp"
 
 #include <gtest/gtest.h>
 
@@ -36,7 +36,8 @@ std::vector<std::shared_ptr<const Dataset>> scatteredDems(std::size_t n, unsigne
     DatasetOptions o = named("dem");
     o.heightRange = std::array<double, 2>{-500.0, 500.0};
     out.push_back(Dataset::dem(
-        pyr, topo::Placement(topo::LocalTangentPlane(kMars, {lat(rng), lon(rng), 0.0}, head(rng))), o));
+        pyr, topo::Placement(topo::LocalTangentPlane(kMars, {lat(rng), lon(rng), 0.0}, head(rng))),
+        o));
   }
   return out;
 }
@@ -160,9 +161,8 @@ TEST(Catalogue, AddAndRemoveWhileOtherThreadsQuery) {
         const auto snap = cat.snapshot();
         found.clear();
         snap->covering(o.latDeg, o.lonDeg, found);
-        const bool ok = std::any_of(found.begin(), found.end(), [&](std::uint32_t k) {
-          return snap->entries()[k].id == keep;
-        });
+        const bool ok = std::any_of(found.begin(), found.end(),
+                                    [&](std::uint32_t k) { return snap->entries()[k].id == keep; });
         if (!ok) misses.fetch_add(1);
         queries.fetch_add(1);
       }

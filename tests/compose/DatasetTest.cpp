@@ -1,11 +1,11 @@
 // Dataset: the terms of the weight (coverage, quality), its bad-input refusals, and the
 // feather mask against a brute-force distance in double.
 
-#include "compose/ComposeFixtures.hpp"
-
 #include <regolith/compose/Dataset.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/topo/Projection.hpp>
+
+#include "compose/ComposeFixtures.hpp"
 
 #include <gtest/gtest.h>
 
@@ -29,33 +29,38 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 TEST(Dataset, ProjectionQualityFollowsKooima) {
   // α = 1 − |log k| / log n.
   EXPECT_DOUBLE_EQ(projectionQuality(1.0, 1.0, 1.0, 8.0), 1.0);
-  EXPECT_NEAR(projectionQuality(0.5, 1.0, std::sqrt(0.5), 8.0), 1.0 - std::log(2.0) / std::log(8.0), 1e-15);
+  EXPECT_NEAR(projectionQuality(0.5, 1.0, std::sqrt(0.5), 8.0), 1.0 - std::log(2.0) / std::log(8.0),
+              1e-15);
   EXPECT_NEAR(projectionQuality(2.0, 2.0, 1.0, 8.0), 1.0 - std::log(2.0) / std::log(8.0), 1e-15);
   EXPECT_DOUBLE_EQ(projectionQuality(1.0, 8.0, std::sqrt(8.0), 8.0), kMinQuality);
   EXPECT_DOUBLE_EQ(projectionQuality(0.0, 1.0, 1.0, 8.0), kMinQuality);
 }
 
 TEST(Dataset, EquirectangularQualityFallsTowardsThePoles) {
-  const auto d = Dataset::planet(globalPlanet(kMars, 1.0, [](double, double) { return 0.0; }), named("g"));
+  const auto d =
+      Dataset::planet(globalPlanet(kMars, 1.0, [](double, double) { return 0.0; }), named("g"));
   double prev = 2.0;
   for (double lat : {0.0, 30.0, 60.0, 80.0, 89.9}) {
     const double q = d->evaluate(lat, 10.0).quality;
-    EXPECT_NEAR(q, std::max(kMinQuality, 1.0 + std::log(std::cos(lat * kDeg)) / std::log(kQualityN)), 1e-12);
+    EXPECT_NEAR(q,
+                std::max(kMinQuality, 1.0 + std::log(std::cos(lat * kDeg)) / std::log(kQualityN)),
+                1e-12);
     EXPECT_LT(q, prev + 1e-15);
     prev = q;
   }
 }
 
 TEST(Dataset, PolarStereographicQualityFallsAwayFromItsPole) {
-  const auto ps = topo::PolarStereographic::withTrueScaleLatitude(kMars, topo::PolarStereographic::Pole::North,
-                                                                  90.0, 0.0);
+  const auto ps = topo::PolarStereographic::withTrueScaleLatitude(
+      kMars, topo::PolarStereographic::Pole::North, 90.0, 0.0);
   const auto d = Dataset::dem(demPyramid(20e3, 401, 401, [](double, double) { return 0.0; }),
                               topo::Placement(kMars, ps), named("cap"));
   // The scale factor of a polar stereographic map with true scale at its pole is
   // k = 2 / (1 + sin φ): a pixel there is 1/k of its nominal size on the ground.
   for (double lat : {89.0, 80.0, 70.0, 60.0}) {
     const double k = 2.0 / (1.0 + std::sin(lat * kDeg));
-    EXPECT_NEAR(d->evaluate(lat, 30.0).quality, 1.0 - std::log(k) / std::log(kQualityN), 2e-3) << lat;
+    EXPECT_NEAR(d->evaluate(lat, 30.0).quality, 1.0 - std::log(k) / std::log(kQualityN), 2e-3)
+        << lat;
   }
 }
 
@@ -63,9 +68,8 @@ TEST(Dataset, MaskScalesCoverageAndFeatherStartsAtTheEdge) {
   auto pyr = demPyramid(10.0, 101, 101, [](double, double) { return 5.0; });
   DatasetOptions o = named("masked", 100.0);
   // Mask: 1 in the west half, 0.25 in the east half.
-  o.mask = topo::InMemorySamples::fromFunction(101, 101, [](std::size_t, std::size_t c) {
-    return c < 50 ? 1.0F : 0.25F;
-  });
+  o.mask = topo::InMemorySamples::fromFunction(
+      101, 101, [](std::size_t, std::size_t c) { return c < 50 ? 1.0F : 0.25F; });
   const topo::LocalTangentPlane ltp(kMars, {0.0, 0.0, 0.0});
   const auto d = Dataset::dem(pyr, topo::Placement(ltp), o);
   auto at = [&](double x, double y) {
@@ -100,7 +104,8 @@ TEST(Dataset, RefusesBadOptionsWithClearMessages) {
   o.heightRange = std::array<double, 2>{5.0, -5.0};
   EXPECT_NE(message(o).find("height range"), std::string::npos) << message(o);
   o = named("holes");
-  auto empty = demPyramid(10.0, 3, 3, [](double, double) { return std::numeric_limits<double>::quiet_NaN(); });
+  auto empty = demPyramid(10.0, 3, 3,
+                          [](double, double) { return std::numeric_limits<double>::quiet_NaN(); });
   try {
     (void)Dataset::dem(empty, pl, o);
     FAIL();
@@ -108,7 +113,8 @@ TEST(Dataset, RefusesBadOptionsWithClearMessages) {
     EXPECT_NE(std::string(e.what()).find("all missing"), std::string::npos) << e.what();
   }
   EXPECT_THROW((void)Dataset::planet(pyr, named("flat")), InvalidArgument);
-  EXPECT_THROW((void)Dataset::dem(globalPlanet(kMars, 10.0, [](double, double) { return 0.0; }), pl, named("p")),
+  EXPECT_THROW((void)Dataset::dem(globalPlanet(kMars, 10.0, [](double, double) { return 0.0; }), pl,
+                                  named("p")),
                InvalidArgument);
 }
 
@@ -136,7 +142,8 @@ TEST(Dataset, FeatherMaskMatchesBruteForceDistance) {
           }
         }
         if (edge) {
-          best = std::min({best, double(r) + 1.0, double(c) + 1.0, double(rows - r), double(cols - c)});
+          best = std::min(
+              {best, double(r) + 1.0, double(c) + 1.0, double(rows - r), double(cols - c)});
         }
         const double expected = testing::smoothstep(best / width);
         EXPECT_NEAR(mask->sample(r, c), expected, 1e-6) << r << "," << c << " edge " << edge;

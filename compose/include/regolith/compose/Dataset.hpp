@@ -101,6 +101,8 @@ class Dataset {
   [[nodiscard]] const std::optional<topo::Placement>& placement() const noexcept {
     return placement_;
   }
+  /// Levels used: the pyramid's, up to the first planet level whose pixel extent reaches
+  /// past a pole (coarse levels of a grid with an odd number of rows do).
   [[nodiscard]] std::size_t levelCount() const noexcept { return levels_.size(); }
   [[nodiscard]] const topo::PyramidLevel& level(std::size_t i) const { return levels_.at(i).level; }
   /// The level-0 grid's latitude type (planet grids; planetodetic for DEMs).
