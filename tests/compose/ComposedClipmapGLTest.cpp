@@ -1,0 +1,126 @@
+// One surface for the rover and the camera: a clipmap drawing the composed pyramid shows, at
+// every pixel, the composed heights the CPU queries answer, across a dataset border and its
+// feather. Oracle: the depth buffer, turned back into body-fixed points, against the CPU
+// composition at the four level-0 samples around each point (the GPU draws two triangles
+// per cell, so its height lies between the two triangulations of the cell).
+
+#include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/compose/ComposedPyramid.hpp>
+#include <regolith/gl/RenderTarget.hpp>
+
+#include "compose/ComposeFixtures.hpp"
+#include "gl/GlContext.hpp"
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+namespace regolith::compose {
+namespace {
+
+using testing::demPyramid;
+using testing::named;
+using testing::planetPyramid;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+TEST(ComposedClipmapGLTest, GpuHeightsAreTheCpuCompositionAcrossABorderAndItsFeather) {
+  test::glContext();
+  const topo::Body mars = topo::Body::marsSphere();
+  const double r = mars.equatorialRadius();
+  const double lat0 = 18.4, lon0 = 77.5;
+  // A coarse regional grid (0.01°, 590 m) and a fine tangent-plane DEM (1 m, 401 × 401)
+  // 20 m above it, feathered over 60 m: a wrong composition is off by metres.
+  Catalogue cat(mars);
+  cat.add(Dataset::planet(planetPyramid(mars, 19.0, 77.0, 0.01, 101, 101,
+                                        [](double lat, double lon) {
+                                          return -2500.0 +
+                                                 30.0 * std::sin(40.0 * lat) * std::cos(30.0 * lon);
+                                        }),
+                          named("coarse")));
+  cat.add(Dataset::dem(demPyramid(1.0, 401, 401,
+                                  [](double x, double y) {
+                                    return -2480.0 + 5.0 * std::sin(x / 20.0) * std::cos(y / 30.0);
+                                  }),
+                       topo::Placement(topo::LocalTangentPlane(mars, {lat0, lon0, 0.0})),
+                       named("fine", 60.0)));
+  const auto surface =
+      std::make_shared<const ComposedSurface>(cat.snapshot(), Rules{Policy::FinestWins, 2.0});
+
+  // Render grid: 1e-5° (0.59 m) centred 160 m east of the DEM's origin, so that level 0's
+  // window (±59 m) holds the DEM at full weight (x < 140.5 m), its feather and, past its
+  // east border (x = 200.5 m), the coarse grid alone.
+  const double d = 1e-5;
+  const double lonC = lon0 + 160.0 / (r * std::cos(lat0 * kDeg) * kDeg);
+  const topo::TopoGrid grid(1025, 1025, lonC - 512 * d, lat0 + 512 * d, d, d);
+  const topo::GridPyramid composed = composedPlanetPyramid(surface, grid);
+  const auto& level0 = dynamic_cast<const ComposedSamples&>(*composed.levels[0].source);
+  const glm::dmat3 enu = mars.enuFrame(lat0, lonC);
+  clod::ClipmapOptions options;
+  options.lightDirection = glm::vec3(glm::normalize(0.8 * enu[0] + 0.3 * enu[1] + 0.5 * enu[2]));
+  clod::ClipmapTerrain terrain(std::make_shared<const clod::HeightPyramid>(composed), options);
+
+  const double hC = surface->height(lat0, lonC).height;
+  clod::Camera cam;
+  cam.target = mars.toBodyFixed({lat0, lonC, hC});
+  cam.position = cam.target + 120.0 * enu[2] - 50.0 * enu[1];
+  cam.up = enu[1];
+  cam.fovYDegrees = 40.0;
+  cam.width = cam.height = 256;
+  cam.near = 0.5;
+  terrain.setFocus(cam.target);
+  terrain.finishLoading();
+  gl::RenderTarget target(cam.width, cam.height);
+  target.clear({1.0F, 0.0F, 1.0F, 1.0F});
+  terrain.draw(cam);
+  const gl::DepthImage depth = target.readDepth();
+  test::savePng("composed_clipmap_border", target.readColor());
+
+  const glm::dvec3 f = cam.forward();
+  int checked = 0, inside = 0, feather = 0, outside = 0;
+  double worst = 0.0;
+  for (int y = 0; y < cam.height; ++y) {
+    for (int x = 0; x < cam.width; ++x) {
+      const float z = depth.at(x, y);
+      if (z <= 0.0F) continue;
+      const glm::dvec3 ray = cam.ray(x + 0.5, y + 0.5);
+      const glm::dvec3 p = cam.position + (cam.viewDistance(z) / glm::dot(ray, f)) * ray;
+      const topo::Geodetic g = mars.toGeodetic(p);
+      const glm::dvec2 uv = grid.fractionalIndex(g.lonDeg, g.latDeg);
+      // Only level 0's inner window (the focus ± 100 samples), where level 0 draws alone.
+      if (std::abs(uv.x - 512.0) > 100.0 || std::abs(uv.y - 512.0) > 100.0) continue;
+      const auto c = static_cast<std::size_t>(uv.x), rr = static_cast<std::size_t>(uv.y);
+      const double tu = uv.x - static_cast<double>(c), tv = uv.y - static_cast<double>(rr);
+      const double h00 = level0.height(rr, c), h01 = level0.height(rr, c + 1);
+      const double h10 = level0.height(rr + 1, c), h11 = level0.height(rr + 1, c + 1);
+      // The two triangulations of the cell.
+      const double a = tu >= tv ? h00 + tu * (h01 - h00) + tv * (h11 - h01)
+                                : h00 + tv * (h10 - h00) + tu * (h11 - h10);
+      const double b = tu + tv <= 1.0 ? h00 + tu * (h01 - h00) + tv * (h10 - h00)
+                                      : h11 + (1.0 - tu) * (h10 - h11) + (1.0 - tv) * (h01 - h11);
+      const double err = std::max({0.0, std::min(a, b) - g.height, g.height - std::max(a, b)});
+      worst = std::max(worst, err);
+      ++checked;
+      const auto shares = surface->weights(g.latDeg, g.lonDeg);
+      double fine = 0.0;
+      for (const Share& s : shares) fine += s.id == 2 ? s.weight : 0.0;
+      (fine > 0.999 ? inside : fine > 0.001 ? feather : outside)++;
+    }
+  }
+  std::printf(
+      "checked %d pixels (%d on the fine DEM, %d in its feather, %d outside): worst %.2e m\n",
+      checked, inside, feather, outside, worst);
+  EXPECT_GE(checked, 10000);
+  EXPECT_GT(inside, 1000);
+  EXPECT_GT(feather, 1000);
+  EXPECT_GT(outside, 1000);
+  EXPECT_LE(worst, 1e-3);
+}
+
+}  // namespace
+}  // namespace regolith::compose
