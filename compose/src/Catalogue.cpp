@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <numeric>
 #include <string>
 #include <utility>
@@ -103,9 +104,15 @@ std::uint32_t Snapshot::build(std::uint32_t first, std::uint32_t count) {
 void Snapshot::covering(double latDeg, double lonDeg, std::vector<std::uint32_t>& out,
                         Role role) const {
   if (nodes_.empty()) return;
-  const glm::dvec3 p0 = body_.toBodyFixed({latDeg, lonDeg, hLow_});
-  const glm::dvec3 p1 = body_.toBodyFixed({latDeg, lonDeg, hHigh_});
-  const glm::dvec3 d = p1 - p0;
+  // The normal line from the lowest to the highest height: p(h) = p(0) + h·n, with one
+  // sine and cosine per angle (Body::toBodyFixed() twice would take them twice).
+  const double phi = latDeg * (std::numbers::pi / 180.0), lam = lonDeg * (std::numbers::pi / 180.0);
+  const double sp = std::sin(phi), cp = std::cos(phi), sl = std::sin(lam), cl = std::cos(lam);
+  const double a = body_.equatorialRadius(), e2 = body_.eccentricitySquared();
+  const double nu = a / std::sqrt(1.0 - e2 * sp * sp);  // prime-vertical radius N
+  const glm::dvec3 up(cp * cl, cp * sl, sp);
+  const glm::dvec3 p0 = glm::dvec3(nu * cp * cl, nu * cp * sl, nu * (1.0 - e2) * sp) + hLow_ * up;
+  const glm::dvec3 d = (hHigh_ - hLow_) * up;
   const glm::dvec3 inv(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
   std::uint32_t stack[64];
   int top = 0;

@@ -88,7 +88,7 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
   for (const std::uint32_t e : s.candidates) {
     const Dataset& d = *entries[e].dataset;
     const std::size_t level = metres > 0.0 ? d.levelFor(metres) : 0;
-    Contribution c = d.evaluate(latDeg, lonDeg, level, wantNormal);
+    Contribution c = d.evaluate(latDeg, lonDeg, level, wantNormal, false);
     if (c.status != QueryStatus::Ok) {
       sawNodata |= c.status == QueryStatus::Nodata;
       sawUnmappable |= c.status == QueryStatus::Unmappable;
@@ -106,7 +106,16 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
     out.normalStatus = out.status;
     return out;
   }
-  for (Member& m : s.members) m.resolution = std::pow(finest / m.spacing, rules_.resolutionPower);
+  // Weights matter only between several contributors (or to report shares): one alone is
+  // the surface, and its quality costs as much as its height.
+  if (s.members.size() > 1 || shares != nullptr) {
+    for (Member& m : s.members) {
+      m.resolution = std::pow(finest / m.spacing, rules_.resolutionPower);
+      m.c.quality = entries[m.entry].dataset->quality(latDeg, lonDeg);
+    }
+  } else {
+    s.members.front().c.quality = 1.0;  // any positive weight: it is the only one
+  }
   // Tiers: higher priority first; under FinestWins, finer datasets first within a priority.
   const bool finestWins = rules_.policy == Policy::FinestWins;
   auto sameTier = [&](const Member& a, const Member& b) {

@@ -348,8 +348,13 @@ std::size_t Dataset::levelFor(double metres) const noexcept {
   return l;
 }
 
-Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level,
-                               bool wantSlope) const {
+double Dataset::quality(double latDeg, double lonDeg) const {
+  const GridPoint g = locate(latDeg, lonDeg);
+  return g.inside ? qualityAt(g) : kMinQuality;
+}
+
+Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, bool wantSlope,
+                               bool wantQuality) const {
   Contribution out;
   const GridPoint g = locate(latDeg, lonDeg);
   if (!g.mapped) {
@@ -412,7 +417,7 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level,
   if (!s.valid()) return out;
   out.height = s.height;
   out.coverage = coverageAt(g, latDeg);
-  out.quality = qualityAt(g);
+  if (wantQuality) out.quality = qualityAt(g);
   if (wantSlope) {
     out.normalStatus = s.normalStatus;
     if (s.normalValid()) {

@@ -122,8 +122,12 @@ class Dataset {
   /// latitude and longitude, from level `level` (clamped to the coarsest). Never throws for
   /// a finite point: a point the dataset does not have gets its status and coverage 0.
   /// Requires finite coordinates with |lat| ≤ 90.
+  /// `wantQuality` false leaves quality at 0: a composition with one contributor needs no
+  /// weight, and the quality costs as much as the height.
   [[nodiscard]] Contribution evaluate(double latDeg, double lonDeg, std::size_t level = 0,
-                                      bool wantSlope = false) const;
+                                      bool wantSlope = false, bool wantQuality = true) const;
+  /// The projection quality alone at a point of the pixel extent (kMinQuality outside it).
+  [[nodiscard]] double quality(double latDeg, double lonDeg) const;
   /// Coverage and quality only (no height read): the weight's spatial terms {c, q}, for
   /// their gradients. Coverage is 0 outside the grid or where the mask is 0.
   [[nodiscard]] std::array<double, 2> coverageQuality(double latDeg, double lonDeg) const;
