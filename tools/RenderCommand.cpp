@@ -1,5 +1,8 @@
-// `regolith render STORE`: one headless clipmap image of a store's grid, as a PNG.
+// `regolith render STORE|CATALOGUE`: one headless clipmap image of a store's grid, or of the
+// composed surface of a catalogue file, as a PNG.
 #include <regolith/clod/Render.hpp>
+#include <regolith/compose/ComposedPyramid.hpp>
+#include <regolith/compose/FromStore.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
 #include <regolith/store/Pager.hpp>
@@ -16,9 +19,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fstream>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -42,7 +48,35 @@ struct Args {
   double fov = 45.0;
   int clipmapSize = 255;
   std::size_t cacheMb = 256;
+  std::optional<double> spacing;  // catalogue: the composed grid's spacing, degrees
 };
+
+/// What a render draws: a store's grid, or a catalogue's composed surface over a global
+/// latitude/longitude grid.
+struct Terrain {
+  std::shared_ptr<const clod::HeightPyramid> pyramid;
+  bool planet = false;
+  topo::TopoGrid g0{1, 1, 0.0, 0.0, 1.0, 1.0};
+  double radius = 0.0;                                          // the body's equatorial radius
+  std::function<std::optional<double>(double, double)> height;  // at grid point (a, b)
+  /// Scene position of command-line point (a, b) at height h (the pyramid's, unless the
+  /// pyramid's grid is not the command line's: a catalogue drawn in a polar frame).
+  std::function<glm::dvec3(double, double, double)> position;
+  bool latLonGrid = false;  // the pyramid's grid is latitude/longitude (degrees)
+  std::string what;         // for messages and the summary
+  std::shared_ptr<store::PatchCache> cache;
+  std::shared_ptr<const void> keepAlive;  // pagers, stores, catalogue
+};
+
+/// True if `path` holds a catalogue file (JSON: its first non-blank byte is '{'), not a store.
+bool isCatalogueFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char c = 0;
+  while (in.get(c)) {
+    if (c != ' ' && c != '\t' && c != '\n' && c != '\r') return c == '{';
+  }
+  return false;
+}
 
 /// Height at grid point (a, b) from the finest level that has a sample there, or nullopt.
 std::optional<double> surfaceHeight(const store::Pager& pager, const std::string& grid,
@@ -56,21 +90,127 @@ std::optional<double> surfaceHeight(const store::Pager& pager, const std::string
   return std::nullopt;
 }
 
+Terrain storeTerrain(const Args& a) {
+  Terrain t;
+  auto store = std::make_shared<const store::Store>(store::Store::open(a.store));
+  const std::string gridName = chooseGrid(*store, a.grid, "render");
+  const store::GridInfo& info = store->grid(gridName);
+  t.planet = info.kind == store::GridKind::Planet;
+  t.cache = std::make_shared<store::PatchCache>(a.cacheMb << 20U);
+  auto pager = std::make_shared<const store::Pager>(store, t.cache);
+  t.pyramid = std::make_shared<const clod::HeightPyramid>(pager->pyramid(gridName));
+  t.g0 = store::topoGridOf(info, 0);
+  t.radius = store::bodyOf(info).equatorialRadius();
+  t.height = [pager, gridName, &info](double pa, double pb) {
+    return surfaceHeight(*pager, gridName, info, pa, pb);
+  };
+  t.position = [p = t.pyramid](double pa, double pb, double h) { return p->position(pa, pb, h); };
+  t.latLonGrid = t.planet;
+  t.what = "grid '" + gridName + "' of " + a.store;
+  t.keepAlive = pager;
+  return t;
+}
+
+/// A catalogue's composed surface drawn over a global planet grid at --spacing degrees
+/// (default: the finest height dataset's ground spacing, at least 1e-6°).
+Terrain catalogueTerrain(const Args& a) {
+  Terrain t;
+  auto file = std::make_shared<compose::CatalogueFile>(
+      compose::readCatalogueFile(a.store, a.cacheMb << 20U));
+  const auto snapshot = file->catalogue->snapshot();
+  const topo::Body& body = snapshot->body();
+  t.radius = body.equatorialRadius();
+  const double metresPerDegree = t.radius * std::numbers::pi / 180.0;
+  double finest = std::numeric_limits<double>::infinity();
+  for (const auto& e : snapshot->entries()) {
+    if (e.dataset->options().role == compose::Role::Height)
+      finest = std::min(finest, e.dataset->groundSpacing());
+  }
+  if (!std::isfinite(finest)) {
+    throw InvalidArgument(core::format({.operation = "render",
+                                        .file = a.store,
+                                        .field = "datasets",
+                                        .value = "no height dataset",
+                                        .expected = "at least one dataset of role height"}));
+  }
+  auto surface = std::make_shared<const compose::ComposedSurface>(snapshot, file->rules);
+  const double lookLat = a.target.size() == 2 ? a.target[1] : 0.0;
+  std::ostringstream frame;
+  if (std::abs(lookLat) < 50.0) {
+    // A global latitude/longitude grid whose pixels tile the sphere: 180/step rows, rounded.
+    const double step = a.spacing.value_or(std::max(1e-6, finest / metresPerDegree));
+    const auto rows = static_cast<std::size_t>(std::max(2.0, std::round(180.0 / step)));
+    const double dy = 180.0 / static_cast<double>(rows);
+    t.g0 = topo::TopoGrid(rows, 2 * rows, -180.0 + 0.5 * dy, 90.0 - 0.5 * dy, dy, dy);
+    t.pyramid = std::make_shared<const clod::HeightPyramid>(
+        compose::composedPlanetPyramid(surface, t.g0, topo::LatitudeType::Planetodetic));
+    t.position = [p = t.pyramid](double lon, double lat, double h) {
+      return p->position(lon, lat, h);
+    };
+    t.latLonGrid = true;
+    frame << "a latitude/longitude grid at " << dy << "°";
+  } else {
+    // Near a pole a latitude/longitude grid converges to a point: draw on a polar
+    // stereographic grid about that pole instead (true scale at the pole), from the pole down
+    // to 10° of latitude, at the finest dataset's spacing (or --spacing in degrees of arc).
+    const auto pole =
+        lookLat > 0 ? topo::PolarStereographic::Pole::North : topo::PolarStereographic::Pole::South;
+    const topo::Placement placement(
+        body, topo::PolarStereographic::withScaleFactor(body, pole, 1.0, 0.0));
+    const double spacing = a.spacing ? *a.spacing * metresPerDegree : std::max(finest, 1e-3);
+    const double half = 2.0 * t.radius * std::tan((90.0 - 10.0) / 2.0 * std::numbers::pi / 180.0);
+    const auto halfSamples = static_cast<std::size_t>(std::ceil(half / spacing));
+    if (2 * halfSamples + 1 > store::kMaxGridSide) {
+      throw InvalidArgument(core::format(
+          {.operation = "render",
+           .file = a.store,
+           .field = "polar grid spacing",
+           .value = core::number(spacing) + " m",
+           .expected = "coarse enough for at most 2^31 samples per side (--spacing)"}));
+    }
+    const std::size_t n = 2 * halfSamples + 1;  // the pole is the centre sample
+    const double h = static_cast<double>(halfSamples) * spacing;
+    t.g0 = topo::TopoGrid(n, n, -h, h, spacing, spacing);
+    t.pyramid = std::make_shared<const clod::HeightPyramid>(
+        compose::composedDemPyramid(surface, t.g0, placement).levels, placement);
+    t.position = [body](double lon, double lat, double hh) {
+      return body.toBodyFixed({lat, lon, hh});
+    };
+    t.latLonGrid = false;
+    frame << "a polar stereographic grid at " << spacing << " m";
+  }
+  t.planet = true;  // the command line speaks longitude, latitude
+  t.height = [surface](double lon, double lat) -> std::optional<double> {
+    const topo::HeightSample hs = surface->height(lat, lon);
+    return hs.valid() ? std::optional<double>(hs.height) : std::nullopt;
+  };
+  std::ostringstream what;
+  what << "the composed surface of " << snapshot->size() << " datasets of " << a.store << " ("
+       << compose::policyName(file->rules.policy) << ", drawn on " << frame.str() << ")";
+  t.what = what.str();
+  t.cache = file->pagers.empty() ? nullptr
+                                 : std::shared_ptr<store::PatchCache>(
+                                       file->pagers.front(), &file->pagers.front()->cache());
+  t.keepAlive = std::shared_ptr<const void>(file, file.get());
+  return t;
+}
+
 void runRender(const Args& a) {
   const auto start = std::chrono::steady_clock::now();
   refuseOverwritingInputs("render", {a.out, a.out + ".legend.json"}, {a.store});
   refuseStdoutOverInput("render", a.store);
-  auto store = std::make_shared<const store::Store>(store::Store::open(a.store));
-  const std::string gridName = chooseGrid(*store, a.grid, "render");
-  const store::GridInfo& info = store->grid(gridName);
-  const bool planet = info.kind == store::GridKind::Planet;
-  auto cache = std::make_shared<store::PatchCache>(a.cacheMb << 20U);
-  const store::Pager pager(store, cache);
-  const auto pyramid = std::make_shared<const clod::HeightPyramid>(pager.pyramid(gridName));
+  const bool catalogue = isCatalogueFile(a.store);
+  if (!catalogue && a.spacing) {
+    throw InvalidArgument("render: --spacing applies to a catalogue file only; " + a.store +
+                          " is a store");
+  }
+  const Terrain terrain = catalogue ? catalogueTerrain(a) : storeTerrain(a);
+  const bool planet = terrain.planet;
+  const auto& pyramid = terrain.pyramid;
+  const topo::TopoGrid& g0 = terrain.g0;
 
   // A grid point given on the command line: checked, and lifted to the surface (the finest
   // level with data there; 0 m over nodata everywhere).
-  const topo::TopoGrid g0 = store::topoGridOf(info, 0);
   struct Ground {
     double a, b, h;
   };
@@ -79,27 +219,27 @@ void runRender(const Args& a) {
       throw InvalidArgument(std::string("render: ") + option + " must be finite numbers");
     if (planet ? std::abs(pb) > 90.0 : !g0.contains(pa, pb)) {
       std::ostringstream msg;
-      msg << "render: " << option << " " << pa << "," << pb << " is outside grid '" << gridName
-          << "' ("
-          << (planet ? "latitude must be within [-90, 90]"
+      msg << "render: " << option << " " << pa << "," << pb << " is outside " << terrain.what
+          << " (";
+      msg << (planet ? "latitude must be within [-90, 90]"
                      : "x in [" + std::to_string(g0.west()) + ", " + std::to_string(g0.east()) +
                            "], y in [" + std::to_string(g0.south()) + ", " +
                            std::to_string(g0.north()) + "]")
           << ")";
       throw InvalidArgument(msg.str());
     }
-    return Ground{pa, pb, surfaceHeight(pager, gridName, info, pa, pb).value_or(0.0)};
+    return Ground{pa, pb, terrain.height(pa, pb).value_or(0.0)};
   };
   // The look-at point: --look-at, else the grid's centre.
   const Ground t = a.target.empty() ? ground(0.5 * (g0.west() + g0.east()),
                                              0.5 * (g0.north() + g0.south()), "--look-at")
                                     : ground(a.target[0], a.target[1], "--look-at");
   const double ta = t.a, tb = t.b, th = t.h;
-  const glm::dvec3 target = pyramid->position(ta, tb, th);
+  const glm::dvec3 target = terrain.position(ta, tb, th);
 
   // Defaults: a planet seen whole from straight above; a DEM at 35° from 1.2 × its extent.
-  const double extent = planet ? store::bodyOf(info).equatorialRadius()
-                               : std::max(g0.east() - g0.west(), g0.north() - g0.south());
+  const double extent =
+      planet ? terrain.radius : std::max(g0.east() - g0.west(), g0.north() - g0.south());
   const double distance = a.distance.value_or(planet ? 2.0 * extent : 1.2 * extent);
   const double elevation = a.elevation.value_or(planet ? 90.0 : 35.0);
   clod::RenderRequest request;
@@ -123,7 +263,7 @@ void runRender(const Args& a) {
            "finite and >= 0 (below the surface the camera is inside the body and sees no "
            "terrain)"}));
     }
-    const glm::dvec3 eye = pyramid->position(p.a, p.b, p.h + a.position[2]);
+    const glm::dvec3 eye = terrain.position(p.a, p.b, p.h + a.position[2]);
     view << "from " << (planet ? "lon,lat " : "x,y ") << p.a << "," << p.b << " at "
          << a.position[2] << " m above the surface (height " << p.h << " m), ";
     if (!a.target.empty()) {
@@ -151,7 +291,16 @@ void runRender(const Args& a) {
     }
   }
   request.clipmap.size = a.clipmapSize;
-  if (planet) {
+  if (catalogue) {
+    // The sun 35° above the look-at point's horizon, from the west-north-west, wherever on
+    // the body that is (the default light is fixed in body-fixed axes: from below at a
+    // south pole).
+    const glm::dmat3 enu = terrain.pyramid->body()->enuFrame(tb, ta);
+    const glm::dvec3 horizontal = glm::normalize(-0.92 * enu[0] + 0.38 * enu[1]);
+    const double el = 35.0 * std::numbers::pi / 180.0;
+    request.clipmap.lightDirection = glm::vec3(std::cos(el) * horizontal + std::sin(el) * enu[2]);
+  }
+  if (terrain.latLonGrid) {
     // On a coarse planet, shrink the levels to the largest odd size whose finest window
     // spans at most 180°: a wider window reaches over a pole onto ground it already covers,
     // and the two copies of that ground (lit from different neighbours) fight in the depth
@@ -168,12 +317,15 @@ void runRender(const Args& a) {
 
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const store::CacheStats stats = cache->stats();
-  std::cout << "Wrote " << a.out << " (" << a.width << "×" << a.height << "): grid '" << gridName
-            << "' of " << a.store << ", " << view.str() << "\n"
-            << std::setprecision(3) << "  " << seconds << " s; " << stats.loads
-            << " patches loaded, " << static_cast<double>(stats.bytesLoaded) / 1048576.0
-            << " MiB loaded\n";
+  std::cout << "Wrote " << a.out << " (" << a.width << "×" << a.height << "): " << terrain.what
+            << ", " << view.str() << "\n"
+            << std::setprecision(3) << "  " << seconds << " s";
+  if (terrain.cache) {
+    const store::CacheStats stats = terrain.cache->stats();
+    std::cout << "; " << stats.loads << " patches loaded, "
+              << static_cast<double>(stats.bytesLoaded) / 1048576.0 << " MiB loaded";
+  }
+  std::cout << "\n";
 }
 
 }  // namespace
@@ -182,7 +334,8 @@ void addRenderCommand(CLI::App& app) {
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
       "render",
-      "Renders a store's grid headless (EGL, no display or GPU needed) with the geometry-"
+      "Renders a store's grid, or the composed surface of a catalogue file (JSON, "
+      "docs/composition.md), headless (EGL, no display or GPU needed) with the geometry-"
       "clipmap renderer and writes a PNG. The camera orbits a look-at point on the surface "
       "(distance, heading, elevation), or stands at --position and looks at --look-at or "
       "along --heading and --pitch");
@@ -228,6 +381,11 @@ void addRenderCommand(CLI::App& app) {
   cmd->add_option("--fov", a->fov, "Vertical field of view in degrees")
       ->check(FiniteRange(1.0, 170.0))
       ->capture_default_str();
+  cmd->add_option("--spacing", a->spacing,
+                  "Catalogue files: spacing of the global latitude/longitude grid the composed "
+                  "surface is drawn on, degrees (default: the finest height dataset's, at least "
+                  "1e-6)")
+      ->check(FiniteRange(1e-7, 10.0));
   cmd->add_option("--clipmap-size", a->clipmapSize,
                   "Vertices per clipmap level side (odd, 15 to 2047)")
       ->check(CLI::Range(15, 2047))
@@ -239,6 +397,7 @@ void addRenderCommand(CLI::App& app) {
       "  regolith render victoria.h5 --position -450,0,2 --look-at 0,0\n"
       "  regolith render victoria.h5 --position -450,0,2 --heading 90 --pitch -10\n"
       "  regolith render mars.h5 --look-at -5.5,-2 --distance 2e6 --elevation 60\n"
+      "  regolith render moon.json --look-at 0,-88 --distance 1e6 --elevation 60\n"
       "Exit status: 0 on success; non-zero with 'regolith: error: ...' on stderr otherwise "
       "(including when no OpenGL 4.5 context can be made).");
   cmd->callback([a] { runRender(*a); });

@@ -24,6 +24,7 @@ struct Member {
   double resolution = 1.0;  // (finest spacing / spacing)^p
   double spacing = 0.0;
   int priority = 0;
+  int tier = 0;
   glm::dvec2 gradC{0.0}, gradQ{0.0};  // ∂/∂east, ∂/∂north of coverage and quality
 };
 
@@ -31,6 +32,8 @@ struct Member {
 struct Scratch {
   std::vector<std::uint32_t> candidates;
   std::vector<Member> members;
+  std::vector<std::pair<std::size_t, std::size_t>> tiers;  // [begin, end) of members, bottom-up
+  std::vector<double> alphas;                              // each tier's α
 };
 thread_local Scratch tlScratch;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
 
@@ -67,6 +70,12 @@ ComposedSurface::ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules
                                         .value = "null",
                                         .expected = "a catalogue snapshot"}));
   }
+  if (!(rules_.tierRatio >= 1.0)) {  // +inf allowed: one tier per priority
+    throw InvalidArgument(core::format({.operation = "compose::ComposedSurface()",
+                                        .field = "rules.tierRatio",
+                                        .value = core::number(rules_.tierRatio),
+                                        .expected = ">= 1 (infinity: one tier per priority)"}));
+  }
   if (!(std::isfinite(rules_.resolutionPower) && rules_.resolutionPower >= 0.0)) {
     throw InvalidArgument(core::format({.operation = "compose::ComposedSurface()",
                                         .field = "rules.resolutionPower",
@@ -97,7 +106,7 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
     }
     if (!(c.coverage > 0.0)) continue;
     finest = std::min(finest, d.groundSpacing());
-    s.members.push_back({e, c, 1.0, d.groundSpacing(), d.options().priority, {}, {}});
+    s.members.push_back({e, c, 1.0, d.groundSpacing(), d.options().priority, 0, {}, {}});
   }
   if (s.members.empty()) {
     out.status = sawNodata ? QueryStatus::Nodata
@@ -116,17 +125,29 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
   } else {
     s.members.front().c.quality = 1.0;  // any positive weight: it is the only one
   }
-  // Tiers: higher priority first; under FinestWins, finer datasets first within a priority.
-  const bool finestWins = rules_.policy == Policy::FinestWins;
-  auto sameTier = [&](const Member& a, const Member& b) {
-    if (a.priority != b.priority) return false;
-    return !finestWins || std::abs(a.spacing - b.spacing) <= 1e-9 * std::max(a.spacing, b.spacing);
-  };
-  std::stable_sort(s.members.begin(), s.members.end(), [&](const Member& a, const Member& b) {
-    if (a.priority != b.priority) return a.priority > b.priority;
-    if (finestWins && !sameTier(a, b)) return a.spacing < b.spacing;
-    return false;
-  });
+  // Tiers: higher priority first, then finer resolution classes first. A class holds the
+  // datasets whose spacing is within rules_.tierRatio of its finest (FinestWins: equal
+  // spacings only), so similar data blend by weight and much finer data composite over
+  // coarser with their coverage as alpha (docs/composition.md "Tiers").
+  const double ratio = rules_.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules_.tierRatio;
+  if (s.members.size() > 1) {
+    std::sort(s.members.begin(), s.members.end(), [](const Member& a, const Member& b) {
+      if (a.priority != b.priority) return a.priority > b.priority;
+      if (a.spacing != b.spacing) return a.spacing < b.spacing;
+      return a.entry < b.entry;
+    });
+    int tier = 0;
+    double tierFinest = s.members.front().spacing;
+    for (std::size_t i = 1; i < s.members.size(); ++i) {
+      Member& m = s.members[i];
+      if (m.priority != s.members[i - 1].priority || m.spacing > tierFinest * ratio) {
+        ++tier;
+        tierFinest = m.spacing;
+      }
+      m.tier = tier;
+    }
+  }
+  auto sameTier = [](const Member& a, const Member& b) { return a.tier == b.tier; };
 
   const bool several = s.members.size() > 1;
   if (wantNormal && several) {
@@ -161,9 +182,10 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
   QueryStatus badNormal = QueryStatus::Ok;
   std::size_t end = s.members.size();
   bool bottom = true;
-  // Scale of each tier's shares, applied after all tiers are known (top-down products).
-  std::vector<std::pair<std::size_t, std::size_t>> tiers;
-  std::vector<double> alphas;
+  auto& tiers = s.tiers;
+  auto& alphas = s.alphas;
+  tiers.clear();
+  alphas.clear();
   while (end > 0) {
     std::size_t begin = end - 1;
     while (begin > 0 && sameTier(s.members[begin - 1], s.members[end - 1])) --begin;

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -84,9 +85,9 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
     badFile(path, "JSON", e.what(), "valid JSON");
   }
   if (!root.is_object()) badFile(path, "top level", shown(root), "an object");
-  static const std::set<std::string> kTop{"policy", "resolution_power", "datasets"};
+  static const std::set<std::string> kTop{"policy", "resolution_power", "tier_ratio", "datasets"};
   for (const auto& [key, value] : root.items()) {
-    if (!kTop.count(key)) badFile(path, "key '" + key + "'", shown(value), "one of policy, resolution_power, datasets");
+    if (!kTop.count(key)) badFile(path, "key '" + key + "'", shown(value), "one of policy, resolution_power, tier_ratio, datasets");
   }
   CatalogueFile out;
   if (root.contains("policy")) {
@@ -101,6 +102,9 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
   }
   if (root.contains("resolution_power")) {
     out.rules.resolutionPower = number(path, root["resolution_power"], "resolution_power", 0.0, 64.0);
+  }
+  if (root.contains("tier_ratio")) {
+    out.rules.tierRatio = number(path, root["tier_ratio"], "tier_ratio", 1.0, std::numeric_limits<double>::max());
   }
   if (!root.contains("datasets") || !root["datasets"].is_array() || root["datasets"].empty()) {
     badFile(path, "datasets", root.contains("datasets") ? shown(root["datasets"]) : "missing",

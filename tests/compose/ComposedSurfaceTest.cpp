@@ -132,6 +132,39 @@ TEST(ComposedSurface, SharesSumToOneAndRebuildTheHeight) {
   }
 }
 
+TEST(ComposedSurface, MuchFinerDataCompositesOverWithItsFeather) {
+  // A 1 km regional grid's feather over a 1° (30 km) global grid: 30 times finer, so under
+  // Weighted (tierRatio 4) it is a tier of its own and its coverage is its alpha. With
+  // tierRatio = ∞ the two blend by weight alone, and (1/30)² squeezes the feather.
+  Catalogue cat(kMoon);
+  cat.add(Dataset::planet(globalPlanet(kMoon, 1.0, [](double, double) { return 100.0; }),
+                          named("global")));
+  const double step = 1000.0 / (kR * kDeg);  // 1 km in degrees
+  cat.add(Dataset::planet(planetPyramid(kMoon, 2.0 - 0.5 * step, -2.0 + 0.5 * step, step,
+                                        static_cast<std::size_t>(std::lround(4.0 / step)),
+                                        static_cast<std::size_t>(std::lround(4.0 / step)),
+                                        [](double, double) { return 200.0; }),
+                          named("fine", 40e3)));
+  const double east = -2.0 + static_cast<double>(std::lround(4.0 / step)) * step;
+  const ComposedSurface tiered(cat.snapshot());
+  Rules flat;
+  flat.tierRatio = std::numeric_limits<double>::infinity();
+  const ComposedSurface blended(cat.snapshot(), flat);
+  for (double d : {5e3, 20e3, 35e3}) {
+    const double lon = east - d / (kR * kDeg);
+    const double c = testing::smoothstep(d / 40e3);
+    EXPECT_NEAR(tiered.height(0.0, lon).height, c * 200.0 + (1.0 - c) * 100.0, 1e-6) << d;
+    // The pure blend: w_fine = c·q·1, w_global = 1·q·(1/30.3)²: nearly 200 long before the
+    // feather ends.
+    const double wg = std::pow(1000.0 / (kR * kDeg), 2.0);
+    const double q = projectionQuality(1.0, 1.0, 1.0, kQualityN);  // both square on the equator
+    EXPECT_NEAR(blended.height(0.0, lon).height,
+                (c * q * 200.0 + wg * q * 100.0) / (c * q + wg * q), 1e-3)
+        << d;
+  }
+  EXPECT_THROW(ComposedSurface(cat.snapshot(), Rules{Policy::Weighted, 2.0, 0.5}), InvalidArgument);
+}
+
 TEST(ComposedSurface, AHigherPriorityTierHidesALowerOne) {
   // The coarse global grid is priority 0, the regional one −1: the global one wins although
   // it is coarser, because tiers composite over each other.

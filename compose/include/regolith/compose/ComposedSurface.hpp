@@ -16,13 +16,15 @@
 
 namespace regolith::compose {
 
-/// How covering datasets combine.
-/// - Weighted: within a priority tier, H = Σ wᵢhᵢ / Σ wᵢ with wᵢ = coverage × projection
-///   quality × (ground spacing)^−p; tiers are composited "over" (a higher tier's coverage
-///   hides what lies below it).
-/// - FinestWins: every dataset is its own tier, finer ones above coarser ones (after
-///   priority): the limit p → ∞ of Weighted, and the old cut-out's behaviour with a
-///   feather-wide blend at each border instead of a crack.
+/// How covering datasets combine (docs/composition.md). Datasets fall into tiers: by
+/// priority first, then by resolution class (the datasets whose ground spacing is within
+/// Rules::tierRatio of the finest in the class). Tiers composite "over" each other, higher
+/// priority and finer classes on top, each with its coverage as alpha.
+/// - Weighted: within a tier, H = Σ wᵢhᵢ / Σ wᵢ with wᵢ = coverage × projection quality ×
+///   (ground spacing)^−p. With tierRatio = ∞ every dataset of a priority blends this way.
+/// - FinestWins: every distinct spacing is its own class (tierRatio 1): the limit p → ∞ of
+///   Weighted, and the old cut-out's behaviour with a feather-wide blend at each border
+///   instead of a crack.
 enum class Policy : std::uint8_t { Weighted, FinestWins };
 
 /// Lower-case name ("weighted", "finest").
@@ -34,6 +36,12 @@ struct Rules {
   /// p of the resolution term (spacing^−p), ≥ 0. 2: a 1 m DEM outweighs a 463 m planet
   /// grid 2·10^5 to 1 where both have full coverage and quality.
   double resolutionPower = 2.0;
+  /// Weighted: datasets blend by weight only with others whose spacing is within this
+  /// factor of their tier's finest; a much finer dataset composites over coarser ones with
+  /// its coverage as alpha, so its feather blends it in (a weight ratio of (463/1)² would
+  /// squeeze a 1 m DEM's feather against the planet to a cliff). ≥ 1; infinity for one
+  /// tier per priority.
+  double tierRatio = 4.0;
 };
 
 /// A composed height and normal at one point, with the number of datasets that contributed.

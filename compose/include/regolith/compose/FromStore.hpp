@@ -36,7 +36,7 @@ struct CatalogueFile {
 
 /// Reads a catalogue file (JSON):
 /// ```
-/// { "policy": "weighted" | "finest", "resolution_power": 2,
+/// { "policy": "weighted" | "finest", "resolution_power": 2, "tier_ratio": 4,
 ///   "datasets": [ { "store": "mola.h5", "grid": "mola", "role": "height",
 ///                   "priority": 0, "feather_m": 20000,
 ///                   "mask_grid": "mola_mask", "feather_nodata_samples": 8 } ] }
