@@ -121,63 +121,27 @@ Terrain catalogueTerrain(const Args& a) {
   const topo::Body& body = snapshot->body();
   t.radius = body.equatorialRadius();
   const double metresPerDegree = t.radius * std::numbers::pi / 180.0;
-  double finest = std::numeric_limits<double>::infinity();
-  for (const auto& e : snapshot->entries()) {
-    if (e.dataset->options().role == compose::Role::Height)
-      finest = std::min(finest, e.dataset->groundSpacing());
-  }
-  if (!std::isfinite(finest)) {
-    throw InvalidArgument(core::format({.operation = "render",
-                                        .file = a.store,
-                                        .field = "datasets",
-                                        .value = "no height dataset",
-                                        .expected = "at least one dataset of role height"}));
-  }
   auto surface = std::make_shared<const compose::ComposedSurface>(snapshot, file->rules);
   const double lookLat = a.target.size() == 2 ? a.target[1] : 0.0;
+  const compose::DrawingFrame f =
+      compose::drawingFrame(surface, lookLat, a.spacing ? *a.spacing * metresPerDegree : 0.0);
   std::ostringstream frame;
-  if (std::abs(lookLat) < 50.0) {
-    // A global latitude/longitude grid whose pixels tile the sphere: 180/step rows, rounded.
-    const double step = a.spacing.value_or(std::max(1e-6, finest / metresPerDegree));
-    const auto rows = static_cast<std::size_t>(std::max(2.0, std::round(180.0 / step)));
-    const double dy = 180.0 / static_cast<double>(rows);
-    t.g0 = topo::TopoGrid(rows, 2 * rows, -180.0 + 0.5 * dy, 90.0 - 0.5 * dy, dy, dy);
-    t.pyramid = std::make_shared<const clod::HeightPyramid>(
-        compose::composedPlanetPyramid(surface, t.g0, topo::LatitudeType::Planetodetic));
+  if (!f.polar) {
+    t.pyramid = std::make_shared<const clod::HeightPyramid>(f.pyramid);
+    t.g0 = f.pyramid.levels[0].grid;
     t.position = [p = t.pyramid](double lon, double lat, double h) {
       return p->position(lon, lat, h);
     };
     t.latLonGrid = true;
-    frame << "a latitude/longitude grid at " << dy << "°";
+    frame << "a latitude/longitude grid at " << t.g0.spacingY() << "°";
   } else {
-    // Near a pole a latitude/longitude grid converges to a point: draw on a polar
-    // stereographic grid about that pole instead (true scale at the pole), from the pole down
-    // to 10° of latitude, at the finest dataset's spacing (or --spacing in degrees of arc).
-    const auto pole =
-        lookLat > 0 ? topo::PolarStereographic::Pole::North : topo::PolarStereographic::Pole::South;
-    const topo::Placement placement(
-        body, topo::PolarStereographic::withScaleFactor(body, pole, 1.0, 0.0));
-    const double spacing = a.spacing ? *a.spacing * metresPerDegree : std::max(finest, 1e-3);
-    const double half = 2.0 * t.radius * std::tan((90.0 - 10.0) / 2.0 * std::numbers::pi / 180.0);
-    const auto halfSamples = static_cast<std::size_t>(std::ceil(half / spacing));
-    if (2 * halfSamples + 1 > store::kMaxGridSide) {
-      throw InvalidArgument(core::format(
-          {.operation = "render",
-           .file = a.store,
-           .field = "polar grid spacing",
-           .value = core::number(spacing) + " m",
-           .expected = "coarse enough for at most 2^31 samples per side (--spacing)"}));
-    }
-    const std::size_t n = 2 * halfSamples + 1;  // the pole is the centre sample
-    const double h = static_cast<double>(halfSamples) * spacing;
-    t.g0 = topo::TopoGrid(n, n, -h, h, spacing, spacing);
-    t.pyramid = std::make_shared<const clod::HeightPyramid>(
-        compose::composedDemPyramid(surface, t.g0, placement).levels, placement);
+    t.pyramid = std::make_shared<const clod::HeightPyramid>(f.pyramid.levels, *f.placement);
+    t.g0 = f.pyramid.levels[0].grid;
     t.position = [body](double lon, double lat, double hh) {
       return body.toBodyFixed({lat, lon, hh});
     };
     t.latLonGrid = false;
-    frame << "a polar stereographic grid at " << spacing << " m";
+    frame << "a polar stereographic grid at " << f.spacingMetres << " m";
   }
   t.planet = true;  // the command line speaks longitude, latitude
   t.height = [surface](double lon, double lat) -> std::optional<double> {

@@ -2,6 +2,7 @@
 
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
+#include <regolith/topo/Projection.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -113,6 +114,62 @@ topo::GridPyramid composedDemPyramid(const std::shared_ptr<const ComposedSurface
     g = topo::coarserGrid(g);
   }
   return p;
+}
+
+DrawingFrame drawingFrame(const std::shared_ptr<const ComposedSurface>& surface, double lookLatDeg,
+                          double spacingMetres) {
+  constexpr const char* op = "compose::drawingFrame()";
+  const topo::Body& body = checked(surface)->body();
+  const double metresPerDegree = body.equatorialRadius() * kDeg;
+  if (!(spacingMetres > 0.0)) {
+    double finest = std::numeric_limits<double>::infinity();
+    for (const auto& e : surface->snapshot().entries()) {
+      if (e.dataset->options().role == Role::Height) finest = std::min(finest, e.dataset->groundSpacing());
+    }
+    if (!std::isfinite(finest)) {
+      throw InvalidArgument(core::format({.operation = op,
+                                          .field = "height datasets of the catalogue",
+                                          .value = "none",
+                                          .expected = "at least one dataset of role height"}));
+    }
+    spacingMetres = finest;
+  }
+  spacingMetres = std::max(spacingMetres, 1e-3);
+  DrawingFrame f;
+  if (std::abs(lookLatDeg) < 50.0) {
+    // Whole pixels on the sphere: 180 / step rows, rounded, twice as many columns.
+    const double step = spacingMetres / metresPerDegree;
+    const double rowsD = std::max(2.0, std::round(180.0 / step));
+    if (2.0 * rowsD > static_cast<double>(std::size_t{1} << 31)) {
+      throw InvalidArgument(core::format({.operation = op,
+                                          .field = "spacing",
+                                          .value = core::number(spacingMetres) + " m",
+                                          .expected = "coarse enough for at most 2^31 columns around the body"}));
+    }
+    const auto rows = static_cast<std::size_t>(rowsD);
+    const double dy = 180.0 / rowsD;
+    const topo::TopoGrid g(rows, 2 * rows, -180.0 + 0.5 * dy, 90.0 - 0.5 * dy, dy, dy);
+    f.pyramid = composedPlanetPyramid(surface, g, topo::LatitudeType::Planetodetic);
+    f.spacingMetres = dy * metresPerDegree;
+    return f;
+  }
+  const auto pole = lookLatDeg > 0 ? topo::PolarStereographic::Pole::North : topo::PolarStereographic::Pole::South;
+  const topo::Placement placement(body, topo::PolarStereographic::withScaleFactor(body, pole, 1.0, 0.0));
+  const double half = 2.0 * body.equatorialRadius() * std::tan(40.0 * kDeg);  // down to 10° latitude
+  const double halfSamples = std::ceil(half / spacingMetres);
+  if (2.0 * halfSamples + 1.0 > static_cast<double>(std::size_t{1} << 31)) {
+    throw InvalidArgument(core::format({.operation = op,
+                                        .field = "polar grid spacing",
+                                        .value = core::number(spacingMetres) + " m",
+                                        .expected = "coarse enough for at most 2^31 samples a side"}));
+  }
+  const auto n = static_cast<std::size_t>(2.0 * halfSamples + 1.0);  // the pole is the centre sample
+  const double h = halfSamples * spacingMetres;
+  f.pyramid = composedDemPyramid(surface, topo::TopoGrid(n, n, -h, h, spacingMetres, spacingMetres), placement);
+  f.placement = placement;
+  f.spacingMetres = spacingMetres;
+  f.polar = true;
+  return f;
 }
 
 }  // namespace regolith::compose

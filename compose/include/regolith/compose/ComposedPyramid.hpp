@@ -65,4 +65,23 @@ class ComposedSamples final : public topo::SampleSource {
     const std::shared_ptr<const ComposedSurface>& surface, const topo::TopoGrid& grid,
     const topo::Placement& placement, std::size_t levels = 0);
 
+/// A grid to draw a composed surface on, chosen for a view: a global latitude/longitude grid
+/// away from the poles, a polar stereographic grid about a pole near one (a latitude/longitude
+/// lattice converges there: its cells become slivers and its shading streaks).
+struct DrawingFrame {
+  topo::GridPyramid pyramid;               ///< levels of composed samples
+  std::optional<topo::Placement> placement;  ///< set for the polar grid (planar levels)
+  double spacingMetres = 0.0;              ///< level 0's ground spacing
+  bool polar = false;
+};
+
+/// The frame for a view centred near planetodetic latitude `lookLatDeg`: within 40° of a
+/// pole (|lat| ≥ 50°) a polar stereographic grid about it (true scale at the pole, from the
+/// pole down to 10° latitude, the pole at its centre sample), else a global
+/// latitude/longitude grid; both at `spacingMetres` on the ground (the finest height
+/// dataset's when ≤ 0, at least 1 mm). Throws InvalidArgument if the grid would exceed 2^31
+/// samples a side.
+[[nodiscard]] DrawingFrame drawingFrame(const std::shared_ptr<const ComposedSurface>& surface,
+                                        double lookLatDeg, double spacingMetres = 0.0);
+
 }  // namespace regolith::compose

@@ -1,0 +1,90 @@
+// The composed surface as a renderer's pyramid: every sample is the composed height at its
+// position, in the grid's own height convention; drawingFrame() picks a polar grid near a pole.
+
+#include <regolith/compose/ComposedPyramid.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/topo/Projection.hpp>
+
+#include "compose/ComposeFixtures.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace regolith::compose {
+namespace {
+
+using testing::demPyramid;
+using testing::globalPlanet;
+using testing::named;
+
+const topo::Body kMoon = topo::Body::moon();
+
+std::shared_ptr<const ComposedSurface> moonSurface() {
+  auto cat = std::make_shared<Catalogue>(kMoon);
+  cat->add(Dataset::planet(
+      globalPlanet(kMoon, 1.0, [](double lat, double lon) { return 100.0 * std::sin(lat) + lon; }),
+      named("global")));
+  cat->add(Dataset::dem(
+      demPyramid(100.0, 201, 201, [](double x, double y) { return 500.0 + 0.01 * x - 0.02 * y; }),
+      topo::Placement(topo::LocalTangentPlane(kMoon, {5.0, 5.0, 0.0}, 20.0)), named("site", 2e3)));
+  return std::make_shared<const ComposedSurface>(cat->snapshot());
+}
+
+TEST(ComposedPyramid, PlanetSamplesAreTheComposedHeights) {
+  const auto s = moonSurface();
+  const topo::TopoGrid g(101, 101, 4.5, 5.5, 0.01, 0.01);
+  const ComposedSamples samples(s, g, topo::LatitudeType::Planetodetic, 0.0);
+  for (std::size_t r : {0UL, 30UL, 50UL, 100UL}) {
+    for (std::size_t c : {0UL, 49UL, 77UL}) {
+      const glm::dvec2 p = g.sampleCentre(static_cast<double>(r), static_cast<double>(c));
+      EXPECT_EQ(samples.height(r, c), s->height(p.y, p.x).height);
+      EXPECT_EQ(samples.sample(r, c), static_cast<float>(s->height(p.y, p.x).height));
+    }
+  }
+}
+
+TEST(ComposedPyramid, TangentPlaneSamplesLieOnTheComposedSurface) {
+  // A tangent plane's heights are along its own normal: the point (x, y, h) it stores must
+  // lie on the composed surface, i.e. its geodetic height is the composed height there.
+  const auto s = moonSurface();
+  const topo::Placement plane(topo::LocalTangentPlane(kMoon, {5.0, 5.1, 0.0}, -10.0));
+  const topo::TopoGrid g(81, 81, -20e3, 20e3, 500.0, 500.0);
+  const ComposedSamples samples(s, g, plane, 0.0);
+  for (std::size_t r = 0; r < 81; r += 8) {
+    for (std::size_t c = 0; c < 81; c += 8) {
+      const glm::dvec2 p = g.sampleCentre(static_cast<double>(r), static_cast<double>(c));
+      const double h = samples.height(r, c);
+      const topo::Geodetic geo = plane.toGeodetic(p.x, p.y, h);
+      EXPECT_NEAR(geo.height, s->height(geo.latDeg, geo.lonDeg).height, 1e-6) << r << "," << c;
+    }
+  }
+}
+
+TEST(ComposedPyramid, DrawingFrameIsPolarNearAPole) {
+  const auto s = moonSurface();
+  const DrawingFrame eq = drawingFrame(s, 10.0, 2000.0);
+  EXPECT_FALSE(eq.polar);
+  EXPECT_FALSE(eq.placement.has_value());
+  ASSERT_TRUE(eq.pyramid.planetBody.has_value());
+  EXPECT_NEAR(eq.pyramid.levels[0].grid.west(), -180.0, 1e-9);
+  EXPECT_NEAR(eq.pyramid.levels[0].grid.north(), 90.0, 1e-9);
+  const DrawingFrame south = drawingFrame(s, -70.0, 2000.0);
+  ASSERT_TRUE(south.polar);
+  ASSERT_NE(south.placement->polarStereographic(), nullptr);
+  const topo::TopoGrid& g = south.pyramid.levels[0].grid;
+  ASSERT_EQ(g.rows() % 2, 1U);
+  // The centre sample is the pole, and its composed height is the pole's.
+  const glm::dvec2 c =
+      g.sampleCentre(static_cast<double>(g.rows() / 2), static_cast<double>(g.cols() / 2));
+  EXPECT_NEAR(c.x, 0.0, 1e-6);
+  EXPECT_NEAR(c.y, 0.0, 1e-6);
+  const auto& src = dynamic_cast<const ComposedSamples&>(*south.pyramid.levels[0].source);
+  EXPECT_NEAR(src.height(g.rows() / 2, g.cols() / 2), s->height(-90.0, 0.0).height, 1e-9);
+  // Default spacing: the finest dataset's (100 m).
+  EXPECT_NEAR(drawingFrame(s, 80.0).spacingMetres, 100.0, 1e-9);
+  EXPECT_THROW((void)drawingFrame(s, 0.0, 1e-3), InvalidArgument);  // 2^32 columns
+}
+
+}  // namespace
+}  // namespace regolith::compose
