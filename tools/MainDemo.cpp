@@ -261,6 +261,13 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
   // The fly-over ends where the traverse stopped, with the tracks it left.
   fly.rover = glm::dvec3{trav.last.x, trav.last.y, trav.last.heading * 180.0 / M_PI};
   fly.scene.victoriaEffects.tracks = trav.tracks;
+  // One composed surface (docs/composition.md): Mars and the DEMs blend over the DEMs'
+  // feathers, and the flight starts beyond the north pole and passes over it.
+  fly.scene.composition = true;
+  fly.overPole = true;
+  // The DEM blends into the planet over its feather: drawn in the planet's colour, its border
+  // is invisible (the lighter tone above marks it without composition).
+  fly.scene.demAlbedo = demo::MarsVictoriaScene::kPlanetAlbedo;
   fly.progress = [&out, every = std::max<std::size_t>(1, o.frames / 6)](int done, int all,
                                                                         const fs::path& path) {
     if (static_cast<std::size_t>(done) % every == 0 || done == all)
@@ -289,6 +296,16 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
       << " s in all; " << std::setprecision(0) << flyover.startDistance / 1e3 << " km to "
       << std::setprecision(1) << flyover.endDistance
       << " m from the rover, focus Mars → Victoria at frame " << flyover.focusSwitchFrame << ")\n";
+  if (!flyover.datasetsPerFrame.empty()) {
+    const auto [lo, hi] =
+        std::minmax_element(flyover.datasetsPerFrame.begin(), flyover.datasetsPerFrame.end());
+    out << "  composition: " << *lo << " to " << *hi << " datasets in view per frame (";
+    for (std::size_t i = 0; i < flyover.datasetsPerFrame.size(); ++i) {
+      out << (i == 0 ? "" : " ") << flyover.datasetsPerFrame[i];
+    }
+    out << "); over the north pole at frame " << flyover.poleFrame << " (latitude "
+        << std::setprecision(2) << flyover.poleLatitude << "°)\n";
+  }
   out << "Rover views: " << views.mast.string() << " and " << views.chase.string() << " ("
       << views.imprints << " six-wheel imprints pressed into " << views.trackTiles
       << " track tiles, " << std::setprecision(1) << viewSeconds << " s)\n";

@@ -40,11 +40,54 @@ ComposedSamples::ComposedSamples(std::shared_ptr<const ComposedSurface> surface,
 
 ComposedSamples::ComposedSamples(std::shared_ptr<const ComposedSurface> surface,
                                  const topo::TopoGrid& grid, const topo::Placement& placement,
-                                 double groundMetres)
-    : surface_(checked(std::move(surface))), grid_(grid), placement_(placement), metres_(groundMetres) {}
+                                 double groundMetres, std::shared_ptr<const Dataset> own,
+                                 std::size_t ownLevel)
+    : surface_(checked(std::move(surface))), grid_(grid), placement_(placement), metres_(groundMetres) {
+  if (!own || own->isPlanet() || own->options().mask || ownLevel >= own->levelCount() ||
+      own->levelFor(groundMetres) != ownLevel) {
+    return;
+  }
+  // The same lattice: own's level `ownLevel` has this grid's geometry.
+  const topo::TopoGrid& og = own->level(ownLevel).grid;
+  const double tol = 1e-9 * std::max(og.spacingX(), 1.0);
+  if (og.rows() != grid.rows() || og.cols() != grid.cols() || std::abs(og.x0() - grid.x0()) > tol ||
+      std::abs(og.y0() - grid.y0()) > tol || std::abs(og.spacingX() - grid.spacingX()) > tol ||
+      std::abs(og.spacingY() - grid.spacingY()) > tol) {
+    return;
+  }
+  // No dataset of own's tier or above may overlap it (docs/composition.md "Tiers"): then
+  // wherever own's coverage is 1, the layers below it are hidden and it is the surface.
+  const Rules& rules = surface_->rules();
+  const double ratio = rules.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules.tierRatio;
+  const auto& b = own->bounds();
+  for (const auto& e : surface_->snapshot().entries()) {
+    const Dataset& d = *e.dataset;
+    if (&d == own.get() || d.options().role != Role::Height) continue;
+    const bool below = d.options().priority < own->options().priority ||
+                       (d.options().priority == own->options().priority &&
+                        d.groundSpacing() > own->groundSpacing() * ratio);
+    const auto& db = d.bounds();
+    const bool overlaps = db[0].x <= b[1].x && db[1].x >= b[0].x && db[0].y <= b[1].y &&
+                          db[1].y >= b[0].y && db[0].z <= b[1].z && db[1].z >= b[0].z;
+    if (overlaps && !below) return;
+  }
+  own_ = std::move(own);
+  ownSource_ = own_->level(ownLevel).source;
+  ownGrid0_ = own_->level(0).grid;
+}
 
 double ComposedSamples::height(std::size_t row, std::size_t col) const {
   const glm::dvec2 xy = grid_.sampleCentre(static_cast<double>(row), static_cast<double>(col));
+  if (own_) {
+    // Past own's feather (coverage exactly 1) and on a valid sample: own is the surface.
+    const double feather = own_->options().featherMetres;
+    const double d = std::min({xy.x - ownGrid0_.west(), ownGrid0_.east() - xy.x, xy.y - ownGrid0_.south(),
+                               ownGrid0_.north() - xy.y});
+    if (d >= feather && d >= 0.0) {
+      const float v = ownSource_->sample(row, col);
+      if (!std::isnan(v)) return static_cast<double>(v);
+    }
+  }
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
   const topo::Body& body = surface_->body();
   if (!placement_) {
@@ -59,6 +102,10 @@ double ComposedSamples::height(std::size_t row, std::size_t col) const {
       return h.valid() ? h.height : nan;
     }
     // Along the plane's normal: h such that the point (x, y, h) lies on the composed surface.
+    // The plane's normal and the body's differ by the grid's extent over the radius, so each
+    // step shrinks the error by that angle times the slope. Samples are stored as floats (an
+    // ulp of 1e-4 m at 1000 m), so 1e-5 m is enough. The start is fixed (0), so a sample
+    // never depends on the samples read before it.
     double h = 0.0;
     for (int it = 0; it < 12; ++it) {
       const topo::Geodetic g = placement_->toGeodetic(xy.x, xy.y, h);
@@ -66,7 +113,7 @@ double ComposedSamples::height(std::size_t row, std::size_t col) const {
       if (!s.valid()) return nan;
       const double residual = s.height - g.height;
       h += residual;
-      if (std::abs(residual) < 1e-7) break;
+      if (std::abs(residual) < 1e-5) break;
     }
     return h;
   } catch (const DomainError&) {
@@ -104,13 +151,13 @@ topo::GridPyramid composedPlanetPyramid(const std::shared_ptr<const ComposedSurf
 
 topo::GridPyramid composedDemPyramid(const std::shared_ptr<const ComposedSurface>& surface,
                                      const topo::TopoGrid& grid, const topo::Placement& placement,
-                                     std::size_t levels) {
+                                     std::size_t levels, const std::shared_ptr<const Dataset>& own) {
   topo::GridPyramid p;
   topo::TopoGrid g = grid;
   const std::size_t n = levelsFor(grid, levels);
   for (std::size_t l = 0; l < n; ++l) {
     const double metres = std::sqrt(g.spacingX() * g.spacingY());
-    p.levels.push_back({g, std::make_shared<ComposedSamples>(checked(surface), g, placement, metres)});
+    p.levels.push_back({g, std::make_shared<ComposedSamples>(checked(surface), g, placement, metres, own, l)});
     g = topo::coarserGrid(g);
   }
   return p;

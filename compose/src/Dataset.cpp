@@ -380,6 +380,8 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, 
     // line whose plane coordinates (x, y, h) lie on the DEM (h = DEM(x, y)). The plane's
     // normal and the body's differ by the DEM's extent over the radius, so each step shrinks
     // the error by about that angle times the slope: a few steps reach 1e-6 m.
+    // From the middle of the height range: a fixed start, so a point's answer never depends
+    // on the queries before it.
     double height = 0.5 * (heightRange_[0] + heightRange_[1]);
     double x = g.x, y = g.y;
     for (int it = 0; it < 12; ++it) {
@@ -394,7 +396,7 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, 
       const double residual = h.height - p.z;
       height += residual;
       s.status = topo::QueryStatus::Ok;
-      if (std::abs(residual) < 1e-7) break;
+      if (std::abs(residual) < 1e-6) break;
     }
     if (s.status == topo::QueryStatus::Ok) {
       s.height = height;

@@ -1,3 +1,6 @@
+#include <regolith/compose/Catalogue.hpp>
+#include <regolith/compose/ComposedPyramid.hpp>
+#include <regolith/compose/FromStore.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/FileIdentity.hpp>
 #include <regolith/core/Message.hpp>
@@ -155,6 +158,7 @@ MarsVictoriaScene::MarsVictoriaScene(const MarsVictoriaOptions& options) : optio
   vo.originHeight = layout_.victoriaOrigin.height;
   victoria_ = demPyramid(store::VictoriaGenerator(vo));
   if (options.secondDem) second_ = secondDemPyramid(options, layout_.secondDemOrigin.height);
+  if (options.composition) compose();
   finish();
 }
 
@@ -190,7 +194,90 @@ void MarsVictoriaScene::fromStores(const MarsVictoriaOptions& options) {
   layout_.secondDem = options.secondDem;
   layout_.secondDemOrigin.height = planetHeightAt(*mars_, layout_.secondDemOrigin);
   if (options.secondDem) second_ = secondDemPyramid(options, layout_.secondDemOrigin.height);
+  if (options.composition) compose();
   finish();
+}
+
+namespace {
+topo::GridPyramid levelsOf(const clod::HeightPyramid& p) {
+  topo::GridPyramid g;
+  for (std::size_t l = 0; l < p.levelCount(); ++l) g.levels.push_back(p.level(l));
+  g.planetBody = p.kind() == clod::SurfaceKind::Planet ? p.body() : std::nullopt;
+  g.latitudeType = p.latitudeType();
+  return g;
+}
+}  // namespace
+
+void MarsVictoriaScene::compose() {
+  // The catalogue: the planet, the DEMs on their tangent planes, and the extra store grids.
+  const topo::Body& body = layout_.mars;
+  auto catalogue = std::make_shared<compose::Catalogue>(body);
+  compose::DatasetOptions po;
+  po.name = "mars";
+  catalogue->add(compose::Dataset::planet(levelsOf(*mars_), po));
+  const topo::Placement victoriaPlacement(
+      topo::LocalTangentPlane(body, layout_.victoriaOrigin, layout_.victoriaHeadingDeg));
+  compose::DatasetOptions vo;
+  vo.name = "victoria";
+  vo.featherMetres = options_.demFeatherMetres;
+  const auto victoriaData = compose::Dataset::dem(levelsOf(*victoria_), victoriaPlacement, vo);
+  catalogue->add(victoriaData);
+  std::optional<topo::Placement> secondPlacement;
+  std::shared_ptr<const compose::Dataset> secondData;
+  if (second_) {
+    secondPlacement.emplace(topo::LocalTangentPlane(body, layout_.secondDemOrigin, 0.0));
+    compose::DatasetOptions so = vo;
+    so.name = "victoria2";
+    secondData = compose::Dataset::dem(levelsOf(*second_), *secondPlacement, so);
+    catalogue->add(secondData);
+  }
+  if (!options_.extraDatasets.empty()) {
+    auto cache = std::make_shared<store::PatchCache>(options_.cacheBytes);
+    auto pagers = std::make_shared<std::vector<std::shared_ptr<const store::Pager>>>();
+    for (const auto& d : options_.extraDatasets) {
+      auto pager = std::make_shared<const store::Pager>(
+          std::make_shared<const store::Store>(store::Store::open(d.store)), cache);
+      compose::DatasetOptions eo;
+      eo.featherMetres = d.featherMetres;
+      catalogue->add(compose::datasetFromStore(*pager, d.grid, eo));
+      pagers->push_back(std::move(pager));
+    }
+    extraPager_ = pagers;
+  }
+  composed_ = std::make_shared<const compose::ComposedSurface>(catalogue->snapshot());
+  // Every terrain keeps its lattice and levels; its samples become the composed heights.
+  mars_ = std::make_shared<const clod::HeightPyramid>(compose::composedPlanetPyramid(
+      composed_, mars_->level(0).grid, mars_->latitudeType(), mars_->levelCount()));
+  // A DEM's own lattice reads its own samples where it alone is the surface.
+  const auto plane = [&](const clod::HeightPyramid& p, const topo::Placement& placement,
+                         const std::shared_ptr<const compose::Dataset>& own) {
+    return std::make_shared<const clod::HeightPyramid>(
+        compose::composedDemPyramid(composed_, p.level(0).grid, placement, p.levelCount(), own)
+            .levels,
+        clod::SurfaceKind::Plane);
+  };
+  victoria_ = plane(*victoria_, victoriaPlacement, victoriaData);
+  if (second_) second_ = plane(*second_, *secondPlacement, secondData);
+}
+
+std::size_t MarsVictoriaScene::datasetsSeen(scenegraph::NodeId camera, double fovYDegrees,
+                                            double aspect, double near) const {
+  if (!composed_) return 0;
+  // The camera's frustum in the body-fixed frame of Mars (GL eye: it looks along −z).
+  const scenegraph::Pose pose = graph_.relative(nodes_.mars, camera);
+  const double ty = std::tan(0.5 * fovYDegrees * kDeg), tx = ty * aspect;
+  const glm::dvec3 eyePlanes[] = {
+      {1.0, 0.0, -tx}, {-1.0, 0.0, -tx}, {0.0, 1.0, -ty}, {0.0, -1.0, -ty}};
+  std::vector<glm::dvec4> planes;
+  for (const glm::dvec3& e : eyePlanes) {
+    const glm::dvec3 n = pose.applyVector(e);
+    planes.emplace_back(n, -glm::dot(n, pose.translation));
+  }
+  const glm::dvec3 forward = pose.applyVector({0.0, 0.0, -1.0});
+  planes.emplace_back(forward, -glm::dot(forward, pose.translation) - near);
+  std::vector<std::uint32_t> seen;
+  composed_->snapshot().visible(planes, seen);
+  return seen.size();
 }
 
 void MarsVictoriaScene::finish() {
@@ -244,11 +331,13 @@ glm::dvec3 MarsVictoriaScene::lightInFocus(scenegraph::NodeId focus) const {
   return graph_.relative(focus, nodes_.victoria).applyVector(glm::normalize(local));
 }
 
-scenegraph::Pose flyoverCamera(double t, const glm::dvec3& rover) {
-  // Smoothstep in t, logarithmic in distance: 8000 km out to 6 m from the rover. The view
-  // direction turns from straight down (north up in the image) to a low look along +y.
+scenegraph::Pose flyoverCamera(double t, const glm::dvec3& rover, double startDistance) {
+  // Smoothstep in t, logarithmic in distance: startDistance (8000 km) out to 6 m from the
+  // rover. The view direction turns from straight down (north up in the image) to a low look
+  // along +y.
   const double s = t * t * (3.0 - 2.0 * t);
-  const double dist = std::exp(std::log(8.0e6) + s * (std::log(6.0) - std::log(8.0e6)));
+  const double dist =
+      std::exp(std::log(startDistance) + s * (std::log(6.0) - std::log(startDistance)));
   const double tilt = std::pow(s, 3.0);  // stays near nadir until close
   const glm::dvec3 dir =
       glm::normalize(glm::mix(glm::dvec3(0.0, -0.02, 1.0), glm::dvec3(0.0, -1.0, 0.35), tilt));
@@ -320,9 +409,46 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
     scene.registerWith(renderer);
     gl::RenderTarget target(options.width, options.height);
     double renderSeconds = 0.0;
+    // Over the pole: the first 40% of the frames follow the great circle through the pole
+    // and Victoria's meridian at 2000 km, from 20° beyond the pole to above Victoria, looking
+    // straight down with north at the top of the image; the rest descends from 2000 km.
+    const double lonV = scene.layout().victoriaOrigin.lonDeg,
+                 latV = scene.layout().victoriaOrigin.latDeg;
+    const scenegraph::Pose victoriaFromMars = g.relative(n.victoria, n.mars);
+    const topo::Body& body = scene.layout().mars;
+    constexpr double kPoleShare = 0.4, kPoleAltitude = 2.0e6;
+    const glm::dvec3 meridian(std::cos(lonV * kDeg), std::sin(lonV * kDeg), 0.0);
+    double bestLat = -90.0;
     for (int i = 0; i < options.frames; ++i) {
       const double t = static_cast<double>(i) / (options.frames - 1);
-      const scenegraph::Pose pose = flyoverCamera(t, rover);
+      scenegraph::Pose pose;
+      std::optional<glm::dvec3> poleLight;  // in the Mars frame
+      if (options.overPole && t < kPoleShare) {
+        const double theta =
+            (-20.0 + (90.0 - latV + 20.0) * t / kPoleShare) * kDeg;  // from the pole
+        const double lat = 90.0 - std::abs(theta) / kDeg, lon = theta < 0.0 ? lonV + 180.0 : lonV;
+        const glm::dvec3 travel =
+            -std::sin(theta) * glm::dvec3(0.0, 0.0, 1.0) + std::cos(theta) * meridian;
+        const scenegraph::Pose inMars =
+            scenegraph::Pose::lookAt(body.toBodyFixed({lat, lon, kPoleAltitude}),
+                                     body.toBodyFixed({lat, lon, 0.0}), -travel);
+        pose = victoriaFromMars * inMars;
+        // The sun 35° above the horizon under the camera, turning into Victoria's morning
+        // sun by the end of this part (a sun fixed over Victoria would leave the pole dark).
+        const glm::dmat3 enu = body.enuFrame(lat, lon);
+        const glm::dvec3 sky =
+            std::cos(35.0 * kDeg) * glm::normalize(-0.92 * enu[0] + 0.38 * enu[1]) +
+            std::sin(35.0 * kDeg) * enu[2];
+        poleLight = glm::normalize(glm::mix(sky, scene.lightInFocus(n.mars), t / kPoleShare));
+        if (lat > bestLat) {
+          bestLat = lat;
+          summary.poleFrame = i;
+          summary.poleLatitude = lat;
+        }
+      } else {
+        const double u = options.overPole ? (t - kPoleShare) / (1.0 - kPoleShare) : t;
+        pose = flyoverCamera(u, rover, options.overPole ? kPoleAltitude : 8.0e6);
+      }
       g.setLocal(cam, pose);
       const double dist = glm::length(pose.translation - rover);
       // Focus: Mars while the camera is far, Victoria once within 200 km of the rover.
@@ -335,7 +461,11 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
       view.near = std::clamp(0.01 * dist, 0.05, 1000.0);
       view.width = options.width;
       view.height = options.height;
-      view.lightInFocus = scene.lightInFocus(focus);
+      view.lightInFocus = poleLight && focus == n.mars ? *poleLight : scene.lightInFocus(focus);
+      if (scene.composed()) {
+        summary.datasetsPerFrame.push_back(scene.datasetsSeen(
+            cam, view.fovYDegrees, static_cast<double>(options.width) / options.height, view.near));
+      }
       const auto r0 = std::chrono::steady_clock::now();
       target.clear({0.02F, 0.02F, 0.04F, 1.0F});
       renderer.draw(g.renderList(focus, cam), view);

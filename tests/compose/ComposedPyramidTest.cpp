@@ -61,6 +61,39 @@ TEST(ComposedPyramid, TangentPlaneSamplesLieOnTheComposedSurface) {
   }
 }
 
+TEST(ComposedPyramid, ADatasetsOwnLatticeReadsItsSamplesWhereItAloneIsTheSurface) {
+  // The site DEM drawn on its own lattice: with `own`, interior samples are read directly;
+  // every sample must equal the full composition's (to the 1e-5 m the iteration is run to).
+  auto cat = std::make_shared<Catalogue>(kMoon);
+  cat->add(Dataset::planet(
+      globalPlanet(kMoon, 1.0, [](double lat, double lon) { return 100.0 * std::sin(lat) + lon; }),
+      named("global")));
+  const topo::Placement plane(topo::LocalTangentPlane(kMoon, {5.0, 5.0, 40.0}, 20.0));
+  const auto pyr =
+      demPyramid(100.0, 101, 101, [](double x, double y) { return 500.0 + 0.01 * x - 0.02 * y; });
+  const auto site = Dataset::dem(pyr, plane, named("site", 1500.0));
+  cat->add(site);
+  const auto s = std::make_shared<const ComposedSurface>(cat->snapshot());
+  const topo::TopoGrid& g = pyr.levels[0].grid;
+  const ComposedSamples direct(s, g, plane, 100.0, site, 0), full(s, g, plane, 100.0);
+  int same = 0;
+  for (std::size_t r = 0; r < 101; r += 4) {
+    for (std::size_t c = 0; c < 101; c += 4) {
+      const double a = direct.height(r, c), b = full.height(r, c);
+      EXPECT_NEAR(a, b, 1e-5) << r << "," << c;
+      same += a == static_cast<double>(pyr.levels[0].source->sample(r, c));
+    }
+  }
+  EXPECT_GT(same, 100);  // the interior (past the 15-sample feather) is read directly
+  // A second dataset of the same tier overlapping it: no direct reads (the blend matters).
+  cat->add(Dataset::dem(demPyramid(100.0, 21, 21, [](double, double) { return 0.0; }), plane,
+                        named("overlap")));
+  const auto s2 = std::make_shared<const ComposedSurface>(cat->snapshot());
+  const ComposedSamples guarded(s2, g, plane, 100.0, site, 0);
+  EXPECT_NEAR(guarded.height(50, 50), ComposedSamples(s2, g, plane, 100.0).height(50, 50), 1e-9);
+  EXPECT_NE(guarded.height(50, 50), static_cast<double>(pyr.levels[0].source->sample(50, 50)));
+}
+
 TEST(ComposedPyramid, DrawingFrameIsPolarNearAPole) {
   const auto s = moonSurface();
   const DrawingFrame eq = drawingFrame(s, 10.0, 2000.0);

@@ -30,9 +30,14 @@ class ComposedSamples final : public topo::SampleSource {
   /// A planet grid. Throws InvalidArgument for a null surface.
   ComposedSamples(std::shared_ptr<const ComposedSurface> surface, const topo::TopoGrid& grid,
                   topo::LatitudeType latitudeType, double groundMetres);
-  /// A placed planar grid (the placement must be on the surface's body).
+  /// A placed planar grid (the placement must be on the surface's body). If it is level
+  /// `ownLevel` of dataset `own` of the surface (same placement and lattice), samples where
+  /// `own` alone makes the surface (no mask, past its feather, and no dataset of its tier or
+  /// above overlaps it) are `own`'s own samples, read directly: what the composition gives
+  /// there, at the cost of a plain read.
   ComposedSamples(std::shared_ptr<const ComposedSurface> surface, const topo::TopoGrid& grid,
-                  const topo::Placement& placement, double groundMetres);
+                  const topo::Placement& placement, double groundMetres,
+                  std::shared_ptr<const Dataset> own = nullptr, std::size_t ownLevel = 0);
 
   [[nodiscard]] std::size_t rows() const noexcept override { return grid_.rows(); }
   [[nodiscard]] std::size_t cols() const noexcept override { return grid_.cols(); }
@@ -49,6 +54,9 @@ class ComposedSamples final : public topo::SampleSource {
   topo::LatitudeType latType_ = topo::LatitudeType::Planetodetic;
   std::optional<topo::Placement> placement_;
   double metres_ = 0.0;
+  std::shared_ptr<const Dataset> own_;  // null unless its samples may be read directly
+  std::shared_ptr<const topo::SampleSource> ownSource_;
+  topo::TopoGrid ownGrid0_{1, 1, 0.0, 0.0, 1.0, 1.0};
 };
 
 /// A planet pyramid of the composed surface over `grid` (level 0) and `levels` levels
@@ -61,9 +69,11 @@ class ComposedSamples final : public topo::SampleSource {
 
 /// A planar pyramid of the composed surface over a placed grid (heights in the placement's
 /// convention); draw it with clod::HeightPyramid(levels, placement).
+/// `own`: the dataset whose lattice this is, if any (ComposedSamples' direct reads).
 [[nodiscard]] topo::GridPyramid composedDemPyramid(
     const std::shared_ptr<const ComposedSurface>& surface, const topo::TopoGrid& grid,
-    const topo::Placement& placement, std::size_t levels = 0);
+    const topo::Placement& placement, std::size_t levels = 0,
+    const std::shared_ptr<const Dataset>& own = nullptr);
 
 /// A grid to draw a composed surface on, chosen for a view: a global latitude/longitude grid
 /// away from the poles, a polar stereographic grid about a pole near one (a latitude/longitude

@@ -6,6 +6,7 @@
 #include <regolith/clod/Effects.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
+#include <regolith/compose/ComposedSurface.hpp>
 #include <regolith/gl/Image.hpp>
 #include <regolith/scenegraph/PaperScene.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
@@ -14,6 +15,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -49,6 +51,21 @@ struct MarsVictoriaOptions {
   /// Effects declared on the Victoria DEM (e.g. the wheel tracks of a traverse); none by
   /// default (the bare pipeline).
   clod::Effects victoriaEffects;
+  /// Compose Mars, the DEMs and `extraDatasets` into one surface (docs/composition.md) and
+  /// draw that everywhere: each terrain keeps its own lattice, but its samples are the
+  /// composed heights there, so the planet shows the DEMs (at its resolution) and each DEM
+  /// blends into the planet over its feather instead of meeting it at a step.
+  bool composition = false;
+  /// Border feather of the Victoria-like DEMs in the composition, metres.
+  double demFeatherMetres = 60.0;
+  /// Further datasets of the composition (with composition on): store grids, e.g. the
+  /// generated polar caps and an inclined strip, paged through the scene's cache.
+  struct StoreDataset {
+    std::filesystem::path store;
+    std::string grid;
+    double featherMetres = 0.0;
+  };
+  std::vector<StoreDataset> extraDatasets;
 };
 
 /// The scene: graph (scenegraph::buildPaperScene), data and what each drawable key draws. Building
@@ -79,6 +96,16 @@ class MarsVictoriaScene {
   static constexpr glm::vec3 kPlanetAlbedo{0.80F, 0.52F, 0.38F};
   static constexpr glm::vec3 kDemAlbedo{0.55F, 0.75F, 0.45F};
 
+  /// The composed surface every terrain draws (null unless options.composition).
+  [[nodiscard]] const std::shared_ptr<const compose::ComposedSurface>& composed() const noexcept {
+    return composed_;
+  }
+  /// How many datasets of the composition a camera sees (its frustum against each
+  /// dataset's bounds, Snapshot::visible()): `camera` is the camera node, with the vertical
+  /// field of view and aspect ratio of its image. 0 without composition.
+  [[nodiscard]] std::size_t datasetsSeen(scenegraph::NodeId camera, double fovYDegrees,
+                                         double aspect, double near) const;
+
   /// Registers every drawable of the scene with a renderer (terrains, cut-outs, rover).
   void registerWith(clod::SceneRenderer& renderer) const;
   /// A light direction in `focus`'s frame: morning sun over Victoria (35° up, from the east).
@@ -86,7 +113,8 @@ class MarsVictoriaScene {
 
  private:
   void fromStores(const MarsVictoriaOptions& options);
-  void finish();  // Earth, the graph, the rover
+  void compose();  // options_.composition: replaces the pyramids by composed ones
+  void finish();   // Earth, the graph, the rover
 
   MarsVictoriaOptions options_;
   scenegraph::SceneGraph graph_{"sun"};
@@ -94,6 +122,8 @@ class MarsVictoriaScene {
   scenegraph::PaperSceneNodes nodes_;
   std::shared_ptr<const clod::HeightPyramid> mars_, victoria_, second_, earth_;
   std::shared_ptr<void> pager_;  // keeps the stores' pager alive while the scene draws them
+  std::shared_ptr<const compose::ComposedSurface> composed_;
+  std::shared_ptr<void> extraPager_;  // the extra datasets' pagers
 };
 
 /// What the fly-over renders and where.
@@ -109,6 +139,9 @@ struct FlyoverOptions {
   /// Also write a frame of the rover's mast camera and of the orbit camera (one PNG with
   /// both as viewports) after the fly-over.
   bool multiView = true;
+  /// Begin over the north pole: the first 40% of the frames fly from 2000 km above the pole
+  /// along Victoria's meridian to 2000 km above Victoria, then descend as without it.
+  bool overPole = false;
   /// Called after each frame with (frames written, frames in all, path).
   std::function<void(int, int, const std::filesystem::path&)> progress;
 };
@@ -119,6 +152,13 @@ struct FlyoverSummary {
   double renderSeconds = 0.0;  ///< drawing and reading back frames only
   /// The frame where the focus switched from Mars to Victoria (-1: never).
   int focusSwitchFrame = -1;
+  /// With composition: how many datasets each frame's camera saw (MarsVictoriaScene::
+  /// datasetsSeen()), one entry per frame.
+  std::vector<std::size_t> datasetsPerFrame;
+  /// The frame where the camera passed closest to the north pole (overPole), and its
+  /// latitude there (degrees; -1 and NaN without overPole).
+  int poleFrame = -1;
+  double poleLatitude = std::numeric_limits<double>::quiet_NaN();
   /// Camera distance to the rover at the first and last frame (m).
   double startDistance = 0.0, endDistance = 0.0;
 };
@@ -150,7 +190,9 @@ struct SceneViewOptions {
 /// that is not finite, or a field of view outside (0, 180) degrees; GlError without GL.
 gl::RgbaImage renderSceneView(const SceneViewOptions& options);
 
-/// The fly-over camera's pose in the Victoria DEM frame at t ∈ [0, 1] for a rover at `rover`.
-[[nodiscard]] scenegraph::Pose flyoverCamera(double t, const glm::dvec3& rover);
+/// The fly-over camera's pose in the Victoria DEM frame at t ∈ [0, 1] for a rover at `rover`,
+/// descending from `startDistance` metres (at t = 0) to 6 m (at t = 1).
+[[nodiscard]] scenegraph::Pose flyoverCamera(double t, const glm::dvec3& rover,
+                                             double startDistance = 8.0e6);
 
 }  // namespace regolith::demo
