@@ -85,7 +85,7 @@ double ComposedSamples::height(std::size_t row, std::size_t col) const {
                                ownGrid0_.north() - xy.y});
     if (d >= feather && d >= 0.0) {
       const float v = ownSource_->sample(row, col);
-      if (!std::isnan(v)) return static_cast<double>(v);
+      if (!std::isnan(v)) return static_cast<double>(v) + own_->options().heightOffset;
     }
   }
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();

@@ -159,6 +159,9 @@ Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement
   } else {
     groundSpacing_ = std::sqrt(g0.spacingX() * g0.spacingY());
   }
+  if (!std::isfinite(options_.heightOffset)) {
+    bad(op, who + "height offset", core::number(options_.heightOffset) + " m", "finite");
+  }
   if (options_.heightRange) {
     const auto [lo, hi] = *options_.heightRange;
     if (!(std::isfinite(lo) && std::isfinite(hi) && lo <= hi)) {
@@ -172,6 +175,8 @@ Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement
     for (const auto& l : levels_) lv.push_back(l.level);
     heightRange_ = estimateHeightRange(lv, op + ": " + who);
   }
+  heightRange_[0] += options_.heightOffset;
+  heightRange_[1] += options_.heightOffset;
   buildQualityLattice();
   computeBounds();
 }
@@ -393,7 +398,7 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, 
         s.status = h.status;
         break;
       }
-      const double residual = h.height - p.z;
+      const double residual = h.height + options_.heightOffset - p.z;
       height += residual;
       s.status = topo::QueryStatus::Ok;
       if (std::abs(residual) < 1e-6) break;
@@ -417,7 +422,9 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, 
   }
   out.status = s.status;
   if (!s.valid()) return out;
-  out.height = s.height;
+  // The tangent plane's iteration has applied the offset already.
+  out.height = placement_ && placement_->localTangentPlane() != nullptr ? s.height
+                                                                        : s.height + options_.heightOffset;
   out.coverage = coverageAt(g, latDeg);
   if (wantQuality) out.quality = qualityAt(g);
   if (wantSlope) {

@@ -113,9 +113,9 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
   auto cache = std::make_shared<store::PatchCache>(cacheBytes);
   std::map<std::filesystem::path, std::shared_ptr<const store::Pager>> pagers;
   std::vector<std::shared_ptr<const Dataset>> datasets;
-  static const std::set<std::string> kKeys{"store",    "grid",      "role",      "priority",
-                                           "feather_m", "mask_grid", "feather_nodata_samples",
-                                           "name"};
+  static const std::set<std::string> kKeys{
+      "store", "grid", "role", "priority", "feather_m", "mask_grid", "feather_nodata_samples",
+      "name", "height_offset_m"};
   std::size_t index = 0;
   for (const auto& d : root["datasets"]) {
     const std::string where = "datasets[" + std::to_string(index++) + "]";
@@ -123,8 +123,8 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
     for (const auto& [key, value] : d.items()) {
       if (!kKeys.count(key)) {
         badFile(path, where + " key '" + key + "'", shown(value),
-                "one of store, grid, name, role, priority, feather_m, mask_grid, "
-                "feather_nodata_samples");
+                "one of store, grid, name, role, priority, feather_m, height_offset_m, "
+                "mask_grid, feather_nodata_samples");
       }
     }
     if (!d.contains("store")) badFile(path, where + ".store", "missing", "a store path");
@@ -153,6 +153,9 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
     }
     if (d.contains("priority")) {
       o.priority = static_cast<int>(number(path, d["priority"], where + ".priority", -1e6, 1e6));
+    }
+    if (d.contains("height_offset_m")) {
+      o.heightOffset = number(path, d["height_offset_m"], where + ".height_offset_m", -1e6, 1e6);
     }
     if (d.contains("feather_m")) o.featherMetres = number(path, d["feather_m"], where + ".feather_m", 0.0, 1e8);
     if (d.contains("mask_grid") && d.contains("feather_nodata_samples")) {

@@ -261,6 +261,35 @@ TEST(ComposedSurface, TangentPlaneDemHeightsAreAlongTheBodyNormal) {
   }
 }
 
+TEST(ComposedSurface, HeightOffsetShiftsADatasetInItsOwnConvention) {
+  // A planet grid: +25 m along the body normal. A tangent-plane DEM: +25 m along its plane's
+  // normal, so the point (x, y, DEM + 25) must lie on the composed surface.
+  auto f = [](double lat, double lon) { return 100.0 + 3.0 * lat - 2.0 * lon; };
+  auto planet = planetPyramid(kMoon, 9.75, -9.75, 0.5, 40, 40, f);
+  DatasetOptions o = named("shifted");
+  o.heightOffset = 25.0;
+  Catalogue cat(kMoon);
+  cat.add(Dataset::planet(planet, o));
+  const ComposedSurface s(cat.snapshot());
+  const topo::TopoPlanet own(planet.levels[0].grid, kMoon, topo::LatitudeType::Planetodetic,
+                             planet.levels[0].source);
+  EXPECT_DOUBLE_EQ(s.height(1.3, 2.7).height, own.height({1.3, 2.7}).height + 25.0);
+
+  const topo::LocalTangentPlane ltp(kMoon, {10.0, 20.0, 0.0}, 30.0);
+  auto dem =
+      demPyramid(10.0, 201, 201, [](double x, double y) { return 50.0 + 0.02 * x + 0.01 * y; });
+  const topo::TopoDem plain(dem.levels[0].grid, topo::Placement(ltp), dem.levels[0].source);
+  Catalogue cat2(kMoon);
+  cat2.add(Dataset::dem(dem, topo::Placement(ltp), o));
+  const ComposedSurface s2(cat2.snapshot());
+  for (std::size_t r : {10UL, 100UL, 190UL}) {
+    const glm::dvec2 xy = dem.levels[0].grid.sampleCentre(static_cast<double>(r), 60.0);
+    const double h = plain.height(xy.x, xy.y).height + 25.0;
+    const topo::Geodetic g = kMoon.toGeodetic(ltp.toBodyFixed({xy.x, xy.y, h}));
+    EXPECT_NEAR(s2.height(g.latDeg, g.lonDeg).height, g.height, 1e-5) << r;
+  }
+}
+
 TEST(ComposedSurface, BatchGivesEachPointItsOwnStatus) {
   TwoPlanets t([](double, double) { return 100.0; }, [](double, double) { return 200.0; });
   const ComposedSurface s = t.surface(Policy::FinestWins);

@@ -48,7 +48,11 @@ struct DatasetOptions {
   /// bilinearly; NaN counts as 0. For non-rectangular coverage and feathered data borders
   /// (featherMask() makes one from the nodata border).
   std::shared_ptr<const topo::SampleSource> mask;
-  /// Lowest and highest height of the data, metres (for the catalogue's bounding boxes).
+  /// Added to every height of the dataset, metres (in its own convention: along its plane's
+  /// normal for a tangent-plane DEM): aligns products on different vertical datums.
+  double heightOffset = 0.0;
+  /// Lowest and highest height of the data, metres (for the catalogue's bounding boxes),
+  /// before heightOffset.
   /// Unset: taken from the coarsest level with at most 2^20 samples, widened by a quarter of
   /// its span and 100 m on each side (a coarse level averages extremes away).
   std::optional<std::array<double, 2>> heightRange;

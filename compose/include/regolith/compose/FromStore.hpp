@@ -38,7 +38,7 @@ struct CatalogueFile {
 /// ```
 /// { "policy": "weighted" | "finest", "resolution_power": 2, "tier_ratio": 4,
 ///   "datasets": [ { "store": "mola.h5", "grid": "mola", "role": "height",
-///                   "priority": 0, "feather_m": 20000,
+///                   "priority": 0, "feather_m": 20000, "height_offset_m": 0,
 ///                   "mask_grid": "mola_mask", "feather_nodata_samples": 8 } ] }
 /// ```
 /// Relative store paths are relative to the file's folder. `mask_grid` names a grid of the
