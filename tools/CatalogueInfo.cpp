@@ -152,6 +152,7 @@ void printCatalogueInfo(const std::filesystem::path& path, bool json, std::ostre
                  {"polar_radius", body.polarRadius()}};
     j["policy"] = compose::policyName(cf.rules.policy);
     j["resolution_power"] = cf.rules.resolutionPower;
+    j["tier_ratio"] = cf.rules.tierRatio;
     ordered_json list = ordered_json::array();
     for (std::size_t i = 0; i < datasets.size(); ++i) {
       list.push_back(datasetJson(i, cf.ids[i], *datasets[i]));
@@ -165,7 +166,8 @@ void printCatalogueInfo(const std::filesystem::path& path, bool json, std::ostre
       << shortestNumber(body.equatorialRadius()) << " m, polar radius "
       << shortestNumber(body.polarRadius()) << " m\n";
   out << "rules:          policy " << compose::policyName(cf.rules.policy) << ", resolution power "
-      << shortestNumber(cf.rules.resolutionPower) << "\n";
+      << shortestNumber(cf.rules.resolutionPower) << ", tier ratio "
+      << shortestNumber(cf.rules.tierRatio) << "\n";
   out << "datasets:       " << datasets.size() << "\n";
   for (std::size_t i = 0; i < datasets.size(); ++i) {
     printDatasetText(i, cf.ids[i], *datasets[i], out);

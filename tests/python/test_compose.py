@@ -31,9 +31,9 @@ def scene(tmp_path_factory):
     folder = tmp_path_factory.mktemp("compose")
     regional = cf.write_moon_scene(folder)
 
-    def catalogue(name, policy, datasets):
+    def catalogue(name, policy, datasets, **rules):
         path = folder / name
-        path.write_text(json.dumps({"policy": policy, "datasets": datasets}))
+        path.write_text(json.dumps({"policy": policy, **rules, "datasets": datasets}))
         return path
 
     glob = {"store": "global.h5", "grid": "global"}
@@ -43,7 +43,8 @@ def scene(tmp_path_factory):
         "folder": folder,
         "regional": regional,
         "finest": catalogue("finest.json", "finest", [glob, reg, site]),
-        "weighted": catalogue("weighted.json", "weighted", [glob, reg]),
+        # A tier ratio above the grids' spacing ratio (8): one tier, blended by weight.
+        "weighted": catalogue("weighted.json", "weighted", [glob, reg], tier_ratio=10),
         "regional_only": catalogue("regional_only.json", "finest", [reg]),
     }
 
@@ -118,16 +119,21 @@ def test_finest_wins_heights_match_the_rule(scene):
     assert np.sum((c > 0.05) & (c < 0.95)) > 20
 
 
-def test_weighted_heights_match_the_rule_for_two_powers(scene):
+def test_weighted_heights_match_the_rule_for_two_powers_and_tier_ratios(scene):
     cat = regolith.read_catalogue(scene["weighted"])
+    assert cat.policy == "weighted" and cat.tier_ratio == 10.0
     lat, lon = points_around_the_regional_grid(seed=5)
-    for power, s in [(2.0, cat.surface()), (1.0, cat.surface(resolution_power=1.0))]:
+    for power, s in [(2.0, cat.surface()), (1.0, cat.surface(resolution_power=1.0)),
+                     (2.0, cat.surface(tier_ratio=float("inf")))]:
         assert s.policy == "weighted" and s.resolution_power == power
         want = cf.weighted_oracle(lat, lon, scene["regional"], power)
         np.testing.assert_allclose(s.heights(lat, lon), want, rtol=0, atol=1e-9)
-    # The same file composed "finest wins" instead.
+    # A tier ratio below the spacing ratio (8; the default is 4) puts the regional grid in a
+    # tier of its own over the global one: its coverage is the alpha, as under "finest".
     want, _, _ = cf.finest_wins_oracle(lat, lon, scene["regional"])
-    np.testing.assert_allclose(cat.surface(policy="finest").heights(lat, lon), want, atol=1e-9)
+    for s in [cat.surface(tier_ratio=4.0), cat.surface(tier_ratio=7.9), cat.surface(policy="finest")]:
+        np.testing.assert_allclose(s.heights(lat, lon), want, rtol=0, atol=1e-9)
+    assert cat.surface(tier_ratio=4.0).tier_ratio == 4.0
 
 
 def test_a_nodata_hole_leaves_the_global_height(scene):
@@ -287,6 +293,8 @@ def test_shapes_outputs_and_options_are_checked(scene):
         cat.surface(policy="best")
     with pytest.raises(ValueError, match=r"rules.resolutionPower is -1, expected finite, >= 0"):
         cat.surface(resolution_power=-1.0)
+    with pytest.raises(ValueError, match=r"rules.tierRatio is 0.5, expected >= 1"):
+        cat.surface(tier_ratio=0.5)
     with pytest.raises(ValueError, match=r"cache_bytes is 0"):
         regolith.read_catalogue(scene["finest"], cache_bytes=0)
 

@@ -183,8 +183,10 @@ def finest_wins_oracle(lat, lon, regional):
 
 
 def weighted_oracle(lat, lon, regional, power):
-    """Composed heights under "weighted": one tier, w = c q (finest spacing / spacing)^p; the
-    two grids have the same quality at a latitude (square pixels), so it cancels."""
+    """Composed heights under "weighted" with a tier ratio above the grids' spacing ratio (8),
+    so that both are one tier: w = c q (finest spacing / spacing)^p; the two grids have the
+    same quality at a latitude (square pixels), so it cancels. (With a tier ratio below 8 the
+    regional grid is a tier of its own over the global one: finest_wins_oracle().)"""
     c = planet_coverage(lat, lon, REGIONAL_EXTENT, FEATHER_M, MOON[1])
     c = np.where(regional_has_data(lat, lon, regional), c, 0.0)
     q = planet_quality(lat)

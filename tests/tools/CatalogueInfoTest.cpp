@@ -68,8 +68,8 @@ TEST(CatalogueInfo, ACatalogueIsATextFileThatStartsAJsonObject) {
 
 TEST(CatalogueInfo, JsonListsTheDatasetAsTheStoreRecordsIt) {
   writePlanetStore();  // patch.h5, beside the catalogue file
-  const auto file =
-      writeText("one.json", R"({"policy": "weighted", "resolution_power": 1.5, "datasets": [
+  const auto file = writeText(
+      "one.json", R"({"policy": "weighted", "resolution_power": 1.5, "tier_ratio": 6, "datasets": [
           {"store": "patch.h5", "grid": "patch", "feather_m": 1000, "priority": 3}]})");
   std::ostringstream out;
   tools::printInfo(file.string(), true, out);
@@ -79,6 +79,7 @@ TEST(CatalogueInfo, JsonListsTheDatasetAsTheStoreRecordsIt) {
   EXPECT_EQ(j["body"]["name"], "Moon");
   EXPECT_EQ(j["policy"], "weighted");
   EXPECT_EQ(j["resolution_power"], 1.5);
+  EXPECT_EQ(j["tier_ratio"], 6.0);
   ASSERT_EQ(j["datasets"].size(), 1U);
   const nlohmann::json& d = j["datasets"][0];
   EXPECT_EQ(d["name"], "patch");
@@ -107,7 +108,8 @@ TEST(CatalogueInfo, ABadCatalogueGivesTheLibrarysError) {
   } catch (const InvalidArgument& e) {
     EXPECT_EQ(std::string(e.what()),
               "compose::readCatalogueFile(): " + file.string() +
-                  ": key 'dataset' is [], expected one of policy, resolution_power, datasets");
+                  ": key 'dataset' is [], expected one of policy, resolution_power, tier_ratio, "
+                  "datasets");
   }
 }
 

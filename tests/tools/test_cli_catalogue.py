@@ -191,7 +191,7 @@ def test_explain_outside_every_dataset_has_one_empty_row(scene):
      "store, grid, name, role, priority, feather_m, mask_grid, feather_nodata_samples"),
     ("top.json", {"datasets": [{"store": "global.h5", "grid": "global"}], "rules": 1},
      "compose::readCatalogueFile(): {path}: key 'rules' is 1, expected one of policy, "
-     "resolution_power, datasets"),
+     "resolution_power, tier_ratio, datasets"),
     ("policy.json", {"policy": "best", "datasets": [{"store": "global.h5", "grid": "global"}]},
      "policy is 'best', expected weighted or finest"),
     ("empty.json", {"datasets": []}, "expected a non-empty array of datasets"),
@@ -267,7 +267,7 @@ def test_info_json_lists_the_datasets_as_h5py_reads_them(scene):
     j = json.loads(run("info", scene["moon"], "--json").stdout)
     assert j["path"] == str(scene["moon"])
     assert j["body"] == {"name": "Moon", "equatorial_radius": R, "polar_radius": R}
-    assert j["policy"] == "finest" and j["resolution_power"] == 2.0
+    assert j["policy"] == "finest" and j["resolution_power"] == 2.0 and j["tier_ratio"] == 4.0
     ds = j["datasets"]
     assert [d["name"] for d in ds] == ["global", "regional", 'site, the "DEM"']
     assert [d["kind"] for d in ds] == ["planet", "planet", "dem"]
@@ -298,7 +298,7 @@ def test_info_json_lists_the_datasets_as_h5py_reads_them(scene):
 def test_info_text_names_every_dataset(scene):
     out = run("info", scene["moon"]).stdout
     assert out.startswith(f"catalogue:      {scene['moon']}\n")
-    assert "rules:          policy finest, resolution power 2\n" in out
+    assert "rules:          policy finest, resolution power 2, tier ratio 4\n" in out
     assert "datasets:       3\n" in out
     assert "dataset 1 'regional' (id 2)" in out
     assert "feather 60000 m" in out

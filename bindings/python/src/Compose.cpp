@@ -265,6 +265,10 @@ void bindCompose(py::module_& m) {
           "resolution_power", [](const PyCatalogue& c) { return c.file.rules.resolutionPower; },
           "The file's p of the resolution term (ground spacing^-p)")
       .def_property_readonly(
+          "tier_ratio", [](const PyCatalogue& c) { return c.file.rules.tierRatio; },
+          "The file's tier ratio: under 'weighted', datasets blend by weight only with those "
+          "whose ground spacing is within this factor of their tier's finest")
+      .def_property_readonly(
           "datasets",
           [](const PyCatalogue& c) {
             py::list l;
@@ -288,16 +292,18 @@ void bindCompose(py::module_& m) {
       .def(
           "surface",
           [](const std::shared_ptr<PyCatalogue>& c, std::optional<std::string> policy,
-             std::optional<double> resolutionPower) {
+             std::optional<double> resolutionPower, std::optional<double> tierRatio) {
             compose::Rules rules = c->file.rules;
             if (policy) rules.policy = parseComposePolicy(*policy);
             if (resolutionPower) rules.resolutionPower = *resolutionPower;
+            if (tierRatio) rules.tierRatio = *tierRatio;
             return PySurface{c, compose::ComposedSurface(c->snapshot, rules)};
           },
           py::arg("policy") = py::none(), py::arg("resolution_power") = py::none(),
+          py::arg("tier_ratio") = py::none(),
           "The composed surface of the datasets: with the file's rules, or with policy "
-          "('weighted' or 'finest') and resolution_power given here (a negative or non-finite "
-          "power raises InvalidArgument)")
+          "('weighted' or 'finest'), resolution_power and tier_ratio (float('inf'): one tier "
+          "per priority) given here; values the rules refuse raise InvalidArgument")
       .def("__repr__", [](const PyCatalogue& c) {
         return "<regolith.Catalogue '" + c.path.string() +
                "': " + std::to_string(c.datasets.size()) + " datasets on " +
@@ -323,6 +329,8 @@ void bindCompose(py::module_& m) {
           [](const PySurface& s) { return compose::policyName(s.surface.rules().policy); })
       .def_property_readonly("resolution_power",
                              [](const PySurface& s) { return s.surface.rules().resolutionPower; })
+      .def_property_readonly("tier_ratio",
+                             [](const PySurface& s) { return s.surface.rules().tierRatio; })
       .def_property_readonly("catalogue", [](const PySurface& s) { return s.catalogue; })
       .def("heights", &heights, py::arg("lat"), py::arg("lon"), py::arg("status") = false,
            py::arg("contributors") = false, py::arg("out") = py::none(),
