@@ -4,6 +4,7 @@
 #include <regolith/store/ProjPlacement.hpp>
 #include <regolith/store/Store.hpp>
 
+#include "CatalogueInfo.hpp"
 #include "Commands.hpp"
 #include "OutputFolder.hpp"
 #include "ReportText.hpp"
@@ -436,16 +437,20 @@ void addInfoCommand(CLI::App& app) {
       "Describe a store: its grids with kind, size, spacing, extent, body, latitude type, "
       "placement, pyramid levels, patch size, nodata, scale/offset and tiling. Given a "
       "raster that is not HDF5, describe what an import would make of it: GDAL driver, "
-      "projection, corrections and the grid, without writing anything");
+      "projection, corrections and the grid, without writing anything. Given a catalogue file "
+      "(a JSON object, docs/composition.md), list its body, rules and datasets: name, kind, "
+      "placement, size, spacing, role, priority, feather, mask, height range and bounds");
   cmd->add_option("file", a->store,
                   "Store file (HDF5), or a raster GDAL reads (GeoTIFF, PDS3, PDS4, ISIS3, "
-                  ".hgt, ...): then what `regolith import` would make of it")
+                  ".hgt, ...): then what `regolith import` would make of it, or a catalogue "
+                  "file (JSON)")
       ->required();
   cmd->add_flag("--json", a->json, "Print JSON (keys documented in docs/cli.md)");
   cmd->footer(
       "Examples:\n"
       "  regolith info victoria.h5\n"
       "  regolith info dtm.cub --json\n"
+      "  regolith info moon.json\n"
       "  regolith info mars.h5 --json | python3 -c 'import json,sys; "
       "print(json.load(sys.stdin)[\"grids\"][0][\"rows\"])'");
   cmd->callback([a] {
@@ -458,6 +463,10 @@ void printInfo(const std::string& file, bool json, std::ostream& out) {
   std::error_code ec;
   // GDAL's virtual paths (/vsizip/, /vsicurl/, ...) are rasters: `import` accepts them.
   const bool virtualPath = file.rfind("/vsi", 0) == 0;
+  if (!virtualPath && isCatalogueFile(file)) {
+    printCatalogueInfo(file, json, out);
+    return;
+  }
   if (virtualPath || (std::filesystem::is_regular_file(file, ec) && !store::Store::isHdf5(file))) {
     printRaster(file, json, out);
     return;

@@ -38,6 +38,16 @@ std::vector<std::string_view> splitFields(std::string_view line) {
 
 }  // namespace
 
+void appendCsvNumber(std::string& out, double v) {
+  if (std::isnan(v)) {
+    out += "nan";
+    return;
+  }
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, r.ptr);
+}
+
 std::pair<const char*, const char*> coordNames(Coords c) {
   switch (c) {
     case Coords::LonLat: return {"lon", "lat"};

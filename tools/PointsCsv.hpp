@@ -26,6 +26,10 @@ struct Point {
 /// InvalidArgument("query: <where>: ...") naming the field.
 [[nodiscard]] Point parsePoint(std::string_view text, const std::string& where, Coords coords);
 
+/// Appends the shortest text that reads back as the same double (std::to_chars); "nan" for
+/// NaN. The numbers `query` prints.
+void appendCsvNumber(std::string& out, double v);
+
 /// Every point of CSV lines read from `in` (`source` names it in messages, e.g. "stdin"):
 /// blank lines and lines starting with '#' skipped, an optional first header line naming
 /// the columns in order. Throws InvalidArgument naming the line of the first bad one.

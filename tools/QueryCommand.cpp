@@ -3,6 +3,8 @@
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 
+#include "CatalogueInfo.hpp"
+#include "CatalogueQuery.hpp"
 #include "Commands.hpp"
 #include "OutputFolder.hpp"
 #include "PointsCsv.hpp"
@@ -11,31 +13,21 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <system_error>
 #include <vector>
 
 namespace regolith::tools {
 
 namespace {
-
-/// Shortest text that reads back as the same double; "nan" for NaN.
-void appendNumber(std::string& out, double v) {
-  if (std::isnan(v)) {
-    out += "nan";
-    return;
-  }
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  out.append(buf, r.ptr);
-}
 
 struct Result {
   std::vector<double> height;
@@ -173,7 +165,23 @@ struct Args {
   std::vector<std::string> points;
   std::size_t cacheMb = 256;
   std::size_t level = 0;
+  bool explain = false;
+  /// The options that choose a store's grid and how to read it, which a catalogue file
+  /// (whose datasets compose by its own rules) refuses when given.
+  std::vector<const CLI::Option*> storeOnly;
 };
+
+/// A catalogue file composes its datasets at lon,lat points: refuses the options that only a
+/// store's grid has (naming the first one given).
+void refuseStoreOnlyOptions(const Args& a) {
+  for (const CLI::Option* o : a.storeOnly) {
+    if (o->count() == 0) continue;
+    if (o->get_name() == "--coords" && a.coords == "lonlat") continue;
+    throw InvalidArgument("query: " + o->get_name() + " applies to a store's grid, but " + a.store +
+                          " is a catalogue file: its datasets are composed at lon,lat points "
+                          "(planetodetic latitude), each read at its finest level");
+  }
+}
 
 void runQuery(const Args& a) {
   static const std::map<std::string, Coords> kCoords{
@@ -187,6 +195,17 @@ void runQuery(const Args& a) {
   const topo::NormalFrame frame =
       a.frame == "body" ? topo::NormalFrame::BodyFixed : topo::NormalFrame::Grid;
 
+  // A catalogue file or a store: options that do not apply are refused before stdin is read.
+  const bool catalogue = isCatalogueFile(a.store);
+  if (catalogue) {
+    refuseStoreOnlyOptions(a);
+  } else if (a.explain) {
+    throw InvalidArgument(
+        "query: --explain shows how a catalogue file's datasets share a "
+        "composed height, but " +
+        a.store + " is a store (one grid, nothing to compose)");
+  }
+
   // All input is read and checked before anything is printed: a bad line gives an error
   // and no partial output.
   std::vector<Point> points;
@@ -198,6 +217,17 @@ void runQuery(const Args& a) {
     }
   }
 
+  if (catalogue) {
+    runCatalogueQuery({a.store, frame, a.explain, a.cacheMb}, points);
+    return;
+  }
+
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(a.store, ec) && !store::Store::isHdf5(a.store)) {
+    throw InvalidArgument("query: " + a.store +
+                          " is neither a store (no HDF5 signature) nor a catalogue file (its "
+                          "text does not start with '{', a JSON object)");
+  }
   auto store = std::make_shared<const store::Store>(store::Store::open(a.store));
   const std::string gridName = chooseGrid(*store, a.grid, "query");
   const store::GridInfo& info = store->grid(gridName);
@@ -233,14 +263,14 @@ void runQuery(const Args& a) {
       const bool valid = res.status[i] == topo::QueryStatus::Ok;
       const bool normalValid = valid && res.normalStatus[i] == topo::QueryStatus::Ok;
       const double nan = std::nan("");
-      appendNumber(out, batch[i].a);
+      appendCsvNumber(out, batch[i].a);
       out += ',';
-      appendNumber(out, batch[i].b);
+      appendCsvNumber(out, batch[i].b);
       out += ',';
-      appendNumber(out, valid ? res.height[i] : nan);
+      appendCsvNumber(out, valid ? res.height[i] : nan);
       for (int k = 0; k < 3; ++k) {
         out += ',';
-        appendNumber(out, normalValid ? res.normal[i][k] : nan);
+        appendCsvNumber(out, normalValid ? res.normal[i][k] : nan);
       }
       out += valid ? ",1," : ",0,";
       out += normalValid ? "1," : "0,";
@@ -269,35 +299,57 @@ void addQueryCommand(CLI::App& app) {
       "such point never fails the others). Points come as arguments "
       "'a,b' (if one starts with '-.', put -- before the first point) or, with none given, as CSV "
       "lines on stdin (an optional header line naming the columns; blank lines and lines "
-      "starting with # are skipped)");
+      "starting with # are skipped). Given a catalogue file (a JSON object, "
+      "docs/composition.md) instead of a store, the composed surface of its datasets: points "
+      "are lon,lat with planetodetic latitude, and a last column, contributors, counts the "
+      "datasets that cover the point (with --explain: one row per point and dataset with "
+      "its own height, coverage, quality and share)");
   addStoreGridOptions(*cmd, a->store, a->grid, a->cacheMb, "query");
+  cmd->get_option("store")->description(
+      "Store file (HDF5), or a catalogue file (JSON: datasets of store grids composed by one "
+      "rule)");
   cmd->add_option("points", a->points, "Points 'a,b' in the --coords order");
-  cmd->add_option("--interp", a->interp, "Interpolation kernel")
-      ->check(CLI::IsMember({"nearest", "bilinear", "bicubic"}))
-      ->capture_default_str();
-  cmd->add_option("--coords", a->coords,
-                  "Input coordinates: lonlat = 'lon,lat' in degrees (east longitude; "
-                  "latitude as the grid declares it, planetodetic for DEMs); grid = "
-                  "'row,col' fractional sample indices (row 0 north, integers at sample "
-                  "centres); xy = 'x,y' grid coordinates (metres for a DEM, lon/lat degrees "
-                  "for a planet)")
-      ->check(CLI::IsMember({"lonlat", "grid", "xy"}))
-      ->capture_default_str();
+  const CLI::Option* interp = cmd->add_option("--interp", a->interp, "Interpolation kernel")
+                                  ->check(CLI::IsMember({"nearest", "bilinear", "bicubic"}))
+                                  ->capture_default_str();
+  const CLI::Option* coords =
+      cmd->add_option(
+             "--coords", a->coords,
+             "Input coordinates: lonlat = 'lon,lat' in degrees (east longitude; "
+             "latitude as the grid declares it, planetodetic for DEMs); grid = "
+             "'row,col' fractional sample indices (row 0 north, integers at sample "
+             "centres); xy = 'x,y' grid coordinates (metres for a DEM, lon/lat degrees "
+             "for a planet). A catalogue file takes lonlat only, with planetodetic latitude")
+          ->check(CLI::IsMember({"lonlat", "grid", "xy"}))
+          ->capture_default_str();
   cmd->add_option("--frame", a->frame,
-                  "Frame of the normal: grid (a DEM's x, y, up axes; a planet's local "
-                  "east, north, up) or body (body-fixed Cartesian)")
+                  "Frame of the normal: grid (a DEM's x, y, up axes; a planet's, and a "
+                  "catalogue's, local east, north, up) or body (body-fixed Cartesian)")
       ->check(CLI::IsMember({"grid", "body"}))
       ->capture_default_str();
-  cmd->add_option("--level", a->level, "Pyramid level to query (grid coordinates then index it)")
-      ->capture_default_str();
+  const CLI::Option* level =
+      cmd->add_option("--level", a->level,
+                      "Pyramid level to query (grid coordinates then index it); stores only")
+          ->capture_default_str();
+  cmd->add_flag("--explain", a->explain,
+                "Catalogue files: instead of heights and normals, print each point's shares "
+                "of the composed height, one row per point and contributing dataset: lon, lat, "
+                "point (1-based input order), height (composed), valid, reason, "
+                "contributors, dataset (its index in the file), name, dataset_height, "
+                "coverage, quality, share (the shares of a point sum to 1); a point nothing "
+                "covers has one row with an empty dataset");
+  a->storeOnly = {cmd->get_option("--grid"), level, interp, coords};
   cmd->footer(
       "Examples:\n"
       "  regolith query mars.h5 137.4,-4.6 -5.5,-2.05\n"
       "  regolith query mars.h5 -- -.5,10 20,30\n"
       "  regolith query victoria.h5 --coords xy --interp bicubic 0,0 120.5,-40\n"
       "  printf 'lon,lat\\n-5.5,-2.05\\n' | regolith query victoria.h5 --frame body\n"
+      "  regolith query moon.json 20,10 -45.5,-89.2\n"
+      "  regolith query moon.json --explain 20,10\n"
       "Exit status: 0 on success; non-zero, with 'regolith: error: ...' on stderr and nothing "
-      "on stdout, for malformed input (the message names the argument or stdin line).");
+      "on stdout, for malformed input (the message names the argument or stdin line) and for "
+      "a bad catalogue file (the message names the file, the dataset and the key).");
   cmd->callback([a] {
     refuseStdoutOverInput("query", a->store);
     runQuery(*a);

@@ -13,7 +13,9 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
+#include <vector>
 
 namespace regolith::gl {
 struct RgbaImage;
@@ -51,6 +53,17 @@ class DoubleArray : public py::array_t<double, py::array::c_style | py::array::f
 /// Throws InvalidArgument unless `a`'s dtype holds real numbers (numpy kinds i, u, f).
 void requireRealDtype(const py::array& a);
 
+/// Checks that a and b (named na, nb in the message of `op`) have one shape; returns it.
+std::vector<py::ssize_t> commonShape(const char* op, const char* na, const DoubleArray& a,
+                                     const char* nb, const DoubleArray& b);
+/// The array's values as one span (DoubleArray is C-contiguous).
+[[nodiscard]] std::span<const double> spanOf(const DoubleArray& a);
+/// `out` if given (a writable, C-contiguous float64 array of `shape`: results are written
+/// into it, so repeated batches allocate nothing), else a new array.
+[[nodiscard]] py::array_t<double> outputArray(const char* op, const char* name,
+                                              const py::object& out,
+                                              const std::vector<py::ssize_t>& shape);
+
 [[nodiscard]] topo::Interpolation parseInterpolation(const std::string& name);
 [[nodiscard]] topo::NormalFrame parseFrame(const std::string& name);
 [[nodiscard]] store::CachePolicy parsePolicy(const std::string& name);
@@ -64,6 +77,9 @@ void requireRealDtype(const py::array& a);
 void bindErrors(py::module_& m);
 void bindStore(py::module_& m);
 void bindQueries(py::module_& m);
+/// Catalogue files and composed surfaces (compose/): Catalogue, read_catalogue(),
+/// ComposedSurface.
+void bindCompose(py::module_& m);
 /// Adds render() to the Dem and Planet classes.
 void bindRender(py::class_<DemTerrain, std::shared_ptr<DemTerrain>>& dem,
                 py::class_<PlanetTerrain, std::shared_ptr<PlanetTerrain>>& planet);

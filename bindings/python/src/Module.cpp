@@ -9,6 +9,7 @@ PYBIND11_MODULE(regolith, m) {
   bindErrors(m);
   bindStore(m);
   bindQueries(m);
+  bindCompose(m);
   bindRover(m);
   bindScene(m);
 }

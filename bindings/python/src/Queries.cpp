@@ -30,11 +30,8 @@ void requireRealDtype(const py::array& a) {
                         ", expected real numbers (an integer or floating-point dtype)");
 }
 
-namespace {
-
 static_assert(sizeof(glm::dvec3) == 3 * sizeof(double), "glm::dvec3 must be three packed doubles");
 
-/// Checks that a and b have one shape; returns it.
 std::vector<py::ssize_t> commonShape(const char* op, const char* na, const DoubleArray& a,
                                      const char* nb, const DoubleArray& b) {
   std::vector<py::ssize_t> shape(a.shape(), a.shape() + a.ndim());
@@ -46,12 +43,10 @@ std::vector<py::ssize_t> commonShape(const char* op, const char* na, const Doubl
   return shape;
 }
 
-std::span<const double> in(const DoubleArray& a) {
+std::span<const double> spanOf(const DoubleArray& a) {
   return {a.data(), static_cast<std::size_t>(a.size())};
 }
 
-/// `out` if given (a writable, C-contiguous float64 array of `shape`: results are written
-/// into it, so repeated batches allocate nothing), else a new array.
 py::array_t<double> outputArray(const char* op, const char* name, const py::object& out,
                                 const std::vector<py::ssize_t>& shape) {
   if (out.is_none()) return py::array_t<double>(shape);
@@ -67,6 +62,8 @@ py::array_t<double> outputArray(const char* op, const char* name, const py::obje
   return a;
 }
 
+namespace {
+
 /// Heights (and statuses) for a Dem or a Planet: fn(xs, ys, out, status).
 template <class Fn>
 py::object batchHeights(const char* op, const char* na, const DoubleArray& a, const char* nb,
@@ -77,7 +74,7 @@ py::object batchHeights(const char* op, const char* na, const DoubleArray& a, co
   std::vector<topo::QueryStatus> status(withStatus ? n : 0);
   {
     const py::gil_scoped_release release;
-    fn(in(a), in(b), std::span<double>(out.mutable_data(), n), std::span(status));
+    fn(spanOf(a), spanOf(b), std::span<double>(out.mutable_data(), n), std::span(status));
   }
   if (!withStatus) return out;
   py::array_t<std::uint8_t> st(shape);
@@ -112,7 +109,7 @@ py::tuple batchSurfaces(const char* op, const char* na, const DoubleArray& a, co
   std::vector<topo::QueryStatus> normalStatus(withNormalStatus ? n : 0);
   {
     const py::gil_scoped_release release;
-    fn(in(a), in(b), std::span<double>(heights.mutable_data(), n),
+    fn(spanOf(a), spanOf(b), std::span<double>(heights.mutable_data(), n),
        std::span<glm::dvec3>(reinterpret_cast<glm::dvec3*>(normals.mutable_data()), n),
        std::span(status), std::span(normalStatus));
   }
