@@ -8,6 +8,7 @@
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 
+#include "CatalogueInfo.hpp"
 #include "Commands.hpp"
 #include "FiniteRange.hpp"
 #include "OutputFolder.hpp"
@@ -67,16 +68,6 @@ struct Terrain {
   std::shared_ptr<store::PatchCache> cache;
   std::shared_ptr<const void> keepAlive;  // pagers, stores, catalogue
 };
-
-/// True if `path` holds a catalogue file (JSON: its first non-blank byte is '{'), not a store.
-bool isCatalogueFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  char c = 0;
-  while (in.get(c)) {
-    if (c != ' ' && c != '\t' && c != '\n' && c != '\r') return c == '{';
-  }
-  return false;
-}
 
 /// Height at grid point (a, b) from the finest level that has a sample there, or nullopt.
 std::optional<double> surfaceHeight(const store::Pager& pager, const std::string& grid,

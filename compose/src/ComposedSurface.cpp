@@ -239,7 +239,21 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
   }
   out.height = acc;
   out.status = QueryStatus::Ok;
-  out.contributors = static_cast<std::uint32_t>(s.members.size());
+  // Contributors: members with a non-zero share (a tier under one of full coverage has none).
+  {
+    std::uint32_t n = 0;
+    double above = 1.0;
+    for (std::size_t t = tiers.size(); t-- > 0;) {
+      if (above > 0.0) {
+        for (std::size_t i = tiers[t].first; i < tiers[t].second; ++i) {
+          const Member& m = s.members[i];
+          n += m.c.coverage * m.c.quality * m.resolution > 0.0 && alphas[t] > 0.0 ? 1U : 0U;
+        }
+      }
+      above *= 1.0 - alphas[t];
+    }
+    out.contributors = n;
+  }
   if (wantNormal) {
     if (normalOk) {
       // In the point's east-north-up frame; surface() turns it body-fixed if asked.
@@ -301,9 +315,11 @@ std::vector<Share> ComposedSurface::weights(double latDeg, double lonDeg) const 
 }
 
 void ComposedSurface::heights(std::span<const double> latsDeg, std::span<const double> lonsDeg,
-                              std::span<double> out, std::span<topo::QueryStatus> status) const {
+                              std::span<double> out, std::span<topo::QueryStatus> status,
+                              std::span<std::uint32_t> contributors) const {
   const std::size_t n = latsDeg.size();
-  if (lonsDeg.size() != n || out.size() != n || (!status.empty() && status.size() != n)) {
+  if (lonsDeg.size() != n || out.size() != n || (!status.empty() && status.size() != n) ||
+      (!contributors.empty() && contributors.size() != n)) {
     throw InvalidArgument(core::format({.operation = "compose::ComposedSurface::heights()",
                                         .field = "array lengths",
                                         .value = std::to_string(n) + " latitudes, " +
@@ -316,17 +332,20 @@ void ComposedSurface::heights(std::span<const double> latsDeg, std::span<const d
     if (pointOk(latsDeg[i], lonsDeg[i])) c = compose(latsDeg[i], lonsDeg[i], 0.0, false, nullptr);
     out[i] = c.height;
     if (!status.empty()) status[i] = c.status;
+    if (!contributors.empty()) contributors[i] = c.contributors;
   }
 }
 
 void ComposedSurface::surfaces(std::span<const double> latsDeg, std::span<const double> lonsDeg,
                                std::span<double> outHeights, std::span<glm::dvec3> outNormals,
                                std::span<topo::QueryStatus> status, topo::NormalFrame frame,
-                               std::span<topo::QueryStatus> normalStatus) const {
+                               std::span<topo::QueryStatus> normalStatus,
+                               std::span<std::uint32_t> contributors) const {
   const std::size_t n = latsDeg.size();
   if (lonsDeg.size() != n || outHeights.size() != n || outNormals.size() != n ||
       (!status.empty() && status.size() != n) ||
-      (!normalStatus.empty() && normalStatus.size() != n)) {
+      (!normalStatus.empty() && normalStatus.size() != n) ||
+      (!contributors.empty() && contributors.size() != n)) {
     throw InvalidArgument(core::format({.operation = "compose::ComposedSurface::surfaces()",
                                         .field = "array lengths",
                                         .value = std::to_string(n) + " latitudes, " +
@@ -342,6 +361,7 @@ void ComposedSurface::surfaces(std::span<const double> latsDeg, std::span<const 
     outNormals[i] = c.normal;
     if (!status.empty()) status[i] = c.status;
     if (!normalStatus.empty()) normalStatus[i] = c.normalStatus;
+    if (!contributors.empty()) contributors[i] = c.contributors;
   }
 }
 

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -69,8 +70,7 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
   if (!in) {
     throw IoError(core::format({.operation = "compose::readCatalogueFile()",
                                 .file = path.string(),
-                                .field = "file",
-                                .value = "cannot be opened",
+                                .field = "the file cannot be opened",
                                 .expected = "a readable catalogue file (JSON)"}));
   }
   std::ostringstream buf;
@@ -172,6 +172,15 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
     datasets.push_back(datasetFromStore(*pager, grid, std::move(o)));
   }
   out.catalogue = std::make_shared<Catalogue>(datasets.front()->body());
+  const topo::Body& body = datasets.front()->body();
+  for (std::size_t i = 1; i < datasets.size(); ++i) {
+    const topo::Body& b = datasets[i]->body();
+    if (std::abs(b.equatorialRadius() - body.equatorialRadius()) > 1e-3 ||
+        std::abs(b.polarRadius() - body.polarRadius()) > 1e-3) {
+      badFile(path, "datasets[" + std::to_string(i) + "] body", b.name() + " (" + core::number(b.equatorialRadius()) + " / " + core::number(b.polarRadius()) + " m)",
+              "datasets[0]'s body " + body.name() + " (" + core::number(body.equatorialRadius()) + " / " + core::number(body.polarRadius()) + " m): one catalogue is one body");
+    }
+  }
   out.ids = out.catalogue->add(datasets);
   for (auto& [p, pager] : pagers) out.pagers.push_back(pager);
   return out;

@@ -8,6 +8,7 @@
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/compose/ComposedPyramid.hpp>
 #include <regolith/gl/RenderTarget.hpp>
+#include <regolith/topo/Projection.hpp>
 
 #include "compose/ComposeFixtures.hpp"
 #include "gl/GlContext.hpp"
@@ -120,6 +121,98 @@ TEST(ComposedClipmapGLTest, GpuHeightsAreTheCpuCompositionAcrossABorderAndItsFea
   EXPECT_GT(feather, 1000);
   EXPECT_GT(outside, 1000);
   EXPECT_LE(worst, 1e-3);
+}
+
+TEST(ComposedClipmapGLTest, PolarCapBlendIsDrawnAsTheCpuComposesIt) {
+  // The north pole of a Mars sphere: a 1° global grid (poor at the pole) and a 50 m polar
+  // stereographic cap (±4 km) with detail the global grid lacks, feathered over 1.5 km, drawn
+  // on drawingFrame()'s polar grid. At every pixel near the pole the GPU's height must lie
+  // between the two triangulations of the CPU-composed samples around it.
+  test::glContext();
+  const topo::Body mars = topo::Body::marsSphere();
+  Catalogue cat(mars);
+  cat.add(Dataset::planet(testing::globalPlanet(mars, 1.0,
+                                                [](double lat, double lon) {
+                                                  return 300.0 * std::cos(lat * kDeg) *
+                                                         std::sin(3.0 * lon * kDeg);
+                                                }),
+                          named("global")));
+  const auto ps = topo::PolarStereographic::withScaleFactor(
+      mars, topo::PolarStereographic::Pole::North, 1.0, 0.0);
+  cat.add(Dataset::dem(demPyramid(50.0, 161, 161,
+                                  [](double x, double y) {
+                                    return 40.0 * std::sin(x / 300.0) * std::cos(y / 400.0) + 20.0;
+                                  }),
+                       topo::Placement(mars, ps), named("cap", 1500.0)));
+  const auto surface = std::make_shared<const ComposedSurface>(cat.snapshot());
+  const DrawingFrame frame = drawingFrame(surface, 89.9, 50.0);
+  ASSERT_TRUE(frame.polar);
+  const topo::Placement& placement = *frame.placement;
+  const topo::TopoGrid& grid = frame.pyramid.levels[0].grid;
+  const auto& level0 = dynamic_cast<const ComposedSamples&>(*frame.pyramid.levels[0].source);
+  const glm::dmat3 enu = mars.enuFrame(90.0, 0.0);
+  clod::ClipmapOptions options;
+  options.lightDirection = glm::vec3(glm::normalize(0.7 * enu[0] + 0.4 * enu[1] + 0.6 * enu[2]));
+  clod::ClipmapTerrain terrain(
+      std::make_shared<const clod::HeightPyramid>(frame.pyramid.levels, placement), options);
+  clod::Camera cam;
+  // Focus 3 km from the pole along x, so level 0's window (±127 samples, ±6.3 km) holds the
+  // cap's interior, its feather and the global grid beyond it.
+  cam.target = placement.toBodyFixed(3e3, 0.0, surface->height(89.95, 90.0).height);
+  cam.position = placement.toBodyFixed(3e3, -6e3, 7e3);
+  cam.up = enu[2];
+  cam.fovYDegrees = 50.0;
+  cam.width = cam.height = 256;
+  cam.near = 2.0;
+  terrain.setFocus(cam.target);
+  terrain.finishLoading();
+  gl::RenderTarget target(cam.width, cam.height);
+  target.clear({1.0F, 0.0F, 1.0F, 1.0F});
+  terrain.draw(cam);
+  const gl::DepthImage depth = target.readDepth();
+  test::savePng("composed_clipmap_pole", target.readColor());
+  const glm::dvec3 f = cam.forward();
+  const glm::dvec2 focus = grid.fractionalIndex(3e3, 0.0);
+  int checked = 0, cap = 0, feather = 0, global = 0;
+  double worst = 0.0;
+  for (int y = 0; y < cam.height; ++y) {
+    for (int x = 0; x < cam.width; ++x) {
+      const float z = depth.at(x, y);
+      if (z <= 0.0F) continue;
+      const glm::dvec3 ray = cam.ray(x + 0.5, y + 0.5);
+      const glm::dvec3 p = cam.position + (cam.viewDistance(z) / glm::dot(ray, f)) * ray;
+      const glm::dvec3 xyh = placement.fromBodyFixed(p);
+      const glm::dvec2 uv = grid.fractionalIndex(xyh.x, xyh.y);
+      if (std::abs(uv.x - focus.x) > 100.0 || std::abs(uv.y - focus.y) > 100.0) continue;
+      const auto c = static_cast<std::size_t>(uv.x), rr = static_cast<std::size_t>(uv.y);
+      const double tu = uv.x - static_cast<double>(c), tv = uv.y - static_cast<double>(rr);
+      const double h00 = level0.height(rr, c), h01 = level0.height(rr, c + 1);
+      const double h10 = level0.height(rr + 1, c), h11 = level0.height(rr + 1, c + 1);
+      const double a = tu >= tv ? h00 + tu * (h01 - h00) + tv * (h11 - h01)
+                                : h00 + tv * (h10 - h00) + tu * (h11 - h10);
+      const double b = tu + tv <= 1.0 ? h00 + tu * (h01 - h00) + tv * (h10 - h00)
+                                      : h11 + (1.0 - tu) * (h10 - h11) + (1.0 - tv) * (h01 - h11);
+      // Flat facets between samples 50 m apart sag below the body's curve by 50²/8R.
+      const double sag = 50.0 * 50.0 / (8.0 * mars.equatorialRadius());
+      const double err =
+          std::max({0.0, std::min(a, b) - sag - xyh.z, xyh.z - std::max(a, b) - sag});
+      // Relative to the view distance: the GPU's positions and depths are float32, and this
+      // view is 9 km deep (the border test's, 150 m, keeps its errors under 1e-3 m).
+      worst = std::max(worst, err / glm::length(p - cam.position));
+      ++checked;
+      const double d = std::max(std::abs(xyh.x), std::abs(xyh.y));  // cap edge at 4025 m
+      (d < 4025.0 - 1500.0 ? cap : d < 4025.0 ? feather : global)++;
+    }
+  }
+  std::printf(
+      "pole: checked %d pixels (%d cap, %d feather, %d global only): worst %.2e of the view "
+      "distance\n",
+      checked, cap, feather, global, worst);
+  EXPECT_GE(checked, 10000);
+  EXPECT_GT(cap, 1000);
+  EXPECT_GT(feather, 1000);
+  EXPECT_GT(global, 1000);
+  EXPECT_LE(worst, 1e-6);  // about 8 float32 ulps
 }
 
 }  // namespace

@@ -143,8 +143,8 @@ py::array_t<std::uint32_t> countArray(const std::vector<py::ssize_t>& shape,
   return a;
 }
 
-/// ComposedSurface.heights(): the library's batch, or with contributors each point's
-/// height and its number of shares.
+/// ComposedSurface.heights(): the library's batch (with each point's number of datasets with
+/// a share of its height, if asked).
 py::object heights(const PySurface& s, const DoubleArray& lat, const DoubleArray& lon,
                    bool withStatus, bool withContributors, const py::object& outArg) {
   const char* op = "ComposedSurface.heights()";
@@ -156,23 +156,7 @@ py::object heights(const PySurface& s, const DoubleArray& lat, const DoubleArray
   {
     const py::gil_scoped_release release;
     const std::span<double> h(out.mutable_data(), n);
-    if (!withContributors) {
-      s.surface.heights(spanOf(lat), spanOf(lon), h, status);
-    } else {
-      const double* la = lat.data();
-      const double* lo = lon.data();
-      for (std::size_t i = 0; i < n; ++i) {
-        if (!pointOk(la[i], lo[i])) {
-          h[i] = std::nan("");
-          status[i] = topo::QueryStatus::OutsideGrid;
-          continue;
-        }
-        const topo::HeightSample hs = s.surface.height(la[i], lo[i]);
-        h[i] = hs.height;
-        status[i] = hs.status;
-        contributors[i] = static_cast<std::uint32_t>(s.surface.weights(la[i], lo[i]).size());
-      }
-    }
+    s.surface.heights(spanOf(lat), spanOf(lon), h, status, contributors);
   }
   if (!withStatus && !withContributors) return out;
   if (withStatus && withContributors) {

@@ -50,7 +50,7 @@ struct ComposedSample {
   glm::dvec3 normal{std::numeric_limits<double>::quiet_NaN()};
   topo::QueryStatus status = topo::QueryStatus::OutsideGrid;
   topo::QueryStatus normalStatus = topo::QueryStatus::OutsideGrid;
-  std::uint32_t contributors = 0;  ///< datasets with a non-zero weight
+  std::uint32_t contributors = 0;  ///< datasets with a non-zero share of the height
   [[nodiscard]] bool valid() const noexcept { return status == topo::QueryStatus::Ok; }
 };
 
@@ -90,17 +90,19 @@ class ComposedSurface {
   /// clipmap level of that spacing shows; metres ≤ 0 is level 0 (height()).
   [[nodiscard]] topo::HeightSample heightAt(double latDeg, double lonDeg, double metres) const;
 
-  /// Batch heights: spans of one length (status may be empty). Each point has its own
-  /// status: a NaN or out-of-range coordinate gives OutsideGrid for that point, never a
-  /// failed batch. Throws InvalidArgument only for spans of different lengths.
+  /// Batch heights: spans of one length (status and contributors may be empty). Each point
+  /// has its own status: a NaN or out-of-range coordinate gives OutsideGrid for that point,
+  /// never a failed batch. Throws InvalidArgument only for spans of different lengths.
   void heights(std::span<const double> latsDeg, std::span<const double> lonsDeg,
-               std::span<double> out, std::span<topo::QueryStatus> status) const;
-  /// Batch heights and normals (normalStatus may be empty).
+               std::span<double> out, std::span<topo::QueryStatus> status,
+               std::span<std::uint32_t> contributors = {}) const;
+  /// Batch heights and normals (normalStatus and contributors may be empty).
   void surfaces(std::span<const double> latsDeg, std::span<const double> lonsDeg,
                 std::span<double> outHeights, std::span<glm::dvec3> outNormals,
                 std::span<topo::QueryStatus> status,
                 topo::NormalFrame frame = topo::NormalFrame::Grid,
-                std::span<topo::QueryStatus> normalStatus = {}) const;
+                std::span<topo::QueryStatus> normalStatus = {},
+                std::span<std::uint32_t> contributors = {}) const;
 
   /// Each contributing dataset's share of the height at a point (empty where nothing
   /// covers it): the rule written out, for tests, `regolith query --explain` and Python.
