@@ -115,17 +115,19 @@ double PolarCapGenerator::Impl::deposit(const glm::dvec3& u) const noexcept {
                           smoothstep((reach - theta) / (0.25 * reach));
   if (envelope == 0.0) return 0.0;
   // Spiral troughs: phase 2π·(distance from the pole)/spacing + arms·azimuth, turning
-  // counter-clockwise outwards seen from above either pole, with a seeded wander of about a
-  // radian at 150 km scales.
+  // counter-clockwise outwards seen from above either pole, with a seeded wander of a
+  // radian or two at 200 km scales and a depth that varies along them (40–100 %).
   const double azimuth = std::atan2(u.y, u.x);
-  const double distance = theta * body.equatorialRadius();
-  const double wander =
-      1.5 * gen::fbm(u * (body.equatorialRadius() / 150000.0), 3, 0.5, troughSeed);
+  const double radius = body.equatorialRadius();
+  const double distance = theta * radius;
+  const double wander = 2.5 * gen::fbm(u * (radius / 200000.0), 3, 0.5, troughSeed);
+  const double strength =
+      std::clamp(0.7 + 0.6 * gen::fbm(u * (radius / 250000.0), 3, 0.5, troughSeed + 1), 0.4, 1.0);
   const double phase = 2.0 * kPi * distance / kTroughSpacing +
                        sign * static_cast<double>(kTroughArms) * azimuth + wander;
   const double c = std::max(0.0, std::cos(phase));
   const double c2 = c * c;
-  return -options.troughDepth * envelope * c2 * c2 * c2;
+  return -options.troughDepth * envelope * strength * c2 * c2 * c2;
 }
 
 PolarCapGenerator::PolarCapGenerator(PolarCapOptions options)

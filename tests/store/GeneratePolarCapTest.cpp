@@ -320,7 +320,7 @@ TEST(GeneratePolarCap, DepositsAreSpiralTroughsWithinTheirReach) {
   // kTroughArms times per turn.
   const double colat = 6.0 * kDeg;
   int crossings = 0;
-  bool below = b.depositHeight(unitOf(90.0 - 6.0, -180.0)) < -250.0;
+  bool below = b.depositHeight(unitOf(90.0 - 6.0, -180.0)) < -100.0;
   for (int k = 1; k <= 3600; ++k) {
     const double lon = -180.0 + 0.1 * k;
     const bool now =

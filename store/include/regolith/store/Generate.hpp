@@ -258,7 +258,10 @@ class PolarCapGenerator {
   [[nodiscard]] double depositReachDeg() const noexcept;
   /// The deposits' height at a body-fixed unit vector, m: in [−troughDepth, 0], 0 beyond
   /// depositReachDeg() from the pole, within 10 % of it (no pinch at the pole) and without
-  /// troughs.
+  /// troughs. Troughs follow kTroughArms interleaved spirals kTroughSpacing apart along a
+  /// radius, wandering and varying in depth (40–100 %) with the seed, cos⁶-shaped across
+  /// (about a fifth of the spacing wide), faded in from 10 % to 25 % of the reach and out
+  /// over its last quarter.
   [[nodiscard]] double depositHeight(const glm::dvec3& unit) const noexcept;
   [[nodiscard]] std::shared_ptr<const topo::SampleSource> samples() const;
   /// Writes the store crash-safely (writeStore). Throws StoreError or InvalidArgument.
