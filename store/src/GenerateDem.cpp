@@ -4,7 +4,9 @@
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <utility>
 #include <vector>
