@@ -181,8 +181,9 @@ class MarsPlanetGenerator {
   /// points row-major and `out` receives as many heights (a caller bug otherwise). Points
   /// that are neighbours in the grid should be near each other on the body, which keeps the
   /// crater search local; any set of points gives the same heights. At the unit vector
-  /// (cos φ cos λ, cos φ sin λ, sin φ), with λ in [−180°, 180°), it equals height(φ, λ) to
-  /// the bit. Runs on options().write.executor with options().threads threads, as write().
+  /// (cos φ cos λ, cos φ sin λ, sin φ), with λ in [−180°, 180°) and both in radians as
+  /// degrees · (π/180), it equals height(φ, λ) to the bit. Runs on options().write.executor with
+  /// options().threads threads, as write().
   void heightsAt(std::span<const glm::dvec3> units, std::size_t cols, std::span<double> out) const;
   /// The samples, computed window by window on demand.
   [[nodiscard]] std::shared_ptr<const topo::SampleSource> samples() const;
