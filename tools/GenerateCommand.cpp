@@ -185,7 +185,6 @@ void addCap(CLI::App& generate) {
     o.gridName = a->w.grid;
     TerminalProgress progress = TerminalProgress::forStderr();
     o.write = writeOptions(a->w, progress);
-    o.write.statistics = true;  // height range for catalogues (docs/store-format.md)
     const store::PolarCapGenerator g(o);
     const CancelOnSignal cancel;
     g.write(a->w.out);
@@ -245,7 +244,6 @@ void addStrip(CLI::App& generate) {
     o.gridName = a->w.grid;
     TerminalProgress progress = TerminalProgress::forStderr();
     o.write = writeOptions(a->w, progress);
-    o.write.statistics = true;  // height range for catalogues (docs/store-format.md)
     const store::StripGenerator g(o);
     const CancelOnSignal cancel;
     g.write(a->w.out);

@@ -153,7 +153,9 @@ std::shared_ptr<const topo::SampleSource> PolarCapGenerator::samples() const {
 
 void PolarCapGenerator::write(const std::filesystem::path& path) const {
   const GridSource grid{gridInfo(), samples()};
-  writeStore(path, std::span(&grid, 1), impl_->options.write);
+  WriteOptions w = impl_->options.write;
+  w.statistics = true;  // the height range a catalogue's bounds need
+  writeStore(path, std::span(&grid, 1), w);
 }
 
 }  // namespace regolith::store

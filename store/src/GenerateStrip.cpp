@@ -200,7 +200,9 @@ std::shared_ptr<const topo::SampleSource> StripGenerator::samples() const {
 
 void StripGenerator::write(const std::filesystem::path& path) const {
   const GridSource grid{gridInfo(), samples()};
-  writeStore(path, std::span(&grid, 1), impl_->options.write);
+  WriteOptions w = impl_->options.write;
+  w.statistics = true;  // the height range a catalogue's bounds need
+  writeStore(path, std::span(&grid, 1), w);
 }
 
 }  // namespace regolith::store

@@ -213,6 +213,10 @@ TEST(GeneratePolarCap, EverySampleIsThePlanetAtTheCapResolution) {
     }
   }
   EXPECT_EQ(differ, 0U);
+  ASSERT_TRUE(info.statistics.has_value());
+  EXPECT_EQ(info.statistics->validSamples, v.size());
+  EXPECT_EQ(info.statistics->min, static_cast<double>(*std::min_element(v.begin(), v.end())));
+  EXPECT_EQ(info.statistics->max, static_cast<double>(*std::max_element(v.begin(), v.end())));
 }
 
 TEST(GeneratePolarCap, AgreesWithACoarsePlanetWithinTheDetailItOmits) {

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <numbers>
 #include <set>
 #include <string>
@@ -246,6 +247,18 @@ TEST(GenerateStrip, HeightsAreThePlanetAtTheStripResolutionWithinTheRaggedEdges)
   }
   EXPECT_EQ(wrong, 0U);
   EXPECT_GT(valid, v.size() / 2);
+  // Height statistics are stored (a catalogue's height range) and are those of the samples.
+  ASSERT_TRUE(info.statistics.has_value());
+  EXPECT_EQ(info.statistics->validSamples, valid);
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  for (const float h : v) {
+    if (!std::isnan(h)) {
+      lo = std::min(lo, h);
+      hi = std::max(hi, h);
+    }
+  }
+  EXPECT_EQ(info.statistics->min, static_cast<double>(lo));
+  EXPECT_EQ(info.statistics->max, static_cast<double>(hi));
 }
 
 TEST(GenerateStrip, RaggedEdgesMaskTheBorderOnly) {

@@ -265,7 +265,8 @@ class PolarCapGenerator {
   /// over its last quarter.
   [[nodiscard]] double depositHeight(const glm::dvec3& unit) const noexcept;
   [[nodiscard]] std::shared_ptr<const topo::SampleSource> samples() const;
-  /// Writes the store crash-safely (writeStore). Throws StoreError or InvalidArgument.
+  /// Writes the store crash-safely (writeStore), with height statistics (format 1.3) whatever
+  /// options().write says. Throws StoreError or InvalidArgument.
   void write(const std::filesystem::path& path) const;
 
  private:
@@ -329,7 +330,8 @@ class StripGenerator {
   /// sample centres), never where |y| > W/2 or |x| > L/2.
   [[nodiscard]] bool covers(double x, double y) const noexcept;
   [[nodiscard]] std::shared_ptr<const topo::SampleSource> samples() const;
-  /// Writes the store crash-safely (writeStore). Throws StoreError or InvalidArgument.
+  /// Writes the store crash-safely (writeStore), with height statistics (format 1.3) whatever
+  /// options().write says. Throws StoreError or InvalidArgument.
   void write(const std::filesystem::path& path) const;
 
  private:
