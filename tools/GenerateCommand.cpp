@@ -1,4 +1,5 @@
-// `regolith generate mars-planet|victoria`: procedural stores (store/Generate.hpp).
+// `regolith generate mars-planet|mars-cap|mars-strip|victoria`: procedural stores
+// (store/Generate.hpp).
 #include <regolith/core/Error.hpp>
 #include <regolith/store/Generate.hpp>
 
@@ -130,6 +131,126 @@ void addPlanet(CLI::App& generate) {
   });
 }
 
+/// Options of the planet a cap or a strip refines (the same flags as mars-planet's).
+void addPlanetOfOptions(CLI::App& cmd, store::PlanetOf& p, std::size_t& threads) {
+  cmd.add_flag("--ellipsoid", p.ellipsoid,
+               "The planet is on the IAU Mars ellipsoid (as mars-planet --ellipsoid)");
+  cmd.add_option("--craters", p.craterDensity,
+                 "Crater density multiplier, as for mars-planet (0: no craters)")
+      ->check(FiniteRange(0.0, 100.0))
+      ->capture_default_str();
+  cmd.add_option("--threads", threads, "Threads computing samples (0: all cores)")
+      ->capture_default_str();
+}
+
+void addCap(CLI::App& generate) {
+  struct Args {
+    WriteArgs w;
+    store::PolarCapOptions o;
+    std::string pole = "north";
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = generate.add_subcommand(
+      "mars-cap",
+      "A polar cap of the generated Mars (the planet of mars-planet with the same --seed, "
+      "--ellipsoid and --craters): a square polar stereographic DEM around a pole at a finer "
+      "resolution, with the planet's finer relief and craters and spiral troughs of layered "
+      "deposits");
+  addWriteOptions(*cmd, a->w);
+  cmd->add_option("--pole", a->pole, "Which pole")
+      ->check(CLI::IsMember({"north", "south"}))
+      ->capture_default_str();
+  cmd->add_option("--min-lat", a->o.minLatitudeDeg,
+                  "The cap holds every point with |planetocentric latitude| >= this (degrees, "
+                  "between 0 and 90)")
+      ->check(FiniteRange(0.0, 90.0))
+      ->capture_default_str();
+  cmd->add_option("--resolution", a->o.spacing, "Sample spacing in map metres")
+      ->check(FinitePositive())
+      ->capture_default_str();
+  cmd->add_option("--troughs", a->o.troughDepth,
+                  "Depth of the layered deposits' spiral troughs in metres (0: no deposits)")
+      ->check(FiniteRange(0.0, 10000.0))
+      ->capture_default_str();
+  addPlanetOfOptions(*cmd, a->o.planet, a->o.threads);
+  cmd->add_option("--grid", a->w.grid,
+                  "Name of the grid in the store (default north_cap or "
+                  "south_cap)");
+  cmd->callback([a] {
+    requireOutputFolder("generate mars-cap", a->w.out);
+    store::PolarCapOptions o = a->o;
+    o.pole = a->pole == "north" ? store::PolarCapOptions::Pole::North
+                                : store::PolarCapOptions::Pole::South;
+    o.planet.seed = a->w.seed;
+    o.gridName = a->w.grid;
+    TerminalProgress progress = TerminalProgress::forStderr();
+    o.write = writeOptions(a->w, progress);
+    const store::PolarCapGenerator g(o);
+    const CancelOnSignal cancel;
+    g.write(a->w.out);
+    report(a->w.out, g.gridInfo(), "polar stereographic DEM");
+  });
+}
+
+void addStrip(CLI::App& generate) {
+  struct Args {
+    WriteArgs w;
+    store::StripOptions o;
+    double lengthKm = 300.0, widthKm = 10.0;
+  };
+  auto a = std::make_shared<Args>();
+  a->w.grid = "strip";
+  auto* cmd = generate.add_subcommand(
+      "mars-strip",
+      "A long, narrow DEM of the generated Mars (the planet of mars-planet with the same "
+      "--seed, --ellipsoid and --craters) along a satellite's ground track: oblique Mercator "
+      "about the great circle of an inclined orbit, at a finer resolution, with ragged edges "
+      "(missing samples)");
+  addWriteOptions(*cmd, a->w);
+  cmd->add_option("--lat", a->o.centreLatDeg, "Centre latitude, planetocentric degrees")
+      ->check(FiniteRange(-90.0, 90.0))
+      ->capture_default_str();
+  cmd->add_option("--lon", a->o.centreLonDeg, "Centre longitude, degrees east")
+      ->check(FiniteRange(-360.0, 360.0))
+      ->capture_default_str();
+  cmd->add_option("--inclination", a->o.inclinationDeg,
+                  "Orbit inclination in degrees, 0-180 (above 90: retrograde); |--lat| must be "
+                  "within its reach")
+      ->check(FiniteRange(0.0, 180.0))
+      ->capture_default_str();
+  cmd->add_flag("--descending", a->o.descending, "A southbound pass (default: northbound)");
+  cmd->add_option("--length-km", a->lengthKm, "Length along the track, km")
+      ->check(FinitePositive())
+      ->capture_default_str();
+  cmd->add_option("--width-km", a->widthKm, "Width across the track, km")
+      ->check(FinitePositive())
+      ->capture_default_str();
+  cmd->add_option("--resolution", a->o.spacing, "Sample spacing in metres")
+      ->check(FinitePositive())
+      ->capture_default_str();
+  cmd->add_option("--ragged", a->o.raggedness,
+                  "How far the edges wander inwards, as a fraction of half the width, 0-0.9 "
+                  "(0: every sample valid)")
+      ->check(FiniteRange(0.0, 0.9))
+      ->capture_default_str();
+  addPlanetOfOptions(*cmd, a->o.planet, a->o.threads);
+  cmd->add_option("--grid", a->w.grid, "Name of the grid in the store")->capture_default_str();
+  cmd->callback([a] {
+    requireOutputFolder("generate mars-strip", a->w.out);
+    store::StripOptions o = a->o;
+    o.length = 1000.0 * a->lengthKm;
+    o.width = 1000.0 * a->widthKm;
+    o.planet.seed = a->w.seed;
+    o.gridName = a->w.grid;
+    TerminalProgress progress = TerminalProgress::forStderr();
+    o.write = writeOptions(a->w, progress);
+    const store::StripGenerator g(o);
+    const CancelOnSignal cancel;
+    g.write(a->w.out);
+    report(a->w.out, g.gridInfo(), "oblique Mercator DEM");
+  });
+}
+
 void addVictoria(CLI::App& generate) {
   struct Args {
     WriteArgs w;
@@ -180,9 +301,13 @@ void addGenerateCommand(CLI::App& app) {
       "  regolith generate victoria --out victoria.h5\n"
       "  regolith generate victoria --out v2m.h5 --size 601 --resolution 2 --seed 7\n"
       "  regolith generate mars-planet --out mars.h5 --resolution 0.25 --deflate 4\n"
+      "  regolith generate mars-cap --out north.h5 --pole north --resolution 1000\n"
+      "  regolith generate mars-strip --out strip.h5 --lat 20 --lon 30 --inclination 60\n"
       "A progress bar is drawn on stderr when it is a terminal; Ctrl-C cancels cleanly "
       "(no partial file).");
   addPlanet(*generate);
+  addCap(*generate);
+  addStrip(*generate);
   addVictoria(*generate);
 }
 

@@ -6,6 +6,7 @@
 // cell. Craters are drawn per cell from a hash of (seed, band, cell), so any window can
 // find the craters near it without a global list, and a sample's value depends only on its
 // own position: windows of any shape, and the point function height(), agree to the bit.
+#include <regolith/core/Assert.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Executor.hpp>
 #include <regolith/store/Generate.hpp>
@@ -169,6 +170,18 @@ struct Trig {
   }
 };
 
+/// Where a set of points lies, for the crater search: planetocentric latitudes latLo…latHi and
+/// longitudes lonLo…lonHi (degrees, lonLo ≤ lonHi, possibly beyond ±180°), or every longitude.
+struct Extent {
+  double latLo = 0.0, latHi = 0.0;
+  double lonLo = 0.0, lonHi = 0.0;
+  bool allLon = false;
+};
+
+Extent extentOf(const Lattice& l) noexcept {
+  return {l.lat(l.r0 + l.nr - 1), l.lat(l.r0), l.lon(l.c0), l.lon(l.c0 + l.nc - 1), false};
+}
+
 /// Angle between two unit vectors, from their chord (accurate at small angles).
 double angleBetween(const glm::dvec3& a, const glm::dvec3& b) noexcept {
   const double chord = glm::length(a - b);
@@ -211,8 +224,18 @@ struct MarsPlanetGenerator::Impl {
   [[nodiscard]] double base(const glm::dvec3& u) const noexcept;
   [[nodiscard]] double dichotomy(const glm::dvec3& u) const noexcept;
   [[nodiscard]] bool kept(const Crater& c) const noexcept;
-  void addCraters(const Band& band, const Lattice& l, const Trig& t, double* out) const;
+  /// Calls visit(crater) for every kept crater of a band that may reach a point of `e`, in
+  /// the fixed order (z-band cell, longitude cell, crater) every window uses.
+  template <class Visit>
+  void forEachCrater(const Band& band, const Extent& e, Visit&& visit) const;
+  /// Heights of a lattice's samples.
   void evaluate(const Lattice& l, double* out) const;
+  /// Heights at nr × nc unit vectors (row-major).
+  void evaluate(const glm::dvec3* units, std::size_t nr, std::size_t nc, double* out) const;
+  /// Runs part(row0, rows) over rows [0, nr) of an nr × nc window, split over the threads of
+  /// options.threads on options.write.executor.
+  void inParallel(std::size_t nr, std::size_t nc,
+                  const std::function<void(std::size_t, std::size_t)>& part) const;
   void evaluateParallel(const Lattice& l, double* out) const;
 };
 
@@ -315,21 +338,21 @@ namespace {
 
 constexpr double kMargin = 1e-6;  // radians: candidate filters stay conservative
 
-/// The longitude cells of a band whose craters may reach a lattice, in ascending order (the
-/// sum's order must not depend on the window). A cap of radius ρ around a point at latitude
-/// φ spans asin(sin ρ / cos φ) of longitude, unless it holds a pole.
-std::vector<std::uint64_t> longitudeCells(const Band& band, const Lattice& l) {
+/// The longitude cells of a band whose craters may reach points of an extent, in ascending order
+/// (the sum's order must not depend on the window). A cap of radius ρ around a point at latitude φ
+/// spans asin(sin ρ / cos φ) of longitude, unless it holds a pole.
+std::vector<std::uint64_t> longitudeCells(const Band& band, const Extent& e) {
   const double rho = band.maxInfluence + kMargin;
-  const double absLat = std::max(std::abs(l.lat(l.r0)), std::abs(l.lat(l.r0 + l.nr - 1)));
+  const double absLat = std::max(std::abs(e.latHi), std::abs(e.latLo));
   std::vector<std::uint64_t> js;
-  bool allLon = absLat * kDegToRad + rho >= 0.5 * kPi;
+  bool allLon = e.allLon || absLat * kDegToRad + rho >= 0.5 * kPi;
   double lonLo = 0.0, lonHi = 0.0;
   if (!allLon) {
     const double spread =
         std::asin(std::min(1.0, std::sin(rho) / std::cos(absLat * kDegToRad))) * kRadToDeg +
         kMargin;
-    lonLo = l.lon(l.c0) - spread;
-    lonHi = l.lon(l.c0 + l.nc - 1) + spread;
+    lonLo = e.lonLo - spread;
+    lonHi = e.lonHi + spread;
     allLon = lonHi - lonLo >= 360.0;
   }
   if (allLon) {
@@ -349,11 +372,11 @@ std::vector<std::uint64_t> longitudeCells(const Band& band, const Lattice& l) {
   return js;
 }
 
-/// The z-band cells [first, last] of a band whose craters may reach a lattice.
-std::pair<std::uint64_t, std::uint64_t> latitudeCells(const Band& band, const Lattice& l) {
+/// The z-band cells [first, last] of a band whose craters may reach points of an extent.
+std::pair<std::uint64_t, std::uint64_t> latitudeCells(const Band& band, const Extent& e) {
   const double rhoDeg = (band.maxInfluence + kMargin) * kRadToDeg;
-  const double latLo = std::max(-90.0, l.lat(l.r0 + l.nr - 1) - rhoDeg);
-  const double latHi = std::min(90.0, l.lat(l.r0) + rhoDeg);
+  const double latLo = std::max(-90.0, e.latLo - rhoDeg);
+  const double latHi = std::min(90.0, e.latHi + rhoDeg);
   const double dz = 2.0 / static_cast<double>(band.nz);
   const auto zCell = [&](double latDeg) {
     const double f = std::floor((std::sin(latDeg * kDegToRad) + 1.0) / dz);
@@ -405,18 +428,91 @@ void splat(const Crater& c, const Lattice& l, const Trig& t, double* out) {
   }
 }
 
+/// The extent of a set of unit vectors: their latitude range, and the shortest longitude
+/// interval that holds them all (every longitude if a point is at a pole or they span 180°
+/// or more).
+Extent extentOf(std::span<const glm::dvec3> units) noexcept {
+  Extent e{90.0, -90.0, 0.0, 0.0, false};
+  const double refLon = std::atan2(units[0].y, units[0].x) * kRadToDeg;
+  double lo = 0.0, hi = 0.0;
+  for (const glm::dvec3& u : units) {
+    const double lat = std::asin(std::clamp(u.z, -1.0, 1.0)) * kRadToDeg;
+    e.latLo = std::min(e.latLo, lat);
+    e.latHi = std::max(e.latHi, lat);
+    if (std::hypot(u.x, u.y) < 1e-12) {
+      e.allLon = true;
+      continue;
+    }
+    double rel = std::atan2(u.y, u.x) * kRadToDeg - refLon;
+    rel -= 360.0 * std::floor((rel + 180.0) / 360.0);
+    lo = std::min(lo, rel);
+    hi = std::max(hi, rel);
+  }
+  e.allLon = e.allLon || hi - lo >= 180.0;
+  e.lonLo = refLon + lo;
+  e.lonHi = refLon + hi;
+  return e;
+}
+
+/// A block of up to kTileSide × kTileSide points of a grid of unit vectors (by index), with
+/// a ball that holds them: centre and radius as a chord (straight-line distance).
+struct Tile {
+  std::size_t r0 = 0, r1 = 0, c0 = 0, c1 = 0;
+  glm::dvec3 centre{0.0};
+  double radius = 0.0;
+};
+constexpr std::size_t kTileSide = 16;
+
+std::vector<Tile> tilesOf(const glm::dvec3* units, std::size_t nr, std::size_t nc) {
+  std::vector<Tile> tiles;
+  for (std::size_t r0 = 0; r0 < nr; r0 += kTileSide) {
+    for (std::size_t c0 = 0; c0 < nc; c0 += kTileSide) {
+      Tile t{r0, std::min(nr, r0 + kTileSide), c0, std::min(nc, c0 + kTileSide)};
+      t.centre = units[((t.r0 + t.r1) / 2) * nc + (t.c0 + t.c1) / 2];
+      for (std::size_t r = t.r0; r < t.r1; ++r) {
+        for (std::size_t c = t.c0; c < t.c1; ++c) {
+          t.radius = std::max(t.radius, glm::length(units[r * nc + c] - t.centre));
+        }
+      }
+      tiles.push_back(t);
+    }
+  }
+  return tiles;
+}
+
+/// As splat() above, for a grid of unit vectors: the tiles a crater's reach may meet are
+/// pre-filtered by the triangle inequality on chords; the chord test decides, with the same
+/// arithmetic as on a lattice, so a point gets the same bits either way.
+void splat(const Crater& c, const std::vector<Tile>& tiles, const glm::dvec3* units, std::size_t nc,
+           double* out) {
+  const double reach = std::sqrt(c.influenceChord2) + 1e-9;
+  for (const Tile& t : tiles) {
+    if (glm::length(t.centre - c.centre) >= reach + t.radius) continue;
+    for (std::size_t r = t.r0; r < t.r1; ++r) {
+      for (std::size_t cc = t.c0; cc < t.c1; ++cc) {
+        const glm::dvec3 d = units[r * nc + cc] - c.centre;
+        const double chord2 = glm::dot(d, d);
+        if (chord2 >= c.influenceChord2) continue;
+        const double angle = 2.0 * std::asin(std::min(1.0, 0.5 * std::sqrt(chord2)));
+        out[r * nc + cc] += craterProfile(c, angle / c.radius);
+      }
+    }
+  }
+}
+
 }  // namespace
 
-void MarsPlanetGenerator::Impl::addCraters(const Band& band, const Lattice& l, const Trig& t,
-                                           double* out) const {
-  const auto [iLo, iHi] = latitudeCells(band, l);
-  const std::vector<std::uint64_t> js = longitudeCells(band, l);
+template <class Visit>
+void MarsPlanetGenerator::Impl::forEachCrater(const Band& band, const Extent& e,
+                                              Visit&& visit) const {
+  const auto [iLo, iHi] = latitudeCells(band, e);
+  const std::vector<std::uint64_t> js = longitudeCells(band, e);
   std::vector<Crater> craters;
   for (std::uint64_t i = iLo; i <= iHi; ++i) {
     for (const std::uint64_t j : js) {
       cellCraters(band, craterSeed, i, j, radiusKm, craters);
       for (const Crater& c : craters) {
-        if (kept(c)) splat(c, l, t, out);
+        if (kept(c)) visit(c);
       }
     }
   }
@@ -427,30 +523,52 @@ void MarsPlanetGenerator::Impl::evaluate(const Lattice& l, double* out) const {
   for (std::size_t r = 0; r < l.nr; ++r) {
     for (std::size_t c = 0; c < l.nc; ++c) out[r * l.nc + c] = base(t.unit(r, c));
   }
-  for (const Band& b : bands) addCraters(b, l, t, out);
+  const Extent e = extentOf(l);
+  for (const Band& b : bands) {
+    forEachCrater(b, e, [&](const Crater& c) { splat(c, l, t, out); });
+  }
 }
 
-void MarsPlanetGenerator::Impl::evaluateParallel(const Lattice& l, double* out) const {
+void MarsPlanetGenerator::Impl::evaluate(const glm::dvec3* units, std::size_t nr, std::size_t nc,
+                                         double* out) const {
+  const std::size_t n = nr * nc;
+  for (std::size_t i = 0; i < n; ++i) out[i] = base(units[i]);
+  if (bands.empty() || n == 0) return;
+  const Extent e = extentOf(std::span(units, n));
+  const std::vector<Tile> tiles = tilesOf(units, nr, nc);
+  for (const Band& b : bands) {
+    forEachCrater(b, e, [&](const Crater& c) { splat(c, tiles, units, nc, out); });
+  }
+}
+
+void MarsPlanetGenerator::Impl::inParallel(
+    std::size_t nr, std::size_t nc,
+    const std::function<void(std::size_t, std::size_t)>& part) const {
   core::Executor* executor = options.write.executor;
   std::size_t threads = options.threads != 0  ? options.threads
                         : executor != nullptr ? executor->concurrency() + 1
                                               : std::thread::hardware_concurrency();
   threads = std::clamp<std::size_t>(threads, 1, 64);
-  threads = std::min(threads, std::max<std::size_t>(1, l.nr * l.nc / 4096));
-  threads = std::min(threads, l.nr);
+  threads = std::min(threads, std::max<std::size_t>(1, nr * nc / 4096));
+  threads = std::min(threads, nr);
   if (threads <= 1) {
-    evaluate(l, out);
+    part(0, nr);
     return;
   }
-  const std::size_t per = (l.nr + threads - 1) / threads;
-  const std::size_t parts = (l.nr + per - 1) / per;
-  const auto part = [&](std::size_t k) {
+  const std::size_t per = (nr + threads - 1) / threads;
+  const std::size_t parts = (nr + per - 1) / per;
+  core::parallelFor(
+      executor, parts, [&](std::size_t k) { part(k * per, std::min(per, nr - k * per)); },
+      static_cast<unsigned>(threads));
+}
+
+void MarsPlanetGenerator::Impl::evaluateParallel(const Lattice& l, double* out) const {
+  inParallel(l.nr, l.nc, [&](std::size_t r0, std::size_t nr) {
     Lattice p = l;
-    p.r0 = l.r0 + k * per;
-    p.nr = std::min(per, l.nr - k * per);
-    evaluate(p, out + k * per * l.nc);
-  };
-  core::parallelFor(executor, parts, part, static_cast<unsigned>(threads));
+    p.r0 = l.r0 + r0;
+    p.nr = nr;
+    evaluate(p, out + r0 * l.nc);
+  });
 }
 
 namespace {
@@ -523,6 +641,16 @@ double MarsPlanetGenerator::height(double latDeg, double lonDeg) const {
   double h = 0.0;
   impl_->evaluate(l, &h);
   return h;
+}
+
+void MarsPlanetGenerator::heightsAt(std::span<const glm::dvec3> units, std::size_t cols,
+                                    std::span<double> out) const {
+  REGOLITH_ASSERT(cols > 0 && units.size() % cols == 0 && out.size() == units.size(),
+                  "heightsAt(): units must be rows x cols, out as many");
+  const std::size_t rows = units.size() / cols;
+  impl_->inParallel(rows, cols, [&](std::size_t r0, std::size_t nr) {
+    impl_->evaluate(units.data() + r0 * cols, nr, cols, out.data() + r0 * cols);
+  });
 }
 
 std::shared_ptr<const topo::SampleSource> MarsPlanetGenerator::samples() const {

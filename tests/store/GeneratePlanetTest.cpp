@@ -7,6 +7,7 @@
 
 #include "support/StoreScratch.hpp"
 
+#include <glm/vec3.hpp>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -18,6 +19,7 @@
 #include <map>
 #include <numbers>
 #include <numeric>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -346,4 +348,47 @@ TEST(GeneratePlanet, BadOptionsAreRefused) {
   const fs::path path = scratch("bad.h5");
   EXPECT_THROW(MarsPlanetGenerator(o).write(path), InvalidArgument);
   EXPECT_FALSE(fs::exists(path));
+}
+
+TEST(GeneratePlanet, HeightsAtUnitVectorsAreThePointFunctionWhateverTheWindow) {
+  // heightsAt() on scattered points (both poles, the ±180° seam, a tight cluster, random
+  // points: windows whose crater search spans every longitude or wraps the seam) equals
+  // height() at each point's latitude and longitude, to the bit, whatever the grouping.
+  MarsPlanetOptions o = smallPlanet(17);
+  o.rows = 720;
+  o.threads = 1;
+  const MarsPlanetGenerator g(o);
+  ASSERT_GT(g.craterBands(), 2U);
+  std::vector<std::array<double, 2>> latLon{{90.0, 0.0},      {-90.0, 0.0},   {89.99, 179.99},
+                                            {-89.9, -179.9},  {0.0, -180.0},  {10.0, 179.999},
+                                            {10.0, -179.999}, {45.0, 45.0},   {45.001, 45.001},
+                                            {44.999, 45.002}, {-60.0, 120.0}, {-60.01, 120.02}};
+  std::uint64_t state = 99;
+  const auto uniform = [&state] {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11U) * 0x1.0p-53;
+  };
+  while (latLon.size() < 60) {
+    latLon.push_back(
+        {std::asin(2.0 * uniform() - 1.0) * 180.0 / std::numbers::pi, -180.0 + 360.0 * uniform()});
+  }
+  std::vector<glm::dvec3> units;
+  for (const auto& [lat, lon] : latLon) {
+    constexpr double kDegToRad = std::numbers::pi / 180.0;  // as the generator rounds it
+    const double phi = lat * kDegToRad, lambda = lon * kDegToRad;
+    units.emplace_back(std::cos(phi) * std::cos(lambda), std::cos(phi) * std::sin(lambda),
+                       std::sin(phi));
+  }
+  std::vector<double> together(units.size()), asGrid(units.size());
+  g.heightsAt(units, units.size(), together);  // one row
+  g.heightsAt(units, 6, asGrid);               // 10 rows of 6
+  for (std::size_t i = 0; i < units.size(); ++i) {
+    const double expected = g.height(latLon[i][0], latLon[i][1]);
+    double alone = 0.0;
+    g.heightsAt(std::span(&units[i], 1), 1, std::span(&alone, 1));
+    EXPECT_EQ(std::memcmp(&together[i], &expected, sizeof(double)), 0)
+        << latLon[i][0] << ", " << latLon[i][1] << ": " << together[i] << " vs " << expected;
+    EXPECT_EQ(std::memcmp(&asGrid[i], &expected, sizeof(double)), 0) << i;
+    EXPECT_EQ(std::memcmp(&alone, &expected, sizeof(double)), 0) << i;
+  }
 }

@@ -160,7 +160,12 @@ def attrs(path, grid):
 
 @pytest.mark.parametrize("cmd,expect", [
     ([], ["generate", "import", "info", "query", "demo"]),
-    (["generate"], ["mars-planet", "victoria"]),
+    (["generate"], ["mars-planet", "mars-cap", "mars-strip", "victoria"]),
+    (["generate", "mars-cap"], ["--pole", "--min-lat", "--resolution", "--troughs", "--seed",
+                                "--ellipsoid", "--craters", "--threads", "--out", "--grid"]),
+    (["generate", "mars-strip"], ["--lat", "--lon", "--inclination", "--descending",
+                                  "--length-km", "--width-km", "--resolution", "--ragged",
+                                  "--seed", "--ellipsoid", "--craters", "--out", "--grid"]),
     (["generate", "mars-planet"], ["--seed", "--size", "--resolution", "--out", "--patch",
                                    "--deflate", "--levels", "--ellipsoid", "--craters"]),
     (["generate", "victoria"], ["--seed", "--size", "--resolution", "--out", "--patch",
@@ -190,6 +195,8 @@ def test_help(cmd, expect):
     (["query", "x.h5", "--interp", "cubic"], "cubic"),
     (["generate", "victoria"], "--out"),
     (["generate", "victoria", "--out", "x.h5", "--deflate", "12"], "deflate"),
+    (["generate", "mars-cap", "--out", "x.h5", "--pole", "east"], "--pole"),
+    (["generate", "mars-strip", "--out", "x.h5", "--ragged", "2"], "--ragged"),
     (["import", "x.tif"], "--out"),
     (["import", "--out", "x.h5"], "source"),
     (["import", "x.tif", "--out", "x.h5", "--patch", "4"], "patch"),
@@ -201,7 +208,8 @@ def test_usage_errors(args, needle):
     assert needle in p.stderr
     assert p.stdout == ""
     # The hint names the subcommand that failed.
-    words = [a for a in args if a in ("generate", "victoria", "query", "import")]
+    words = [a for a in args
+             if a in ("generate", "victoria", "mars-cap", "mars-strip", "query", "import")]
     assert f"Run '{' '.join(['regolith', *words])} --help'" in p.stderr, p.stderr
 
 
@@ -232,6 +240,98 @@ def test_generate_planet_options(work):
     assert p.returncode != 0 and p.stderr.startswith("regolith: error: ")
     assert "--resolution" in p.stderr
     assert not (work / "bad.h5").exists()
+
+
+def crs_lonlat(srs_text, points):
+    """PROJ (through GDAL's OSR) as the oracle: longitude, latitude of map points."""
+    srs = osr.SpatialReference()
+    if srs_text.startswith("+proj"):
+        srs.ImportFromProj4(srs_text)
+    else:
+        srs.ImportFromWkt(srs_text)
+    geo = srs.CloneGeogCS()
+    for r in (srs, geo):
+        r.SetAxisMappingStrategy(osr.OAMS_TRADITIONAL_GIS_ORDER)
+    ct = osr.CoordinateTransformation(srs, geo)
+    return [ct.TransformPoint(x, y)[:2] for x, y in points]
+
+
+def test_generate_cap(work):
+    path = work / "south.h5"
+    p = run("generate", "mars-cap", "--out", path, "--pole", "south", "--min-lat", 70,
+            "--resolution", 40000, "--troughs", 300, "--seed", 5, "--patch", 32)
+    assert p.stdout == (f"Wrote {path}: polar stereographic DEM grid 'south_cap', "
+                        "61 x 61 samples\n")
+    a = attrs(path, "south_cap")
+    assert a["kind"] == "dem" and a["placement"] == "polar_stereographic"
+    assert a["pole"] == -1 and a["scale_factor"] == 1.0 and a["lon_centre_deg"] == 0.0
+    # 2 R tan(10°) = 1197688 m from the pole to 70°S: 30 spacings of 40 km reach it.
+    assert a["rows"] == a["cols"] == 61 and list(a["spacing"]) == [40000.0, 40000.0]
+    assert a["x0"] == -a["y0"] == -1200000.0
+    h = level0(path, "south_cap")
+    assert np.isfinite(h).all()
+    # Statistics are stored (format 1.3) and are numpy's.
+    assert a["height_min"] == h.min() and a["height_max"] == h.max()
+    # PROJ puts the edge midpoints at or beyond 70°S and one spacing inwards within it.
+    stere = "+proj=stere +lat_0=-90 +lon_0=0 +k=1 +x_0=0 +y_0=0 +R=3396190 +units=m +no_defs"
+    (_, edge), (_, inside) = crs_lonlat(stere, [(0.0, a["y0"]), (0.0, a["y0"] - 40000.0)])
+    assert edge >= -70.0 - 1e-9 and inside < -70.0
+    # The same seed again gives the same samples; another seed does not.
+    again, other = work / "south-again.h5", work / "south-other.h5"
+    run("generate", "mars-cap", "--out", again, "--pole", "south", "--min-lat", 70,
+        "--resolution", 40000, "--troughs", 300, "--seed", 5, "--patch", 48, "--threads", 1)
+    run("generate", "mars-cap", "--out", other, "--pole", "south", "--min-lat", 70,
+        "--resolution", 40000, "--troughs", 300, "--seed", 6)
+    assert np.array_equal(h, level0(again, "south_cap"))
+    assert np.mean(h != level0(other, "south_cap")) > 0.9
+
+
+def test_generate_strip(work):
+    path = work / "strip.h5"
+    p = run("generate", "mars-strip", "--out", path, "--lat", 20, "--lon", 30,
+            "--inclination", 60, "--length-km", 100, "--width-km", 5, "--resolution", 250,
+            "--grid", "lroc", "--patch", 64)
+    assert p.stdout == f"Wrote {path}: oblique Mercator DEM grid 'lroc', 21 x 401 samples\n"
+    a = attrs(path, "lroc")
+    assert a["kind"] == "dem" and a["placement"] == "projected"
+    assert "Hotine Oblique Mercator (variant B)" in a["crs_wkt"]
+    assert a["x0"] == -50000.0 and a["y0"] == 2500.0
+    h = level0(path, "lroc")
+    missing = np.isnan(h)
+    assert missing.any() and missing.mean() < 0.25  # ragged edges, not a ragged strip
+    assert not missing[8:13, 20:-20].any()           # the core is covered
+    assert a["valid_samples"] == int((~missing).sum())
+    # PROJ (OSR) reads the stored CRS: the grid's centre is the strip's centre, and 50 km
+    # along the track (+x) lies north-east (an ascending pass inclined 60°: azimuth
+    # asin(cos 60° / cos 20°) = 32.2°).
+    (lon0, lat0), (lon1, lat1) = crs_lonlat(a["crs_wkt"], [(0.0, 0.0), (50000.0, 0.0)])
+    assert lon0 == pytest.approx(30.0, abs=1e-9) and lat0 == pytest.approx(20.0, abs=1e-9)
+    dn = math.radians(lat1 - lat0)
+    de = math.radians(lon1 - lon0) * math.cos(math.radians(lat0))
+    azimuth = math.degrees(math.atan2(de, dn))
+    assert azimuth == pytest.approx(math.degrees(math.asin(0.5 / math.cos(math.radians(20)))),
+                                    abs=0.2)
+    # --ragged 0: every sample valid.
+    full = work / "strip-full.h5"
+    run("generate", "mars-strip", "--out", full, "--lat", 20, "--lon", 30, "--length-km", 100,
+        "--width-km", 5, "--resolution", 250, "--ragged", 0)
+    assert np.isfinite(level0(full, "strip")).all()
+
+
+@pytest.mark.parametrize("args,message", [
+    (["mars-strip", "--lat", 70],
+     "store::StripGenerator(): centre latitude is 70 degrees, expected within the reach of an "
+     "orbit inclined 60 degrees (|latitude| <= 60)"),
+    (["mars-cap", "--min-lat", 90],
+     "store::PolarCapGenerator(): minimum latitude is 90 degrees, expected > 0 and < 90"),
+])
+def test_generate_cap_and_strip_refuse_bad_options(work, args, message):
+    out = work / "refused.h5"
+    p = run("generate", *args, "--out", out, check=False)
+    assert p.returncode != 0
+    assert p.stderr == f"regolith: error: {message}\n"
+    assert p.stdout == ""
+    assert not out.exists()
 
 
 def test_generate_into_a_missing_folder(work):

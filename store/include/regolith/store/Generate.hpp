@@ -1,8 +1,9 @@
 #pragma once
 /// \file
-/// Procedural terrain, written as stores: a global Mars-like planet and a Victoria-crater-like
-/// local DEM. Both are deterministic functions of their options (same seed → bit-identical
-/// samples, whatever the patch size or the number of threads), are defined at any
+/// Procedural terrain, written as stores: a global Mars-like planet, its polar caps and
+/// inclined strips at finer resolutions (datasets that overlap it, for composition), and a
+/// Victoria-crater-like local DEM. All are deterministic functions of their options (same seed →
+/// bit-identical samples, whatever the patch size or the number of threads), are defined at any
 /// resolution, and are computed window by window as the writer asks for them, so an output
 /// far larger than RAM never exists as a whole grid in memory.
 ///
@@ -12,11 +13,16 @@
 
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Store.hpp>
+#include <regolith/topo/Placement.hpp>
+#include <regolith/topo/Projection.hpp>
 #include <regolith/topo/TopoGrid.hpp>
+
+#include <glm/vec3.hpp>
 
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -170,9 +176,162 @@ class MarsPlanetGenerator {
   /// Height in metres at planetocentric latitude and east longitude (degrees; any
   /// longitude). At a sample centre it equals the stored sample (before the float cast).
   [[nodiscard]] double height(double latDeg, double lonDeg) const;
+  /// Heights in metres at body-fixed unit vectors (directions from the body's centre to
+  /// surface points), for the samples of a DEM in any placement. `units` holds rows × cols
+  /// points row-major and `out` receives as many heights (a caller bug otherwise). Points
+  /// that are neighbours in the grid should be near each other on the body, which keeps the
+  /// crater search local; any set of points gives the same heights. At the unit vector
+  /// (cos φ cos λ, cos φ sin λ, sin φ), with λ in [−180°, 180°) and both in radians as
+  /// degrees · (π/180), it equals height(φ, λ) to the bit. Runs on options().write.executor with
+  /// options().threads threads, as write().
+  void heightsAt(std::span<const glm::dvec3> units, std::size_t cols, std::span<double> out) const;
   /// The samples, computed window by window on demand.
   [[nodiscard]] std::shared_ptr<const topo::SampleSource> samples() const;
   /// Writes the store crash-safely (writeStore). Throws StoreError or InvalidArgument.
+  void write(const std::filesystem::path& path) const;
+
+ private:
+  struct Impl;
+  std::shared_ptr<const Impl> impl_;
+};
+
+// ---- Polar caps and inclined strips of the planet ------------------------------------------
+
+/// The planet a cap or a strip refines: MarsPlanetGenerator's seed, body and crater density.
+/// A cap or strip agrees with a planet made with the same three.
+struct PlanetOf {
+  std::uint64_t seed = 1;
+  bool ellipsoid = false;
+  double craterDensity = 1.0;
+};
+
+struct PolarCapOptions {
+  using Pole = topo::PolarStereographic::Pole;
+  Pole pole = Pole::North;
+  /// The cap holds every point with |planetocentric latitude| ≥ this, degrees in (0, 90).
+  double minLatitudeDeg = 75.0;
+  /// Sample spacing in map metres (true at the pole; at 75° a sample spans 0.98 of it).
+  double spacing = 1000.0;
+  PlanetOf planet{};
+  /// Depth of the layered deposits' spiral troughs, m (0: no deposits).
+  double troughDepth = 500.0;
+  /// Empty: "north_cap" or "south_cap".
+  std::string gridName;
+  /// Threads computing each window (as MarsPlanetOptions::threads).
+  std::size_t threads = 0;
+  WriteOptions write{};
+};
+
+/// A polar cap of the generated Mars: a square DEM in polar stereographic map metres (true
+/// scale at the pole, central meridian 0°, no false easting or northing, on the planet's
+/// body) centred on the pole, whose outermost sample centres lie at or beyond the circle of
+/// the minimum latitude (it holds that circle). An odd number of samples per side puts a
+/// sample on the pole.
+///
+/// Heights: the planet's (MarsPlanetGenerator::heightsAt() at the unit vector under each
+/// sample) with the octaves and crater bands of a planet grid of the cap's spacing (rows =
+/// ⌈π·a / spacing⌉, a the equatorial radius, planet()): the same function as the global
+/// grid, with the detail that a coarser grid leaves out. Plus, optionally, polar layered
+/// deposits: spiral troughs (depositHeight()) that a grid coarser than about 10 km does not
+/// resolve, fading out at 80 % of the cap's angular radius so that the cap's border agrees
+/// with the planet.
+///
+/// Thread-safety: immutable after construction; all members may be called concurrently.
+class PolarCapGenerator {
+ public:
+  /// Trough spacing along a radius, and the number of interleaved spiral arms.
+  static constexpr double kTroughSpacing = 60000.0;  // m
+  static constexpr int kTroughArms = 3;
+
+  /// Throws regolith::InvalidArgument for a minimum latitude outside (0, 90), a spacing that
+  /// is not finite and > 0 (or so small that the grid exceeds kMaxGridSide), a trough depth
+  /// that is not finite and ≥ 0, or a bad crater density.
+  explicit PolarCapGenerator(PolarCapOptions options);
+
+  [[nodiscard]] const PolarCapOptions& options() const noexcept;
+  /// The grid as it will be stored (kind Dem, polar stereographic placement).
+  [[nodiscard]] GridInfo gridInfo() const;
+  [[nodiscard]] const topo::Placement& placement() const noexcept;
+  /// The planet at the cap's resolution, whose heights the cap stores.
+  [[nodiscard]] const MarsPlanetGenerator& planet() const noexcept;
+  /// Angular distance from the pole at which the deposits end, degrees: 0.8 (90° − the
+  /// minimum latitude).
+  [[nodiscard]] double depositReachDeg() const noexcept;
+  /// The deposits' height at a body-fixed unit vector, m: in [−troughDepth, 0], 0 beyond
+  /// depositReachDeg() from the pole, within 10 % of it (no pinch at the pole) and without
+  /// troughs. Troughs follow kTroughArms interleaved spirals kTroughSpacing apart along a
+  /// radius, wandering and varying in depth (40–100 %) with the seed, cos⁶-shaped across
+  /// (about a fifth of the spacing wide), faded in from 10 % to 25 % of the reach and out
+  /// over its last quarter.
+  [[nodiscard]] double depositHeight(const glm::dvec3& unit) const noexcept;
+  [[nodiscard]] std::shared_ptr<const topo::SampleSource> samples() const;
+  /// Writes the store crash-safely (writeStore), with height statistics (format 1.3) whatever
+  /// options().write says. Throws StoreError or InvalidArgument.
+  void write(const std::filesystem::path& path) const;
+
+ private:
+  struct Impl;
+  std::shared_ptr<const Impl> impl_;
+};
+
+struct StripOptions {
+  /// Centre of the strip: planetocentric latitude and east longitude, degrees.
+  double centreLatDeg = 0.0, centreLonDeg = 0.0;
+  /// The orbit's inclination to the equator, degrees in [0, 180] (> 90: retrograde). The
+  /// centre latitude must be within the orbit's reach, |φ| ≤ min(i, 180° − i), and < 89°.
+  double inclinationDeg = 60.0;
+  /// A southbound pass instead of a northbound one.
+  bool descending = false;
+  /// Along and across the track, metres: the outermost sample centres lie at ±length/2 and
+  /// ±width/2 (rounded up to whole spacings). length ≤ π·a (half a great circle).
+  double length = 300000.0, width = 10000.0;
+  /// Sample spacing, metres (true along the centre line).
+  double spacing = 50.0;
+  /// How far the strip's edges wander inwards, as a fraction of half the width, in [0, 0.9]:
+  /// samples beyond the wandering sides and ends are missing (NaN). 0: all samples valid.
+  double raggedness = 0.25;
+  PlanetOf planet{};
+  std::string gridName = "strip";
+  /// Threads computing each window (as MarsPlanetOptions::threads).
+  std::size_t threads = 0;
+  WriteOptions write{};
+};
+
+/// A long, narrow DEM along a satellite's ground track (Kooima's LROC example): a rectangle
+/// in an oblique Mercator projection (PROJ `omerc`, Hotine variant B, scale 1 on the centre
+/// line) whose centre line is the great circle of an orbit of the given inclination through
+/// the strip's centre, on the planet's body (the body's rotation during the pass is
+/// neglected; on the ellipsoid the line is the projection's, close to the orbit plane's
+/// trace). Grid x runs along the track in the direction of flight, y to its left; the
+/// store records the CRS as WKT2 (placement kind Projected).
+///
+/// Heights: the planet's at the strip's resolution (as PolarCapGenerator: rows =
+/// ⌈π·a / spacing⌉, planet()), missing beyond the ragged edges (covers()).
+///
+/// Thread-safety: immutable after construction; all members may be called concurrently.
+class StripGenerator {
+ public:
+  /// Throws regolith::InvalidArgument for a non-finite option, an inclination outside
+  /// [0, 180], a centre latitude the orbit does not reach (or ≥ 89°), a length, width or
+  /// spacing that is not > 0 (or a length beyond π·a, or a grid beyond kMaxGridSide), a
+  /// raggedness outside [0, 0.9], a bad crater density or an empty grid name.
+  explicit StripGenerator(StripOptions options);
+
+  [[nodiscard]] const StripOptions& options() const noexcept;
+  [[nodiscard]] GridInfo gridInfo() const;
+  [[nodiscard]] const topo::Placement& placement() const noexcept;
+  [[nodiscard]] const MarsPlanetGenerator& planet() const noexcept;
+  /// Direction of flight at the centre, degrees clockwise from north, in (−180, 180].
+  [[nodiscard]] double azimuthDeg() const noexcept;
+  /// The CRS as a PROJ string (what the store's WKT2 was made from).
+  [[nodiscard]] const std::string& projString() const noexcept;
+  /// Whether grid point (x, y) (map metres) lies within the ragged edges: always where
+  /// |y| ≤ (1 − raggedness)·W/2 and |x| ≤ L/2 − raggedness·W/2 (W, L between the outermost
+  /// sample centres), never where |y| > W/2 or |x| > L/2.
+  [[nodiscard]] bool covers(double x, double y) const noexcept;
+  [[nodiscard]] std::shared_ptr<const topo::SampleSource> samples() const;
+  /// Writes the store crash-safely (writeStore), with height statistics (format 1.3) whatever
+  /// options().write says. Throws StoreError or InvalidArgument.
   void write(const std::filesystem::path& path) const;
 
  private:
