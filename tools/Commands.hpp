@@ -4,7 +4,9 @@
 // (regolith::Error and its kin for bad input, CLI::Error for usage errors); main() turns
 // that into "regolith: error: ..." on stderr and a non-zero exit code.
 
+#include <filesystem>
 #include <iosfwd>
+#include <ostream>
 #include <string>
 
 namespace CLI {
@@ -29,5 +31,12 @@ void addInfoCommand(CLI::App& app);
 void printInfo(const std::string& file, bool json, std::ostream& out);
 void addQueryCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);
+/// `regolith render CATALOGUE --look-at lon,lat --distance --elevation --heading` into `png`:
+/// one view of a catalogue file's composed surface (the main demo's pole views). Writes the
+/// command's one-line report to `report`.
+void renderCatalogueView(const std::filesystem::path& catalogue, double lonDeg, double latDeg,
+                         double distance, double elevationDeg, double headingDeg,
+                         const std::filesystem::path& png, int width, int height,
+                         std::ostream& report);
 
 }  // namespace regolith::tools

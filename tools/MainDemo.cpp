@@ -1,6 +1,7 @@
 #include "MainDemo.hpp"
 
 #include <regolith/clod/TrackLayer.hpp>
+#include <regolith/core/AtomicFile.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/gl/Image.hpp>
@@ -10,6 +11,7 @@
 #include <regolith/store/Store.hpp>
 
 #include "CancelOnSignal.hpp"
+#include "Commands.hpp"
 #include "OutputFolder.hpp"
 #include "TerminalProgress.hpp"
 
@@ -64,6 +66,10 @@ store::WriteOptions writeOptions(TerminalProgress& progress) {
 struct DefaultData {
   fs::path mars, victoria;
   std::string marsNote, victoriaNote;
+  /// The composition's further datasets: north and south polar caps and an inclined strip
+  /// east of Victoria, and the catalogue file listing every dataset.
+  fs::path northCap, southCap, strip, catalogue;
+  std::string extraNote;
 };
 
 /// Mars's surface height at the Victoria site (bilinear in the stored planet's level 0), so
@@ -82,7 +88,9 @@ double marsHeightAtVictoria(const fs::path& mars, const std::string& grid) {
 
 DefaultData ensureData(const MainDemoOptions& o, const fs::path& dir, std::ostream& out) {
   fs::create_directories(dir);
-  DefaultData d{dir / "mars.h5", dir / "victoria.h5", "", ""};
+  DefaultData d;
+  d.mars = dir / "mars.h5";
+  d.victoria = dir / "victoria.h5";
   const CancelOnSignal cancel;
   const auto note = [](Clock::time_point t0) {
     std::ostringstream s;
@@ -130,6 +138,76 @@ DefaultData ensureData(const MainDemoOptions& o, const fs::path& dir, std::ostre
     store::VictoriaGenerator(v).write(d.victoria);
     d.victoriaNote = note(t0);
   }
+  // The composition's further datasets, refining the same planet (seed, ellipsoid, craters):
+  // polar caps at a finer spacing with the layered deposits the global grid lacks, and a
+  // strip along an inclined ground track, 30 km east of Victoria.
+  d.northCap = dir / "north_cap.h5";
+  d.southCap = dir / "south_cap.h5";
+  d.strip = dir / "strip.h5";
+  const auto t0 = Clock::now();
+  std::vector<std::string> made;
+  for (const auto pole :
+       {store::PolarCapOptions::Pole::North, store::PolarCapOptions::Pole::South}) {
+    store::PolarCapOptions c;
+    c.pole = pole;
+    c.planet = {m.seed, m.ellipsoid, m.craterDensity};
+    c.spacing = o.quick ? 6000.0 : 2000.0;
+    const bool north = pole == store::PolarCapOptions::Pole::North;
+    const fs::path path = north ? d.northCap : d.southCap;
+    const std::string grid = north ? "north_cap" : "south_cap";
+    if (!marsNew && fs::exists(path)) {
+      try {
+        const store::Store s = store::Store::open(path);
+        if (s.grid(grid).spacingX == c.spacing) continue;
+      } catch (const Error&) {  // NOLINT(bugprone-empty-catch): regenerate it below
+      }
+    }
+    out << "  generating " << path.string() << " (" << (north ? "north" : "south") << " polar cap, "
+        << c.spacing << " m)..." << std::endl;
+    TerminalProgress progress = TerminalProgress::forStderr();
+    c.write = writeOptions(progress);
+    store::PolarCapGenerator(c).write(path);
+    made.push_back(grid);
+  }
+  store::StripOptions st;
+  st.centreLatDeg = -2.0;
+  st.centreLonDeg = -5.0;
+  st.inclinationDeg = 60.0;
+  st.length = 200000.0;
+  st.width = 8000.0;
+  st.spacing = o.quick ? 400.0 : 100.0;
+  st.planet = {m.seed, m.ellipsoid, m.craterDensity};
+  bool stripOk = false;
+  if (!marsNew && fs::exists(d.strip)) {
+    try {
+      const store::Store s = store::Store::open(d.strip);
+      stripOk = s.grid(st.gridName).spacingX == st.spacing;
+    } catch (const Error&) {  // NOLINT(bugprone-empty-catch): regenerate it below
+    }
+  }
+  if (!stripOk) {
+    out << "  generating " << d.strip.string() << " (a strip along an inclined ground track, "
+        << st.length / 1e3 << " x " << st.width / 1e3 << " km at " << st.spacing << " m)..."
+        << std::endl;
+    TerminalProgress progress = TerminalProgress::forStderr();
+    st.write = writeOptions(progress);
+    store::StripGenerator(st).write(d.strip);
+    made.push_back("strip");
+  }
+  d.extraNote = made.empty() ? "reused" : note(t0);
+  // The catalogue of all five: `regolith render`, `query` and `info` read it too.
+  d.catalogue = dir / "mars_catalogue.json";
+  std::ostringstream json;
+  json << "{\"policy\": \"weighted\", \"datasets\": [\n"
+       << "  {\"store\": \"mars.h5\", \"grid\": \"" << m.gridName << "\"},\n"
+       << "  {\"store\": \"north_cap.h5\", \"grid\": \"north_cap\", \"feather_m\": 60000},\n"
+       << "  {\"store\": \"south_cap.h5\", \"grid\": \"south_cap\", \"feather_m\": 60000},\n"
+       << "  {\"store\": \"strip.h5\", \"grid\": \"strip\", \"feather_nodata_samples\": 8},\n"
+       << "  {\"store\": \"victoria.h5\", \"grid\": \"" << v.gridName
+       << "\", \"feather_m\": 60}]}\n";
+  const std::string text = json.str();
+  core::writeStreamAtomically(
+      d.catalogue, [&](std::ostream& os) { os << text; }, "demo");
   return d;
 }
 
@@ -233,21 +311,24 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
   fs::create_directories(o.outDir);
   const fs::path dataDir = o.dataDir.empty() ? o.outDir / "data" : o.dataDir;
 
-  out << "[1/4] Default data in " << dataDir.string() << "\n";
+  out << "[1/5] Default data in " << dataDir.string() << "\n";
   const DefaultData data = ensureData(o, dataDir, out);
-  refuseOverwritingInputs("demo", {o.outDir / "rover_view.png", o.outDir / "rover_chase.png"},
-                          {data.mars, data.victoria});
+  refuseOverwritingInputs(
+      "demo",
+      {o.outDir / "rover_view.png", o.outDir / "rover_chase.png", o.outDir / "north_pole.png",
+       o.outDir / "south_pole.png"},
+      {data.mars, data.victoria, data.northCap, data.southCap, data.strip, data.catalogue});
   out << "  " << data.mars.string() << ": " << data.marsNote << "\n  " << data.victoria.string()
       << ": " << data.victoriaNote << "\n";
 
-  out << "[2/4] Rover traverse across the crater (6 wheels, 1 ms steps, cache budget " << o.cacheMb
+  out << "[2/5] Rover traverse across the crater (6 wheels, 1 ms steps, cache budget " << o.cacheMb
       << " MiB)\n";
   const auto t1 = Clock::now();
   const TraverseRun trav = runTraverse(o, data.victoria, out);
   const double traverseSeconds = secondsSince(t1);
   const rover::TraverseResult& r = trav.result;
 
-  out << "[3/4] Fly-over from orbit down to the rover on the crater rim (" << o.frames
+  out << "[3/5] Fly-over from orbit down to the rover on the crater rim (" << o.frames
       << " frames, " << o.width << "x" << o.height << ")" << std::endl;
   demo::FlyoverOptions fly;
   fly.outputDir = o.outDir / "flyover";
@@ -268,6 +349,9 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
   // The DEM blends into the planet over its feather: drawn in the planet's colour, its border
   // is invisible (the lighter tone above marks it without composition).
   fly.scene.demAlbedo = demo::MarsVictoriaScene::kPlanetAlbedo;
+  fly.scene.extraDatasets = {{data.northCap, "north_cap", 60000.0, 0.0},
+                             {data.southCap, "south_cap", 60000.0, 0.0},
+                             {data.strip, "strip", 0.0, 8.0}};
   fly.progress = [&out, every = std::max<std::size_t>(1, o.frames / 6)](int done, int all,
                                                                         const fs::path& path) {
     if (static_cast<std::size_t>(done) % every == 0 || done == all)
@@ -275,10 +359,22 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
   };
   const demo::FlyoverSummary flyover = demo::renderFlyover(fly);
 
-  out << "[4/4] The rover's view back along its tracks, and a chase view" << std::endl;
+  out << "[4/5] The rover's view back along its tracks, and a chase view" << std::endl;
   const auto t4 = Clock::now();
   const RoverViews views = renderRoverViews(o, fly.scene, trav, out);
   const double viewSeconds = secondsSince(t4);
+
+  out << "[5/5] The poles from 2000 km: each cap composed over the global grid ("
+      << data.catalogue.string() << ")" << std::endl;
+  const auto t5 = Clock::now();
+  const fs::path northPole = o.outDir / "north_pole.png", southPole = o.outDir / "south_pole.png";
+  std::ostringstream renderReport;
+  renderCatalogueView(data.catalogue, 0.0, 88.0, 2.0e6, 65.0, 0.0, northPole, o.width, o.height,
+                      renderReport);
+  renderCatalogueView(data.catalogue, 180.0, -88.0, 2.0e6, 65.0, 180.0, southPole, o.width,
+                      o.height, renderReport);
+  out << "  " << northPole.string() << "\n  " << southPole.string() << std::endl;
+  const double poleSeconds = secondsSince(t5);
 
   out << "\n==== Summary (" << std::fixed << std::setprecision(1) << secondsSince(start) << " s)\n";
   out << "Traverse: " << r.steps << " steps, " << std::setprecision(0) << r.distance
@@ -306,6 +402,8 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
     out << "); over the north pole at frame " << flyover.poleFrame << " (latitude "
         << std::setprecision(2) << flyover.poleLatitude << "°)\n";
   }
+  out << "Poles: " << northPole.string() << " and " << southPole.string() << " ("
+      << std::setprecision(1) << poleSeconds << " s; caps and strip " << data.extraNote << ")\n";
   out << "Rover views: " << views.mast.string() << " and " << views.chase.string() << " ("
       << views.imprints << " six-wheel imprints pressed into " << views.trackTiles
       << " track tiles, " << std::setprecision(1) << viewSeconds << " s)\n";

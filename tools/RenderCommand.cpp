@@ -150,7 +150,7 @@ Terrain catalogueTerrain(const Args& a) {
   return t;
 }
 
-void runRender(const Args& a) {
+void runRender(const Args& a, std::ostream& report) {
   const auto start = std::chrono::steady_clock::now();
   refuseOverwritingInputs("render", {a.out, a.out + ".legend.json"}, {a.store});
   refuseStdoutOverInput("render", a.store);
@@ -263,8 +263,8 @@ void runRender(const Args& a) {
     const double dy = g0.spacingY();
     const int fit = static_cast<int>(std::floor(180.0 / dy)) / 2 * 2 + 1;
     if (fit < request.clipmap.size && fit >= 15) {
-      std::cout << "Clipmap size " << request.clipmap.size << " spans more than 180° at " << dy
-                << "° spacing; using " << fit << "\n";
+      report << "Clipmap size " << request.clipmap.size << " spans more than 180° at " << dy
+             << "° spacing; using " << fit << "\n";
       request.clipmap.size = fit;
     }
   }
@@ -272,18 +272,34 @@ void runRender(const Args& a) {
 
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::cout << "Wrote " << a.out << " (" << a.width << "×" << a.height << "): " << terrain.what
-            << ", " << view.str() << "\n"
-            << std::setprecision(3) << "  " << seconds << " s";
+  report << "Wrote " << a.out << " (" << a.width << "×" << a.height << "): " << terrain.what << ", "
+         << view.str() << "\n"
+         << std::setprecision(3) << "  " << seconds << " s";
   if (terrain.cache) {
     const store::CacheStats stats = terrain.cache->stats();
-    std::cout << "; " << stats.loads << " patches loaded, "
-              << static_cast<double>(stats.bytesLoaded) / 1048576.0 << " MiB loaded";
+    report << "; " << stats.loads << " patches loaded, "
+           << static_cast<double>(stats.bytesLoaded) / 1048576.0 << " MiB loaded";
   }
-  std::cout << "\n";
+  report << "\n";
 }
 
 }  // namespace
+
+void renderCatalogueView(const std::filesystem::path& catalogue, double lonDeg, double latDeg,
+                         double distance, double elevationDeg, double headingDeg,
+                         const std::filesystem::path& png, int width, int height,
+                         std::ostream& report) {
+  Args a;
+  a.store = catalogue.string();
+  a.out = png.string();
+  a.width = width;
+  a.height = height;
+  a.target = {lonDeg, latDeg};
+  a.distance = distance;
+  a.elevation = elevationDeg;
+  a.heading = headingDeg;
+  runRender(a, report);
+}
 
 void addRenderCommand(CLI::App& app) {
   auto a = std::make_shared<Args>();
@@ -355,7 +371,7 @@ void addRenderCommand(CLI::App& app) {
       "  regolith render moon.json --look-at 0,-88 --distance 1e6 --elevation 60\n"
       "Exit status: 0 on success; non-zero with 'regolith: error: ...' on stderr otherwise "
       "(including when no OpenGL 4.5 context can be made).");
-  cmd->callback([a] { runRender(*a); });
+  cmd->callback([a] { runRender(*a, std::cout); });
 }
 
 }  // namespace regolith::tools

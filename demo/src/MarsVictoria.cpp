@@ -239,6 +239,10 @@ void MarsVictoriaScene::compose() {
           std::make_shared<const store::Store>(store::Store::open(d.store)), cache);
       compose::DatasetOptions eo;
       eo.featherMetres = d.featherMetres;
+      if (d.featherNodataSamples > 0.0) {
+        eo.mask = compose::featherMask(store::topoGridOf(pager->store().grid(d.grid)),
+                                       *pager->source(d.grid), d.featherNodataSamples);
+      }
       catalogue->add(compose::datasetFromStore(*pager, d.grid, eo));
       pagers->push_back(std::move(pager));
     }

@@ -64,6 +64,9 @@ struct MarsVictoriaOptions {
     std::filesystem::path store;
     std::string grid;
     double featherMetres = 0.0;
+    /// > 0: a coverage mask feathered over this many samples from the grid's nodata border
+    /// (compose::featherMask(), in memory).
+    double featherNodataSamples = 0.0;
   };
   std::vector<StoreDataset> extraDatasets;
 };
