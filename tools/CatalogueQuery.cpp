@@ -5,6 +5,7 @@
 
 #include "OutputFolder.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -106,7 +107,9 @@ void runCatalogueQuery(const CatalogueQueryOptions& options, std::span<const Poi
       head += valid ? ",1," : ",0,";
       head += topo::statusName(h.status);
       head += ',';
-      head += std::to_string(shares.size());
+      // Contributors: the datasets with a non-zero share (ComposedSample::contributors).
+      head += std::to_string(std::count_if(
+          shares.begin(), shares.end(), [](const compose::Share& sh) { return sh.weight > 0.0; }));
       head += ',';
       if (shares.empty()) {
         // A point nothing covers still gets its row.

@@ -175,11 +175,13 @@ def regional_has_data(lat, lon, regional):
 
 
 def finest_wins_oracle(lat, lon, regional):
-    """Composed heights, coverage of the regional grid, and contributor counts of the global
-    and regional grids under "finest wins": H = c h_regional + (1 - c) h_global."""
+    """Composed heights, coverage of the regional grid, and contributor counts (datasets with a
+    non-zero share) under "finest wins": H = c h_regional + (1 - c) h_global, so both
+    contribute only inside the feather (0 < c < 1); past it the regional grid hides the
+    global one."""
     c = planet_coverage(lat, lon, REGIONAL_EXTENT, FEATHER_M, MOON[1])
     c = np.where(regional_has_data(lat, lon, regional), c, 0.0)
-    return c * REGIONAL_H + (1.0 - c) * GLOBAL_H, c, np.where(c > 0, 2, 1)
+    return c * REGIONAL_H + (1.0 - c) * GLOBAL_H, c, np.where((c > 0) & (c < 1), 2, 1)
 
 
 def weighted_oracle(lat, lon, regional, power):

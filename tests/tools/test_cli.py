@@ -1609,7 +1609,8 @@ def test_demo_generates_then_reuses_its_data_and_writes_every_image(work):
     first_frame = terrain_mask(read_png(images[0]))
     assert first_frame[45, 80] and not first_frame[0, 0] and not first_frame[-1, -1]
     second = run(*args, env_render=True)
-    assert second.stdout.count("reused") == 2 and "generated in" not in second.stdout
+    # Mars, Victoria, and the caps and strip of the composition.
+    assert second.stdout.count("reused") == 3 and "generated in" not in second.stdout
 
 
 # ---- projections through PROJ, height maps (issue 21) ----------------------------------------
