@@ -111,8 +111,14 @@ struct SurfaceAccumulator::Pass {
 
 SurfaceAccumulator::SurfaceAccumulator(AccumulatorOptions options)
     : options_(options),
+      geodetic_("surface geodetic pass",
+                gl::ShaderSources{shaders::kFullScreenVertex, {},
+                                  std::string(shaders::kVersion) + shaders::kHelpers +
+                                      shaders::kGeodeticFragment}),
       accumulate_("surface accumulation",
-                  gl::ShaderSources{shaders::kFullScreenVertex, {}, shaders::kAccumulateFragment}),
+                  gl::ShaderSources{shaders::kFullScreenVertex, {},
+                                    std::string(shaders::kVersion) + shaders::kHelpers +
+                                        shaders::kAccumulateFragment}),
       normalise_("surface normalisation",
                  gl::ShaderSources{shaders::kFullScreenVertex, {}, shaders::kNormaliseFragment}) {
   constexpr const char* op = "render::SurfaceAccumulator()";
@@ -163,6 +169,14 @@ void SurfaceAccumulator::resize(int width, int height) {
     glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   }
+  geo_ = gl::Texture();
+  glTextureStorage2D(geo_.id(), 1, GL_RGBA32F, width, height);
+  glTextureParameteri(geo_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTextureParameteri(geo_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  geoFbo_ = gl::Framebuffer();
+  glNamedFramebufferTexture(geoFbo_.id(), GL_COLOR_ATTACHMENT0, geo_.id(), 0);
+  if (glCheckNamedFramebufferStatus(geoFbo_.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw gl::GlError("render::SurfaceAccumulator: geodetic framebuffer incomplete");
   fbo_ = gl::Framebuffer();
   glNamedFramebufferTexture(fbo_.id(), GL_COLOR_ATTACHMENT0, sums_.id(), 0);
   glNamedFramebufferTexture(fbo_.id(), GL_COLOR_ATTACHMENT1, cover_.id(), 0);
@@ -539,29 +553,76 @@ AccumulationFrame SurfaceAccumulator::accumulate(const gl::RenderTarget& target,
   const std::array<float, 4> zero{0.0F, 0.0F, 0.0F, 0.0F}, one{1.0F, 1.0F, 1.0F, 1.0F};
   glClearNamedFramebufferfv(fbo_.id(), GL_COLOR, 0, zero.data());
   glClearNamedFramebufferfv(fbo_.id(), GL_COLOR, 1, one.data());
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo_.id());
+  glClearNamedFramebufferfv(geoFbo_.id(), GL_COLOR, 0, zero.data());
+  if (passes.empty()) {
+    target.bind();
+    return frame;
+  }
   glViewport(0, 0, width_, height_);
   glDisable(GL_DEPTH_TEST);
   glDepthMask(GL_FALSE);
+  glBindVertexArray(vao_.id());
+  glBindTextureUnit(2, target.depthTexture());
+  const glm::mat3 eyeToWorld(glm::transpose(rot));
+  const auto viewport = glm::vec2(static_cast<float>(camera.width), static_cast<float>(camera.height));
+
+  // The geodetic pass, once per frame over the union of the passes' rectangles: latitude,
+  // longitude and height relative to R0, the point of the reference surface under the
+  // screen's centre (or under the camera if that ray misses the body).
+  glm::ivec4 all = passes.front().scissor;
+  for (const Pass& p : passes) {
+    const glm::ivec2 lo = glm::min(glm::ivec2(all.x, all.y), glm::ivec2(p.scissor.x, p.scissor.y));
+    const glm::ivec2 hi = glm::max(glm::ivec2(all.x + all.z, all.y + all.w),
+                                   glm::ivec2(p.scissor.x + p.scissor.z, p.scissor.y + p.scissor.w));
+    all = {lo.x, lo.y, hi.x - lo.x, hi.y - lo.y};
+  }
+  topo::Geodetic frameRef = body.toGeodetic(camera.position);
+  {
+    const double hMid = 0.5 * (snapshot.lowestHeight() + snapshot.highestHeight());
+    const glm::dvec3 ray = camera.ray(0.5 * camera.width, 0.5 * camera.height);
+    const double t = hitShell(camera.position, ray, body.equatorialRadius() + hMid,
+                              body.polarRadius() + hMid);
+    if (t > 0.0) frameRef = body.toGeodetic(camera.position + t * ray);
+  }
+  const glm::dvec3 r0 = body.toBodyFixed({frameRef.latDeg, frameRef.lonDeg, 0.0});
+  {
+    const double s0 = std::sin(frameRef.latDeg * kDeg), c0 = std::cos(frameRef.latDeg * kDeg);
+    const double n0 = body.primeVerticalRadius(frameRef.latDeg);
+    glBindFramebuffer(GL_FRAMEBUFFER, geoFbo_.id());
+    glDisable(GL_BLEND);
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(all.x, all.y, all.z, all.w);
+    const gl::Program& gp = geodetic_;
+    gp.use();
+    gp.set("uEyeToWorld", eyeToWorld);
+    gp.set("uViewport", viewport);
+    gp.set("uFocal", static_cast<float>(camera.focalPixels()));
+    gp.set("uNear", static_cast<float>(camera.near));
+    gp.set("uRRel", f3(r0 - camera.position));
+    gp.set("uWorldToEnu", glm::mat3(glm::transpose(body.enuFrame(frameRef.latDeg, frameRef.lonDeg))));
+    gp.set("uRef", glm::vec4(glm::dvec4(s0, c0, n0 * c0, n0)));
+    gp.set("uA", static_cast<float>(body.equatorialRadius()));
+    gp.set("uE2", static_cast<float>(body.eccentricitySquared()));
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo_.id());
   glEnablei(GL_BLEND, 0);
   glBlendEquationi(0, GL_FUNC_ADD);
   glBlendFunci(0, GL_ONE, GL_ONE);
   glEnablei(GL_BLEND, 1);
   glBlendEquationi(1, GL_FUNC_ADD);
   glBlendFunci(1, GL_ZERO, GL_ONE_MINUS_SRC_COLOR);
-  glEnable(GL_SCISSOR_TEST);
-  glBindVertexArray(vao_.id());
-  glBindTextureUnit(2, target.depthTexture());
+  glBindTextureUnit(1, geo_.id());
 
   const gl::Program& pr = accumulate_;
   pr.use();
-  pr.set("uEyeToWorld", glm::mat3(glm::transpose(rot)));
-  pr.set("uViewport", glm::vec2(static_cast<float>(camera.width), static_cast<float>(camera.height)));
+  pr.set("uEyeToWorld", eyeToWorld);
+  pr.set("uViewport", viewport);
   pr.set("uFocal", static_cast<float>(camera.focalPixels()));
   pr.set("uNear", static_cast<float>(camera.near));
   pr.set("uA", static_cast<float>(body.equatorialRadius()));
   pr.set("uE2", static_cast<float>(body.eccentricitySquared()));
-  pr.set("uUpdates", body.eccentricitySquared() > 0.0 ? 3 : 1);
   pr.set("uLogN", static_cast<float>(std::log(options_.qualityN)));
   pr.set("uMinQuality", static_cast<float>(compose::kMinQuality));
   for (const Pass& p : passes) {
@@ -570,11 +631,12 @@ AccumulationFrame SurfaceAccumulator::accumulate(const gl::RenderTarget& target,
     const topo::TopoGrid& g0 = ds.level(0).grid;
     const topo::TopoGrid& gridL = ds.level(w.level).grid;
     const double sR = std::sin(p.latR * kDeg), cR = std::cos(p.latR * kDeg);
-    const double nR = body.primeVerticalRadius(p.latR);
     const glm::dmat3 enu = body.enuFrame(p.latR, p.lonR);
     pr.set("uRRel", f3(p.reference - camera.position));
     pr.set("uWorldToEnu", glm::mat3(glm::transpose(enu)));
-    pr.set("uRef", glm::vec4(glm::dvec4(sR, cR, nR * cR, nR)));
+    pr.set("uRef", glm::vec4(glm::dvec4(sR, cR, 0.0, 0.0)));
+    pr.set("uRefDelta", glm::vec2(glm::dvec2((p.latR - frameRef.latDeg) * kDeg,
+                                             topo::wrapLongitude180(p.lonR - frameRef.lonDeg) * kDeg)));
     Kind kind = Kind::LatLon;
     glm::dvec2 lin(1.0 / kDeg, 1.0 / kDeg);
     int centric = ds.latitudeType() == topo::LatitudeType::Planetocentric ? 1 : 0;

@@ -61,9 +61,10 @@ struct DatasetWindow {
 /// frame whose terrain is already drawn into a gl::RenderTarget, by Kooima's surface-map
 /// accumulation:
 ///
-/// 1. accumulate(): for each colour dataset whose bounds the camera's frustum meets
-///    (Snapshot::visible), one screen pass (scissored to the projection of its bounds)
-///    turns each pixel's depth back into a body-fixed point, maps it through the dataset's
+/// 1. accumulate(): one geodetic pass turns each pixel's depth back into a latitude,
+///    longitude and height (Kooima's deferred texturing, §3.4.2); then, for each colour
+///    dataset whose bounds the camera's frustum meets (Snapshot::visible), one screen pass
+///    (scissored to the projection of its bounds) maps each pixel through the dataset's
 ///    placement to its grid, reads a window of the pyramid level that matches the pixel
 ///    footprint (an R32F texture, NaN = no data) and adds (w·value, w) into an RGBA32F
 ///    accumulation target with w = coverage × α: coverage as compose::Dataset defines it
@@ -73,10 +74,11 @@ struct DatasetWindow {
 /// 2. normalise(): value = Σ w·v / Σ w where Σ w > 0, blended into the target's colour:
 ///    terrain × (1 + (albedo·gain − 1) × albedo coverage), then the overlay ramp over it.
 ///
-/// Precision: the shader works in float on offsets from a per-dataset reference point R
-/// (chosen in double on the CPU near the visible part of the dataset), with difference
-/// formulas for the geodetic latitude and the projections, so an error is a fraction of
-/// the view's extent (~1e-7 of it), never of the body's radius.
+/// Precision: the shaders work in float on offsets from reference points (the frame's,
+/// under the screen's centre, and each dataset's, at the centre of its window) whose own
+/// coordinates the CPU computes in double, with difference formulas for the geodetic
+/// latitude and the projections, so an error is a fraction of the view's extent (~1e-7 of
+/// it), never of the body's radius.
 ///
 /// Supported placements: planet latitude/longitude grids (either latitude type), local
 /// tangent planes, polar stereographic and equirectangular maps. accumulate() throws
@@ -124,12 +126,15 @@ class SurfaceAccumulator {
                  std::array<double, 2> heights, AccumulationFrame& frame);
 
   AccumulatorOptions options_;
+  gl::Program geodetic_;
   gl::Program accumulate_;
   gl::Program normalise_;
   gl::VertexArray vao_;
   gl::Framebuffer fbo_;
   gl::Texture sums_{0};
   gl::Texture cover_{0};
+  gl::Texture geo_{0};
+  gl::Framebuffer geoFbo_{0};
   int width_ = 0, height_ = 0;
   std::vector<std::unique_ptr<Cached>> cache_;
   std::vector<DatasetWindow> windows_;
