@@ -560,6 +560,72 @@ TEST(SurfaceAccumulatorGLTest, AGlobalMapSeenFromOrbitReadsACoarserLevelAcrossTh
   EXPECT_LE(worst, 2e-3);
 }
 
+TEST(SurfaceAccumulatorGLTest, APolarCapMapIsExactAtItsPole) {
+  test::glContext();
+  const topo::Body& body = mars();
+  // Terrain: the global 0.5° grid at height 0 (its clipmap continues over the pole);
+  // camera 400 km above the north pole, looking down at it from a little to the side.
+  const double tStep = 0.5;
+  const topo::TopoGrid tGrid(360, 720, -180.0 + 0.5 * tStep, 90.0 - 0.5 * tStep, tStep, tStep);
+  auto pyramid = std::make_shared<const clod::HeightPyramid>(clod::HeightPyramid::fromSamples(
+      tGrid, std::make_shared<ConstantSource>(360, 720, 0.0F), clod::SurfaceKind::Planet, body,
+      topo::LatitudeType::Planetodetic));
+  clod::ClipmapTerrain terrain(pyramid, clod::ClipmapOptions{});
+  Scene s;
+  clod::Camera& cam = s.camera;
+  cam.target = body.toBodyFixed({90.0, 0.0, 0.0});
+  cam.position = body.toBodyFixed({88.0, 30.0, 400.0e3});
+  cam.up = glm::dvec3(0.0, 0.0, 1.0);
+  cam.fovYDegrees = 50.0;
+  cam.width = 256;
+  cam.height = 192;
+  cam.near = 1000.0;
+  terrain.setFocus(cam.target);
+  terrain.finishLoading();
+  s.target = std::make_unique<gl::RenderTarget>(cam.width, cam.height);
+  s.target->clear({0.0F, 0.0F, 0.0F, 1.0F});
+  terrain.draw(cam);
+  // A north polar stereographic cap, 1 km samples, 401² centred on the pole, 0.6, feathered
+  // over 40 km; and a second one turned by its central meridian (90° E), 0.3, over 60 km:
+  // both meet the pole, where longitude has no meaning and ρ → 0.
+  compose::Catalogue cat(body);
+  for (int k = 0; k < 2; ++k) {
+    const auto ps = topo::PolarStereographic::withTrueScaleLatitude(
+        body, topo::PolarStereographic::Pole::North, 90.0, k == 0 ? 0.0 : 90.0);
+    const std::size_t n = k == 0 ? 401 : 301;
+    const double sp = k == 0 ? 1000.0 : 1500.0;
+    compose::DatasetOptions o = named(k == 0 ? "cap" : "turned cap", k == 0 ? 40e3 : 60e3);
+    o.role = compose::Role::Albedo;
+    o.heightRange = std::array<double, 2>{-10.0, 10.0};
+    cat.add(
+        compose::Dataset::dem(withSource(demPyramid(sp, n, n, [](double, double) { return 0.0; }),
+                                         constant(n, n, k == 0 ? 0.6F : 0.3F)),
+                              topo::Placement(body, ps), o));
+  }
+  const auto snap = cat.snapshot();
+  SurfaceAccumulator acc;
+  ASSERT_EQ(acc.accumulate(*s.target, cam, *snap).drawn, 2U);
+  const std::vector<glm::vec4> gpu = acc.readAccumulation();
+  acc.normalise(*s.target);
+  test::savePng("accumulation_pole", s.target->readColor());
+  const Expected e =
+      cpuRule(s, *snap, std::log(compose::kQualityN), [](int i) { return i == 0 ? 0.6 : 0.3; });
+  // Positions ~400 km away: float keeps ~0.04 m of them, 4e-5 of a 1 km sample.
+  int checked = 0, both = 0;
+  double worst = 0.0;
+  for (std::size_t i = 0; i < gpu.size(); ++i) {
+    if (!e.checkable[i]) continue;
+    const glm::dvec4 g(gpu[i]);
+    worst = std::max({worst, std::abs(g.x - e.sums[i].x), std::abs(g.y - e.sums[i].y)});
+    ++checked;
+    both += e.coverage[0][i] > 0.0 && e.coverage[1][i] > 0.0 ? 1 : 0;
+  }
+  std::printf("checked %d pixels (%d under both caps): worst |error| %.2e\n", checked, both, worst);
+  EXPECT_GE(checked, 20000);
+  EXPECT_GE(both, 10000);
+  EXPECT_LE(worst, 2e-3);
+}
+
 TEST(SurfaceAccumulatorGLTest, RefusesAPlacementItCannotMap) {
   test::glContext();
   const topo::Body& body = mars();
