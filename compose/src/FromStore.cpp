@@ -122,7 +122,11 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
     if (!d.is_object()) badFile(path, where, shown(d), "an object");
     for (const auto& [key, value] : d.items()) {
       if (!kKeys.count(key)) {
-        badFile(path, where + " key '" + key + "'", shown(value),
+        std::string field = where;
+        field += " key '";
+        field += key;
+        field += "'";
+        badFile(path, field, shown(value),
                 "one of store, grid, name, role, priority, feather_m, height_offset_m, "
                 "mask_grid, feather_nodata_samples");
       }
