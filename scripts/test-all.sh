@@ -4,7 +4,7 @@
 #   2. clang-format check                  (scripts/check-format.sh)
 #   3. Release build with -Werror           -> build/
 #   4. clang-tidy over that build           (scripts/run-clang-tidy.sh)
-#   5. ASan+UBSan build of the core (topo, store, rover) and its tests -> build-asan/
+#   5. ASan+UBSan build of the core (topo, store, rover, compose) and its tests -> build-asan/
 #      (REGOLITH_FULL_CHECKS=1: everything, with every test)
 #   6. TSan build of the store tests (pager, patch cache: the concurrent code) -> build-tsan/
 #   7. a short fuzz run: each libFuzzer target of tests/fuzz for REGOLITH_FUZZ_SECONDS (default
@@ -109,10 +109,11 @@ else
     -DCMAKE_C_FLAGS_DEBUG=-g1 -DREGOLITH_WERROR=OFF -DREGOLITH_SANITIZE=address,undefined \
     -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=OFF -DREGOLITH_BUILD_EXAMPLES=OFF \
     -DREGOLITH_BUILD_PYTHON=OFF -DREGOLITH_BUILD_BENCH=OFF "${extra_args[@]}"
-  cmake --build "$asan_dir" -j"$jobs" --target topo_tests store_tests rover_tests
+  cmake --build "$asan_dir" -j"$jobs" --target topo_tests store_tests rover_tests compose_tests
   run_shards "ASan+UBSan topo_tests" "$asan_dir/tests/topo_tests" "${asan_env[@]}"
   run_shards "ASan+UBSan store_tests" "$asan_dir/tests/store/store_tests" "${asan_env[@]}"
   run_shards "ASan+UBSan rover_tests" "$asan_dir/tests/rover/rover_tests" "${asan_env[@]}"
+  run_shards "ASan+UBSan compose_tests" "$asan_dir/tests/compose/compose_tests" "${asan_env[@]}"
 fi
 
 # ThreadSanitizer on the concurrent code: the store tests (pager, cache, lock-free block
