@@ -43,22 +43,67 @@ Lock::~Lock() {
 
 namespace {
 
+/// One entry of HDF5's error stack: "function(): description".
+struct StackEntry {
+  std::string func;
+  std::string desc;
+};
+
 herr_t collectError(unsigned /*n*/, const H5E_error2_t* err, void* data) {
-  auto* out = static_cast<std::string*>(data);
-  if (!out->empty()) out->append("; ");
-  out->append(err->func_name != nullptr ? err->func_name : "?");
-  out->append("(): ");
-  out->append(err->desc != nullptr ? err->desc : "");
+  static_cast<std::vector<StackEntry>*>(data)->push_back(
+      {err->func_name != nullptr ? err->func_name : "?", err->desc != nullptr ? err->desc : ""});
   return 0;
 }
 
 }  // namespace
 
+std::string condenseErrorDescription(std::string_view desc) {
+  // A failed read or write of HDF5's file drivers reads "file write failed: time = <ctime(),
+  // which ends in a line break>, filename = '<the file, perhaps a temporary>', file
+  // descriptor = 5, errno = 28, error message = 'No space left on device', buf = ...": the
+  // cause is the system's message and errno.
+  std::string out(desc);
+  const std::string_view timeKey = ": time = ", errnoKey = "errno = ",
+                         messageKey = "error message = '";
+  const std::size_t time = desc.find(timeKey), message = desc.find(messageKey);
+  if (time != std::string_view::npos && message != std::string_view::npos) {
+    const std::size_t from = message + messageKey.size(), to = desc.find('\'', from);
+    out = std::string(desc.substr(0, time)) + ": " +
+          std::string(desc.substr(from, to == std::string_view::npos ? to : to - from));
+    const std::size_t e = desc.find(errnoKey);
+    if (e != std::string_view::npos) {
+      const std::size_t digits = e + errnoKey.size();
+      std::size_t end = digits;
+      while (end < desc.size() && desc[end] >= '0' && desc[end] <= '9') ++end;
+      if (end > digits) out += " (errno " + std::string(desc.substr(digits, end - digits)) + ")";
+    }
+  }
+  // One line: line breaks and runs of blanks become one space.
+  std::string line;
+  line.reserve(out.size());
+  for (const char ch : out) {
+    const bool blank = ch == ' ' || ch == '\n' || ch == '\r' || ch == '\t';
+    if (blank && (line.empty() || line.back() == ' ')) continue;
+    line += blank ? ' ' : ch;
+  }
+  while (!line.empty() && line.back() == ' ') line.pop_back();
+  return line;
+}
+
 std::string takeErrorStack() {
   const Lock lock;
-  std::string out;
-  (void)H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, collectError, &out);
+  std::vector<StackEntry> entries;
+  (void)H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, collectError, &entries);
   (void)H5Eclear2(H5E_DEFAULT);
+  if (entries.empty()) return {};
+  // The outermost call (what failed) and the innermost one (why); the frames between them
+  // repeat the failure on its way up.
+  const auto text = [](const StackEntry& e) {
+    return e.func + "(): " + condenseErrorDescription(e.desc);
+  };
+  std::string out = text(entries.front());
+  if (entries.size() > 2) out += "; ...";
+  if (entries.size() > 1) out += "; " + text(entries.back());
   return out;
 }
 

@@ -94,9 +94,17 @@ using Datatype = Handle<H5Tclose>;
 using PropertyList = Handle<H5Pclose>;
 using Object = Handle<H5Oclose>;
 
-/// HDF5's error stack of this thread as one line ("H5Fopen(): unable to open file; ..."),
-/// innermost last; clears the stack. Empty if there is none.
+/// HDF5's error stack of this thread as one line: its outermost entry (what failed) and its
+/// innermost one (why), each condensed by condenseErrorDescription():
+/// "H5Fopen(): unable to open file; ...; H5F__super_read(): truncated file: eof = 100000, ...".
+/// Clears the stack. Empty if there is none.
 [[nodiscard]] std::string takeErrorStack();
+
+/// One HDF5 error description on one line: line breaks and runs of blanks become one space,
+/// and a file driver's "file write failed: time = ..., filename = ..., errno = 28, error
+/// message = 'No space left on device', ..." becomes "file write failed: No space left on
+/// device (errno 28)" (the file, often a temporary, is named by the message around it).
+[[nodiscard]] std::string condenseErrorDescription(std::string_view desc);
 
 /// The context of one operation, for messages: "store::open(): /path/x.h5".
 struct Context {

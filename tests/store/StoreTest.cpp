@@ -16,11 +16,13 @@
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -1098,6 +1100,43 @@ TEST(Store, RejectsAFileWithACorruptObjectHeader) {
       "store::open(): " + p.string() + ": cannot open grid 'moon' [HDF5: H5Oopen(): ";
   EXPECT_EQ(msg.substr(0, prefix.size()), prefix) << msg;
   EXPECT_NE(msg.find("incorrect metadata checksum"), std::string::npos) << msg;
+}
+
+TEST(StoreWriter, AWriteTheFileSystemRefusesNamesTheCauseOnOneLine) {
+  // A file size limit (RLIMIT_FSIZE, with SIGXFSZ ignored) makes write(2) fail with EFBIG
+  // inside HDF5's sec2 driver, whose description carries ctime()'s line break, the
+  // temporary's name and a dozen numbers. In a child: the limit and HDF5's state after the
+  // failed write (see the corrupt-header test) stay there.
+  const fs::path p = scratch("too-large.h5");
+  const std::string msg = inChild([&] {
+    (void)::signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{64 * 1024, 64 * 1024};
+    if (::setrlimit(RLIMIT_FSIZE, &limit) != 0) return std::string("setrlimit failed");
+    WriteOptions o;
+    o.deflate = 0;  // 1 MiB of samples, uncompressed: far beyond 64 KiB
+    try {
+      const std::vector<GridSource> grids{source(demInfo("big", 512, 512), crater)};
+      writeStore(p, grids, o);
+    } catch (const StoreError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  });
+  const std::string prefix = "store::writeStore(): " + p.string() + ": cannot ";
+  EXPECT_EQ(msg.substr(0, prefix.size()), prefix) << msg;
+  // HDF5's stack: its outermost entry, then its innermost one, the system's cause.
+  std::array<char, 128> buf{};
+  std::snprintf(buf.data(), buf.size(), "(): file write failed: %s (errno %d)]",
+                std::strerror(EFBIG), EFBIG);
+  const std::string cause = buf.data();  // "...: File too large (errno 27)]"
+  ASSERT_GE(msg.size(), cause.size()) << msg;
+  EXPECT_EQ(msg.substr(msg.size() - cause.size()), cause) << msg;
+  EXPECT_NE(msg.find(" [HDF5: H5"), std::string::npos) << msg;
+  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+  EXPECT_EQ(msg.find(".tmp-"), std::string::npos) << msg;  // the temporary is HDF5's detail
+  EXPECT_EQ(msg.find("time = "), std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists(p));
+  EXPECT_TRUE(filesBeside(p).empty());  // and no temporary is left
 }
 
 TEST(Store, RejectsFilesThatAreNotHdf5OrNotStoresOrMissing) {
