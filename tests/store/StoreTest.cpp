@@ -1763,6 +1763,29 @@ TEST(Store, ADamagedGlobalHeapInAnOldStoreIsAnErrorNotACrashOrAHang) {
                    "has no checksum: the heap is damaged)");
 }
 
+TEST(Store, ADamagedHeapObjectIsBlamedOnItsOwnAttributeWhenTheTextsAreReadTogether) {
+  // An old store's text attributes of one grid are read in one child process
+  // (hdf5::VariableStringBatch). Object 5 of the heap is grid 'crater''s fifth text, 'body'
+  // (makePre14 writes them in this order); 'kind', 'units' and 'sample_type' before it read
+  // back, and the error names 'body', as a read of 'body' alone would.
+  const fs::path p = writeStandardStore("heap-body.h5");
+  makePre14(p);
+  const std::string good = fileBytes(p);
+  std::uint64_t bodySize = 0;
+  std::memcpy(&bodySize, good.data() + heapObjectSizeOffset(good, 5), 8);
+  ASSERT_EQ(bodySize, 4U);  // "Mars"; objects 2 to 4 are "dem", "m" and "float32"
+  ASSERT_EQ(good.substr(heapObjectSizeOffset(good, 5) + 8, 4), "Mars");
+  patchU64(p, heapObjectSizeOffset(good, 5), std::uint64_t{1} << 62);
+  const std::string e = openError(p);
+  const std::string prefix =
+      "store::open(): " + p.string() + ": cannot read grid 'crater' attribute 'body': HDF5 ";
+  EXPECT_EQ(e.substr(0, prefix.size()), prefix) << e;
+  EXPECT_TRUE(
+      e.ends_with(" (a variable-length string, kept in the file's global heap, which "
+                  "has no checksum: the heap is damaged)"))
+      << e;
+}
+
 // ---- placements through PROJ (format 1.4) ---------------------------------------------------
 
 TEST(Store, AProjectedPlacementIsWrittenAsWkt2AndReopensAsTheSamePlacement) {
