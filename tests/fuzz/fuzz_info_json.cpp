@@ -29,6 +29,7 @@ void checkJson(const std::string& text) {
 
 extern "C" int LLVMFuzzerInitialize(int* /*argc*/, char*** /*argv*/) {
   regolith::fuzz::keepHdf5FreeLists();
+  regolith::fuzz::quietSanitizerDeathsInForkedChildren();
   return 0;
 }
 

@@ -64,6 +64,7 @@ void query(const regolith::store::Pager& pager, const GridInfo& g) {
 
 extern "C" int LLVMFuzzerInitialize(int* /*argc*/, char*** /*argv*/) {
   regolith::fuzz::keepHdf5FreeLists();
+  regolith::fuzz::quietSanitizerDeathsInForkedChildren();
   return 0;
 }
 
