@@ -16,7 +16,8 @@
 #   FUZZ_JOBS        build jobs (default 2)
 # The committed seeds (tests/fuzz/corpus/<target>) are copied into
 # <build>/fuzz/<target>/corpus, where the corpus grows from run to run; findings are written
-# to <build>/fuzz/<target>/run-<UTC time>/ (crash-*, timeout-*, leak-*, oom-*). Reproduce one with
+# to <build>/fuzz/<target>/run-<UTC time>/ (crash-*, timeout-*, leak-*, oom-*; slow-unit-*, an input
+# slower than 10 s, is counted apart and is not a finding). Reproduce one with
 # `<build>/tests/fuzz/<target> <file>`. Exit status 1 if any target found anything.
 set -euo pipefail
 
@@ -84,16 +85,17 @@ for t in "${targets[@]}"; do
   rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
   added=$(sed -n 's/^stat::new_units_added: *//p' "$log" | tail -1)
   count() { find "$found_dir" -maxdepth 1 -name "$1-*" | wc -l; }
-  crashes=$(count crash) hangs=$(count timeout) leaks=$(count leak) ooms=$(count oom)
+  crashes=$(count crash) hangs=$(count timeout) leaks=$(count leak) ooms=$(count oom) slow=$(count slow-unit)
   found=$((crashes + hangs + leaks + ooms))
-  [[ $found == 0 ]] && rmdir "$found_dir"
+  # slow-unit-* files (an input slower than 10 s, not a finding) keep the folder.
+  rmdir "$found_dir" 2>/dev/null || true
   if ((rc != 0 || found > 0)); then
     status=1
     echo "fuzz: $t stopped with status $rc; the end of its log:"
     grep -E "ERROR|SUMMARY|Test unit written|deadly signal|uncaught|runtime error" "$log" | head -20
   fi
-  summary+=("$(printf '%-16s %10s runs %8s exec/s %6s new units   crashes %s, hangs %s, leaks %s, ooms %s' \
-    "$t" "${runs:-?}" "${rate:-?}" "${added:-?}" "$crashes" "$hangs" "$leaks" "$ooms")")
+  summary+=("$(printf '%-16s %10s runs %8s exec/s %6s new units   crashes %s, hangs %s, leaks %s, ooms %s; slow units %s' \
+    "$t" "${runs:-?}" "${rate:-?}" "${added:-?}" "$crashes" "$hangs" "$leaks" "$ooms" "$slow")")
 done
 echo
 echo "fuzz: ${seconds} s per target ($(nproc) cores, $(uname -m)); findings in $build/fuzz/<target>/run-*/"

@@ -12,6 +12,7 @@
 #include <charconv>
 #include <chrono>
 #include <cstring>
+#include <optional>
 
 namespace regolith::store::hdf5 {
 
@@ -43,22 +44,67 @@ Lock::~Lock() {
 
 namespace {
 
+/// One entry of HDF5's error stack: "function(): description".
+struct StackEntry {
+  std::string func;
+  std::string desc;
+};
+
 herr_t collectError(unsigned /*n*/, const H5E_error2_t* err, void* data) {
-  auto* out = static_cast<std::string*>(data);
-  if (!out->empty()) out->append("; ");
-  out->append(err->func_name != nullptr ? err->func_name : "?");
-  out->append("(): ");
-  out->append(err->desc != nullptr ? err->desc : "");
+  static_cast<std::vector<StackEntry>*>(data)->push_back(
+      {err->func_name != nullptr ? err->func_name : "?", err->desc != nullptr ? err->desc : ""});
   return 0;
 }
 
 }  // namespace
 
+std::string condenseErrorDescription(std::string_view desc) {
+  // A failed read or write of HDF5's file drivers reads "file write failed: time = <ctime(),
+  // which ends in a line break>, filename = '<the file, perhaps a temporary>', file
+  // descriptor = 5, errno = 28, error message = 'No space left on device', buf = ...": the
+  // cause is the system's message and errno.
+  std::string out(desc);
+  const std::string_view timeKey = ": time = ", errnoKey = "errno = ",
+                         messageKey = "error message = '";
+  const std::size_t time = desc.find(timeKey), message = desc.find(messageKey);
+  if (time != std::string_view::npos && message != std::string_view::npos) {
+    const std::size_t from = message + messageKey.size(), to = desc.find('\'', from);
+    out = std::string(desc.substr(0, time)) + ": " +
+          std::string(desc.substr(from, to == std::string_view::npos ? to : to - from));
+    const std::size_t e = desc.find(errnoKey);
+    if (e != std::string_view::npos) {
+      const std::size_t digits = e + errnoKey.size();
+      std::size_t end = digits;
+      while (end < desc.size() && desc[end] >= '0' && desc[end] <= '9') ++end;
+      if (end > digits) out += " (errno " + std::string(desc.substr(digits, end - digits)) + ")";
+    }
+  }
+  // One line: line breaks and runs of blanks become one space.
+  std::string line;
+  line.reserve(out.size());
+  for (const char ch : out) {
+    const bool blank = ch == ' ' || ch == '\n' || ch == '\r' || ch == '\t';
+    if (blank && (line.empty() || line.back() == ' ')) continue;
+    line += blank ? ' ' : ch;
+  }
+  while (!line.empty() && line.back() == ' ') line.pop_back();
+  return line;
+}
+
 std::string takeErrorStack() {
   const Lock lock;
-  std::string out;
-  (void)H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, collectError, &out);
+  std::vector<StackEntry> entries;
+  (void)H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, collectError, &entries);
   (void)H5Eclear2(H5E_DEFAULT);
+  if (entries.empty()) return {};
+  // The outermost call (what failed) and the innermost one (why); the frames between them
+  // repeat the failure on its way up.
+  const auto text = [](const StackEntry& e) {
+    return e.func + "(): " + condenseErrorDescription(e.desc);
+  };
+  std::string out = text(entries.front());
+  if (entries.size() > 2) out += "; ...";
+  if (entries.size() > 1) out += "; " + text(entries.back());
   return out;
 }
 
@@ -225,9 +271,9 @@ bool writeAll(int fd, const char* data, std::size_t n) {
   return true;
 }
 
-/// Reads from fd until end of file, kMaxStringBytes + 1 bytes, or the deadline; false on a
-/// timeout.
-bool readUntilEof(int fd, std::string& out, std::chrono::steady_clock::time_point deadline) {
+/// Reads from fd until end of file, maxBytes + 1 bytes, or the deadline; false on a timeout.
+bool readUntilEof(int fd, std::string& out, std::size_t maxBytes,
+                  std::chrono::steady_clock::time_point deadline) {
   std::array<char, 4096> buf{};
   for (;;) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -241,8 +287,76 @@ bool readUntilEof(int fd, std::string& out, std::chrono::steady_clock::time_poin
     if (r < 0 && errno == EINTR) continue;
     if (r <= 0) return true;
     out.append(buf.data(), static_cast<std::size_t>(r));
-    if (out.size() > kMaxStringBytes) return true;
+    if (out.size() > maxBytes) return true;
   }
+}
+
+}  // namespace
+
+namespace {
+
+const char* const kHeapNote =
+    " (a variable-length string, kept in the file's global heap, which has no checksum: "
+    "the heap is damaged)";
+
+/// How a child that read variable-length strings ended, for messages: the end of "cannot
+/// read <owner> attribute '<name>'" for the attribute it was reading.
+std::string childFailure(bool finished, int status) {
+  if (!finished) {
+    return ": HDF5 did not finish reading it within " +
+           std::to_string(kStringReadTimeoutMs / 1000) + " s" + kHeapNote;
+  }
+  if (WIFSIGNALED(status)) {
+    return ": HDF5 crashed reading it (signal " + std::to_string(WTERMSIG(status)) + ")" +
+           kHeapNote;
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 2) return kHeapNote;  // HDF5's error
+  // A sanitizer's report exits non-zero.
+  return ": HDF5 crashed reading it (exit status " + std::to_string(WEXITSTATUS(status)) + ")" +
+         kHeapNote;
+}
+
+std::string tooLong() {
+  return ": it is longer than " + std::to_string(kMaxStringBytes) + " bytes" + kHeapNote;
+}
+
+/// A forked child of the caller, which holds the HDF5 lock (so no other thread of this
+/// process is inside HDF5 when it forks): `body(fd)` runs in the child, writing to a pipe,
+/// then the child exits with its return value without running any destructor or atexit
+/// handler. The parent reads the pipe until end of file, `maxBytes` + 1 bytes or the
+/// watchdog's deadline (then kills the child), and reaps the child.
+struct ChildRead {
+  std::string bytes;
+  bool finished = false;  // false: the deadline passed
+  int status = 0;         // waitpid()'s
+};
+
+template <class Body>
+ChildRead readInChild(Body&& body, std::size_t maxBytes, const Context& ctx,
+                      const std::string& what) {
+  std::array<int, 2> fds{};
+  if (::pipe2(fds.data(), O_CLOEXEC) != 0) {
+    fail(ctx, what + ": pipe(): " + std::strerror(errno));
+  }
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(fds[0]);
+    ::_exit(body(fds[1]));
+  }
+  ::close(fds[1]);
+  if (pid < 0) {
+    ::close(fds[0]);
+    fail(ctx, what + ": fork(): " + std::strerror(errno));
+  }
+  ChildRead r;
+  r.finished = readUntilEof(
+      fds[0], r.bytes, maxBytes,
+      std::chrono::steady_clock::now() + std::chrono::milliseconds(kStringReadTimeoutMs));
+  ::close(fds[0]);
+  if (!r.finished) ::kill(pid, SIGKILL);
+  while (::waitpid(pid, &r.status, 0) < 0 && errno == EINTR) {
+  }
+  return r;
 }
 
 }  // namespace
@@ -253,56 +367,153 @@ std::string readVariableStringBounded(hid_t attr, hid_t mem, const Context& ctx,
   // checksum, and HDF5 1.10 crashes (a huge object size, in H5HG_read) or loops forever (a
   // free-space entry of size 0) on a damaged one; no HDF5 call validates a heap first.
   // Stores since format 1.4 write fixed-length strings (inside checksummed object
-  // headers), so only older stores come here. The caller holds the HDF5 lock, so no other
-  // thread of this process is inside HDF5 when it forks; the child reads the attribute,
-  // writes the text to a pipe and exits without running any destructor or atexit handler.
+  // headers), so only older stores come here. The child reads the attribute and writes the
+  // text to a pipe.
   const std::string what = "cannot read " + owner + " attribute '" + name + "'";
-  std::array<int, 2> fds{};
-  if (::pipe2(fds.data(), O_CLOEXEC) != 0) {
-    fail(ctx, what + ": pipe(): " + std::strerror(errno));
+  const ChildRead r = readInChild(
+      [&](int fd) {
+        char* p = nullptr;
+        if (H5Aread(attr, mem, static_cast<void*>(&p)) < 0) return 2;
+        return p == nullptr || writeAll(fd, p, std::strlen(p)) ? 0 : 3;
+      },
+      kMaxStringBytes, ctx, what);
+  if (r.finished && r.bytes.size() > kMaxStringBytes) fail(ctx, what + tooLong());
+  if (!r.finished || !WIFEXITED(r.status) || WEXITSTATUS(r.status) != 0) {
+    fail(ctx, what + childFailure(r.finished, r.status));
   }
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    ::close(fds[0]);
-    char* p = nullptr;
-    if (H5Aread(attr, mem, static_cast<void*>(&p)) < 0) ::_exit(2);
-    const bool ok = p == nullptr || writeAll(fds[1], p, std::strlen(p));
-    ::_exit(ok ? 0 : 3);
+  return r.bytes;
+}
+
+namespace {
+
+// The batch's records on the pipe, in the order read: 'B' and the attribute's index (4
+// bytes) before a read; then 'V', the text's length (8 bytes) and the text; or 'F' (HDF5's
+// error) or 'L' (longer than kMaxStringBytes).
+constexpr char kBegin = 'B', kValue = 'V', kHdf5Error = 'F', kTooLong = 'L';
+
+thread_local VariableStringBatch* tlInnermostBatch = nullptr;
+
+}  // namespace
+
+VariableStringBatch::VariableStringBatch(hid_t obj, std::initializer_list<const char*> names,
+                                         const Context& ctx)
+    : obj_(obj), outcomes_(read(obj, names, ctx)), outer_(tlInnermostBatch) {
+  tlInnermostBatch = this;  // last: a constructor that throws has no destructor to undo it
+}
+
+std::vector<std::pair<std::string, VariableStringBatch::Outcome>> VariableStringBatch::read(
+    hid_t obj, std::initializer_list<const char*> names, const Context& ctx) {
+  std::vector<std::pair<std::string, Outcome>> outcomes;
+  const Lock lock;
+  struct Pending {
+    std::string name;
+    Attribute attr;
+    Datatype mem;
+  };
+  std::vector<Pending> todo;
+  for (const char* name : names) {
+    // Only what readString() would read in a child: one element of a variable-length
+    // string. Anything else (or any HDF5 error here) is left to readString().
+    if (H5Aexists(obj, name) <= 0) continue;
+    Attribute attr(H5Aopen(obj, name, H5P_DEFAULT));
+    if (!attr.valid()) continue;
+    const Datatype type(H5Aget_type(attr.get()));
+    const Dataspace space(H5Aget_space(attr.get()));
+    if (!type.valid() || !space.valid() || H5Tget_class(type.get()) != H5T_STRING ||
+        H5Tis_variable_str(type.get()) <= 0 || H5Sget_simple_extent_npoints(space.get()) != 1) {
+      continue;
+    }
+    Datatype mem(H5Tcopy(H5T_C_S1));
+    if (!mem.valid() || H5Tset_cset(mem.get(), H5Tget_cset(type.get())) < 0 ||
+        H5Tset_size(mem.get(), H5T_VARIABLE) < 0) {
+      continue;
+    }
+    todo.push_back({name, std::move(attr), std::move(mem)});
   }
-  ::close(fds[1]);
-  if (pid < 0) {
-    ::close(fds[0]);
-    fail(ctx, what + ": fork(): " + std::strerror(errno));
+  (void)takeErrorStack();  // lookups that failed are readString()'s to report
+  if (todo.size() < 2) return outcomes;
+  ChildRead r;
+  try {
+    r = readInChild(
+        [&](int fd) {
+          for (std::size_t i = 0; i < todo.size(); ++i) {
+            std::array<char, 5> begin{kBegin};
+            const auto index = static_cast<std::uint32_t>(i);
+            std::memcpy(begin.data() + 1, &index, 4);
+            if (!writeAll(fd, begin.data(), begin.size())) return 3;
+            char* p = nullptr;
+            const char* tag = &kValue;
+            std::uint64_t n = 0;
+            if (H5Aread(todo[i].attr.get(), todo[i].mem.get(), static_cast<void*>(&p)) < 0) {
+              tag = &kHdf5Error;
+            } else if (p != nullptr) {
+              n = std::strlen(p);
+              if (n > kMaxStringBytes) tag = &kTooLong;
+            }
+            if (!writeAll(fd, tag, 1)) return 3;
+            if (*tag != kValue) continue;
+            if (!writeAll(fd, reinterpret_cast<const char*>(&n), 8)) return 3;
+            if (n > 0 && !writeAll(fd, p, static_cast<std::size_t>(n))) return 3;
+          }
+          return 0;
+        },
+        todo.size() * (kMaxStringBytes + 16), ctx, "cannot read text attributes");
+  } catch (const StoreError&) {
+    return outcomes;  // no pipe or no fork: each attribute's own read reports it, by name
   }
-  std::string text;
-  const bool finished = readUntilEof(
-      fds[0], text,
-      std::chrono::steady_clock::now() + std::chrono::milliseconds(kStringReadTimeoutMs));
-  ::close(fds[0]);
-  if (!finished) ::kill(pid, SIGKILL);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  // Parse the records; a record cut short ends the parse (the child failed there).
+  std::size_t pos = 0;
+  std::optional<std::size_t> reading;  // begun, with no outcome yet
+  const std::string& b = r.bytes;
+  while (pos < b.size()) {
+    const char tag = b[pos];
+    if (tag == kBegin) {
+      std::uint32_t index = 0;
+      if (b.size() - pos < 5) break;
+      std::memcpy(&index, b.data() + pos + 1, 4);
+      if (index >= todo.size()) break;
+      reading = index;
+      pos += 5;
+      continue;
+    }
+    if (!reading) break;
+    Outcome o;
+    if (tag == kValue) {
+      std::uint64_t n = 0;
+      if (b.size() - pos < 9) break;
+      std::memcpy(&n, b.data() + pos + 1, 8);
+      if (b.size() - pos - 9 < n) break;
+      o.text = b.substr(pos + 9, static_cast<std::size_t>(n));
+      pos += 9 + static_cast<std::size_t>(n);
+    } else if (tag == kHdf5Error || tag == kTooLong) {
+      o.failed = true;
+      o.text = tag == kTooLong ? tooLong() : std::string(kHeapNote);
+      pos += 1;
+    } else {
+      break;
+    }
+    outcomes.emplace_back(todo[*reading].name, std::move(o));
+    reading.reset();
   }
-  const std::string heap =
-      " (a variable-length string, kept in the file's global heap, which has no checksum: "
-      "the heap is damaged)";
-  if (!finished) {
-    fail(ctx, what + ": HDF5 did not finish reading it within " +
-                  std::to_string(kStringReadTimeoutMs / 1000) + " s" + heap);
+  // The attribute being read when the child crashed, hung or was cut off.
+  const bool clean = r.finished && WIFEXITED(r.status) && WEXITSTATUS(r.status) == 0;
+  if (reading && !clean) {
+    outcomes.emplace_back(todo[*reading].name, Outcome{true, childFailure(r.finished, r.status)});
   }
-  if (text.size() > kMaxStringBytes) {
-    fail(ctx, what + ": it is longer than " + std::to_string(kMaxStringBytes) + " bytes" + heap);
+  return outcomes;
+}
+
+VariableStringBatch::~VariableStringBatch() { tlInnermostBatch = outer_; }
+
+const VariableStringBatch::Outcome* VariableStringBatch::find(hid_t obj, std::string_view name) {
+  for (const VariableStringBatch* b = tlInnermostBatch; b != nullptr; b = b->outer_) {
+    if (b->obj_ != obj) continue;
+    for (const auto& [n, o] : b->outcomes_) {
+      if (n == name) return &o;
+    }
+    return nullptr;
   }
-  if (WIFSIGNALED(status)) {
-    fail(ctx, what + ": HDF5 crashed reading it (signal " + std::to_string(WTERMSIG(status)) + ")" +
-                  heap);
-  }
-  if (WIFEXITED(status) && WEXITSTATUS(status) == 2) fail(ctx, what + heap);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {  // a sanitizer's report exits non-zero
-    fail(ctx, what + ": HDF5 crashed reading it (exit status " +
-                  std::to_string(WEXITSTATUS(status)) + ")" + heap);
-  }
-  return text;
+  return nullptr;
 }
 
 std::string readString(hid_t obj, const char* name, const Context& ctx, const std::string& owner) {
@@ -315,6 +526,12 @@ std::string readString(hid_t obj, const char* name, const Context& ctx, const st
   const std::string what = "cannot read " + owner + " attribute '" + name + "'";
   const htri_t variable = H5Tis_variable_str(a.type.get());
   if (variable < 0) failHdf5(ctx, what);
+  if (variable > 0) {
+    if (const VariableStringBatch::Outcome* o = VariableStringBatch::find(obj, name)) {
+      if (o->failed) fail(ctx, what + o->text);
+      return o->text;
+    }
+  }
   const Datatype mem(check(H5Tcopy(H5T_C_S1), ctx, what));
   check(H5Tset_cset(mem.get(), H5Tget_cset(a.type.get())), ctx, what);
   if (variable > 0) {

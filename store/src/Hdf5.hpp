@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <initializer_list>
 #include <mutex>
 #include <string>
 #include <string_view>
@@ -94,9 +95,17 @@ using Datatype = Handle<H5Tclose>;
 using PropertyList = Handle<H5Pclose>;
 using Object = Handle<H5Oclose>;
 
-/// HDF5's error stack of this thread as one line ("H5Fopen(): unable to open file; ..."),
-/// innermost last; clears the stack. Empty if there is none.
+/// HDF5's error stack of this thread as one line: its outermost entry (what failed) and its
+/// innermost one (why), each condensed by condenseErrorDescription():
+/// "H5Fopen(): unable to open file; ...; H5F__super_read(): truncated file: eof = 100000, ...".
+/// Clears the stack. Empty if there is none.
 [[nodiscard]] std::string takeErrorStack();
+
+/// One HDF5 error description on one line: line breaks and runs of blanks become one space,
+/// and a file driver's "file write failed: time = ..., filename = ..., errno = 28, error
+/// message = 'No space left on device', ..." becomes "file write failed: No space left on
+/// device (errno 28)" (the file, often a temporary, is named by the message around it).
+[[nodiscard]] std::string condenseErrorDescription(std::string_view desc);
 
 /// The context of one operation, for messages: "store::open(): /path/x.h5".
 struct Context {
@@ -141,9 +150,50 @@ void check(herr_t status, const Context& ctx, const std::string& what);
 /// held; `mem` is a variable-length C string type.
 [[nodiscard]] std::string readVariableStringBounded(hid_t attr, hid_t mem, const Context& ctx,
                                                     const std::string& owner, const char* name);
-/// A string (fixed or variable length, one element).
+/// A string (fixed or variable length, one element). A variable-length one is answered by
+/// the innermost VariableStringBatch of this thread that read it, else read on its own by
+/// readVariableStringBounded().
 [[nodiscard]] std::string readString(hid_t obj, const char* name, const Context& ctx,
                                      const std::string& owner);
+
+/// Reads several variable-length string attributes of one object (a store before format
+/// 1.4) in one child process under one 10 s watchdog, instead of one child per attribute:
+/// a fork() is the main cost of opening an old store (7 per grid). While the batch lives,
+/// readString() on this thread answers those attributes of `obj` from it: their text, or the
+/// error the attribute's own bounded read would have given (HDF5's error, a crash, a timeout,
+/// text over 16 MiB), named after the attribute that was being read when the child failed.
+/// Attributes the child did not reach, and names that are missing, of another class or
+/// shape, or fixed-length strings, are left to readString() (its own checks and messages).
+/// Does nothing for fewer than two such attributes. Call with `obj` open for the batch's
+/// life; the batch takes the HDF5 lock while it reads. Not copyable or movable; one thread.
+class VariableStringBatch {
+ public:
+  VariableStringBatch(hid_t obj, std::initializer_list<const char*> names, const Context& ctx);
+  ~VariableStringBatch();
+  VariableStringBatch(const VariableStringBatch&) = delete;
+  VariableStringBatch& operator=(const VariableStringBatch&) = delete;
+  VariableStringBatch(VariableStringBatch&&) = delete;
+  VariableStringBatch& operator=(VariableStringBatch&&) = delete;
+
+  /// What the read of one attribute gave: its text, or (failed) the end of its error
+  /// message after "cannot read <owner> attribute '<name>'".
+  struct Outcome {
+    bool failed = false;
+    std::string text;
+  };
+  /// The outcome of attribute `name` of `obj` in this thread's innermost batch of `obj`, or
+  /// nullptr if no batch of this thread read it.
+  [[nodiscard]] static const Outcome* find(hid_t obj, std::string_view name);
+
+ private:
+  static std::vector<std::pair<std::string, Outcome>> read(hid_t obj,
+                                                           std::initializer_list<const char*> names,
+                                                           const Context& ctx);
+
+  hid_t obj_;
+  std::vector<std::pair<std::string, Outcome>> outcomes_;
+  VariableStringBatch* outer_;
+};
 
 void writeDouble(hid_t obj, const char* name, double v, const Context& ctx);
 void writeDoubles(hid_t obj, const char* name, const std::vector<double>& v, const Context& ctx);

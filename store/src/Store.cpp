@@ -182,6 +182,13 @@ void readPlacement(hid_t g, GridInfo& info, const Context& ctx, const std::strin
 void readAttributes(hid_t g, GridEntry& entry, const Context& ctx, const std::string& owner) {
   GridInfo& info = entry.info;
   checkVersion(hdf5::readIntegers(g, format::kFormatVersion, 2, ctx, owner), ctx, owner);
+  // A store before format 1.4: its text attributes are read in one child process, not one
+  // each (hdf5::VariableStringBatch); a 1.4 store has none to read there.
+  const hdf5::VariableStringBatch texts(
+      g,
+      {format::kKind, format::kUnits, format::kSampleType, format::kBody, format::kLatitudeType,
+       format::kPlacement, format::kCrsWkt, format::kProvenance},
+      ctx);
 
   const std::string kind = hdf5::readString(g, format::kKind, ctx, owner);
   if (kind == format::kDem) {
@@ -437,6 +444,8 @@ Tile openTile(hid_t tiles, std::size_t i, const GridEntry& entry, const Context&
         towner + " has neither a dataset 'level0' nor an attribute 'external_file'", "tile", ctx);
     return t;
   }
+  const hdf5::VariableStringBatch texts(tg.get(), {format::kExternalFile, format::kExternalGrid},
+                                        ctx);
   const std::string file = hdf5::readString(tg.get(), format::kExternalFile, ctx, towner);
   t.externalGrid = hdf5::readString(tg.get(), format::kExternalGrid, ctx, towner);
   std::filesystem::path resolved(file);

@@ -29,12 +29,13 @@ void checkJson(const std::string& text) {
 
 extern "C" int LLVMFuzzerInitialize(int* /*argc*/, char*** /*argv*/) {
   regolith::fuzz::keepHdf5FreeLists();
+  regolith::fuzz::quietSanitizerDeathsInForkedChildren();
   return 0;
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const regolith::fuzz::ScratchFile file("info.h5");
-  if (!regolith::fuzz::globalHeapsConsistent(data, size)) return -1;  // known: see there
+  if (regolith::fuzz::globalHeapMayLoop(data, size)) return -1;  // known: see there
   file.write(data, size);
   for (const bool json : {true, false}) {
     regolith::fuzz::expectOnlyRegolithErrors([&] {

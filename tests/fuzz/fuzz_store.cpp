@@ -64,12 +64,13 @@ void query(const regolith::store::Pager& pager, const GridInfo& g) {
 
 extern "C" int LLVMFuzzerInitialize(int* /*argc*/, char*** /*argv*/) {
   regolith::fuzz::keepHdf5FreeLists();
+  regolith::fuzz::quietSanitizerDeathsInForkedChildren();
   return 0;
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const regolith::fuzz::ScratchFile file("store.h5");
-  if (!regolith::fuzz::globalHeapsConsistent(data, size)) return -1;  // known: see there
+  if (regolith::fuzz::globalHeapMayLoop(data, size)) return -1;  // known: see there
   file.write(data, size);
   regolith::fuzz::expectOnlyRegolithErrors([&] {
     auto store =

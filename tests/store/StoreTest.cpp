@@ -16,11 +16,13 @@
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -1100,6 +1102,43 @@ TEST(Store, RejectsAFileWithACorruptObjectHeader) {
   EXPECT_NE(msg.find("incorrect metadata checksum"), std::string::npos) << msg;
 }
 
+TEST(StoreWriter, AWriteTheFileSystemRefusesNamesTheCauseOnOneLine) {
+  // A file size limit (RLIMIT_FSIZE, with SIGXFSZ ignored) makes write(2) fail with EFBIG
+  // inside HDF5's sec2 driver, whose description carries ctime()'s line break, the
+  // temporary's name and a dozen numbers. In a child: the limit and HDF5's state after the
+  // failed write (see the corrupt-header test) stay there.
+  const fs::path p = scratch("too-large.h5");
+  const std::string msg = inChild([&] {
+    (void)::signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{64 * 1024, 64 * 1024};
+    if (::setrlimit(RLIMIT_FSIZE, &limit) != 0) return std::string("setrlimit failed");
+    WriteOptions o;
+    o.deflate = 0;  // 1 MiB of samples, uncompressed: far beyond 64 KiB
+    try {
+      const std::vector<GridSource> grids{source(demInfo("big", 512, 512), crater)};
+      writeStore(p, grids, o);
+    } catch (const StoreError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  });
+  const std::string prefix = "store::writeStore(): " + p.string() + ": cannot ";
+  EXPECT_EQ(msg.substr(0, prefix.size()), prefix) << msg;
+  // HDF5's stack: its outermost entry, then its innermost one, the system's cause.
+  std::array<char, 128> buf{};
+  std::snprintf(buf.data(), buf.size(), "(): file write failed: %s (errno %d)]",
+                std::strerror(EFBIG), EFBIG);
+  const std::string cause = buf.data();  // "...: File too large (errno 27)]"
+  ASSERT_GE(msg.size(), cause.size()) << msg;
+  EXPECT_EQ(msg.substr(msg.size() - cause.size()), cause) << msg;
+  EXPECT_NE(msg.find(" [HDF5: H5"), std::string::npos) << msg;
+  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+  EXPECT_EQ(msg.find(".tmp-"), std::string::npos) << msg;  // the temporary is HDF5's detail
+  EXPECT_EQ(msg.find("time = "), std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists(p));
+  EXPECT_TRUE(filesBeside(p).empty());  // and no temporary is left
+}
+
 TEST(Store, RejectsFilesThatAreNotHdf5OrNotStoresOrMissing) {
   const fs::path text = scratch("not-hdf5.h5");
   std::ofstream(text) << "elevation,lat,lon\n1,2,3\n";
@@ -1722,6 +1761,29 @@ TEST(Store, ADamagedGlobalHeapInAnOldStoreIsAnErrorNotACrashOrAHang) {
                    ": cannot read grid 'crater' attribute 'kind': HDF5 did not finish reading it "
                    "within 10 s (a variable-length string, kept in the file's global heap, which "
                    "has no checksum: the heap is damaged)");
+}
+
+TEST(Store, ADamagedHeapObjectIsBlamedOnItsOwnAttributeWhenTheTextsAreReadTogether) {
+  // An old store's text attributes of one grid are read in one child process
+  // (hdf5::VariableStringBatch). Object 5 of the heap is grid 'crater''s fifth text, 'body'
+  // (makePre14 writes them in this order); 'kind', 'units' and 'sample_type' before it read
+  // back, and the error names 'body', as a read of 'body' alone would.
+  const fs::path p = writeStandardStore("heap-body.h5");
+  makePre14(p);
+  const std::string good = fileBytes(p);
+  std::uint64_t bodySize = 0;
+  std::memcpy(&bodySize, good.data() + heapObjectSizeOffset(good, 5), 8);
+  ASSERT_EQ(bodySize, 4U);  // "Mars"; objects 2 to 4 are "dem", "m" and "float32"
+  ASSERT_EQ(good.substr(heapObjectSizeOffset(good, 5) + 8, 4), "Mars");
+  patchU64(p, heapObjectSizeOffset(good, 5), std::uint64_t{1} << 62);
+  const std::string e = openError(p);
+  const std::string prefix =
+      "store::open(): " + p.string() + ": cannot read grid 'crater' attribute 'body': HDF5 ";
+  EXPECT_EQ(e.substr(0, prefix.size()), prefix) << e;
+  EXPECT_TRUE(
+      e.ends_with(" (a variable-length string, kept in the file's global heap, which "
+                  "has no checksum: the heap is damaged)"))
+      << e;
 }
 
 // ---- placements through PROJ (format 1.4) ---------------------------------------------------
