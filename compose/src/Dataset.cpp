@@ -29,24 +29,6 @@ double smoothstep(double t) noexcept {
   return t * t * (3.0 - 2.0 * t);
 }
 
-/// Bilinear read of a source at fractional (u, v) = (col, row), clamped to the grid; NaN
-/// samples count as 0 (mask semantics).
-double maskAt(const topo::SampleSource& mask, double u, double v) {
-  const auto cols = static_cast<double>(mask.cols()), rows = static_cast<double>(mask.rows());
-  u = std::clamp(u, 0.0, cols - 1.0);
-  v = std::clamp(v, 0.0, rows - 1.0);
-  const auto c0 = static_cast<std::size_t>(u), r0 = static_cast<std::size_t>(v);
-  const std::size_t c1 = std::min(c0 + 1, mask.cols() - 1), r1 = std::min(r0 + 1, mask.rows() - 1);
-  const double tu = u - static_cast<double>(c0), tv = v - static_cast<double>(r0);
-  auto s = [&](std::size_t r, std::size_t c) {
-    const auto x = static_cast<double>(mask.sample(r, c));
-    return std::isnan(x) ? 0.0 : std::clamp(x, 0.0, 1.0);
-  };
-  const double top = s(r0, c0) + tu * (s(r0, c1) - s(r0, c0));
-  const double bottom = s(r1, c0) + tu * (s(r1, c1) - s(r1, c0));
-  return top + tv * (bottom - top);
-}
-
 /// Height range of a pyramid from its coarsest level of at most 2^20 samples (see
 /// DatasetOptions::heightRange).
 std::array<double, 2> estimateHeightRange(const std::vector<topo::PyramidLevel>& levels,
@@ -77,6 +59,22 @@ std::array<double, 2> estimateHeightRange(const std::vector<topo::PyramidLevel>&
 }
 
 }  // namespace
+
+double maskValue(const topo::SampleSource& mask, double u, double v) {
+  const auto cols = static_cast<double>(mask.cols()), rows = static_cast<double>(mask.rows());
+  u = std::clamp(u, 0.0, cols - 1.0);
+  v = std::clamp(v, 0.0, rows - 1.0);
+  const auto c0 = static_cast<std::size_t>(u), r0 = static_cast<std::size_t>(v);
+  const std::size_t c1 = std::min(c0 + 1, mask.cols() - 1), r1 = std::min(r0 + 1, mask.rows() - 1);
+  const double tu = u - static_cast<double>(c0), tv = v - static_cast<double>(r0);
+  auto s = [&](std::size_t r, std::size_t c) {
+    const auto x = static_cast<double>(mask.sample(r, c));
+    return std::isnan(x) ? 0.0 : std::clamp(x, 0.0, 1.0);
+  };
+  const double top = s(r0, c0) + tu * (s(r0, c1) - s(r0, c0));
+  const double bottom = s(r1, c0) + tu * (s(r1, c1) - s(r1, c0));
+  return top + tv * (bottom - top);
+}
 
 const char* roleName(Role role) noexcept {
   switch (role) {
@@ -236,7 +234,7 @@ double Dataset::coverageAt(const GridPoint& g, double latDeg) const {
   }
   if (options_.mask && c > 0.0) {
     const glm::dvec2 uv = grid.fractionalIndex(g.x, g.y);
-    c *= maskAt(*options_.mask, uv.x, uv.y);
+    c *= maskValue(*options_.mask, uv.x, uv.y);
   }
   return c;
 }

@@ -43,24 +43,6 @@ double hitShell(const glm::dvec3& o, const glm::dvec3& d, double a, double b) {
   return t1 > 0.0 ? t1 : -1.0;
 }
 
-/// Bilinear read of a mask at level-0 fractional index (u, v), clamped, NaN as 0
-/// (compose::Dataset's mask rule).
-float maskAt(const topo::SampleSource& mask, double u, double v) {
-  const auto cols = static_cast<double>(mask.cols()), rows = static_cast<double>(mask.rows());
-  u = std::clamp(u, 0.0, cols - 1.0);
-  v = std::clamp(v, 0.0, rows - 1.0);
-  const auto c0 = static_cast<std::size_t>(u), r0 = static_cast<std::size_t>(v);
-  const std::size_t c1 = std::min(c0 + 1, mask.cols() - 1), r1 = std::min(r0 + 1, mask.rows() - 1);
-  const double tu = u - static_cast<double>(c0), tv = v - static_cast<double>(r0);
-  auto s = [&](std::size_t r, std::size_t c) {
-    const auto x = static_cast<double>(mask.sample(r, c));
-    return std::isnan(x) ? 0.0 : std::clamp(x, 0.0, 1.0);
-  };
-  const double top = s(r0, c0) + tu * (s(r0, c1) - s(r0, c0));
-  const double bottom = s(r1, c0) + tu * (s(r1, c1) - s(r1, c0));
-  return static_cast<float>(top + tv * (bottom - top));
-}
-
 /// Reads rows [r0, r0 + nr) and columns [c0, c0 + nc) of a source; columns wrap modulo
 /// cols() when `wrap` (a grid that covers a whole turn of longitude).
 void readWrapped(const topo::SampleSource& src, std::int64_t r0, std::int64_t c0, int nr, int nc,
@@ -387,7 +369,7 @@ SurfaceAccumulator::Cached* SurfaceAccumulator::window(const compose::CatalogueE
           glm::dvec2 uv = g0.fractionalIndex(xy.x, xy.y);
           if (wrap) uv.x = uv.x - cols0 * std::floor(uv.x / cols0);
           maskBuf[static_cast<std::size_t>(r) * static_cast<std::size_t>(entry->cols) +
-                  static_cast<std::size_t>(c)] = maskAt(*mask, uv.x, uv.y);
+                  static_cast<std::size_t>(c)] = static_cast<float>(compose::maskValue(*mask, uv.x, uv.y));
         }
       }
     }

@@ -193,6 +193,11 @@ inline constexpr std::size_t kQualityLattice = 65;
 /// scale distortion has quality 0 (then kMinQuality).
 inline constexpr double kQualityN = 8.0;
 
+/// A coverage mask's value at fractional sample index (u, v) = (col, row), read bilinearly
+/// and clamped to the grid; NaN samples count as 0 and values are clamped to [0, 1]: the
+/// mask term of Dataset's coverage (and of the GPU's, render::SurfaceAccumulator).
+[[nodiscard]] double maskValue(const topo::SampleSource& mask, double u, double v);
+
 /// A coverage mask for a grid from its missing samples: 0 on missing samples, rising with
 /// the distance (in samples, an exact Euclidean distance transform) from the nearest missing
 /// sample or grid edge to 1 at `widthSamples`, through smoothstep. In memory: rows × cols
