@@ -119,7 +119,8 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
   // the surface, and its quality costs as much as its height.
   if (s.members.size() > 1 || shares != nullptr) {
     for (Member& m : s.members) {
-      m.resolution = std::pow(finest / m.spacing, rules_.resolutionPower);
+      const double ratio = finest / m.spacing;
+      m.resolution = rules_.resolutionPower == 2.0 ? ratio * ratio : std::pow(ratio, rules_.resolutionPower);
       m.c.quality = entries[m.entry].dataset->quality(latDeg, lonDeg);
     }
   } else {

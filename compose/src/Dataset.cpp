@@ -154,6 +154,9 @@ Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement
     southPole_ = p.hasSouthCap();
     const double r = (2.0 * body_.equatorialRadius() + body_.polarRadius()) / 3.0;
     groundSpacing_ = r * kDeg * std::sqrt(g0.spacingX() * g0.spacingY());
+    // A planet grid's nominal pixel is its size on the equator.
+    planetNominal_ = std::sqrt(body_.equatorialRadius() * g0.spacingX() * kDeg *
+                               body_.meridianRadius(0.0) * g0.spacingY() * kDeg);
   } else {
     groundSpacing_ = std::sqrt(g0.spacingX() * g0.spacingY());
   }
@@ -244,10 +247,7 @@ double Dataset::planetQuality(double latDeg) const {
   const double lat = std::clamp(latDeg, -90.0, 90.0);
   const double gx = body_.primeVerticalRadius(lat) * std::cos(lat * kDeg) * grid.spacingX() * kDeg;
   const double gy = body_.meridianRadius(lat) * grid.spacingY() * kDeg;
-  // A planet grid's nominal pixel is its size on the equator.
-  const double nominal = std::sqrt(body_.equatorialRadius() * grid.spacingX() * kDeg *
-                                   body_.meridianRadius(0.0) * grid.spacingY() * kDeg);
-  return projectionQuality(gx, gy, nominal, kQualityN);
+  return projectionQuality(gx, gy, planetNominal_, kQualityN);
 }
 
 double Dataset::qualityAt(const GridPoint& g) const {
@@ -353,7 +353,10 @@ std::size_t Dataset::levelFor(double metres) const noexcept {
 
 double Dataset::quality(double latDeg, double lonDeg) const {
   const GridPoint g = locate(latDeg, lonDeg);
-  return g.inside ? qualityAt(g) : kMinQuality;
+  if (!g.inside) return kMinQuality;
+  // A planet's quality depends on the planetodetic latitude only: no round trip through the
+  // grid's latitude type.
+  return isPlanet() ? planetQuality(latDeg) : qualityAt(g);
 }
 
 Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, bool wantSlope,

@@ -169,6 +169,7 @@ class Dataset {
   std::vector<Level> levels_;
   bool globalLon_ = false, northPole_ = false, southPole_ = false;
   double groundSpacing_ = 0.0;
+  double planetNominal_ = 0.0;  // a planet grid's pixel on the equator, metres (geometric mean)
   std::array<double, 2> heightRange_{0.0, 0.0};
   std::array<glm::dvec3, 2> bounds_{};
   /// A DEM's quality on a kQualityLattice² lattice over level 0's pixel extent (row-major,
