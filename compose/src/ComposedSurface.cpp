@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <string>
 #include <utility>
 
@@ -35,7 +36,30 @@ struct Scratch {
   std::vector<std::pair<std::size_t, std::size_t>> tiers;  // [begin, end) of members, bottom-up
   std::vector<double> alphas;                              // each tier's α
 };
-thread_local Scratch tlScratch;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
+/// One Scratch per nesting depth: a dataset's samples may themselves be a composed surface
+/// (a ComposedSamples pyramid in another catalogue), whose query runs inside this one's.
+struct ScratchStack {
+  std::deque<Scratch> scratches;
+  std::size_t depth = 0;
+};
+thread_local ScratchStack tlScratch;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
+
+/// Takes this thread's next Scratch for the length of one composition.
+class ScratchLease {
+ public:
+  ScratchLease() {
+    ScratchStack& st = tlScratch;
+    if (st.depth == st.scratches.size()) st.scratches.emplace_back();
+    scratch_ = &st.scratches[st.depth++];
+  }
+  ScratchLease(const ScratchLease&) = delete;
+  ScratchLease& operator=(const ScratchLease&) = delete;
+  ~ScratchLease() { --tlScratch.depth; }
+  [[nodiscard]] Scratch& get() const noexcept { return *scratch_; }
+
+ private:
+  Scratch* scratch_ = nullptr;
+};
 
 void checkPoint(double latDeg, double lonDeg, const char* op) {
   topo::requireFinite(latDeg, op, "latitude");
@@ -86,7 +110,8 @@ ComposedSurface::ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules
 
 ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double metres,
                                         bool wantNormal, std::vector<Share>* shares) const {
-  Scratch& s = tlScratch;
+  const ScratchLease lease;
+  Scratch& s = lease.get();
   s.candidates.clear();
   s.members.clear();
   snapshot_->covering(latDeg, lonDeg, s.candidates);

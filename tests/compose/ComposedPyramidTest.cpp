@@ -94,6 +94,29 @@ TEST(ComposedPyramid, ADatasetsOwnLatticeReadsItsSamplesWhereItAloneIsTheSurface
   EXPECT_NE(guarded.height(50, 50), static_cast<double>(pyr.levels[0].source->sample(50, 50)));
 }
 
+TEST(ComposedPyramid, ACompositionOfACompositionComposesEachOnce) {
+  // A dataset whose samples are a composed pyramid of another catalogue: its queries run
+  // inside the outer composition's (nested per-thread scratch), and must not disturb it.
+  const auto inner = moonSurface();
+  const topo::TopoGrid g(201, 201, 4.0, 6.0, 0.01, 0.01);  // around the site
+  topo::GridPyramid p = composedPlanetPyramid(inner, g, topo::LatitudeType::Planetodetic, 1);
+  Catalogue outer(kMoon);
+  DatasetOptions o = named("inner as one dataset");
+  o.heightRange = std::array<double, 2>{-200.0, 800.0};
+  outer.add(Dataset::planet(p, o));
+  outer.add(Dataset::planet(globalPlanet(kMoon, 1.0, [](double, double) { return -50.0; }),
+                            named("flat")));
+  const ComposedSurface s(outer.snapshot(), Rules{Policy::FinestWins, 2.0});
+  const topo::TopoPlanet direct(g, kMoon, topo::LatitudeType::Planetodetic, p.levels[0].source);
+  for (double lat : {4.5, 5.0, 5.3}) {
+    for (double lon : {4.2, 5.0, 5.9}) {
+      EXPECT_NEAR(s.height(lat, lon).height, direct.height({lat, lon}).height, 1e-9)
+          << lat << "," << lon;
+    }
+  }
+  EXPECT_DOUBLE_EQ(s.height(-30.0, 100.0).height, -50.0);
+}
+
 TEST(ComposedPyramid, DrawingFrameIsPolarNearAPole) {
   const auto s = moonSurface();
   const DrawingFrame eq = drawingFrame(s, 10.0, 2000.0);
