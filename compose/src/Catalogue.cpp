@@ -1,5 +1,4 @@
 #include <regolith/compose/Catalogue.hpp>
-
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
 
@@ -85,7 +84,8 @@ std::uint32_t Snapshot::build(std::uint32_t first, std::uint32_t count) {
     chi = glm::max(chi, c);
   }
   const glm::dvec3 spread = chi - clo;
-  const int axis = spread.x >= spread.y && spread.x >= spread.z ? 0 : (spread.y >= spread.z ? 1 : 2);
+  const int axis =
+      spread.x >= spread.y && spread.x >= spread.z ? 0 : (spread.y >= spread.z ? 1 : 2);
   const std::uint32_t half = count / 2;
   auto centre = [&](std::uint32_t e) {
     const auto& b = entries_[e].dataset->bounds();
@@ -166,7 +166,8 @@ void Snapshot::visible(std::span<const glm::dvec4> planes, std::vector<std::uint
 }
 
 Catalogue::Catalogue(topo::Body body)
-    : body_(std::move(body)), current_(std::make_shared<const Snapshot>(body_, std::vector<CatalogueEntry>{}, 0)) {}
+    : body_(std::move(body)),
+      current_(std::make_shared<const Snapshot>(body_, std::vector<CatalogueEntry>{}, 0)) {}
 
 namespace {
 void checkBody(const topo::Body& body, const std::shared_ptr<const Dataset>& dataset) {

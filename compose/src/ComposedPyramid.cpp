@@ -1,5 +1,4 @@
 #include <regolith/compose/ComposedPyramid.hpp>
-
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
 #include <regolith/topo/Projection.hpp>
@@ -28,7 +27,9 @@ std::shared_ptr<const ComposedSurface> checked(std::shared_ptr<const ComposedSur
 std::size_t levelsFor(const topo::TopoGrid& grid, std::size_t levels) {
   if (levels > 0) return levels;
   std::size_t n = 1;
-  for (std::size_t r = grid.rows(), c = grid.cols(); r > 2 || c > 2; r = (r + 1) / 2, c = (c + 1) / 2) ++n;
+  for (std::size_t r = grid.rows(), c = grid.cols(); r > 2 || c > 2;
+       r = (r + 1) / 2, c = (c + 1) / 2)
+    ++n;
   return n;
 }
 }  // namespace
@@ -36,13 +37,19 @@ std::size_t levelsFor(const topo::TopoGrid& grid, std::size_t levels) {
 ComposedSamples::ComposedSamples(std::shared_ptr<const ComposedSurface> surface,
                                  const topo::TopoGrid& grid, topo::LatitudeType latitudeType,
                                  double groundMetres)
-    : surface_(checked(std::move(surface))), grid_(grid), latType_(latitudeType), metres_(groundMetres) {}
+    : surface_(checked(std::move(surface))),
+      grid_(grid),
+      latType_(latitudeType),
+      metres_(groundMetres) {}
 
 ComposedSamples::ComposedSamples(std::shared_ptr<const ComposedSurface> surface,
                                  const topo::TopoGrid& grid, const topo::Placement& placement,
                                  double groundMetres, std::shared_ptr<const Dataset> own,
                                  std::size_t ownLevel)
-    : surface_(checked(std::move(surface))), grid_(grid), placement_(placement), metres_(groundMetres) {
+    : surface_(checked(std::move(surface))),
+      grid_(grid),
+      placement_(placement),
+      metres_(groundMetres) {
   if (!own || own->isPlanet() || own->options().mask || ownLevel >= own->levelCount() ||
       own->levelFor(groundMetres) != ownLevel) {
     return;
@@ -81,8 +88,8 @@ double ComposedSamples::height(std::size_t row, std::size_t col) const {
   if (own_) {
     // Past own's feather (coverage exactly 1) and on a valid sample: own is the surface.
     const double feather = own_->options().featherMetres;
-    const double d = std::min({xy.x - ownGrid0_.west(), ownGrid0_.east() - xy.x, xy.y - ownGrid0_.south(),
-                               ownGrid0_.north() - xy.y});
+    const double d = std::min({xy.x - ownGrid0_.west(), ownGrid0_.east() - xy.x,
+                               xy.y - ownGrid0_.south(), ownGrid0_.north() - xy.y});
     if (d >= feather && d >= 0.0) {
       const float v = ownSource_->sample(row, col);
       if (!std::isnan(v)) return static_cast<double>(v) + own_->options().heightOffset;
@@ -151,13 +158,15 @@ topo::GridPyramid composedPlanetPyramid(const std::shared_ptr<const ComposedSurf
 
 topo::GridPyramid composedDemPyramid(const std::shared_ptr<const ComposedSurface>& surface,
                                      const topo::TopoGrid& grid, const topo::Placement& placement,
-                                     std::size_t levels, const std::shared_ptr<const Dataset>& own) {
+                                     std::size_t levels,
+                                     const std::shared_ptr<const Dataset>& own) {
   topo::GridPyramid p;
   topo::TopoGrid g = grid;
   const std::size_t n = levelsFor(grid, levels);
   for (std::size_t l = 0; l < n; ++l) {
     const double metres = std::sqrt(g.spacingX() * g.spacingY());
-    p.levels.push_back({g, std::make_shared<ComposedSamples>(checked(surface), g, placement, metres, own, l)});
+    p.levels.push_back(
+        {g, std::make_shared<ComposedSamples>(checked(surface), g, placement, metres, own, l)});
     g = topo::coarserGrid(g);
   }
   return p;
@@ -171,7 +180,8 @@ DrawingFrame drawingFrame(const std::shared_ptr<const ComposedSurface>& surface,
   if (!(spacingMetres > 0.0)) {
     double finest = std::numeric_limits<double>::infinity();
     for (const auto& e : surface->snapshot().entries()) {
-      if (e.dataset->options().role == Role::Height) finest = std::min(finest, e.dataset->groundSpacing());
+      if (e.dataset->options().role == Role::Height)
+        finest = std::min(finest, e.dataset->groundSpacing());
     }
     if (!std::isfinite(finest)) {
       throw InvalidArgument(core::format({.operation = op,
@@ -188,10 +198,11 @@ DrawingFrame drawingFrame(const std::shared_ptr<const ComposedSurface>& surface,
     const double step = spacingMetres / metresPerDegree;
     const double rowsD = std::max(2.0, std::round(180.0 / step));
     if (2.0 * rowsD > static_cast<double>(std::size_t{1} << 31)) {
-      throw InvalidArgument(core::format({.operation = op,
-                                          .field = "spacing",
-                                          .value = core::number(spacingMetres) + " m",
-                                          .expected = "coarse enough for at most 2^31 columns around the body"}));
+      throw InvalidArgument(
+          core::format({.operation = op,
+                        .field = "spacing",
+                        .value = core::number(spacingMetres) + " m",
+                        .expected = "coarse enough for at most 2^31 columns around the body"}));
     }
     const auto rows = static_cast<std::size_t>(rowsD);
     const double dy = 180.0 / rowsD;
@@ -200,19 +211,25 @@ DrawingFrame drawingFrame(const std::shared_ptr<const ComposedSurface>& surface,
     f.spacingMetres = dy * metresPerDegree;
     return f;
   }
-  const auto pole = lookLatDeg > 0 ? topo::PolarStereographic::Pole::North : topo::PolarStereographic::Pole::South;
-  const topo::Placement placement(body, topo::PolarStereographic::withScaleFactor(body, pole, 1.0, 0.0));
-  const double half = 2.0 * body.equatorialRadius() * std::tan(40.0 * kDeg);  // down to 10° latitude
+  const auto pole = lookLatDeg > 0 ? topo::PolarStereographic::Pole::North
+                                   : topo::PolarStereographic::Pole::South;
+  const topo::Placement placement(body,
+                                  topo::PolarStereographic::withScaleFactor(body, pole, 1.0, 0.0));
+  const double half =
+      2.0 * body.equatorialRadius() * std::tan(40.0 * kDeg);  // down to 10° latitude
   const double halfSamples = std::ceil(half / spacingMetres);
   if (2.0 * halfSamples + 1.0 > static_cast<double>(std::size_t{1} << 31)) {
-    throw InvalidArgument(core::format({.operation = op,
-                                        .field = "polar grid spacing",
-                                        .value = core::number(spacingMetres) + " m",
-                                        .expected = "coarse enough for at most 2^31 samples a side"}));
+    throw InvalidArgument(
+        core::format({.operation = op,
+                      .field = "polar grid spacing",
+                      .value = core::number(spacingMetres) + " m",
+                      .expected = "coarse enough for at most 2^31 samples a side"}));
   }
-  const auto n = static_cast<std::size_t>(2.0 * halfSamples + 1.0);  // the pole is the centre sample
+  const auto n =
+      static_cast<std::size_t>(2.0 * halfSamples + 1.0);  // the pole is the centre sample
   const double h = halfSamples * spacingMetres;
-  f.pyramid = composedDemPyramid(surface, topo::TopoGrid(n, n, -h, h, spacingMetres, spacingMetres), placement);
+  f.pyramid = composedDemPyramid(surface, topo::TopoGrid(n, n, -h, h, spacingMetres, spacingMetres),
+                                 placement);
   f.placement = placement;
   f.spacingMetres = spacingMetres;
   f.polar = true;

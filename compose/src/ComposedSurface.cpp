@@ -1,5 +1,4 @@
 #include <regolith/compose/ComposedSurface.hpp>
-
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
 
@@ -134,7 +133,7 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
     s.members.push_back({e, c, 1.0, d.groundSpacing(), d.options().priority, 0, {}, {}});
   }
   if (s.members.empty()) {
-    out.status = sawNodata ? QueryStatus::Nodata
+    out.status = sawNodata                        ? QueryStatus::Nodata
                  : (sawUnmappable && !sawOutside) ? QueryStatus::Unmappable
                                                   : QueryStatus::OutsideGrid;
     out.normalStatus = out.status;
@@ -145,7 +144,8 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
   if (s.members.size() > 1 || shares != nullptr) {
     for (Member& m : s.members) {
       const double ratio = finest / m.spacing;
-      m.resolution = rules_.resolutionPower == 2.0 ? ratio * ratio : std::pow(ratio, rules_.resolutionPower);
+      m.resolution =
+          rules_.resolutionPower == 2.0 ? ratio * ratio : std::pow(ratio, rules_.resolutionPower);
       m.c.quality = entries[m.entry].dataset->quality(latDeg, lonDeg);
     }
   } else {
@@ -346,12 +346,12 @@ void ComposedSurface::heights(std::span<const double> latsDeg, std::span<const d
   const std::size_t n = latsDeg.size();
   if (lonsDeg.size() != n || out.size() != n || (!status.empty() && status.size() != n) ||
       (!contributors.empty() && contributors.size() != n)) {
-    throw InvalidArgument(core::format({.operation = "compose::ComposedSurface::heights()",
-                                        .field = "array lengths",
-                                        .value = std::to_string(n) + " latitudes, " +
-                                                 std::to_string(lonsDeg.size()) + " longitudes, " +
-                                                 std::to_string(out.size()) + " outputs",
-                                        .expected = "equal (status empty or equal too)"}));
+    throw InvalidArgument(
+        core::format({.operation = "compose::ComposedSurface::heights()",
+                      .field = "array lengths",
+                      .value = std::to_string(n) + " latitudes, " + std::to_string(lonsDeg.size()) +
+                               " longitudes, " + std::to_string(out.size()) + " outputs",
+                      .expected = "equal (status empty or equal too)"}));
   }
   for (std::size_t i = 0; i < n; ++i) {
     ComposedSample c;
@@ -372,13 +372,13 @@ void ComposedSurface::surfaces(std::span<const double> latsDeg, std::span<const 
       (!status.empty() && status.size() != n) ||
       (!normalStatus.empty() && normalStatus.size() != n) ||
       (!contributors.empty() && contributors.size() != n)) {
-    throw InvalidArgument(core::format({.operation = "compose::ComposedSurface::surfaces()",
-                                        .field = "array lengths",
-                                        .value = std::to_string(n) + " latitudes, " +
-                                                 std::to_string(lonsDeg.size()) + " longitudes, " +
-                                                 std::to_string(outHeights.size()) + " heights, " +
-                                                 std::to_string(outNormals.size()) + " normals",
-                                        .expected = "equal (statuses empty or equal too)"}));
+    throw InvalidArgument(
+        core::format({.operation = "compose::ComposedSurface::surfaces()",
+                      .field = "array lengths",
+                      .value = std::to_string(n) + " latitudes, " + std::to_string(lonsDeg.size()) +
+                               " longitudes, " + std::to_string(outHeights.size()) + " heights, " +
+                               std::to_string(outNormals.size()) + " normals",
+                      .expected = "equal (statuses empty or equal too)"}));
   }
   for (std::size_t i = 0; i < n; ++i) {
     ComposedSample c;

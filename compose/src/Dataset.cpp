@@ -1,5 +1,4 @@
 #include <regolith/compose/Dataset.hpp>
-
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
 
@@ -141,8 +140,7 @@ Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement
     levels_.push_back(std::move(l));
   }
   const topo::TopoGrid& g0 = levels_.front().level.grid;
-  if (options_.mask &&
-      (options_.mask->rows() != g0.rows() || options_.mask->cols() != g0.cols())) {
+  if (options_.mask && (options_.mask->rows() != g0.rows() || options_.mask->cols() != g0.cols())) {
     bad(op, who + "mask size",
         std::to_string(options_.mask->rows()) + " x " + std::to_string(options_.mask->cols()),
         "the size of level 0");
@@ -213,9 +211,7 @@ Dataset::GridPoint Dataset::locate(double latDeg, double lonDeg) const {
   return p;
 }
 
-bool Dataset::contains(double latDeg, double lonDeg) const {
-  return locate(latDeg, lonDeg).inside;
-}
+bool Dataset::contains(double latDeg, double lonDeg) const { return locate(latDeg, lonDeg).inside; }
 
 double Dataset::coverageAt(const GridPoint& g, double latDeg) const {
   if (!g.inside) return 0.0;
@@ -252,7 +248,8 @@ double Dataset::planetQuality(double latDeg) const {
 
 double Dataset::qualityAt(const GridPoint& g) const {
   const topo::TopoGrid& grid = levels_.front().level.grid;
-  if (isPlanet()) return planetQuality(body_.toPlanetodetic(std::clamp(g.y, -90.0, 90.0), latType_));
+  if (isPlanet())
+    return planetQuality(body_.toPlanetodetic(std::clamp(g.y, -90.0, 90.0), latType_));
   const double n = static_cast<double>(kQualityLattice - 1);
   const double u = std::clamp((g.x - grid.west()) / (grid.east() - grid.west()), 0.0, 1.0) * n;
   const double v = std::clamp((grid.north() - g.y) / (grid.north() - grid.south()), 0.0, 1.0) * n;
@@ -309,10 +306,12 @@ void Dataset::computeBounds() {
   double step = 0.0;
   std::vector<glm::dvec3> prevRow(kN, glm::dvec3(std::numeric_limits<double>::quiet_NaN()));
   for (std::size_t r = 0; r < kN; ++r) {
-    const double y = grid.north() - (grid.north() - grid.south()) * static_cast<double>(r) / (kN - 1);
+    const double y =
+        grid.north() - (grid.north() - grid.south()) * static_cast<double>(r) / (kN - 1);
     glm::dvec3 prev(std::numeric_limits<double>::quiet_NaN());
     for (std::size_t c = 0; c < kN; ++c) {
-      const double x = grid.west() + (grid.east() - grid.west()) * static_cast<double>(c) / (kN - 1);
+      const double x =
+          grid.west() + (grid.east() - grid.west()) * static_cast<double>(c) / (kN - 1);
       glm::dvec3 p0, p1;
       try {
         if (isPlanet()) {
@@ -424,8 +423,9 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, 
   out.status = s.status;
   if (!s.valid()) return out;
   // The tangent plane's iteration has applied the offset already.
-  out.height = placement_ && placement_->localTangentPlane() != nullptr ? s.height
-                                                                        : s.height + options_.heightOffset;
+  out.height = placement_ && placement_->localTangentPlane() != nullptr
+                   ? s.height
+                   : s.height + options_.heightOffset;
   out.coverage = coverageAt(g, latDeg);
   if (wantQuality) out.quality = qualityAt(g);
   if (wantSlope) {

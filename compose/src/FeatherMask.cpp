@@ -1,5 +1,4 @@
 #include <regolith/compose/Dataset.hpp>
-
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
 
@@ -77,10 +76,11 @@ std::shared_ptr<const topo::SampleSource> featherMask(const topo::TopoGrid& grid
   }
   const std::size_t rows = grid.rows(), cols = grid.cols();
   if (rows * cols > (std::size_t{1} << 28)) {
-    throw InvalidArgument(core::format({.operation = op,
-                                        .field = "grid size",
-                                        .value = std::to_string(rows) + " x " + std::to_string(cols),
-                                        .expected = "at most 2^28 samples (an in-memory mask)"}));
+    throw InvalidArgument(
+        core::format({.operation = op,
+                      .field = "grid size",
+                      .value = std::to_string(rows) + " x " + std::to_string(cols),
+                      .expected = "at most 2^28 samples (an in-memory mask)"}));
   }
   std::vector<float> heights(rows * cols);
   samples.readWindow(0, 0, rows, cols, heights);
@@ -116,7 +116,8 @@ std::shared_ptr<const topo::SampleSource> featherMask(const topo::TopoGrid& grid
   std::vector<float> mask(rows * cols);
   for (std::size_t r = 0; r < rows; ++r) {
     for (std::size_t c = 0; c < cols; ++c) {
-      const double t = std::clamp(std::sqrt(dist[(r + pad) * pc + c + pad]) / widthSamples, 0.0, 1.0);
+      const double t =
+          std::clamp(std::sqrt(dist[(r + pad) * pc + c + pad]) / widthSamples, 0.0, 1.0);
       mask[r * cols + c] = static_cast<float>(t * t * (3.0 - 2.0 * t));
     }
   }

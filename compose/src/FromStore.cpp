@@ -1,5 +1,4 @@
 #include <regolith/compose/FromStore.hpp>
-
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
 #include <regolith/store/GridInfo.hpp>
@@ -58,8 +57,10 @@ double number(const std::filesystem::path& path, const nlohmann::json& j, const 
   return v;
 }
 
-std::string text(const std::filesystem::path& path, const nlohmann::json& j, const std::string& field) {
-  if (!j.is_string() || j.get<std::string>().empty()) badFile(path, field, shown(j), "a non-empty string");
+std::string text(const std::filesystem::path& path, const nlohmann::json& j,
+                 const std::string& field) {
+  if (!j.is_string() || j.get<std::string>().empty())
+    badFile(path, field, shown(j), "a non-empty string");
   return j.get<std::string>();
 }
 
@@ -87,7 +88,9 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
   if (!root.is_object()) badFile(path, "top level", shown(root), "an object");
   static const std::set<std::string> kTop{"policy", "resolution_power", "tier_ratio", "datasets"};
   for (const auto& [key, value] : root.items()) {
-    if (!kTop.count(key)) badFile(path, "key '" + key + "'", shown(value), "one of policy, resolution_power, tier_ratio, datasets");
+    if (!kTop.count(key))
+      badFile(path, "key '" + key + "'", shown(value),
+              "one of policy, resolution_power, tier_ratio, datasets");
   }
   CatalogueFile out;
   if (root.contains("policy")) {
@@ -101,10 +104,12 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
     }
   }
   if (root.contains("resolution_power")) {
-    out.rules.resolutionPower = number(path, root["resolution_power"], "resolution_power", 0.0, 64.0);
+    out.rules.resolutionPower =
+        number(path, root["resolution_power"], "resolution_power", 0.0, 64.0);
   }
   if (root.contains("tier_ratio")) {
-    out.rules.tierRatio = number(path, root["tier_ratio"], "tier_ratio", 1.0, std::numeric_limits<double>::max());
+    out.rules.tierRatio =
+        number(path, root["tier_ratio"], "tier_ratio", 1.0, std::numeric_limits<double>::max());
   }
   if (!root.contains("datasets") || !root["datasets"].is_array() || root["datasets"].empty()) {
     badFile(path, "datasets", root.contains("datasets") ? shown(root["datasets"]) : "missing",
@@ -113,9 +118,15 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
   auto cache = std::make_shared<store::PatchCache>(cacheBytes);
   std::map<std::filesystem::path, std::shared_ptr<const store::Pager>> pagers;
   std::vector<std::shared_ptr<const Dataset>> datasets;
-  static const std::set<std::string> kKeys{
-      "store", "grid", "role", "priority", "feather_m", "mask_grid", "feather_nodata_samples",
-      "name", "height_offset_m"};
+  static const std::set<std::string> kKeys{"store",
+                                           "grid",
+                                           "role",
+                                           "priority",
+                                           "feather_m",
+                                           "mask_grid",
+                                           "feather_nodata_samples",
+                                           "name",
+                                           "height_offset_m"};
   std::size_t index = 0;
   for (const auto& d : root["datasets"]) {
     const std::string where = "datasets[" + std::to_string(index++) + "]";
@@ -161,15 +172,18 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
     if (d.contains("height_offset_m")) {
       o.heightOffset = number(path, d["height_offset_m"], where + ".height_offset_m", -1e6, 1e6);
     }
-    if (d.contains("feather_m")) o.featherMetres = number(path, d["feather_m"], where + ".feather_m", 0.0, 1e8);
+    if (d.contains("feather_m"))
+      o.featherMetres = number(path, d["feather_m"], where + ".feather_m", 0.0, 1e8);
     if (d.contains("mask_grid") && d.contains("feather_nodata_samples")) {
-      badFile(path, where + ".mask_grid", shown(d["mask_grid"]), "either mask_grid or feather_nodata_samples, not both");
+      badFile(path, where + ".mask_grid", shown(d["mask_grid"]),
+              "either mask_grid or feather_nodata_samples, not both");
     }
     if (d.contains("mask_grid")) {
       o.mask = pager->source(text(path, d["mask_grid"], where + ".mask_grid"), 0);
     }
     if (d.contains("feather_nodata_samples")) {
-      const double w = number(path, d["feather_nodata_samples"], where + ".feather_nodata_samples", 1e-3, 1e6);
+      const double w =
+          number(path, d["feather_nodata_samples"], where + ".feather_nodata_samples", 1e-3, 1e6);
       const auto& info = pager->store().grid(grid);
       o.mask = featherMask(store::topoGridOf(info, 0), *pager->source(grid, 0), w, false);
     }
@@ -181,8 +195,11 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
     const topo::Body& b = datasets[i]->body();
     if (std::abs(b.equatorialRadius() - body.equatorialRadius()) > 1e-3 ||
         std::abs(b.polarRadius() - body.polarRadius()) > 1e-3) {
-      badFile(path, "datasets[" + std::to_string(i) + "] body", b.name() + " (" + core::number(b.equatorialRadius()) + " / " + core::number(b.polarRadius()) + " m)",
-              "datasets[0]'s body " + body.name() + " (" + core::number(body.equatorialRadius()) + " / " + core::number(body.polarRadius()) + " m): one catalogue is one body");
+      badFile(path, "datasets[" + std::to_string(i) + "] body",
+              b.name() + " (" + core::number(b.equatorialRadius()) + " / " +
+                  core::number(b.polarRadius()) + " m)",
+              "datasets[0]'s body " + body.name() + " (" + core::number(body.equatorialRadius()) +
+                  " / " + core::number(body.polarRadius()) + " m): one catalogue is one body");
     }
   }
   out.ids = out.catalogue->add(datasets);

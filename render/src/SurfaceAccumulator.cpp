@@ -1,8 +1,7 @@
-#include <regolith/render/SurfaceAccumulator.hpp>
-
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
 #include <regolith/gl/GlError.hpp>
+#include <regolith/render/SurfaceAccumulator.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
 
 #include "Shaders.hpp"
@@ -87,18 +86,20 @@ struct SurfaceAccumulator::Pass {
   const compose::Dataset* dataset = nullptr;
   glm::dvec3 reference{0.0};  // R, body-fixed, on the reference surface
   double latR = 0.0, lonR = 0.0;
-  glm::dvec2 gridR{0.0};      // R's grid coordinates (LTP: at the mid height)
-  glm::ivec4 scissor{0};      // x, y (GL, bottom-left), width, height
+  glm::dvec2 gridR{0.0};  // R's grid coordinates (LTP: at the mid height)
+  glm::ivec4 scissor{0};  // x, y (GL, bottom-left), width, height
 };
 
 SurfaceAccumulator::SurfaceAccumulator(AccumulatorOptions options)
     : options_(options),
       geodetic_("surface geodetic pass",
-                gl::ShaderSources{shaders::kFullScreenVertex, {},
+                gl::ShaderSources{shaders::kFullScreenVertex,
+                                  {},
                                   std::string(shaders::kVersion) + shaders::kHelpers +
                                       shaders::kGeodeticFragment}),
       accumulate_("surface accumulation",
-                  gl::ShaderSources{shaders::kFullScreenVertex, {},
+                  gl::ShaderSources{shaders::kFullScreenVertex,
+                                    {},
                                     std::string(shaders::kVersion) + shaders::kHelpers +
                                         shaders::kAccumulateFragment}),
       normalise_("surface normalisation",
@@ -132,13 +133,13 @@ void SurfaceAccumulator::requireSupported(const compose::Dataset& dataset, const
     return;
   const char* name =
       kind == topo::Placement::Kind::TransverseMercator ? "transverse Mercator" : "PROJ-projected";
-  throw InvalidArgument(core::format(
-      {.operation = operation,
-       .field = "dataset '" + dataset.name() + "' (" + compose::roleName(dataset.options().role) +
-                ") placement",
-       .value = name,
-       .expected = "a planet latitude/longitude grid, a local tangent plane, a polar "
-                   "stereographic or an equirectangular map"}));
+  throw InvalidArgument(
+      core::format({.operation = operation,
+                    .field = "dataset '" + dataset.name() + "' (" +
+                             compose::roleName(dataset.options().role) + ") placement",
+                    .value = name,
+                    .expected = "a planet latitude/longitude grid, a local tangent plane, a polar "
+                                "stereographic or an equirectangular map"}));
 }
 
 void SurfaceAccumulator::resize(int width, int height) {
@@ -277,7 +278,8 @@ SurfaceAccumulator::Cached* SurfaceAccumulator::window(const compose::CatalogueE
   const std::int64_t maxW = options_.maxWindow;
   for (;; ++level) {
     const topo::TopoGrid& gridL = ds.level(level).grid;
-    const auto rows = static_cast<std::int64_t>(gridL.rows()), cols = static_cast<std::int64_t>(gridL.cols());
+    const auto rows = static_cast<std::int64_t>(gridL.rows()),
+               cols = static_cast<std::int64_t>(gridL.cols());
     c0 = static_cast<std::int64_t>(std::floor((gmin.x - gridL.x0()) / gridL.spacingX())) - 2;
     c1 = static_cast<std::int64_t>(std::ceil((gmax.x - gridL.x0()) / gridL.spacingX())) + 2;
     r0 = static_cast<std::int64_t>(std::floor((gridL.y0() - gmax.y) / gridL.spacingY())) - 2;
@@ -314,7 +316,8 @@ SurfaceAccumulator::Cached* SurfaceAccumulator::window(const compose::CatalogueE
   }
   // A new window, padded by a quarter of its size so that small moves reuse it.
   const topo::TopoGrid& gridL = ds.level(level).grid;
-  const auto rows = static_cast<std::int64_t>(gridL.rows()), cols = static_cast<std::int64_t>(gridL.cols());
+  const auto rows = static_cast<std::int64_t>(gridL.rows()),
+             cols = static_cast<std::int64_t>(gridL.cols());
   const std::int64_t padR = std::max<std::int64_t>(8, (r1 - r0 + 1) / 4);
   const std::int64_t padC = std::max<std::int64_t>(8, (c1 - c0 + 1) / 4);
   r0 = std::max<std::int64_t>(0, r0 - padR);
@@ -369,7 +372,8 @@ SurfaceAccumulator::Cached* SurfaceAccumulator::window(const compose::CatalogueE
           glm::dvec2 uv = g0.fractionalIndex(xy.x, xy.y);
           if (wrap) uv.x = uv.x - cols0 * std::floor(uv.x / cols0);
           maskBuf[static_cast<std::size_t>(r) * static_cast<std::size_t>(entry->cols) +
-                  static_cast<std::size_t>(c)] = static_cast<float>(compose::maskValue(*mask, uv.x, uv.y));
+                  static_cast<std::size_t>(c)] =
+              static_cast<float>(compose::maskValue(*mask, uv.x, uv.y));
         }
       }
     }
@@ -402,12 +406,12 @@ AccumulationFrame SurfaceAccumulator::accumulate(const gl::RenderTarget& target,
                                                  const compose::Snapshot& snapshot) {
   constexpr const char* op = "render::SurfaceAccumulator::accumulate()";
   if (camera.width != target.width() || camera.height != target.height()) {
-    throw InvalidArgument(core::format(
-        {.operation = op,
-         .field = "camera size",
-         .value = std::to_string(camera.width) + " x " + std::to_string(camera.height),
-         .expected = "the target's, " + std::to_string(target.width()) + " x " +
-                     std::to_string(target.height())}));
+    throw InvalidArgument(
+        core::format({.operation = op,
+                      .field = "camera size",
+                      .value = std::to_string(camera.width) + " x " + std::to_string(camera.height),
+                      .expected = "the target's, " + std::to_string(target.width()) + " x " +
+                                  std::to_string(target.height())}));
   }
   ++frame_;
   AccumulationFrame frame;
@@ -422,7 +426,8 @@ AccumulationFrame SurfaceAccumulator::accumulate(const gl::RenderTarget& target,
   const double ty = std::tan(0.5 * camera.fovYDegrees * kDeg);
   const double tx = ty * camera.width / camera.height;
   const topo::Body& body = snapshot.body();
-  const double rMin = std::max(0.5 * body.polarRadius(), body.polarRadius() + snapshot.lowestHeight());
+  const double rMin =
+      std::max(0.5 * body.polarRadius(), body.polarRadius() + snapshot.lowestHeight());
   const double rMax = body.equatorialRadius() + std::max(0.0, snapshot.highestHeight());
   const double cam = glm::length(camera.position);
   const double far = std::sqrt(std::max(0.0, cam * cam - rMin * rMin)) +
@@ -452,11 +457,10 @@ AccumulationFrame SurfaceAccumulator::accumulate(const gl::RenderTarget& target,
   std::vector<Pass> passes;
   for (const compose::CatalogueEntry* e : colour) {
     const compose::Dataset& ds = *e->dataset;
-    const Cached* found =
-        window(*e, camera,
-               {std::min(ds.heightRange()[0], snapshot.lowestHeight()),
-                std::max(ds.heightRange()[1], snapshot.highestHeight())},
-               frame);
+    const Cached* found = window(*e, camera,
+                                 {std::min(ds.heightRange()[0], snapshot.lowestHeight()),
+                                  std::max(ds.heightRange()[1], snapshot.highestHeight())},
+                                 frame);
     if (found == nullptr) continue;
     const Cached& w = *found;
     Pass p;
@@ -514,10 +518,13 @@ AccumulationFrame SurfaceAccumulator::accumulate(const gl::RenderTarget& target,
       y1 = std::max(y1, s.y);
     }
     if (!behind) {
-      const auto ix0 = static_cast<int>(std::clamp(std::floor(x0) - 1.0, 0.0, double(camera.width)));
+      const auto ix0 =
+          static_cast<int>(std::clamp(std::floor(x0) - 1.0, 0.0, double(camera.width)));
       const auto ix1 = static_cast<int>(std::clamp(std::ceil(x1) + 1.0, 0.0, double(camera.width)));
-      const auto iy0 = static_cast<int>(std::clamp(std::floor(y0) - 1.0, 0.0, double(camera.height)));
-      const auto iy1 = static_cast<int>(std::clamp(std::ceil(y1) + 1.0, 0.0, double(camera.height)));
+      const auto iy0 =
+          static_cast<int>(std::clamp(std::floor(y0) - 1.0, 0.0, double(camera.height)));
+      const auto iy1 =
+          static_cast<int>(std::clamp(std::ceil(y1) + 1.0, 0.0, double(camera.height)));
       // Whole 2×2 quads, so that screen derivatives see the same neighbours.
       const int qx0 = ix0 & ~1, qy0 = (camera.height - iy1) & ~1;
       p.scissor = {qx0, qy0, ((ix1 - qx0 + 1) & ~1), ((camera.height - iy0 - qy0 + 1) & ~1)};
@@ -546,7 +553,8 @@ AccumulationFrame SurfaceAccumulator::accumulate(const gl::RenderTarget& target,
   glBindVertexArray(vao_.id());
   glBindTextureUnit(2, target.depthTexture());
   const glm::mat3 eyeToWorld(glm::transpose(rot));
-  const auto viewport = glm::vec2(static_cast<float>(camera.width), static_cast<float>(camera.height));
+  const auto viewport =
+      glm::vec2(static_cast<float>(camera.width), static_cast<float>(camera.height));
 
   // The geodetic pass, once per frame over the union of the passes' rectangles: latitude,
   // longitude and height relative to R0, the point of the reference surface under the
@@ -554,16 +562,17 @@ AccumulationFrame SurfaceAccumulator::accumulate(const gl::RenderTarget& target,
   glm::ivec4 all = passes.front().scissor;
   for (const Pass& p : passes) {
     const glm::ivec2 lo = glm::min(glm::ivec2(all.x, all.y), glm::ivec2(p.scissor.x, p.scissor.y));
-    const glm::ivec2 hi = glm::max(glm::ivec2(all.x + all.z, all.y + all.w),
-                                   glm::ivec2(p.scissor.x + p.scissor.z, p.scissor.y + p.scissor.w));
+    const glm::ivec2 hi =
+        glm::max(glm::ivec2(all.x + all.z, all.y + all.w),
+                 glm::ivec2(p.scissor.x + p.scissor.z, p.scissor.y + p.scissor.w));
     all = {lo.x, lo.y, hi.x - lo.x, hi.y - lo.y};
   }
   topo::Geodetic frameRef = body.toGeodetic(camera.position);
   {
     const double hMid = 0.5 * (snapshot.lowestHeight() + snapshot.highestHeight());
     const glm::dvec3 ray = camera.ray(0.5 * camera.width, 0.5 * camera.height);
-    const double t = hitShell(camera.position, ray, body.equatorialRadius() + hMid,
-                              body.polarRadius() + hMid);
+    const double t =
+        hitShell(camera.position, ray, body.equatorialRadius() + hMid, body.polarRadius() + hMid);
     if (t > 0.0) frameRef = body.toGeodetic(camera.position + t * ray);
   }
   const glm::dvec3 r0 = body.toBodyFixed({frameRef.latDeg, frameRef.lonDeg, 0.0});
@@ -581,7 +590,8 @@ AccumulationFrame SurfaceAccumulator::accumulate(const gl::RenderTarget& target,
     gp.set("uFocal", static_cast<float>(camera.focalPixels()));
     gp.set("uNear", static_cast<float>(camera.near));
     gp.set("uRRel", f3(r0 - camera.position));
-    gp.set("uWorldToEnu", glm::mat3(glm::transpose(body.enuFrame(frameRef.latDeg, frameRef.lonDeg))));
+    gp.set("uWorldToEnu",
+           glm::mat3(glm::transpose(body.enuFrame(frameRef.latDeg, frameRef.lonDeg))));
     gp.set("uRef", glm::vec4(glm::dvec4(s0, c0, n0 * c0, n0)));
     gp.set("uA", static_cast<float>(body.equatorialRadius()));
     gp.set("uE2", static_cast<float>(body.eccentricitySquared()));
@@ -617,8 +627,9 @@ AccumulationFrame SurfaceAccumulator::accumulate(const gl::RenderTarget& target,
     pr.set("uRRel", f3(p.reference - camera.position));
     pr.set("uWorldToEnu", glm::mat3(glm::transpose(enu)));
     pr.set("uRef", glm::vec4(glm::dvec4(sR, cR, 0.0, 0.0)));
-    pr.set("uRefDelta", glm::vec2(glm::dvec2((p.latR - frameRef.latDeg) * kDeg,
-                                             topo::wrapLongitude180(p.lonR - frameRef.lonDeg) * kDeg)));
+    pr.set("uRefDelta",
+           glm::vec2(glm::dvec2((p.latR - frameRef.latDeg) * kDeg,
+                                topo::wrapLongitude180(p.lonR - frameRef.lonDeg) * kDeg)));
     Kind kind = Kind::LatLon;
     glm::dvec2 lin(1.0 / kDeg, 1.0 / kDeg);
     int centric = ds.latitudeType() == topo::LatitudeType::Planetocentric ? 1 : 0;
@@ -636,8 +647,8 @@ AccumulationFrame SurfaceAccumulator::accumulate(const gl::RenderTarget& target,
         const double tA = phiN >= 0.0 ? std::cos(phiN) / (1.0 + sN) : (1.0 - sN) / std::cos(phiN);
         const double eR = e == 0.0 ? 1.0 : std::pow((1.0 - e * sN) / (1.0 + e * sN), 0.5 * e);
         const glm::dvec2 onEquator = ps->forward({0.0, ps->lonCentreDeg()});
-        const double rhoFactor = std::hypot(onEquator.x - ps->falseEasting(),
-                                            onEquator.y - ps->falseNorthing());
+        const double rhoFactor =
+            std::hypot(onEquator.x - ps->falseEasting(), onEquator.y - ps->falseNorthing());
         const double k = rhoFactor / eR;
         pr.set("uPolar", glm::vec4(glm::dvec4(sg, tA, k * tA, k)));
         const double dl = (p.lonR - ps->lonCentreDeg()) * kDeg;
@@ -725,7 +736,8 @@ std::vector<glm::vec4> SurfaceAccumulator::readAccumulation() const {
   glGetTextureImage(sums_.id(), 0, GL_RGBA, GL_FLOAT,
                     static_cast<GLsizei>(raw.size() * sizeof(glm::vec4)), raw.data());
   gl::checkGl("render::SurfaceAccumulator::readAccumulation()");
-  for (std::size_t y = 0; y < h; ++y) std::copy_n(raw.data() + (h - 1 - y) * w, w, out.data() + y * w);
+  for (std::size_t y = 0; y < h; ++y)
+    std::copy_n(raw.data() + (h - 1 - y) * w, w, out.data() + y * w);
   return out;
 }
 
@@ -737,7 +749,8 @@ std::vector<glm::vec2> SurfaceAccumulator::readCoverage() const {
   glGetTextureImage(cover_.id(), 0, GL_RG, GL_FLOAT,
                     static_cast<GLsizei>(raw.size() * sizeof(glm::vec2)), raw.data());
   gl::checkGl("render::SurfaceAccumulator::readCoverage()");
-  for (std::size_t y = 0; y < h; ++y) std::copy_n(raw.data() + (h - 1 - y) * w, w, out.data() + y * w);
+  for (std::size_t y = 0; y < h; ++y)
+    std::copy_n(raw.data() + (h - 1 - y) * w, w, out.data() + y * w);
   return out;
 }
 

@@ -79,9 +79,9 @@ class ComposedSamples final : public topo::SampleSource {
 /// away from the poles, a polar stereographic grid about a pole near one (a latitude/longitude
 /// lattice converges there: its cells become slivers and its shading streaks).
 struct DrawingFrame {
-  topo::GridPyramid pyramid;               ///< levels of composed samples
+  topo::GridPyramid pyramid;                 ///< levels of composed samples
   std::optional<topo::Placement> placement;  ///< set for the polar grid (planar levels)
-  double spacingMetres = 0.0;              ///< level 0's ground spacing
+  double spacingMetres = 0.0;                ///< level 0's ground spacing
   bool polar = false;
 };
 
