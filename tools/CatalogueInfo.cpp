@@ -22,19 +22,6 @@ namespace {
 
 using nlohmann::ordered_json;
 
-/// The store's names of the placement kinds (docs/store-format.md), so that `info` says the
-/// same of a catalogue's DEM as of the store's grid.
-const char* placementKindName(topo::Placement::Kind k) {
-  switch (k) {
-    case topo::Placement::Kind::LocalTangentPlane: return "local_tangent_plane";
-    case topo::Placement::Kind::PolarStereographic: return "polar_stereographic";
-    case topo::Placement::Kind::Equirectangular: return "equirectangular";
-    case topo::Placement::Kind::TransverseMercator: return "transverse_mercator";
-    case topo::Placement::Kind::Projected: return "projected";
-  }
-  return "unknown";
-}
-
 const char* latitudeTypeName(topo::LatitudeType t) {
   return t == topo::LatitudeType::Planetocentric ? "planetocentric" : "planetodetic";
 }
@@ -66,8 +53,9 @@ ordered_json datasetJson(std::size_t index, compose::DatasetId id, const compose
   j["id"] = id;
   j["name"] = d.name();
   j["kind"] = d.isPlanet() ? "planet" : "dem";
-  j["placement"] =
-      d.isPlanet() ? ordered_json(nullptr) : ordered_json(placementKindName(d.placement()->kind()));
+  j["placement"] = d.isPlanet()
+                       ? ordered_json(nullptr)
+                       : ordered_json(std::string(store::placementKindName(d.placement()->kind())));
   j["latitude_type"] = latitudeTypeName(d.latitudeType());
   j["role"] = compose::roleName(o.role);
   j["priority"] = o.priority;
@@ -98,7 +86,7 @@ void printDatasetText(std::size_t index, compose::DatasetId id, const compose::D
   out << "  kind:           "
       << (dem ? "dem (planar grid placed on the body)" : "planet (latitude/longitude grid)")
       << "\n";
-  if (dem) out << "  placement:      " << placementKindName(d.placement()->kind()) << "\n";
+  if (dem) out << "  placement:      " << store::placementKindName(d.placement()->kind()) << "\n";
   out << "  latitude type:  " << latitudeTypeName(d.latitudeType()) << "\n";
   out << "  role:           " << compose::roleName(o.role) << ", priority " << o.priority
       << ", feather " << shortestNumber(o.featherMetres) << " m, mask " << (o.mask ? "yes" : "none")

@@ -13,6 +13,26 @@
 
 namespace regolith::store::gen {
 
+GridInfo demGridInfo(const std::string& name, const topo::TopoGrid& grid,
+                     const topo::Placement& placement) {
+  GridInfo info;
+  info.name = name;
+  info.kind = GridKind::Dem;
+  info.rows = grid.rows();
+  info.cols = grid.cols();
+  info.x0 = grid.x0();
+  info.y0 = grid.y0();
+  info.spacingX = grid.spacingX();
+  info.spacingY = grid.spacingY();
+  const topo::Body& body = placement.body();
+  info.bodyName = body.name();
+  info.equatorialRadius = body.equatorialRadius();
+  info.polarRadius = body.polarRadius();
+  info.latitudeType = topo::LatitudeType::Planetodetic;
+  info.placement = placementInfoOf(placement);
+  return info;
+}
+
 namespace {
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 }  // namespace

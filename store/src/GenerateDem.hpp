@@ -3,6 +3,7 @@
 // vector under each sample, and a window-by-window sample source over any placement.
 
 #include <regolith/store/Generate.hpp>
+#include <regolith/store/GridInfo.hpp>
 #include <regolith/topo/Placement.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
@@ -25,6 +26,11 @@ namespace regolith::store::gen {
 /// `operation` if that exceeds 2^31 (a spacing below about 5 mm on Mars).
 [[nodiscard]] std::size_t planetRowsFor(double spacing, double radius,
                                         const std::string& operation);
+
+/// The stored description of a generated DEM: grid `name` of kind Dem with `grid`'s
+/// geometry, on `placement`'s body (planetodetic), no nodata value.
+[[nodiscard]] GridInfo demGridInfo(const std::string& name, const topo::TopoGrid& grid,
+                                   const topo::Placement& placement);
 
 /// A planet at `rows` with `planet`'s seed, body and crater density.
 [[nodiscard]] MarsPlanetGenerator planetAt(const PlanetOf& planet, std::size_t rows,

@@ -89,17 +89,7 @@ PolarCapGenerator::Impl::Impl(PolarCapOptions o)
   const double edge = 0.5 * static_cast<double>(n - 1) * options.spacing;
   grid = topo::TopoGrid(n, n, -edge, edge, options.spacing, options.spacing);
 
-  info.name = options.gridName;
-  info.kind = GridKind::Dem;
-  info.rows = info.cols = n;
-  info.x0 = -edge;
-  info.y0 = edge;
-  info.spacingX = info.spacingY = options.spacing;
-  info.bodyName = body.name();
-  info.equatorialRadius = body.equatorialRadius();
-  info.polarRadius = body.polarRadius();
-  info.latitudeType = topo::LatitudeType::Planetodetic;
-  info.placement = placementInfoOf(placement);
+  info = gen::demGridInfo(options.gridName, grid, placement);
 
   reach = 0.8 * (90.0 - options.minLatitudeDeg) * kDegToRad;
   troughSeed = gen::hashOf(options.planet.seed, 0x504C44ULL);  // "PLD"

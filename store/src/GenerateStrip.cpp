@@ -150,18 +150,7 @@ StripGenerator::Impl::Impl(StripOptions o)
   halfWidth = 0.5 * static_cast<double>(rows - 1) * options.spacing;
   grid = topo::TopoGrid(rows, cols, -halfLength, halfWidth, options.spacing, options.spacing);
 
-  info.name = options.gridName;
-  info.kind = GridKind::Dem;
-  info.rows = rows;
-  info.cols = cols;
-  info.x0 = -halfLength;
-  info.y0 = halfWidth;
-  info.spacingX = info.spacingY = options.spacing;
-  info.bodyName = body.name();
-  info.equatorialRadius = body.equatorialRadius();
-  info.polarRadius = body.polarRadius();
-  info.latitudeType = topo::LatitudeType::Planetodetic;
-  info.placement = placementInfoOf(placement);
+  info = gen::demGridInfo(options.gridName, grid, placement);
   edgeSeed = gen::hashOf(options.planet.seed, 0x5354524950ULL);  // "STRIP"
 }
 

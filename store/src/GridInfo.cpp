@@ -21,6 +21,18 @@ std::string_view placementKindName(PlacementInfo::Kind kind) noexcept {
   return "unknown";
 }
 
+std::string_view placementKindName(topo::Placement::Kind kind) noexcept {
+  using K = topo::Placement::Kind;
+  switch (kind) {
+    case K::LocalTangentPlane: return placementKindName(PlacementInfo::Kind::LocalTangentPlane);
+    case K::PolarStereographic: return placementKindName(PlacementInfo::Kind::PolarStereographic);
+    case K::Equirectangular: return placementKindName(PlacementInfo::Kind::Equirectangular);
+    case K::TransverseMercator: return placementKindName(PlacementInfo::Kind::TransverseMercator);
+    case K::Projected: return placementKindName(PlacementInfo::Kind::Projected);
+  }
+  return "unknown";
+}
+
 topo::Body bodyOf(const GridInfo& info) {
   if (info.equatorialRadius == info.polarRadius) {
     return topo::Body::sphere(info.bodyName, info.equatorialRadius);

@@ -69,17 +69,6 @@ std::shared_ptr<PyCatalogue> readCatalogue(const std::filesystem::path& path,
   return c;
 }
 
-const char* placementKindName(topo::Placement::Kind k) {
-  switch (k) {
-    case topo::Placement::Kind::LocalTangentPlane: return "local_tangent_plane";
-    case topo::Placement::Kind::PolarStereographic: return "polar_stereographic";
-    case topo::Placement::Kind::Equirectangular: return "equirectangular";
-    case topo::Placement::Kind::TransverseMercator: return "transverse_mercator";
-    case topo::Placement::Kind::Projected: return "projected";
-  }
-  return "unknown";
-}
-
 /// One dataset as a dict, with the keys of `regolith info CATALOGUE --json` (docs/cli.md).
 py::dict datasetDict(std::size_t index, compose::DatasetId id, const compose::Dataset& d) {
   const topo::TopoGrid& g = d.level(0).grid;
@@ -89,8 +78,10 @@ py::dict datasetDict(std::size_t index, compose::DatasetId id, const compose::Da
   j["id"] = id;
   j["name"] = d.name();
   j["kind"] = d.isPlanet() ? "planet" : "dem";
-  j["placement"] = d.isPlanet() ? py::object(py::none())
-                                : py::object(py::str(placementKindName(d.placement()->kind())));
+  j["placement"] =
+      d.isPlanet()
+          ? py::object(py::none())
+          : py::object(py::str(std::string(store::placementKindName(d.placement()->kind()))));
   j["latitude_type"] =
       d.latitudeType() == topo::LatitudeType::Planetocentric ? "planetocentric" : "planetodetic";
   j["role"] = compose::roleName(o.role);

@@ -113,6 +113,8 @@ struct GridInfo {
 /// "local_tangent_plane", "polar_stereographic", "equirectangular", "transverse_mercator",
 /// "projected".
 [[nodiscard]] std::string_view placementKindName(PlacementInfo::Kind kind) noexcept;
+/// The same name for a topo placement's kind (a catalogue's DEM, `info` on a catalogue).
+[[nodiscard]] std::string_view placementKindName(topo::Placement::Kind kind) noexcept;
 
 /// The body a grid is on. Throws regolith::InvalidArgument for bad radii.
 [[nodiscard]] topo::Body bodyOf(const GridInfo& info);
