@@ -101,9 +101,9 @@ std::uint32_t Snapshot::build(std::uint32_t first, std::uint32_t count) {
   return index;
 }
 
-void Snapshot::covering(double latDeg, double lonDeg, std::vector<std::uint32_t>& out,
-                        Role role) const {
-  if (nodes_.empty()) return;
+std::size_t Snapshot::covering(double latDeg, double lonDeg, std::vector<std::uint32_t>& out,
+                               Role role) const {
+  if (nodes_.empty()) return 0;
   // The normal line from the lowest to the highest height: p(h) = p(0) + h·n, with one
   // sine and cosine per angle (Body::toBodyFixed() twice would take them twice).
   const double phi = latDeg * (std::numbers::pi / 180.0), lam = lonDeg * (std::numbers::pi / 180.0);
@@ -117,7 +117,7 @@ void Snapshot::covering(double latDeg, double lonDeg, std::vector<std::uint32_t>
   std::uint32_t stack[64];
   int top = 0;
   stack[top++] = 0;
-  std::uint64_t visited = 0;
+  std::size_t visited = 0;
   while (top > 0) {
     const Node& n = nodes_[stack[--top]];
     ++visited;
@@ -135,11 +135,12 @@ void Snapshot::covering(double latDeg, double lonDeg, std::vector<std::uint32_t>
       stack[top++] = n.left;
     }
   }
-  visited_.fetch_add(visited, std::memory_order_relaxed);
+  return visited;
 }
 
-void Snapshot::visible(std::span<const glm::dvec4> planes, std::vector<std::uint32_t>& out) const {
-  if (nodes_.empty()) return;
+std::size_t Snapshot::visible(std::span<const glm::dvec4> planes,
+                              std::vector<std::uint32_t>& out) const {
+  if (nodes_.empty()) return 0;
   auto outside = [&](const glm::dvec3& lo, const glm::dvec3& hi) {
     return std::any_of(planes.begin(), planes.end(),
                        [&](const glm::dvec4& p) { return boxOutsidePlane(lo, hi, p); });
@@ -147,7 +148,7 @@ void Snapshot::visible(std::span<const glm::dvec4> planes, std::vector<std::uint
   std::uint32_t stack[64];
   int top = 0;
   stack[top++] = 0;
-  std::uint64_t visited = 0;
+  std::size_t visited = 0;
   while (top > 0) {
     const Node& n = nodes_[stack[--top]];
     ++visited;
@@ -162,7 +163,7 @@ void Snapshot::visible(std::span<const glm::dvec4> planes, std::vector<std::uint
       stack[top++] = n.left;
     }
   }
-  visited_.fetch_add(visited, std::memory_order_relaxed);
+  return visited;
 }
 
 Catalogue::Catalogue(topo::Body body)

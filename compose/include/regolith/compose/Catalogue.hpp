@@ -47,18 +47,15 @@ class Snapshot {
   /// Appends to `out` the indices (into entries()) of the datasets of role `role` whose
   /// bounds the body's normal line at a planetodetic latitude/longitude crosses between
   /// the lowest and the highest height: every dataset that can cover the point, and a few
-  /// whose boxes merely reach it (Dataset::evaluate() decides).
-  void covering(double latDeg, double lonDeg, std::vector<std::uint32_t>& out,
-                Role role = Role::Height) const;
+  /// whose boxes merely reach it (Dataset::evaluate() decides). Returns the number of BVH
+  /// nodes visited (the index's cost, for tests and benchmarks).
+  std::size_t covering(double latDeg, double lonDeg, std::vector<std::uint32_t>& out,
+                       Role role = Role::Height) const;
   /// Appends the indices of the datasets whose bounds are not wholly outside one of the
   /// `planes` (a, b, c, d: a·x + b·y + c·z + d ≥ 0 inside, body-fixed metres): "which
-  /// datasets can this view see", for a view frustum's six planes.
-  void visible(std::span<const glm::dvec4> planes, std::vector<std::uint32_t>& out) const;
-  /// Number of BVH nodes a query visited since construction (all threads): for tests that
-  /// check the index is used.
-  [[nodiscard]] std::uint64_t nodesVisited() const noexcept {
-    return visited_.load(std::memory_order_relaxed);
-  }
+  /// datasets can this view see", for a view frustum's six planes. Returns the number of
+  /// BVH nodes visited.
+  std::size_t visible(std::span<const glm::dvec4> planes, std::vector<std::uint32_t>& out) const;
 
  private:
   struct Node {
@@ -74,7 +71,6 @@ class Snapshot {
   std::vector<Node> nodes_;
   std::vector<std::uint32_t> order_;
   double hLow_ = 0.0, hHigh_ = 0.0;
-  mutable std::atomic<std::uint64_t> visited_{0};
 };
 
 /// The datasets of one body. add() and remove() may be called from any thread while other
