@@ -193,7 +193,7 @@ SamplingCamera samplingCamera(const Frustum& view, const glm::dvec3& nadir, doub
 }
 
 MapCoords equirectangular(const glm::dvec3& surfaceNormal, double lon0, double lat0) noexcept {
-  const double lat = std::asin(clamp1(surfaceNormal.z));
+  const double lat = std::atan2(surfaceNormal.z, std::hypot(surfaceNormal.x, surfaceNormal.y));
   const double lon = std::atan2(surfaceNormal.y, surfaceNormal.x);
   double dl = std::remainder(lon - lon0, 2.0 * kPi);
   if (dl >= kPi) dl -= 2.0 * kPi;

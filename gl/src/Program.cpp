@@ -64,11 +64,20 @@ Program::Program(std::string_view name, const ShaderSources& sources) {
     cleanup();
     throw;
   }
+  try {
+    link(name, shaders);
+  } catch (...) {
+    cleanup();
+    throw;
+  }
+  cleanup();
+}
+
+void Program::link(std::string_view name, const std::vector<GLuint>& shaders) {
   id_ = glCreateProgram();
   for (GLuint s : shaders) glAttachShader(id_, s);
   glLinkProgram(id_);
   for (GLuint s : shaders) glDetachShader(id_, s);
-  cleanup();
   GLint ok = 0;
   glGetProgramiv(id_, GL_LINK_STATUS, &ok);
   if (ok == 0) {
@@ -77,6 +86,19 @@ Program::Program(std::string_view name, const ShaderSources& sources) {
     id_ = 0;
     throw GlError("Program(): '" + std::string(name) + "' does not link:\n" + log);
   }
+}
+
+Program Program::compute(std::string_view name, const std::string& source) {
+  const GLuint shader = compile(name, GL_COMPUTE_SHADER, "compute", source);
+  Program p;
+  try {
+    p.link(name, {shader});
+  } catch (...) {
+    glDeleteShader(shader);
+    throw;
+  }
+  glDeleteShader(shader);
+  return p;
 }
 
 Program::Program(Program&& o) noexcept : id_(std::exchange(o.id_, 0)) {}

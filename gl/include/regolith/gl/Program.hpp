@@ -12,6 +12,7 @@
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace regolith::gl {
 
@@ -26,6 +27,8 @@ struct ShaderSources {
 class Program {
  public:
   Program(std::string_view name, const ShaderSources& sources);
+  /// A compute program of one compute shader (errors as above).
+  [[nodiscard]] static Program compute(std::string_view name, const std::string& source);
   Program(const Program&) = delete;
   Program& operator=(const Program&) = delete;
   Program(Program&& o) noexcept;
@@ -48,6 +51,9 @@ class Program {
   void set(const char* name, const glm::mat3& m) const noexcept;
 
  private:
+  Program() = default;
+  void link(std::string_view name, const std::vector<GLuint>& shaders);
+
   GLuint id_ = 0;
 };
 

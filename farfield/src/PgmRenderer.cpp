@@ -1,0 +1,309 @@
+#include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
+#include <regolith/farfield/PgmRenderer.hpp>
+#include <regolith/gl/GlError.hpp>
+
+#include "PgmShaders.hpp"
+
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <numbers>
+#include <string>
+
+namespace regolith::farfield {
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+constexpr const char* kOp = "farfield::PgmRenderer()";
+
+void requireRange(const char* field, double v, double lo, double hi) {
+  if (!(v >= lo && v <= hi)) {
+    const std::string value = core::number(v);
+    const std::string expected = "in [" + core::number(lo) + ", " + core::number(hi) + "]";
+    throw InvalidArgument(
+        core::format({.operation = kOp, .field = field, .value = value, .expected = expected}));
+  }
+}
+
+/// A mipmapped R32F texture of a layer (rows from the bottom), wrapping in s if asked.
+gl::Texture uploadLayer(const std::vector<float>& texels, int width, int height, bool wrapS) {
+  gl::Texture tex;
+  const int levels = 1 + static_cast<int>(std::floor(std::log2(std::max(width, height))));
+  glTextureStorage2D(tex.id(), levels, GL_R32F, width, height);
+  glTextureSubImage2D(tex.id(), 0, 0, 0, width, height, GL_RED, GL_FLOAT, texels.data());
+  glGenerateTextureMipmap(tex.id());
+  glTextureParameteri(tex.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  glTextureParameteri(tex.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTextureParameteri(tex.id(), GL_TEXTURE_WRAP_S, wrapS ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+  glTextureParameteri(tex.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  return tex;
+}
+
+gl::Texture gridTexture(int width, int height) {
+  gl::Texture tex;
+  glTextureStorage2D(tex.id(), 1, GL_RGBA32F, width, height);
+  glTextureParameteri(tex.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTextureParameteri(tex.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  return tex;
+}
+
+float decodeOrdered(std::uint32_t u) {
+  const std::uint32_t bits = (u & 0x80000000U) != 0U ? (u & 0x7FFFFFFFU) : ~u;
+  float f = 0.0F;
+  static_assert(sizeof f == sizeof bits);
+  std::memcpy(&f, &bits, sizeof f);
+  return f;
+}
+
+glm::vec3 f3(const glm::dvec3& v) { return glm::vec3(v); }
+
+}  // namespace
+
+PgmRenderer::PgmRenderer(const HeightLayers& layers, PgmOptions options)
+    : options_(options),
+      layerOptions_(layers.options()),
+      capRadius_(layers.capRadius()),
+      a_(layers.body().equatorialRadius()),
+      b_(layers.body().polarRadius()),
+      minHeight_(layers.minHeight()),
+      maxHeight_(layers.maxHeight()),
+      grid_("farfield PGM grid pass", {shaders::kFullScreenVertex, {}, shaders::kGridFragment}),
+      mesh_("farfield PGM mesh pass", {shaders::kMeshVertex, {}, shaders::kMeshFragment}),
+      reduce_(gl::Program::compute("farfield PGM radius reduction", shaders::kReduceCompute)) {
+  requireRange("gridWidth", options.gridWidth, 8, 4096);
+  requireRange("gridHeight", options.gridHeight, 8, 4096);
+  requireRange("zeta", options.zeta, 0.05, 1.0);
+  requireRange("primaryMargin", options.primaryMargin, 0.0, 1.0);
+  minRadius_ = b_ + minHeight_;
+  maxRadius_ = a_ + maxHeight_;
+  primary_ = minRadius_;
+
+  equirect_ = uploadLayer(layers.equirect(), layers.equirectWidth(), layers.equirectHeight(), true);
+  north_ = uploadLayer(layers.north(), layers.capSize(), layers.capSize(), false);
+  south_ = uploadLayer(layers.south(), layers.capSize(), layers.capSize(), false);
+
+  const int w = options.gridWidth, h = options.gridHeight;
+  gridPos_ = gridTexture(w, h);
+  gridNrm_ = gridTexture(w, h);
+  glNamedFramebufferTexture(gridFbo_.id(), GL_COLOR_ATTACHMENT0, gridPos_.id(), 0);
+  glNamedFramebufferTexture(gridFbo_.id(), GL_COLOR_ATTACHMENT1, gridNrm_.id(), 0);
+  const GLenum buffers[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+  glNamedFramebufferDrawBuffers(gridFbo_.id(), 2, buffers);
+  if (glCheckNamedFramebufferStatus(gridFbo_.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+    throw gl::GlError(std::string(kOp) + ": the grid framebuffer is incomplete");
+  }
+
+  // One triangle strip per pair of grid rows, joined by the fixed restart index.
+  std::vector<std::uint32_t> idx;
+  idx.reserve(static_cast<std::size_t>(h - 1) * (2 * static_cast<std::size_t>(w) + 1));
+  for (int j = 0; j + 1 < h; ++j) {
+    for (int i = 0; i < w; ++i) {
+      idx.push_back(static_cast<std::uint32_t>((j + 1) * w + i));
+      idx.push_back(static_cast<std::uint32_t>(j * w + i));
+    }
+    idx.push_back(0xFFFFFFFFU);
+  }
+  indexCount_ = static_cast<GLsizei>(idx.size());
+  glNamedBufferStorage(indices_.id(), static_cast<GLsizeiptr>(idx.size() * sizeof(std::uint32_t)),
+                       idx.data(), 0);
+  glVertexArrayElementBuffer(vao_.id(), indices_.id());
+  for (gl::Buffer& b : minBuffers_) {
+    const std::uint32_t init = 0xFFFFFFFFU;
+    glNamedBufferStorage(b.id(), sizeof init, &init, GL_DYNAMIC_STORAGE_BIT);
+  }
+  gl::checkGl(kOp);
+}
+
+PgmRenderer::~PgmRenderer() {
+  for (GLsync& f : fences_) {
+    if (f != nullptr) glDeleteSync(f);
+  }
+}
+
+void PgmRenderer::setFrameUniforms(const clod::Camera& camera, const ReferenceSpheres& s,
+                                   const SamplingCamera& sc, const glm::dvec3& sun) const {
+  const gl::Program& g = grid_;
+  const glm::dvec3 nadir = -glm::normalize(camera.position);
+  glm::dvec3 anyPerp =
+      glm::cross(nadir, std::abs(nadir.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0));
+  anyPerp = glm::normalize(anyPerp);
+  g.set("uGrid",
+        glm::vec2(static_cast<float>(options_.gridWidth), static_cast<float>(options_.gridHeight)));
+  g.set("uFwd", f3(sc.forward));
+  g.set("uRight", f3(sc.rightAxis));
+  g.set("uUp", f3(sc.up));
+  g.set("uNadir", f3(nadir));
+  g.set("uAnyPerp", f3(anyPerp));
+  g.set("uBounds", glm::vec4(static_cast<float>(sc.left), static_cast<float>(sc.right),
+                             static_cast<float>(sc.bottom), static_cast<float>(sc.top)));
+  g.set("uD", static_cast<float>(s.d));
+  g.set("uRp", static_cast<float>(s.primary));
+  g.set("uAlt", static_cast<float>(s.d - s.primary));
+  g.set("uD2R2", static_cast<float>((s.d - s.primary) * (s.d + s.primary)));
+  g.set("uBegin", static_cast<float>(s.begin));
+  g.set("uTau0", static_cast<float>(s.tau0));
+  g.set("uTauTop", static_cast<float>(s.tauTop));
+  g.set("uTauS", static_cast<float>(s.tauS));
+  g.set("uOmegaSb", static_cast<float>(s.omegaSBegin));
+  g.set("uRs", static_cast<float>(s.secondary));
+  g.set("uA", static_cast<float>(a_));
+  g.set("uB", static_cast<float>(b_));
+  g.set("uAminusRp", static_cast<float>(a_ - s.primary));
+  g.set("uAB2", static_cast<float>((a_ / b_) * (a_ / b_)));
+  g.set("uEquirect", 0);
+  g.set("uNorth", 1);
+  g.set("uSouth", 2);
+  g.set("uEquirectRows", static_cast<float>(layerOptions_.equirectWidth / 2));
+  g.set("uCapSize", static_cast<float>(layerOptions_.capSize));
+  g.set("uCapRadius", static_cast<float>(capRadius_));
+  g.set("uCapLat", static_cast<float>(layerOptions_.capLatitude * kDeg));
+  g.set("uCapBlend", static_cast<float>(layerOptions_.blendDegrees * kDeg));
+  g.set("uLodBias", options_.lodBias);
+
+  const gl::Program& m = mesh_;
+  m.set("uPos", 0);
+  m.set("uNrm", 1);
+  m.set("uGridWidth", options_.gridWidth);
+  m.set("uViewProj", camera.viewProjection());
+  m.set("uSun", f3(glm::normalize(sun)));
+  m.set("uLow", options_.low);
+  m.set("uHigh", options_.high);
+  m.set("uHeightRange", glm::vec2(static_cast<float>(minHeight_), static_cast<float>(maxHeight_)));
+  m.set("uHeightColours", options_.heightColours ? 1 : 0);
+  m.set("uAmbient", options_.ambient);
+}
+
+PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& camera,
+                           const glm::dvec3& sun) {
+  if (camera.width != target.width() || camera.height != target.height()) {
+    throw InvalidArgument(
+        core::format({.operation = "farfield::PgmRenderer::draw()",
+                      .field = "camera size",
+                      .value = core::number(camera.width) + " x " + core::number(camera.height),
+                      .expected = "the target's " + core::number(target.width()) + " x " +
+                                  core::number(target.height())}));
+  }
+  PgmFrame frame;
+  frame.minVisibleRadius = std::numeric_limits<double>::quiet_NaN();
+  const double d = glm::length(camera.position);
+  frame.spheres = referenceSpheres(d, primary_, maxRadius_, options_.zeta);
+  if (!frame.spheres.secondaryExists()) return frame;
+
+  const glm::dmat3 rot = camera.rotation();  // rows: right, up, -forward
+  const glm::dvec3 right(rot[0][0], rot[1][0], rot[2][0]);
+  const glm::dvec3 up(rot[0][1], rot[1][1], rot[2][1]);
+  const glm::dvec3 fwd = camera.forward();
+  const double aspect = static_cast<double>(camera.width) / camera.height;
+  const Frustum view = viewFrustum(fwd, right, up, camera.fovYDegrees * kDeg, aspect);
+  frame.sampling = samplingCamera(view, -camera.position / d, frame.spheres.tauTop);
+  setFrameUniforms(camera, frame.spheres, frame.sampling, sun);
+
+  // 1. The grid pass.
+  glBindFramebuffer(GL_FRAMEBUFFER, gridFbo_.id());
+  glViewport(0, 0, options_.gridWidth, options_.gridHeight);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  glBindTextureUnit(0, equirect_.id());
+  glBindTextureUnit(1, north_.id());
+  glBindTextureUnit(2, south_.id());
+  grid_.use();
+  glBindVertexArray(vao_.id());
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+
+  // 2. The mesh pass, with the radius buffer as a second colour attachment of the target.
+  if (radiusWidth_ != target.width() || radiusHeight_ != target.height()) {
+    radius_ = gl::Texture();
+    glTextureStorage2D(radius_.id(), 1, GL_R32F, target.width(), target.height());
+    radiusWidth_ = target.width();
+    radiusHeight_ = target.height();
+  }
+  const GLuint fbo = target.framebuffer();
+  glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT1, radius_.id(), 0);
+  const GLenum both[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+  glNamedFramebufferDrawBuffers(fbo, 2, both);
+  const float none = 3.0e38F;
+  glClearNamedFramebufferfv(fbo, GL_COLOR, 1, &none);
+  target.bind();
+  glDisable(GL_CULL_FACE);
+  glEnable(GL_PRIMITIVE_RESTART_FIXED_INDEX);
+  glBindTextureUnit(0, gridPos_.id());
+  glBindTextureUnit(1, gridNrm_.id());
+  mesh_.use();
+  glBindVertexArray(vao_.id());
+  glDrawElements(GL_TRIANGLE_STRIP, indexCount_, GL_UNSIGNED_INT, nullptr);
+  glDisable(GL_PRIMITIVE_RESTART_FIXED_INDEX);
+  glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT1, 0, 0);
+  glNamedFramebufferDrawBuffer(fbo, GL_COLOR_ATTACHMENT0);
+  frame.drawn = true;
+
+  // 3. The minimum visible radius, for the next frame's primary sphere.
+  primaryOf_[static_cast<std::size_t>(frameIndex_)] = frame.spheres.primary;
+  reduce(target, frame);
+  gl::checkGl("farfield::PgmRenderer::draw()");
+  return frame;
+}
+
+void PgmRenderer::reduce(const gl::RenderTarget& target, PgmFrame& frame) {
+  if (options_.readback == PrimaryReadback::Fixed) return;
+  const auto slot = static_cast<std::size_t>(frameIndex_);
+  const std::uint32_t init = 0xFFFFFFFFU;
+  glNamedBufferSubData(minBuffers_[slot].id(), 0, sizeof init, &init);
+  glBindImageTexture(0, radius_.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_R32F);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, minBuffers_[slot].id());
+  glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+  reduce_.use();
+  glDispatchCompute(static_cast<GLuint>((target.width() + 15) / 16),
+                    static_cast<GLuint>((target.height() + 15) / 16), 1);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+
+  const auto take = [&](std::size_t s) {
+    std::uint32_t bits = 0;
+    glGetNamedBufferSubData(minBuffers_[s].id(), 0, sizeof bits, &bits);
+    const float offset = decodeOrdered(bits);
+    if (offset < 1.0e38F) {
+      const double radius = primaryOf_[s] + static_cast<double>(offset);
+      frame.minVisibleRadius = radius;
+      const double margin = options_.primaryMargin * (maxRadius_ - minRadius_);
+      primary_ = std::clamp(radius - margin, minRadius_, maxRadius_);
+    }
+  };
+  if (options_.readback == PrimaryReadback::Stall) {
+    take(slot);
+    return;
+  }
+  // Lagged: read the other buffer if its fence has passed, and fence this one.
+  const std::size_t other = 1 - slot;
+  if (fences_[other] != nullptr) {
+    if (glClientWaitSync(fences_[other], 0, 0) != GL_TIMEOUT_EXPIRED) take(other);
+    glDeleteSync(fences_[other]);
+    fences_[other] = nullptr;
+  }
+  if (fences_[slot] != nullptr) glDeleteSync(fences_[slot]);
+  fences_[slot] = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+  frameIndex_ = static_cast<int>(other);
+}
+
+std::vector<glm::vec4> PgmRenderer::readGridPositions() const {
+  std::vector<glm::vec4> out(static_cast<std::size_t>(options_.gridWidth) *
+                             static_cast<std::size_t>(options_.gridHeight));
+  glGetTextureImage(gridPos_.id(), 0, GL_RGBA, GL_FLOAT,
+                    static_cast<GLsizei>(out.size() * sizeof(glm::vec4)), out.data());
+  return out;
+}
+
+std::vector<glm::vec4> PgmRenderer::readGridNormals() const {
+  std::vector<glm::vec4> out(static_cast<std::size_t>(options_.gridWidth) *
+                             static_cast<std::size_t>(options_.gridHeight));
+  glGetTextureImage(gridNrm_.id(), 0, GL_RGBA, GL_FLOAT,
+                    static_cast<GLsizei>(out.size() * sizeof(glm::vec4)), out.data());
+  return out;
+}
+
+}  // namespace regolith::farfield
