@@ -89,8 +89,7 @@ ReferenceSpheres referenceSpheres(double d, double primary, double maximum, doub
   s.gammaBegin = frontNormalAngle(s.begin, d, s.primary).value_or(0.5 * kPi - s.tau0);
   if (s.secondaryExists()) {
     s.tauS = std::asin(std::min(1.0, s.secondary / d));
-    s.omegaSBegin =
-        std::atan2(s.secondary * std::sin(s.gammaBegin), d - s.secondary * std::cos(s.gammaBegin));
+    s.omegaSBegin = std::min(s.begin, s.tauS);
   }
   return s;
 }

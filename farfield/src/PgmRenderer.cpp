@@ -181,7 +181,7 @@ void PgmRenderer::setFrameUniforms(const clod::Camera& camera, const ReferenceSp
 }
 
 PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& camera,
-                           const glm::dvec3& sun) {
+                           const glm::dvec3& sun, bool keepDrawn) {
   if (camera.width != target.width() || camera.height != target.height()) {
     throw InvalidArgument(
         core::format({.operation = "farfield::PgmRenderer::draw()",
@@ -221,9 +221,18 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
   if (radiusWidth_ != target.width() || radiusHeight_ != target.height()) {
     radius_ = gl::Texture();
     glTextureStorage2D(radius_.id(), 1, GL_R32F, target.width(), target.height());
+    drawnDepth_ = gl::Texture();
+    glTextureStorage2D(drawnDepth_.id(), 1, GL_DEPTH_COMPONENT32F, target.width(), target.height());
     radiusWidth_ = target.width();
     radiusHeight_ = target.height();
   }
+  if (keepDrawn) {
+    glCopyImageSubData(target.depthTexture(), GL_TEXTURE_2D, 0, 0, 0, 0, drawnDepth_.id(),
+                       GL_TEXTURE_2D, 0, 0, 0, 0, target.width(), target.height(), 1);
+  }
+  mesh_.set("uKeepDrawn", keepDrawn ? 1 : 0);
+  mesh_.set("uDrawnDepth", 2);
+  glBindTextureUnit(2, drawnDepth_.id());
   const GLuint fbo = target.framebuffer();
   glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT1, radius_.id(), 0);
   const GLenum both[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};

@@ -129,7 +129,11 @@ uniform vec3 uSun, uLow, uHigh;
 uniform vec2 uHeightRange;
 uniform int uHeightColours;
 uniform float uAmbient;
+uniform int uKeepDrawn;
+uniform sampler2D uDrawnDepth;  // the target's depth before this pass (reversed Z, 0 = empty)
 void main() {
+  // Hand-off: where something (the near-field clipmap) is already drawn, it stays.
+  if (uKeepDrawn != 0 && texelFetch(uDrawnDepth, ivec2(gl_FragCoord.xy), 0).r > 0.0) discard;
   vec3 n = normalize(vNormal);
   float range = uHeightRange.y - uHeightRange.x;
   float t = range > 1.0 ? clamp((vHeight - uHeightRange.x) / range, 0.0, 1.0) : 0.5;

@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -190,6 +191,250 @@ TEST(PgmRendererGL, LookingAwayDrawsNothingAndStaysFinite) {
   EXPECT_EQ(c.bodyPixels, 0);
   EXPECT_EQ(c.coverageMisses, 0);
   EXPECT_EQ(c.nonFinite, 0);
+}
+
+}  // namespace
+}  // namespace regolith::farfield
+
+namespace regolith::farfield {
+namespace {
+
+constexpr double kMoon = 1737400.0;
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+
+/// A Gaussian mountain `peak` metres high with σ = `sigma` metres, centred at (lat0, lon0), on
+/// a flat Moon.
+HeightLayers::HeightFunction mountain(double lat0, double lon0, double peak, double sigma) {
+  const topo::Body moon = topo::Body::moon();
+  const glm::dvec3 c = glm::normalize(moon.toBodyFixed({lat0, lon0, 0.0}));
+  return [c, peak, sigma](double lat, double lon, double) {
+    const glm::dvec3 p(std::cos(lat * kDegree) * std::cos(lon * kDegree),
+                       std::cos(lat * kDegree) * std::sin(lon * kDegree), std::sin(lat * kDegree));
+    const double arc = std::acos(std::clamp(glm::dot(p, c), -1.0, 1.0)) * kMoon;
+    return peak * std::exp(-0.5 * (arc / sigma) * (arc / sigma));
+  };
+}
+
+HeightLayers moonLayers(const HeightLayers::HeightFunction& f) {
+  LayerOptions lo;
+  lo.equirectWidth = 2048;
+  lo.capSize = 256;
+  return HeightLayers::build(topo::Body::moon(), f, lo);
+}
+
+TEST(PgmRendererGL, AMountainBehindTheHorizonRisesIntoView) {
+  test::glContext();
+  // A 10 km mountain 200 km east of a camera 1 km up: its foot is 140 km beyond the
+  // horizon (59 km), its top 4 km above the curve.
+  const double lonM = 200e3 / kMoon / kDegree;
+  const HeightLayers layers = moonLayers(mountain(0.0, lonM, 10000.0, 40000.0));
+  const topo::Body moon = topo::Body::moon();
+  clod::Camera cam;
+  cam.position = moon.toBodyFixed({0.0, 0.0, 1000.0});
+  cam.target = moon.toBodyFixed({0.0, lonM, 2000.0});
+  cam.up = {1.0, 0.0, 0.0};
+  cam.fovYDegrees = 8.0;
+  cam.width = 320;
+  cam.height = 240;
+  cam.near = 1.0;
+  PgmOptions options;
+  options.readback = PrimaryReadback::Stall;
+  options.gridWidth = options.gridHeight = 1024;
+  PgmRenderer pgm(layers, options);
+  gl::RenderTarget target(cam.width, cam.height);
+  for (int frame = 0; frame < 2; ++frame) {  // the second frame uses the measured r_p
+    target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+    const PgmFrame f = pgm.draw(target, cam, glm::normalize(glm::dvec3(0.3, -1.0, 0.2)));
+    ASSERT_TRUE(f.drawn);
+    ASSERT_TRUE(f.spheres.secondaryExists());
+  }
+  test::savePng("pgm_mountain_behind_horizon", target.readColor());
+  const gl::DepthImage depth = target.readDepth();
+  // The silhouette's top in the peak's column: the camera, the centre and the equator are
+  // in one plane with the camera's up, so every equator point projects onto that column; the
+  // highest of them in the image (the layers' own heights, sampled every 100 m) is the top.
+  const glm::dvec3 pp = cam.project(moon.toBodyFixed({0.0, lonM, 10000.0}));
+  ASSERT_GT(pp.z, 0.0);
+  const int col = static_cast<int>(pp.x);
+  double expectTop = 1e9;
+  for (double x = 1000.0; x < 400e3; x += 100.0) {
+    const double lon = x / kMoon / kDegree;
+    const glm::dvec3 q = cam.project(moon.toBodyFixed({0.0, lon, layers.heightAt(0.0, lon)}));
+    if (q.z > 0.0) expectTop = std::min(expectTop, q.y);
+  }
+  int top = -1;
+  for (int y = 0; y < cam.height && top < 0; ++y) {
+    if (depth.at(col, y) > 0.0F) top = y;
+  }
+  // The bare sphere's horizon row in that column: the first ray from the top that hits it.
+  int horizon = -1;
+  for (int y = 0; y < cam.height && horizon < 0; ++y) {
+    if (hitEllipsoid(cam.position, cam.ray(col + 0.5, y + 0.5), kMoon, kMoon)) horizon = y;
+  }
+  std::printf("expected top row %.2f, top drawn row %d, bare horizon row %d\n", expectTop, top,
+              horizon);
+  ASSERT_GE(top, 0);
+  EXPECT_LT(top, horizon - 10);                     // the mountain stands well above the horizon
+  EXPECT_LE(std::abs(top + 0.5 - expectTop), 1.5);  // its top where the oracle has it
+}
+
+TEST(PgmRendererGL, ACameraBelowTheMountainTopSeesItAboveTheHorizontal) {
+  test::glContext();
+  const double lonM = 40e3 / kMoon / kDegree;  // 40 km away, 10 km high; the eye 1 km up
+  const HeightLayers layers = moonLayers(mountain(0.0, lonM, 10000.0, 15000.0));
+  const topo::Body moon = topo::Body::moon();
+  clod::Camera cam;
+  cam.position = moon.toBodyFixed({0.0, 0.0, 1000.0});
+  const glm::dmat3 enu = moon.enuFrame(0.0, 0.0);
+  cam.target = cam.position + enu[0];  // level, looking east
+  cam.up = enu[2];
+  cam.fovYDegrees = 40.0;
+  cam.width = 320;
+  cam.height = 240;
+  cam.near = 1.0;
+  PgmOptions options;
+  options.gridWidth = options.gridHeight = 1024;
+  PgmRenderer pgm(layers, options);
+  ASSERT_LT(glm::length(cam.position), pgm.maxRadius());  // below the maximum sphere
+  gl::RenderTarget target(cam.width, cam.height);
+  target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+  const PgmFrame f = pgm.draw(target, cam, enu[2]);
+  ASSERT_TRUE(f.drawn);
+  test::savePng("pgm_below_mountain_top", target.readColor());
+  const gl::DepthImage depth = target.readDepth();
+  const int mid = cam.width / 2;
+  // Rows above the image centre look above the horizontal: the mountain fills some.
+  int above = 0;
+  for (int y = 0; y < cam.height / 2 - 2; ++y) above += depth.at(mid, y) > 0.0F ? 1 : 0;
+  double expectTop = 1e9;  // as in the test above: the equator's highest projection
+  for (double x = 100.0; x < 200e3; x += 50.0) {
+    const double lon = x / kMoon / kDegree;
+    const glm::dvec3 q = cam.project(moon.toBodyFixed({0.0, lon, layers.heightAt(0.0, lon)}));
+    if (q.z > 0.0) expectTop = std::min(expectTop, q.y);
+  }
+  std::printf("drawn rows above the horizontal %d, expected top row %.2f\n", above, expectTop);
+  EXPECT_GT(above, 20);
+  int top = -1;
+  for (int y = 0; y < cam.height && top < 0; ++y) {
+    if (depth.at(mid, y) > 0.0F) top = y;
+  }
+  EXPECT_LE(std::abs(top + 0.5 - expectTop), 1.5);
+  for (const float z : depth.depth) ASSERT_TRUE(std::isfinite(z));
+}
+
+TEST(PgmRendererGL, SecondarySphereVanishingSwitchesToTheImpostor) {
+  test::glContext();
+  const HeightLayers layers = moonLayers(mountain(0.0, 0.0, 8000.0, 100000.0));
+  PgmOptions options;
+  options.readback = PrimaryReadback::Fixed;
+  PgmRenderer pgm(layers, options);
+  // Bisect the distance where r_s crosses 0 with the renderer's radii.
+  double lo = 1.5 * kMoon, hi = 1000.0 * kMoon;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (referenceSpheres(mid, pgm.primaryRadius(), pgm.maxRadius(), 0.9).secondaryExists() ? lo : hi) =
+        mid;
+  }
+  for (const double d : {lo, hi * 1.0001}) {
+    clod::Camera cam;
+    cam.position = {d, 0.0, 0.0};
+    cam.target = {0.0, 0.0, 0.0};
+    cam.up = {0.0, 0.0, 1.0};
+    cam.fovYDegrees = 10.0;
+    cam.width = 200;
+    cam.height = 200;
+    cam.near = 1.0;
+    gl::RenderTarget target(cam.width, cam.height);
+    target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+    const PgmFrame f = pgm.draw(target, cam, {1.0, 0.0, 0.0});
+    const gl::DepthImage depth = target.readDepth();
+    int drawn = 0, inner = 0, missed = 0;
+    for (int y = 0; y < cam.height; ++y) {
+      for (int x = 0; x < cam.width; ++x) {
+        const float z = depth.at(x, y);
+        ASSERT_TRUE(std::isfinite(z));
+        drawn += z > 0.0F ? 1 : 0;
+        const auto hits = [&](int px, int py) {
+          return hitEllipsoid(cam.position, cam.ray(px + 0.5, py + 0.5), pgm.minRadius(),
+                              pgm.minRadius())
+              .has_value();
+        };
+        if (hits(x, y)) {
+          ++inner;
+          // A pixel that certainly sees the body (its ray meets the lowest sphere, and so
+          // do its neighbours': not at the limb) must be drawn.
+          const bool interior =
+              hits(x - 1, y) && hits(x + 1, y) && hits(x, y - 1) && hits(x, y + 1);
+          missed += z > 0.0F || !interior ? 0 : 1;
+        }
+      }
+    }
+    std::printf("d = %.6g R: r_s = %.6g m, drawn %d, body pixels %d, missed %d\n", d / kMoon,
+                f.spheres.secondary, drawn, inner, missed);
+    if (d == lo) {
+      ASSERT_TRUE(f.drawn);  // r_s → 0⁺ still draws, and draws the whole disc
+      EXPECT_GT(f.spheres.secondary, 0.0);
+      EXPECT_LT(f.spheres.secondary, 1e-3 * kMoon);
+      EXPECT_GT(inner, 1000);
+      EXPECT_EQ(missed, 0);
+    } else {
+      EXPECT_FALSE(f.drawn);  // r_s < 0: the impostor's turn
+      EXPECT_LE(f.spheres.secondary, 0.0);
+      EXPECT_EQ(drawn, 0);
+    }
+  }
+}
+
+TEST(PgmRendererGL, MinimumVisibleRadiusIsReadBackStalledOrAFrameLater) {
+  test::glContext();
+  // A crater 3 km deep (a negative mountain) under a camera 300 km up.
+  const HeightLayers layers = moonLayers(mountain(0.0, 0.0, -3000.0, 30000.0));
+  clod::Camera cam;
+  cam.position = {kMoon + 3.0e5, 0.0, 0.0};
+  cam.target = {0.0, 0.0, 0.0};
+  cam.up = {0.0, 0.0, 1.0};
+  cam.width = 200;
+  cam.height = 150;
+  cam.near = 1.0;
+  gl::RenderTarget target(cam.width, cam.height);
+  double stalled = 0.0;
+  {
+    PgmOptions options;
+    options.readback = PrimaryReadback::Stall;
+    PgmRenderer pgm(layers, options);
+    target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+    const PgmFrame f = pgm.draw(target, cam, {1.0, 0.0, 0.0});
+    stalled = f.minVisibleRadius;
+    // The crater floor is the lowest point: within the grid's sampling of its bottom.
+    EXPECT_NEAR(stalled, kMoon - 3000.0, 30.0);
+    // Lowered by the margin but never below the body's lowest radius (here the crater floor
+    // itself, so the clamp holds it there).
+    EXPECT_LE(pgm.primaryRadius(), stalled);
+    EXPECT_GE(pgm.primaryRadius(), pgm.minRadius());
+    // Looking at flat ground away from the crater: the minimum visible radius is the datum,
+    // and the next primary is that less the margin (2 % of the relief).
+    clod::Camera side = cam;
+    side.position = {(kMoon + 3.0e4) * std::cos(0.3), (kMoon + 3.0e4) * std::sin(0.3), 0.0};
+    side.target = {kMoon * std::cos(0.31), kMoon * std::sin(0.31), 0.0};
+    target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+    const PgmFrame g = pgm.draw(target, side, {1.0, 0.0, 0.0});
+    EXPECT_NEAR(g.minVisibleRadius, kMoon, 1.0);
+    EXPECT_NEAR(pgm.primaryRadius(), kMoon - 0.02 * (pgm.maxRadius() - pgm.minRadius()), 1.0);
+  }
+  PgmOptions options;
+  options.readback = PrimaryReadback::Lagged;
+  PgmRenderer pgm(layers, options);
+  double lagged = std::numeric_limits<double>::quiet_NaN();
+  int frames = 0;
+  for (; frames < 5 && std::isnan(lagged); ++frames) {
+    target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+    lagged = pgm.draw(target, cam, {1.0, 0.0, 0.0}).minVisibleRadius;
+    if (frames == 0) {
+      EXPECT_TRUE(std::isnan(lagged));  // nothing to read in the first frame
+    }
+  }
+  std::printf("stalled %.3f m, lagged %.3f m after %d frames\n", stalled, lagged, frames);
+  EXPECT_NEAR(lagged, stalled, 1e-3);
 }
 
 }  // namespace

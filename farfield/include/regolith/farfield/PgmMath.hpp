@@ -67,7 +67,9 @@ struct ReferenceSpheres {
 /// the primary sphere and the secondary sphere, monotone in ω, reaching γ₀ at τ_top):
 /// - ω ≤ b: the front hit on the primary sphere;
 /// - b < ω: f = (ω − b)/(τ_top − b) clamped to [0, 1]; the primary's γ at min(ω, τ₀) mixed
-///   by f with the secondary's γ at the ray angle mix(ω_sb, τ_s, f).
+///   by f with the secondary's γ at the ray angle mix(b, τ_s, f) (§4: "mixing between the
+///   beginning ray angle and the angle of the ray tangent to the secondary reference
+///   sphere"), b taken as min(b, τ_s) so the ray still meets S when r_s → 0.
 /// Requires s.secondaryExists(). The paper's eq. 1 reads f = (ω − τ₀)/(b − τ₀), which would
 /// be 1 (all secondary) at b, against its own text; this uses the reading the text states.
 [[nodiscard]] double blendedNormalAngle(const ReferenceSpheres& s, double omega) noexcept;

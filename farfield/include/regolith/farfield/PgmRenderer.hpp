@@ -96,7 +96,12 @@ class PgmRenderer {
   /// Draws into `target` (which the caller cleared) with depth test and depth writes. The
   /// camera must have the target's size (InvalidArgument otherwise). `sun` is the unit
   /// direction towards the light, body-fixed.
-  PgmFrame draw(const gl::RenderTarget& target, const clod::Camera& camera, const glm::dvec3& sun);
+  ///
+  /// With `keepDrawn`, pixels the target already has depth for keep it: the far field
+  /// fills in only around what is drawn (the hand-off from the near-field clipmaps, drawn
+  /// first: no band where two surfaces of different resolution fight in the depth test).
+  PgmFrame draw(const gl::RenderTarget& target, const clod::Camera& camera, const glm::dvec3& sun,
+                bool keepDrawn = false);
 
   /// The grid pass's outputs of the last draw(), row-major from the grid's bottom row:
   /// (displaced point − eye, radius − r_p) and (lighting normal, height) per grid point.
@@ -123,6 +128,7 @@ class PgmRenderer {
   gl::Buffer indices_;
   GLsizei indexCount_ = 0;
   gl::Texture radius_{0};
+  gl::Texture drawnDepth_{0};  ///< copy of the target's depth for keepDrawn
   int radiusWidth_ = 0, radiusHeight_ = 0;
   std::array<gl::Buffer, 2> minBuffers_;
   std::array<GLsync, 2> fences_{nullptr, nullptr};
