@@ -118,10 +118,12 @@ PgmRenderer::PgmRenderer(const HeightLayers& layers, PgmOptions options)
     const std::uint32_t init = 0xFFFFFFFFU;
     glNamedBufferStorage(b.id(), sizeof init, &init, GL_DYNAMIC_STORAGE_BIT);
   }
+  glCreateQueries(GL_TIME_ELAPSED, 3, timers_.data());
   gl::checkGl(kOp);
 }
 
 PgmRenderer::~PgmRenderer() {
+  glDeleteQueries(3, timers_.data());
   for (GLsync& f : fences_) {
     if (f != nullptr) glDeleteSync(f);
   }
@@ -215,7 +217,9 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
   glBindTextureUnit(2, south_.id());
   grid_.use();
   glBindVertexArray(vao_.id());
+  if (options_.timePasses) glBeginQuery(GL_TIME_ELAPSED, timers_[0]);
   glDrawArrays(GL_TRIANGLES, 0, 3);
+  if (options_.timePasses) glEndQuery(GL_TIME_ELAPSED);
 
   // 2. The mesh pass, with the radius buffer as a second colour attachment of the target.
   if (radiusWidth_ != target.width() || radiusHeight_ != target.height()) {
@@ -246,7 +250,9 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
   glBindTextureUnit(1, gridNrm_.id());
   mesh_.use();
   glBindVertexArray(vao_.id());
+  if (options_.timePasses) glBeginQuery(GL_TIME_ELAPSED, timers_[1]);
   glDrawElements(GL_TRIANGLE_STRIP, indexCount_, GL_UNSIGNED_INT, nullptr);
+  if (options_.timePasses) glEndQuery(GL_TIME_ELAPSED);
   glDisable(GL_PRIMITIVE_RESTART_FIXED_INDEX);
   glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT1, 0, 0);
   glNamedFramebufferDrawBuffer(fbo, GL_COLOR_ATTACHMENT0);
@@ -254,7 +260,17 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
 
   // 3. The minimum visible radius, for the next frame's primary sphere.
   primaryOf_[static_cast<std::size_t>(frameIndex_)] = frame.spheres.primary;
+  if (options_.timePasses) glBeginQuery(GL_TIME_ELAPSED, timers_[2]);
   reduce(target, frame);
+  if (options_.timePasses) {
+    glEndQuery(GL_TIME_ELAPSED);
+    double* out[] = {&frame.gridMs, &frame.meshMs, &frame.reduceMs};
+    for (std::size_t i = 0; i < 3; ++i) {
+      GLuint64 ns = 0;
+      glGetQueryObjectui64v(timers_[i], GL_QUERY_RESULT, &ns);  // waits for the GPU
+      *out[i] = static_cast<double>(ns) * 1e-6;
+    }
+  }
   gl::checkGl("farfield::PgmRenderer::draw()");
   return frame;
 }

@@ -45,6 +45,9 @@ struct PgmOptions {
   bool heightColours = true;
   glm::vec3 low{0.42F, 0.26F, 0.16F}, high{0.93F, 0.80F, 0.62F};
   float ambient = 0.12F;
+  /// Time each pass with GL timer queries (read at the end of draw(), which then waits for
+  /// the GPU): PgmFrame::gridMs, meshMs and reduceMs. For benchmarks.
+  bool timePasses = false;
 };
 
 /// What one draw() did.
@@ -57,6 +60,9 @@ struct PgmFrame {
   /// The minimum visible radius read back this frame (metres from the centre), or NaN if
   /// none arrived yet (Lagged: the previous frame's; Fixed: never).
   double minVisibleRadius = 0.0;
+  /// GPU time of the grid pass (the PGM step proper: rays, spheres, heights), the mesh pass
+  /// and the reduction, in milliseconds (PgmOptions::timePasses; else 0).
+  double gridMs = 0.0, meshMs = 0.0, reduceMs = 0.0;
 };
 
 /// Draws a body's surface by PGM into a render target:
@@ -132,7 +138,8 @@ class PgmRenderer {
   int radiusWidth_ = 0, radiusHeight_ = 0;
   std::array<gl::Buffer, 2> minBuffers_;
   std::array<GLsync, 2> fences_{nullptr, nullptr};
-  std::array<double, 2> primaryOf_{0.0, 0.0};  ///< r_p each buffer's frame drew with
+  std::array<double, 2> primaryOf_{0.0, 0.0};
+  std::array<GLuint, 3> timers_{0, 0, 0};  ///< r_p each buffer's frame drew with
   int frameIndex_ = 0;
 };
 

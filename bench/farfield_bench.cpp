@@ -1,0 +1,270 @@
+// The far field's costs and accuracy (docs/far-field.md), headless on Mesa llvmpipe through
+// EGL surfaceless, on a generated Mars (the IAU ellipsoid with relief at several scales, to
+// ±8 km) composed into height layers:
+//
+//   pgm/<view>/grid:<G>/screen:<S>   one PGM frame (draw + glFinish) with a G × G grid on an
+//       S × S screen: the paper's Figure 8 on this machine, for its three views:
+//         global     the whole planet from 3 R (layers 4096 wide)
+//         low        400 km up, looking at the horizon, low-resolution layers (1024 wide)
+//         victoria   2 km above Victoria crater (2.05° S, 5.5° W), at the horizon (4096)
+//       Counters: error_px_median and error_px_p99, the screen-space error of the drawn
+//       surface against the layers' exact surface in double (the height error of each
+//       pixel's point, over its distance, times the focal length), measured once per case.
+//   readback/<mode>   the primary sphere's minimum-radius reduction: none (Fixed), read at
+//       once (Stall), or a frame later through a fence (Lagged); global view, grid 512,
+//       screen 1024.
+//   sampling/<view>   the per-frame CPU set-up of §4–§5 (reference spheres and sampling
+//       camera), timed; counters (no GPU): of the sampling camera's grid rays, the fraction in
+//       the behind-the-horizon band (ω > b, what the occluded-area sampling costs) and the
+//       fraction whose surface point lands outside the view (not pertinent); of a plain grid
+//       over the view frustum, the fraction of rays that miss the body (wasted) and of the
+//       sampling camera's, the same.
+//
+// Run: build/bench/farfield_bench --benchmark_min_time=5x
+#include <regolith/clod/Camera.hpp>
+#include <regolith/farfield/HeightLayers.hpp>
+#include <regolith/farfield/PgmMath.hpp>
+#include <regolith/farfield/PgmRenderer.hpp>
+#include <regolith/gl/HeadlessContext.hpp>
+#include <regolith/gl/RenderTarget.hpp>
+#include <regolith/topo/Body.hpp>
+
+#include <benchmark/benchmark.h>
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace regolith;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+const topo::Body& mars() {
+  static const topo::Body body = topo::Body::marsEllipsoid();
+  return body;
+}
+
+/// Relief at several scales: continents, ridges and a few craters (metres).
+double relief(double lat, double lon, double) {
+  const double la = lat * kDeg, lo = lon * kDeg;
+  double h = 3000.0 * std::sin(2.0 * la + 0.5) * std::cos(3.0 * lo) +
+             1500.0 * std::sin(9.0 * lo + 1.0) * std::cos(7.0 * la) +
+             400.0 * std::sin(41.0 * la) * std::sin(37.0 * lo + 0.2);
+  const double craters[][4] = {{-2.05, -5.5, 6000.0, 3000.0},  // lat, lon, depth, radius km
+                               {20.0, 100.0, 5000.0, 150.0},
+                               {-45.0, -160.0, 4000.0, 300.0},
+                               {75.0, 30.0, 3000.0, 200.0}};
+  for (const auto& c : craters) {
+    const double cl = c[0] * kDeg, cn = c[1] * kDeg;
+    const double cosd =
+        std::sin(la) * std::sin(cl) + std::cos(la) * std::cos(cl) * std::cos(lo - cn);
+    const double km = std::acos(std::clamp(cosd, -1.0, 1.0)) * 3396.19;
+    const double q = km / c[3];
+    h += -c[2] * std::exp(-q * q * 2.0) + 0.3 * c[2] * std::exp(-(q - 1.0) * (q - 1.0) * 20.0);
+  }
+  return h;
+}
+
+const farfield::HeightLayers& layers(int width) {
+  static std::map<int, std::unique_ptr<farfield::HeightLayers>> cache;
+  auto& slot = cache[width];
+  if (!slot) {
+    farfield::LayerOptions o;
+    o.equirectWidth = width;
+    o.capSize = width / 4;
+    slot =
+        std::make_unique<farfield::HeightLayers>(farfield::HeightLayers::build(mars(), relief, o));
+  }
+  return *slot;
+}
+
+struct View {
+  const char* name;
+  int layerWidth;
+  clod::Camera camera;
+};
+
+View view(const std::string& name, int screen) {
+  clod::Camera cam;
+  cam.width = cam.height = screen;
+  cam.fovYDegrees = 45.0;
+  cam.near = 1.0;
+  cam.up = {0.0, 0.0, 1.0};
+  if (name == "global") {
+    cam.position = glm::dvec3(3.0 * mars().equatorialRadius(), 0.0, 0.0);
+    cam.target = glm::dvec3(0.0);
+    return {"global", 4096, cam};
+  }
+  const bool low = name == "low";
+  const double lat = low ? 10.0 : -2.05, lon = low ? 60.0 : -5.5;
+  const double alt = low ? 400e3 : 2000.0 + relief(lat, lon, 0.0);
+  cam.position = mars().toBodyFixed({lat, lon, alt});
+  const glm::dmat3 enu = mars().enuFrame(lat, lon);
+  cam.target = cam.position + enu[1] - (low ? 0.35 : 0.05) * enu[2];
+  cam.up = enu[2];
+  return {low ? "low" : "victoria", low ? 1024 : 4096, cam};
+}
+
+/// Screen-space error of the drawn surface against the layers' surface, per drawn pixel.
+std::vector<double> screenErrors(const clod::Camera& cam, const gl::DepthImage& depth,
+                                 const farfield::HeightLayers& l) {
+  std::vector<double> out;
+  for (int y = 0; y < cam.height; y += 2) {
+    for (int x = 0; x < cam.width; x += 2) {
+      const float z = depth.at(x, y);
+      if (!(z > 0.0F)) continue;
+      const glm::dvec3 r = cam.ray(x + 0.5, y + 0.5);
+      const double t = cam.viewDistance(z) / glm::dot(r, cam.forward());
+      const topo::Geodetic g = mars().toGeodetic(cam.position + t * r);
+      out.push_back(std::abs(g.height - l.heightAt(g.latDeg, g.lonDeg)) / t * cam.focalPixels());
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+double quantile(const std::vector<double>& v, double q) {
+  return v.empty() ? 0.0 : v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
+}
+
+void pgmFrame(benchmark::State& state, const std::string& name, int grid, int screen) {
+  const View v = view(name, screen);
+  const farfield::HeightLayers& l = layers(v.layerWidth);
+  farfield::PgmOptions o;
+  o.gridWidth = o.gridHeight = grid;
+  o.timePasses = true;
+  farfield::PgmRenderer pgm(l, o);
+  gl::RenderTarget target(screen, screen);
+  const glm::dvec3 sun = glm::normalize(glm::dvec3(1.0, 0.5, 0.6));
+  for (int i = 0; i < 3; ++i) {  // settle the primary sphere
+    target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+    pgm.draw(target, v.camera, sun);
+  }
+  glFinish();
+  const std::vector<double> err = screenErrors(v.camera, target.readDepth(), l);
+  double gridMs = 0.0, meshMs = 0.0, reduceMs = 0.0;
+  for (auto _ : state) {
+    target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+    const farfield::PgmFrame f = pgm.draw(target, v.camera, sun);
+    glFinish();
+    gridMs += f.gridMs;
+    meshMs += f.meshMs;
+    reduceMs += f.reduceMs;
+  }
+  const auto n = static_cast<double>(state.iterations());
+  state.counters["grid_ms"] = gridMs / n;
+  state.counters["mesh_ms"] = meshMs / n;
+  state.counters["reduce_ms"] = reduceMs / n;
+  state.counters["error_px_median"] = quantile(err, 0.5);
+  state.counters["error_px_p99"] = quantile(err, 0.99);
+  state.counters["grid_points"] = static_cast<double>(grid) * grid;
+}
+
+void readback(benchmark::State& state, farfield::PrimaryReadback mode) {
+  const View v = view("global", 1024);
+  farfield::PgmOptions o;
+  o.gridWidth = o.gridHeight = 512;
+  o.readback = mode;
+  farfield::PgmRenderer pgm(layers(v.layerWidth), o);
+  gl::RenderTarget target(1024, 1024);
+  for (int i = 0; i < 3; ++i) pgm.draw(target, v.camera, {1.0, 0.0, 0.0});  // JIT, first frames
+  glFinish();
+  for (auto _ : state) {
+    target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+    pgm.draw(target, v.camera, {1.0, 0.0, 0.0});
+    glFinish();
+  }
+}
+
+void sampling(benchmark::State& state, const std::string& name) {
+  const View v = view(name, 512);
+  const farfield::HeightLayers& l = layers(v.layerWidth);
+  const double minR = mars().polarRadius() + l.minHeight();
+  const double maxR = mars().equatorialRadius() + l.maxHeight();
+  const clod::Camera& cam = v.camera;
+  const double d = glm::length(cam.position);
+  const glm::dvec3 nadir = -cam.position / d;
+  const glm::dmat3 rot = cam.rotation();
+  const glm::dvec3 right(rot[0][0], rot[1][0], rot[2][0]), up(rot[0][1], rot[1][1], rot[2][1]);
+  const farfield::Frustum frustum =
+      farfield::viewFrustum(cam.forward(), right, up, cam.fovYDegrees * kDeg, 1.0);
+  farfield::ReferenceSpheres s;
+  farfield::SamplingCamera sc;
+  for (auto _ : state) {
+    s = farfield::referenceSpheres(d, minR, maxR, 0.9);
+    sc = farfield::samplingCamera(frustum, nadir, s.tauTop);
+    benchmark::DoNotOptimize(sc);
+  }
+  // Counters on a 128² grid of each kind.
+  const int n = 128;
+  int behind = 0, offScreen = 0, plainMiss = 0, samplingMiss = 0;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const double u = i / (n - 1.0), w = j / (n - 1.0);
+      const glm::dvec3 r = sc.ray(u, w);
+      const double omega = std::acos(std::clamp(glm::dot(r, nadir), -1.0, 1.0));
+      behind += omega > s.begin ? 1 : 0;
+      samplingMiss += omega > s.tauTop ? 1 : 0;
+      // The grid point's surface position (on the primary sphere at its blended γ).
+      const double gamma = farfield::blendedNormalAngle(s, omega);
+      glm::dvec3 k = r - glm::dot(r, nadir) * nadir;
+      k = glm::length(k) > 1e-12 ? glm::normalize(k) : glm::dvec3(0.0);
+      const glm::dvec3 p = cam.position + farfield::eyeSpacePoint(gamma, d, s.primary, nadir, k);
+      const glm::dvec3 q = cam.project(p);
+      offScreen +=
+          (q.z <= 0.0 || q.x < 0 || q.y < 0 || q.x > cam.width || q.y > cam.height) ? 1 : 0;
+      // A plain grid over the view frustum.
+      const glm::dvec3 pr = cam.ray(u * cam.width, w * cam.height);
+      const double om = std::acos(std::clamp(glm::dot(pr, nadir), -1.0, 1.0));
+      plainMiss += om > s.tauTop ? 1 : 0;
+    }
+  }
+  const double total = static_cast<double>(n) * n;
+  state.counters["behind_horizon_fraction"] = behind / total;
+  state.counters["sampling_offscreen_fraction"] = offScreen / total;
+  state.counters["sampling_miss_fraction"] = samplingMiss / total;
+  state.counters["plain_grid_miss_fraction"] = plainMiss / total;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const gl::HeadlessContext context;
+  for (const char* name : {"global", "low", "victoria"}) {
+    for (const int grid : {256, 512, 1024, 2048}) {
+      for (const int screen : {256, 512, 1024}) {
+        const std::string label = std::string("pgm/") + name + "/grid:" + std::to_string(grid) +
+                                  "/screen:" + std::to_string(screen);
+        benchmark::RegisterBenchmark(label.c_str(),
+                                     [=](benchmark::State& s) { pgmFrame(s, name, grid, screen); })
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->MinWarmUpTime(0.0);
+      }
+    }
+  }
+  for (const auto& [label, mode] :
+       {std::pair{"readback/fixed", farfield::PrimaryReadback::Fixed},
+        std::pair{"readback/stall", farfield::PrimaryReadback::Stall},
+        std::pair{"readback/lagged", farfield::PrimaryReadback::Lagged}}) {
+    benchmark::RegisterBenchmark(label, [mode](benchmark::State& s) { readback(s, mode); })
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+  }
+  for (const char* name : {"global", "low", "victoria"}) {
+    benchmark::RegisterBenchmark((std::string("sampling/") + name).c_str(),
+                                 [name](benchmark::State& s) { sampling(s, name); })
+        ->Unit(benchmark::kMicrosecond);
+  }
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
