@@ -5,6 +5,7 @@
 #include <regolith/core/FileIdentity.hpp>
 #include <regolith/core/Message.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/farfield/FarField.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/store/Generate.hpp>
@@ -307,11 +308,41 @@ void MarsVictoriaScene::placeRover(double x, double y, double headingDeg) {
   graph_.setLocal(nodes_.rover, scenegraph::roverPose({x, y, demHeight(x, y)}, headingDeg));
 }
 
+std::shared_ptr<const farfield::HeightLayers> MarsVictoriaScene::farFieldLayers() const {
+  farfield::LayerOptions lo;
+  lo.equirectWidth = 2048;
+  lo.capSize = 512;
+  if (composed_) {
+    return std::make_shared<const farfield::HeightLayers>(
+        farfield::HeightLayers::fromSurface(*composed_, lo));
+  }
+  const clod::HeightPyramid& planet = *mars_;
+  return std::make_shared<const farfield::HeightLayers>(farfield::HeightLayers::build(
+      *planet.body(),
+      [&planet](double lat, double lon, double) {
+        return planetHeightAt(planet, {lat, lon, 0.0});
+      },
+      lo));
+}
+
+std::size_t MarsVictoriaScene::planetClipmapLevels() const {
+  if (!options_.farField) return 0;
+  // Level k's window spans (size − 1) × its latitude spacing; keep those within 180°.
+  std::size_t levels = 0;
+  while (levels < mars_->levelCount() &&
+         (options_.clipmapSize - 1) * std::abs(mars_->level(levels).grid.spacingY()) <= 180.0) {
+    ++levels;
+  }
+  return std::max<std::size_t>(levels, 1);
+}
+
 void MarsVictoriaScene::registerWith(clod::SceneRenderer& renderer) const {
   clod::ClipmapOptions planet;
   planet.size = options_.clipmapSize;
+  planet.levels = planetClipmapLevels();
   planet.albedo = kPlanetAlbedo;
   clod::ClipmapOptions dem = planet;
+  dem.levels = 0;
   dem.albedo = options_.demAlbedo.value_or(kDemAlbedo);
   renderer.addTerrain(scenegraph::kDrawMars, mars_, planet);
   clod::ClipmapOptions victoria = dem;
@@ -323,6 +354,7 @@ void MarsVictoriaScene::registerWith(clod::SceneRenderer& renderer) const {
     renderer.addCutOut(scenegraph::kDrawMars, scenegraph::kDrawSecondDem);
   }
   clod::ClipmapOptions earth = planet;
+  earth.levels = 0;
   earth.size = 31;
   earth.albedo = {0.3F, 0.45F, 0.8F};
   renderer.addTerrain(scenegraph::kDrawEarth, earth_, earth);
@@ -412,6 +444,15 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
     clod::SceneRenderer renderer;
     scene.registerWith(renderer);
     gl::RenderTarget target(options.width, options.height);
+    std::unique_ptr<farfield::FarField> farField;
+    if (options.scene.farField) {
+      farfield::PgmOptions po;
+      po.gridWidth = po.gridHeight = 512;
+      po.heightColours = false;  // the planet clipmap's albedo and lighting: one look
+      po.high = MarsVictoriaScene::kPlanetAlbedo;
+      po.ambient = clod::ClipmapOptions{}.ambient;
+      farField = std::make_unique<farfield::FarField>(scene.farFieldLayers(), po);
+    }
     double renderSeconds = 0.0;
     // Over the pole: the first 40% of the frames follow the great circle through the pole
     // and Victoria's meridian at 2000 km, from 20° beyond the pole to above Victoria, looking
@@ -473,6 +514,16 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
       const auto r0 = std::chrono::steady_clock::now();
       target.clear({0.02F, 0.02F, 0.04F, 1.0F});
       renderer.draw(g.renderList(focus, cam), view);
+      if (farField) {
+        // Beyond the clipmaps: the far field, in Mars's body-fixed frame, where nothing is
+        // drawn yet.
+        const clod::Camera marsCamera = clod::cameraInItem(g.relative(n.mars, cam), view);
+        const glm::dvec3 sun =
+            g.relative(n.mars, focus).applyVector(glm::normalize(view.lightInFocus));
+        const farfield::FarFieldFrame ff = farField->draw(target, marsCamera, sun, true);
+        summary.farFieldFrames += ff.mode == farfield::FarFieldMode::Pgm ? 1 : 0;
+        summary.impostorFrames += ff.mode == farfield::FarFieldMode::Impostor ? 1 : 0;
+      }
       const gl::RgbaImage image = target.readColor();
       renderSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
       const auto path = framePath(options.outputDir, i);

@@ -7,6 +7,7 @@
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/compose/ComposedSurface.hpp>
+#include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/gl/Image.hpp>
 #include <regolith/scenegraph/PaperScene.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
@@ -69,6 +70,11 @@ struct MarsVictoriaOptions {
     double featherNodataSamples = 0.0;
   };
   std::vector<StoreDataset> extraDatasets;
+  /// Draw Mars beyond its clipmap with the far field (docs/far-field.md): the planet's
+  /// clipmap keeps only the levels whose window spans at most 180° (a wider one reaches
+  /// over a pole onto ground it already covers), and PGM draws the rest of the planet around
+  /// it. Off: the clipmap draws every level, as before the far field existed.
+  bool farField = true;
 };
 
 /// The scene: graph (scenegraph::buildPaperScene), data and what each drawable key draws. Building
@@ -108,6 +114,12 @@ class MarsVictoriaScene {
   /// field of view and aspect ratio of its image. 0 without composition.
   [[nodiscard]] std::size_t datasetsSeen(scenegraph::NodeId camera, double fovYDegrees,
                                          double aspect, double near) const;
+
+  /// Mars's heights for the far field: the composed surface (options.composition) or the
+  /// planet grid, resampled into farfield::HeightLayers (global 2048 × 1024 and 512² caps).
+  [[nodiscard]] std::shared_ptr<const farfield::HeightLayers> farFieldLayers() const;
+  /// The number of planet clipmap levels registerWith() draws (0: all).
+  [[nodiscard]] std::size_t planetClipmapLevels() const;
 
   /// Registers every drawable of the scene with a renderer (terrains, cut-outs, rover).
   void registerWith(clod::SceneRenderer& renderer) const;
@@ -164,6 +176,10 @@ struct FlyoverSummary {
   double poleLatitude = std::numeric_limits<double>::quiet_NaN();
   /// Camera distance to the rover at the first and last frame (m).
   double startDistance = 0.0, endDistance = 0.0;
+  /// Frames in which the far field drew Mars by PGM around the clipmaps (options.scene.
+  /// farField), and by the impostor (too far for PGM).
+  int farFieldFrames = 0;
+  int impostorFrames = 0;
 };
 
 /// Renders the fly-over headless: the camera starts far enough out to see Mars whole and

@@ -1,0 +1,51 @@
+#pragma once
+/// \file
+/// The far field of one body: PGM where it has a secondary sphere, an impostor beyond
+/// (docs/far-field.md, "One zoom").
+
+#include <regolith/clod/Camera.hpp>
+#include <regolith/farfield/HeightLayers.hpp>
+#include <regolith/farfield/PgmRenderer.hpp>
+#include <regolith/gl/RenderTarget.hpp>
+
+#include <glm/vec3.hpp>
+
+#include <memory>
+
+namespace regolith::farfield {
+
+/// What drew the body in one FarField::draw().
+enum class FarFieldMode { Pgm, Impostor, None };
+
+/// What one FarField::draw() did.
+struct FarFieldFrame {
+  FarFieldMode mode = FarFieldMode::None;
+  PgmFrame pgm;  ///< the PGM frame (mode Pgm; spheres are filled in for Impostor too)
+};
+
+/// A body's far field: draws it by PGM while the view has a secondary sphere (r_s > 0) and
+/// hands over to the ray-cast impostor beyond, filling in around what the target already
+/// shows (the near-field clipmaps drawn first). The camera is body-fixed (the body's centre
+/// at the origin). Needs a current GL 4.5 context; belongs to its thread.
+class FarField {
+ public:
+  /// Keeps the layers (shared; they must describe `layers.body()`).
+  FarField(std::shared_ptr<const HeightLayers> layers, PgmOptions options = {});
+  ~FarField();
+  FarField(const FarField&) = delete;
+  FarField& operator=(const FarField&) = delete;
+
+  [[nodiscard]] const HeightLayers& layers() const noexcept { return *layers_; }
+  [[nodiscard]] PgmRenderer& pgm() noexcept { return pgm_; }
+
+  /// Draws the body into `target` where it has no depth yet (keepDrawn) or over it by the
+  /// depth test. `sun`: unit direction towards the light, body-fixed.
+  FarFieldFrame draw(const gl::RenderTarget& target, const clod::Camera& camera,
+                     const glm::dvec3& sun, bool keepDrawn = true);
+
+ private:
+  std::shared_ptr<const HeightLayers> layers_;
+  PgmRenderer pgm_;
+};
+
+}  // namespace regolith::farfield
