@@ -40,7 +40,10 @@ struct OracleSurface {
   double maxHeight = 0.0;
 };
 
-/// How the oracle marches. The step rule (the bound that keeps a feature from being skipped):
+/// How the oracle marches. Each pixel ray is marched only inside the sphere of radius
+/// equatorialRadius + maxHeight (outside it every point lies above maxHeight), from the camera
+/// if it is inside, else from the ray's entry, found analytically. The step rule (the bound
+/// that keeps a feature from being skipped), with f = altitude − height along the ray:
 /// - above maxHeight (geodetic altitude a > maxHeight) the step is
 ///   max(maxStepMetres, aboveBoundFraction·(a − maxHeight)). No surface point lies closer
 ///   than a − maxHeight (the points at altitude ≤ maxHeight form the body grown by maxHeight,
@@ -50,10 +53,10 @@ struct OracleSurface {
 ///   march ends in the middle of the ray's chord through it.
 /// - in the band [minHeight, maxHeight] the step is maxStepMetres: a feature narrower than
 ///   that along the ray may be missed. Choose it well below the height field's smallest
-///   feature (a grid's spacing, a Gaussian's σ / 20).
-/// - a crossing (f > 0 then f ≤ 0, f = altitude − height) is bisected until its bracket is
-///   below toleranceMetres, or below relativeTolerance × the distance if that is smaller (a
-///   hit millimetres from the camera), or the doubles can split it no further.
+///   feature: a grid's spacing or less (the tests use 200 m for a Gaussian of σ = 20 km).
+/// - a crossing (f > 0 then f ≤ 0) is bisected until its bracket is below toleranceMetres,
+///   or below relativeTolerance × the distance if that is smaller (a hit millimetres from the
+///   camera), or the doubles can split it no further.
 /// - a ray that grazes the surface between samples (a local minimum of f at a sample, below
 ///   grazeRefineMetres) is refined by golden-section search for the minimum of f over the
 ///   two steps around it; if that minimum is ≤ 0 the ray hits. Tangent rays at the horizon
