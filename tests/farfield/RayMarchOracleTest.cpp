@@ -276,6 +276,44 @@ TEST(RayMarchOracle, AMountainBehindTheHorizonRisesAboveTheHorizonLine) {
   EXPECT_GT(bareTop, topRow + 10);
 }
 
+TEST(RayMarchOracle, FromOrbitAMountainJustBehindTheLimbRisesAboveIt) {
+  // From 10^8 m, a 0.05° view of the limb (7 µrad, 0.7 km a pixel); the mountain stands 1.2°
+  // beyond the limb, all of it (to 3σ) hidden but for the top 19 km.
+  const double cameraRadius = 1.0e8;
+  const double limbAngle = std::acos(kMars / cameraRadius);
+  const double mountainAngle = limbAngle + 1.2 * kDeg;
+  const Mountain mountain{{std::cos(mountainAngle), std::sin(mountainAngle), 0.0}};
+  ASSERT_GT(mountainAngle - 3.0 * mountain.sigma / kMars, limbAngle);
+  const glm::dvec3 position(cameraRadius, 0.0, 0.0);
+  // Up = +y, so the centre column's plane is the equator's.
+  const clod::Camera camera =
+      lookingAt(position, kMars * glm::dvec3(std::cos(limbAngle), std::sin(limbAngle), 0.0),
+                {0.0, 1.0, 0.0}, 0.05, 81, 121);
+  const OracleImage image = rayMarch(camera, mountain.surface(), 200.0);
+  savePng("farfield_oracle_limb_from_orbit", depthPicture(image));
+  // Elevations from the camera's horizontal, and the view's own (the limb's) as the centre row.
+  const EquatorView view{0.0, cameraRadius};
+  const double pitch = view.elevation(limbAngle, kMars);
+  const auto row = [&](double e) { return rowOf(camera, e - pitch); };
+  const int column = camera.width / 2;
+  const int topRow = image.topmostHit(column);
+  const double expected = row(profileTop(mountain, mountainAngle, view));
+  std::cout << "limb from 1e8 m: oracle row centre " << topRow + 0.5 << ", profile top " << expected
+            << ", bare limb " << row(pitch) << "\n";
+  expectSilhouetteRow(topRow, expected, "profile top");
+  EXPECT_LT(expected, row(pitch) - 20.0);  // 19 km over the limb: ~27 px
+  // Without the mountain the column's top hit is the bare limb, on the boundary of the centre
+  // row: its centre ray is tangent to the sphere, so rounding decides whether it hits, and
+  // either way the top hit lies where the check allows.
+  Mountain flat = mountain;
+  flat.peak = 0.0;
+  int bareTop = camera.height;
+  for (int y = camera.height - 1; y >= 0; --y) {
+    if (marchRay(position, camera.ray(column + 0.5, y + 0.5), flat.surface(), 200.0)) bareTop = y;
+  }
+  expectSilhouetteRow(bareTop, row(pitch), "bare limb");
+}
+
 TEST(RayMarchOracle, ZoomedOnTheMountainItsSilhouetteMatchesTheProfileWithinAPixel) {
   // 3° over 121 rows: 0.43 mrad a pixel, finer than the distance between the peak's elevation
   // and the profile's top (the near slope stands higher), so only the profile's top fits.
