@@ -228,9 +228,11 @@ constexpr std::size_t kPrefetchAhead = 8;
 /// its first points: most of them more than a few cells from the one before. Along a path (a
 /// rover's wheels) the cells are in cache already, and a loop that even checks for
 /// prefetching ran a third slower (store_bench rover_batch), so such batches take a loop
-/// without it.
+/// without it. A batch no longer than the prefetch distance has nothing to prefetch (the
+/// rover's six wheels of one step).
 template <class ToU, class ToV>
 bool scattered(std::span<const double> xs, std::span<const double> ys, ToU toU, ToV toV) {
+  if (xs.size() <= kPrefetchAhead) return false;
   const std::size_t k = std::min<std::size_t>(xs.size(), 17);
   std::size_t jumps = 0;
   for (std::size_t i = 1; i < k; ++i) {

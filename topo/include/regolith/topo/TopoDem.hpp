@@ -238,10 +238,11 @@ inline bool blockBilinear(const Block& b, const ResidentBilinear& f, double u, d
 /// block if it holds the cell, else from the block table (a lock-free switch, the
 /// random-access case), also for a cell across a block edge. False leaves the point to the
 /// generic path (not resident, missing samples, outside the sample centres; when Grad, near
-/// a cell line).
+/// a cell line). Always inlined: in the batch loops GCC otherwise calls it out of line.
 template <bool Grad>
-inline bool pagedBilinear(const ResidentBilinear& f, const BlockTable* table, std::uint64_t source,
-                          double u, double v, CellValue& out) noexcept {
+[[gnu::always_inline]] inline bool pagedBilinear(const ResidentBilinear& f, const BlockTable* table,
+                                                 std::uint64_t source, double u, double v,
+                                                 CellValue& out) noexcept {
   const ThreadBlock& tb = tlBlock;
   if (tb.source == source && blockBilinear<Grad>(tb, f, u, v, out)) [[likely]] {
     return true;
