@@ -3,7 +3,9 @@
 //   store/rover/paged_heights, paged_surfaces   6 wheels at 1 kHz along a 1 km path over a
 //       4096² float DEM (64 MiB) paged through an 8 MiB cache (8× smaller), starting cold:
 //       wheel queries per second with misses included, patch loads, bytes read, and bytes
-//       read over the bytes of the unique patches the wheels touched
+//       read over the bytes of the unique patches the wheels touched; one height() or
+//       surface() call per wheel, or (…_batch6) one heights() or surfaces() batch of the six
+//       wheels per step, as rover::traverse() queries
 //   store/rover/gdal_rasterio   the same wheel points through GDAL RasterIO (2×2 window
 //       per query, bilinear in code) on the same data as a 256×256-tiled GeoTIFF, with
 //       GDAL's block cache set to the same 8 MiB
@@ -24,6 +26,7 @@
 #include <gdal.h>
 #include <hdf5.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -142,7 +145,9 @@ std::size_t uniquePatches(const Wheels& w) {
   return seen.size();
 }
 
-void roverPaged(benchmark::State& state, bool surfaces, std::size_t budget) {
+enum class RoverQuery { Heights, Surfaces, HeightsBatch, SurfacesBatch };
+
+void roverPaged(benchmark::State& state, RoverQuery query, std::size_t budget) {
   const Data& d = data();
   const Wheels& w = wheels();
   CacheStats last{};
@@ -155,11 +160,27 @@ void roverPaged(benchmark::State& state, bool surfaces, std::size_t budget) {
     const TopoDem dem = pager.dem("dem");
     state.ResumeTiming();
     double sink = 0.0;
-    for (std::size_t i = 0; i < w.xs.size(); ++i) {
-      if (surfaces) {
+    if (query == RoverQuery::Heights) {
+      for (std::size_t i = 0; i < w.xs.size(); ++i) sink += dem.height(w.xs[i], w.ys[i]).height;
+    } else if (query == RoverQuery::Surfaces) {
+      for (std::size_t i = 0; i < w.xs.size(); ++i) {
         sink += dem.surface(w.xs[i], w.ys[i]).normal.z;
-      } else {
-        sink += dem.height(w.xs[i], w.ys[i]).height;
+      }
+    } else {
+      constexpr std::size_t k = 6;  // the wheels of one step
+      std::array<double, k> hs{};
+      std::array<glm::dvec3, k> ns{};
+      std::array<QueryStatus, k> st{}, nst{};
+      const std::span<const double> xs(w.xs), ys(w.ys);
+      for (std::size_t i = 0; i + k <= w.xs.size(); i += k) {
+        if (query == RoverQuery::HeightsBatch) {
+          dem.heights(xs.subspan(i, k), ys.subspan(i, k), hs, st);
+          sink += hs[0];
+        } else {
+          dem.surfaces(xs.subspan(i, k), ys.subspan(i, k), hs, ns, st, Interpolation::Bilinear,
+                       NormalFrame::Grid, nst);
+          sink += ns[0].z;
+        }
       }
     }
     benchmark::DoNotOptimize(sink);
@@ -379,15 +400,25 @@ void coarse(benchmark::State& state, bool pyramid) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::RegisterBenchmark("store/rover/paged_heights", roverPaged, false, kBudget)
+  benchmark::RegisterBenchmark("store/rover/paged_heights", roverPaged, RoverQuery::Heights,
+                               kBudget)
       ->Unit(benchmark::kMillisecond)
       ->Iterations(3);
-  benchmark::RegisterBenchmark("store/rover/paged_surfaces", roverPaged, true, kBudget)
+  benchmark::RegisterBenchmark("store/rover/paged_surfaces", roverPaged, RoverQuery::Surfaces,
+                               kBudget)
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(3);
+  benchmark::RegisterBenchmark("store/rover/paged_heights_batch6", roverPaged,
+                               RoverQuery::HeightsBatch, kBudget)
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(3);
+  benchmark::RegisterBenchmark("store/rover/paged_surfaces_batch6", roverPaged,
+                               RoverQuery::SurfacesBatch, kBudget)
       ->Unit(benchmark::kMillisecond)
       ->Iterations(3);
   // A budget of 4 patches (1 MiB, 64× smaller than the grid): fewer than the path touches.
-  benchmark::RegisterBenchmark("store/rover/paged_heights_4_patches", roverPaged, false,
-                               4 * (kPatch * kPatch * sizeof(float) + 384))
+  benchmark::RegisterBenchmark("store/rover/paged_heights_4_patches", roverPaged,
+                               RoverQuery::Heights, 4 * (kPatch * kPatch * sizeof(float) + 384))
       ->Unit(benchmark::kMillisecond)
       ->Iterations(3);
   benchmark::RegisterBenchmark("store/rover/gdal_rasterio", roverGdal)

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <random>
+#include <span>
 #include <thread>
 #include <vector>
 
@@ -412,4 +413,115 @@ TEST(Pager, BatchesThatPrefetchAheadUnderEvictionGetTheInMemoryAnswers) {
   for (auto& th : threads) th.join();
   for (std::size_t t = 0; t < 4; ++t) EXPECT_EQ(wrong[t], 0u) << "thread " << t;
   EXPECT_GT(o.cache->stats().evictions, 100u);
+}
+
+namespace {
+// The fixture's DEM read sample by sample: every query takes the generic kernel.
+class SampleBySample final : public SampleSource {
+ public:
+  explicit SampleBySample(std::shared_ptr<const InMemorySamples> s) : s_(std::move(s)) {}
+  std::size_t rows() const noexcept override { return s_->rows(); }
+  std::size_t cols() const noexcept override { return s_->cols(); }
+  float sample(std::size_t r, std::size_t c) const override { return s_->sample(r, c); }
+
+ private:
+  std::shared_ptr<const InMemorySamples> s_;
+};
+TopoDem genericDem() {
+  const GridInfo info = demInfo(700, 900);
+  return {topoGridOf(info), placementOf(info),
+          std::make_shared<SampleBySample>(fixture().demSamples)};
+}
+bool sameSurface(const SurfaceSample& a, const SurfaceSample& b) {
+  const auto same = [](double p, double q) { return p == q || (std::isnan(p) && std::isnan(q)); };
+  return a.status == b.status && a.normalStatus == b.normalStatus && same(a.height, b.height) &&
+         same(a.normal.x, b.normal.x) && same(a.normal.y, b.normal.y) &&
+         same(a.normal.z, b.normal.z);
+}
+}  // namespace
+
+TEST(Pager, SurfacesAcrossPatchEdgesAreReadLockFreeAndEqualTheGenericPath) {
+  // surface() takes its normal from the height's four samples on height()'s lock-free paths:
+  // inside the thread's patch, and in cells whose samples lie in two or four patches. Its
+  // answers are the generic kernel's bits (a source read sample by sample), also a few ulps
+  // either side of a cell line, where the generic path snaps the point onto the line.
+  Opened o = openFixture();
+  const TopoDem dem = o.pager.dem("dem");
+  const TopoDem mem = inMemoryDem();
+  const TopoDem generic = genericDem();
+  for (int pr = 0; pr < 2; ++pr) {
+    for (int pc = 0; pc < 2; ++pc) (void)heightIn(dem, pr, pc);  // make them resident
+  }
+  const auto check = [&](double x, double y, const char* what) {
+    const SurfaceSample g = generic.surface(x, y), b = dem.surface(x, y), a = mem.surface(x, y);
+    EXPECT_TRUE(b.normalValid()) << what << " " << x << "," << y;
+    EXPECT_TRUE(sameSurface(g, b)) << what << " " << x << "," << y;
+    EXPECT_TRUE(sameSurface(g, a)) << what << " " << x << "," << y;
+  };
+  for (const auto& [r, c] :
+       {std::pair{127.0, 127.0}, std::pair{40.0, 127.0}, std::pair{127.0, 40.0}}) {
+    (void)dem.surface(-500.0 + c + 0.5, 400.0 - r - 0.5);  // the run begins
+    o.cache->resetStats();
+    for (int i = 0; i < 1000; ++i) {
+      check(-500.0 + c + 0.001 * i, 400.0 - r - 0.999 + 0.00093 * i, "run");
+    }
+    EXPECT_EQ(o.cache->stats().hits, 0u) << "cell " << r << "," << c;
+    EXPECT_EQ(o.cache->stats().misses, 0u);
+    // A few ulps from the cell's far lines (which are patch edges for (127, 127)): the
+    // generic path's cell, on the block table (a switch of the thread's patch is a hit).
+    const double xLine = -500.0 + c + 1.0, yLine = 400.0 - r - 1.0;
+    for (int i = 0; i < 100; ++i) {
+      const double along = 0.01 * i;
+      for (const double x : {std::nextafter(xLine, -1e9), std::nextafter(xLine, 1e9)}) {
+        check(x, yLine + 0.5 + along * 0.4, "near a column line");
+      }
+      for (const double y : {std::nextafter(yLine, -1e9), std::nextafter(yLine, 1e9)}) {
+        check(xLine - 0.5 - along * 0.4, y, "near a row line");
+      }
+    }
+    EXPECT_EQ(o.cache->stats().misses, 0u);
+  }
+}
+
+TEST(Pager, SurfaceBatchesUnderEvictionGetTheGenericAnswers) {
+  // surfaces() along a path (the rover) and at random points (prefetching ahead), with a
+  // budget of three patches, so that patches are evicted under the batch: every answer,
+  // nodata, the hole's neighbours and points outside the grid included, is the generic
+  // kernel's, in both frames.
+  Opened o = openFixture(3 * patchBytes());
+  const TopoDem dem = o.pager.dem("dem");
+  const TopoDem generic = genericDem();
+  std::vector<double> xs, ys;
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> x(-520.0, 420.0), y(-320.0, 420.0);
+  for (int i = 0; i < 3000; ++i) {
+    xs.push_back(x(rng));
+    ys.push_back(y(rng));
+  }
+  for (int i = 0; i < 3000; ++i) {  // across the hole at (300, 301) and patch edges
+    xs.push_back(-500.0 + 250.0 + 0.02 * i);
+    ys.push_back(400.0 - 299.3 - 0.0005 * i);
+  }
+  for (const NormalFrame frame : {NormalFrame::Grid, NormalFrame::BodyFixed}) {
+    for (const std::size_t from : {std::size_t{0}, std::size_t{3000}}) {
+      const auto px = std::span(xs).subspan(from, 3000), py = std::span(ys).subspan(from, 3000);
+      std::vector<double> h(3000);
+      std::vector<glm::dvec3> nrm(3000);
+      std::vector<QueryStatus> st(3000), nst(3000);
+      dem.surfaces(px, py, h, nrm, st, Interpolation::Bilinear, frame, nst);
+      std::size_t wrong = 0, valid = 0, nodata = 0;
+      for (std::size_t i = 0; i < px.size(); ++i) {
+        const SurfaceSample g = generic.surface(px[i], py[i], Interpolation::Bilinear, frame);
+        wrong += sameSurface(g, {h[i], nrm[i], st[i], nst[i]}) ? 0U : 1U;
+        valid += g.normalValid() ? 1U : 0U;
+        nodata += g.status == QueryStatus::Nodata ? 1U : 0U;
+      }
+      EXPECT_EQ(wrong, 0u) << "points from " << from;
+      EXPECT_GT(valid, 2000u);
+      if (from != 0) {
+        EXPECT_GT(nodata, 0u);
+      }
+    }
+  }
+  EXPECT_GT(o.cache->stats().evictions, 10u);
 }

@@ -104,13 +104,15 @@ void requireFiniteArray(std::span<const double> a, const char* op, const char* f
 namespace detail {
 
 bool straddlingBilinear(const ResidentBilinear& f, const BlockTable& table, std::uint64_t source,
-                        double u, double v, double& h) noexcept {
+                        double u, double v, bool grad, CellValue& out) noexcept {
   // Without this, a rover crossing a block edge paid the generic kernel, whose samples
   // outside the thread's block come through the cache's lock: 2 % of a traverse's queries
   // took half of its time.
   hazard::Record* rec = hazard::tlFastRecord;
   if (rec == nullptr || !(u >= 0.0 && v >= 0.0 && u < f.uMax && v < f.vMax)) return false;
   const auto c = static_cast<std::size_t>(u), r = static_cast<std::size_t>(v);
+  const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
+  if (grad && !f.offLines(tu, tv)) return false;
   std::array<double, 4> s{};           // samples (r, c), (r, c + 1), (r + 1, c), (r + 1, c + 1)
   for (std::size_t k = 4; k-- > 0;) {  // (r, c) last: its block stays protected
     const std::size_t sr = r + k / 2, sc = c + k % 2;
@@ -127,11 +129,8 @@ bool straddlingBilinear(const ResidentBilinear& f, const BlockTable& table, std:
   // The thread's block becomes the one of (r, c), already protected (no hit is counted: the
   // run in it goes on); a run of queries there continues without a switch.
   if (enterBlock(table, source, r, c, true) != nullptr) tlBlockOwner.reset();
-  const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
-  const double top = s[0] + tu * (s[1] - s[0]), bottom = s[2] + tu * (s[3] - s[2]);
-  h = top + tv * (bottom - top);
-  return h == h && (!f.hasNodata || ((s[0] != f.nodata) & (s[1] != f.nodata) & (s[2] != f.nodata) &
-                                     (s[3] != f.nodata)));
+  return grad ? bilinearPatch<true>(s[0], s[1], s[2], s[3], tu, tv, f.nodata, f.hasNodata, out)
+              : bilinearPatch<false>(s[0], s[1], s[2], s[3], tu, tv, f.nodata, f.hasNodata, out);
 }
 
 }  // namespace detail
@@ -158,6 +157,8 @@ TopoDem::TopoDem(TopoGrid grid, Placement placement, std::shared_ptr<const Sampl
   fast_.nodata = detail::nodataOrNan(grid_);
   fast_.hasNodata = grid_.nodata().has_value() && !std::isnan(*grid_.nodata());
   slack_ = grid_.edgeSlack();
+  fast_.snapU = 2.0 * slack_.x;
+  fast_.snapV = 2.0 * slack_.y;
 }
 
 HeightSample TopoDem::heightGeneric(double x, double y, Interpolation interp) const {
@@ -165,10 +166,9 @@ HeightSample TopoDem::heightGeneric(double x, double y, Interpolation interp) co
   const Where w = locate(index_, x, y, fast_.uMax, fast_.vMax, slack_);
   if (!w.inside) return {};
   if (resident_ == nullptr && interp == Interpolation::Bilinear) {
-    double h = 0.0;
-    if (detail::blockBilinear(threadBlock(*samples_, w), w.u, w.v, fast_.nodata, fast_.hasNodata,
-                              h)) [[likely]] {
-      return {h, QueryStatus::Ok};
+    detail::CellValue cv;
+    if (detail::blockBilinear<false>(threadBlock(*samples_, w), fast_, w.u, w.v, cv)) [[likely]] {
+      return {cv.h, QueryStatus::Ok};
     }
   }
   const KernelResult k = withAccessor(grid_, *samples_, resident_, w, [&](const auto& acc) {
@@ -178,10 +178,23 @@ HeightSample TopoDem::heightGeneric(double x, double y, Interpolation interp) co
   return {k.h, QueryStatus::Ok};
 }
 
-SurfaceSample TopoDem::surface(double x, double y, Interpolation interp, NormalFrame frame) const {
+SurfaceSample TopoDem::surfaceGeneric(double x, double y, Interpolation interp,
+                                      NormalFrame frame) const {
   requirePoint(x, y, "TopoDem::surface()");
   const Where w = locate(index_, x, y, fast_.uMax, fast_.vMax, slack_);
   if (!w.inside) return {};
+  if (resident_ == nullptr && interp == Interpolation::Bilinear) {
+    // A point within the slack of a cell line is on it now (w is snapped): surface()'s paged
+    // path (lock-free, also across block edges), else the thread's block fetched from the
+    // source, takes it.
+    detail::CellValue cv;
+    if (detail::pagedBilinear<true>(fast_, table_, sourceId_, w.u, w.v, cv) ||
+        detail::blockBilinear<true>(threadBlock(*samples_, w), fast_, w.u, w.v, cv)) [[likely]] {
+      const SurfaceSample s{cv.h, detail::gridNormal(index_, cv.dhdu, cv.dhdv), QueryStatus::Ok,
+                            QueryStatus::Ok};
+      return frame == NormalFrame::Grid ? s : toBodyFixedNormal(s, x, y);
+    }
+  }
   const KernelResult k = withAccessor(grid_, *samples_, resident_, w, [&](const auto& acc) {
     return detail::evaluateSurface(interp, acc, w.u, w.v, fast_.nodata);
   });
@@ -191,21 +204,19 @@ SurfaceSample TopoDem::surface(double x, double y, Interpolation interp, NormalF
   if (k.status != QueryStatus::Ok) return s;
   s.height = k.h;
   if (k.gradStatus != QueryStatus::Ok) return s;
-  // Grid frame: z = h(x, y) with ∂h/∂x = ∂h/∂u / dx and ∂h/∂y = −∂h/∂v / dy (row 0 north).
-  const double hx = k.dhdu / grid_.spacingX();
-  const double hy = -k.dhdv / grid_.spacingY();
-  glm::dvec3 n = glm::normalize(glm::dvec3(-hx, -hy, 1.0));
-  if (frame == NormalFrame::BodyFixed) {
-    try {
-      n = placement_.normalToBodyFixed(n, x, y, k.h);
-    } catch (const DomainError&) {
-      // The point itself lies beyond the projection's domain (a grid reaching past a pole):
-      // its height is the grid's, but it has no body-fixed normal.
-      s.normalStatus = QueryStatus::Unmappable;
-      return s;
-    }
+  s.normal = detail::gridNormal(index_, k.dhdu, k.dhdv);
+  return frame == NormalFrame::Grid ? s : toBodyFixedNormal(s, x, y);
+}
+
+SurfaceSample TopoDem::toBodyFixedNormal(SurfaceSample s, double x, double y) const {
+  try {
+    s.normal = placement_.normalToBodyFixed(s.normal, x, y, s.height);
+  } catch (const DomainError&) {
+    // The point itself lies beyond the projection's domain (a grid reaching past a pole):
+    // its height is the grid's, but it has no body-fixed normal.
+    s.normal = glm::dvec3(std::numeric_limits<double>::quiet_NaN());
+    s.normalStatus = QueryStatus::Unmappable;
   }
-  s.normal = n;
   return s;
 }
 
@@ -217,9 +228,11 @@ constexpr std::size_t kPrefetchAhead = 8;
 /// its first points: most of them more than a few cells from the one before. Along a path (a
 /// rover's wheels) the cells are in cache already, and a loop that even checks for
 /// prefetching ran a third slower (store_bench rover_batch), so such batches take a loop
-/// without it.
+/// without it. A batch no longer than the prefetch distance has nothing to prefetch (the
+/// rover's six wheels of one step).
 template <class ToU, class ToV>
 bool scattered(std::span<const double> xs, std::span<const double> ys, ToU toU, ToV toV) {
+  if (xs.size() <= kPrefetchAhead) return false;
   const std::size_t k = std::min<std::size_t>(xs.size(), 17);
   std::size_t jumps = 0;
   for (std::size_t i = 1; i < k; ++i) {
@@ -380,6 +393,69 @@ void TopoDem::surfaces(std::span<const double> xs, std::span<const double> ys,
   if (!normalStatus.empty()) requireSameLength(n, normalStatus.size(), op, "normalStatus");
   requireFiniteArray(xs, op, "xs");
   requireFiniteArray(ys, op, "ys");
+  const bool resident = fast_.data != nullptr;
+  if (interp == Interpolation::Bilinear && frame == NormalFrame::Grid &&
+      (resident || resident_ == nullptr)) {
+    // surface()'s fast paths on local copies (stores to the outputs could alias the members,
+    // which would then be reloaded for every point), with heights()'s prefetching for
+    // batches that jump around the grid.
+    const detail::DemIndexer m = index_;
+    const detail::ResidentBilinear f = fast_;
+    const BlockTable* table = table_;
+    const std::uint64_t id = sourceId_;
+    auto loop = [&](auto inMemory, auto prefetch) {
+      for (std::size_t i = 0; i < n; ++i) {
+        if constexpr (prefetch) {
+          if (i + kPrefetchAhead < n) {
+            const std::size_t j = i + kPrefetchAhead;
+            const double uj = m.u(xs[j]), vj = m.v(ys[j]);
+            if (uj >= 0.0 && vj >= 0.0 && uj < f.uMax && vj < f.vMax) {
+              const auto rj = static_cast<std::size_t>(vj), cj = static_cast<std::size_t>(uj);
+              if constexpr (inMemory) {
+                const float* p = f.data + rj * static_cast<std::size_t>(f.cols) + cj;
+                __builtin_prefetch(p);
+                __builtin_prefetch(p + f.cols);
+              } else {
+                table->prefetchCell(rj, cj);
+              }
+            }
+          }
+        }
+        const double u = m.u(xs[i]), v = m.v(ys[i]);
+        detail::CellValue cv;
+        bool ok = false;
+        if constexpr (inMemory) {
+          ok = f.evalResident<true>(u, v, cv);
+        } else {
+          ok = detail::pagedBilinear<true>(f, table, id, u, v, cv);
+        }
+        if (ok) [[likely]] {
+          outHeights[i] = cv.h;
+          outNormals[i] = detail::gridNormal(m, cv.dhdu, cv.dhdv);
+          if (!status.empty()) status[i] = QueryStatus::Ok;
+          if (!normalStatus.empty()) normalStatus[i] = QueryStatus::Ok;
+          continue;
+        }
+        const SurfaceSample s = surfaceGeneric(xs[i], ys[i], interp, frame);
+        outHeights[i] = s.height;
+        outNormals[i] = s.normal;
+        if (!status.empty()) status[i] = s.status;
+        if (!normalStatus.empty()) normalStatus[i] = s.normalStatus;
+      }
+    };
+    using Yes = std::true_type;
+    using No = std::false_type;
+    const bool jumps =
+        (resident || table != nullptr) &&
+        scattered(
+            xs, ys, [&](double x) { return m.u(x); }, [&](double y) { return m.v(y); });
+    if (resident) {
+      jumps ? loop(Yes{}, Yes{}) : loop(Yes{}, No{});
+    } else {
+      jumps ? loop(No{}, Yes{}) : loop(No{}, No{});
+    }
+    return;
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const SurfaceSample s = surface(xs[i], ys[i], interp, frame);
     outHeights[i] = s.height;

@@ -7,6 +7,7 @@
 #include <regolith/topo/Query.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
+#include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
@@ -38,33 +39,88 @@ struct DemIndexer {
   [[nodiscard]] double v(double y) const noexcept { return recip ? (y0 - y) * idy : (y0 - y) / dy; }
 };
 
-/// Bilinear height over resident samples, for points whose cell lies inside the grid.
+/// A bilinear cell's height and, for surface queries, its gradient: ∂h/∂u per column and
+/// ∂h/∂v per row index.
+struct CellValue {
+  double h = 0.0, dhdu = 0.0, dhdv = 0.0;
+};
+
+/// The bilinear patch through samples a (r, c), b (r, c + 1), cc (r + 1, c) and
+/// d (r + 1, c + 1) at fractions (tu, tv): its height and, when Grad, its analytic gradient,
+/// the two further differences of the same four samples. The operations are those of the
+/// generic kernel (Kernels.hpp, bilinear), so the fast and generic paths give the same bits.
+/// False when a sample is missing: a NaN sample makes h NaN (0·NaN is NaN), so one test
+/// covers them all, plus the declared nodata value if there is one.
+template <bool Grad>
+inline bool bilinearPatch(double a, double b, double cc, double d, double tu, double tv,
+                          double nodata, bool hasNodata, CellValue& out) noexcept {
+  const double top = a + tu * (b - a), bottom = cc + tu * (d - cc);
+  out.h = top + tv * (bottom - top);
+  if constexpr (Grad) {
+    out.dhdu = (1 - tv) * (b - a) + tv * (d - cc);
+    out.dhdv = bottom - top;
+  }
+  return out.h == out.h &&
+         (!hasNodata || ((a != nodata) & (b != nodata) & (cc != nodata) & (d != nodata)));
+}
+
+/// Bilinear queries over resident samples, for points whose cell lies inside the grid.
 struct ResidentBilinear {
   const float* data = nullptr;  // null: no fast path (paged source, or under 2×2 samples)
   long rows = 0, cols = 0;
   double uMax = 0.0, vMax = 0.0;  // cols − 1, rows − 1
   double nodata = std::numeric_limits<double>::quiet_NaN();
   bool hasNodata = false;  // a nodata value other than NaN is declared
+  /// Fractions within twice TopoGrid::edgeSlack() of a cell line (col, row): the generic
+  /// path snaps such points onto the line, which can move them into the next cell, so a
+  /// gradient there is left to it (a height is continuous across the line and is not).
+  double snapU = 0.0, snapV = 0.0;
 
-  /// Sets h and returns true, or returns false when the point is not inside the sample
-  /// centres (NaN coordinates included) or a sample is missing; the generic path decides
-  /// those. A NaN sample makes h NaN (0·NaN is NaN), so one test covers them all.
-  /// Requires data != nullptr.
-  [[nodiscard]] bool evalResident(double u, double v, double& h) const noexcept {
+  /// Whether a surface query at fractions (tu, tv) of its cell takes the cell the generic
+  /// path takes: each fraction 0 exactly, or farther than the snap slack from both lines.
+  [[nodiscard]] bool offLines(double tu, double tv) const noexcept {
+    return ((tu == 0.0) | (tu > snapU)) & (tu < 1.0 - snapU) & ((tv == 0.0) | (tv > snapV)) &
+           (tv < 1.0 - snapV);
+  }
+
+  /// Fills out (the gradient too when Grad) and returns true, or returns false when the
+  /// point is not inside the sample centres (NaN coordinates included), a sample is
+  /// missing, or (Grad) the point is within the snap slack of a cell line; the generic path
+  /// decides those. Requires data != nullptr.
+  template <bool Grad>
+  [[nodiscard]] bool evalResident(double u, double v, CellValue& out) const noexcept {
     // Strict upper bounds: the cell (c, r) = (⌊u⌋, ⌊v⌋) then needs no clamping; the last
     // row and column of centres go through the generic path.
     if (!(u >= 0.0 && v >= 0.0 && u < uMax && v < vMax)) return false;
     const auto c = static_cast<long>(u), r = static_cast<long>(v);
     const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
+    if constexpr (Grad) {
+      if (!offLines(tu, tv)) [[unlikely]]
+        return false;
+    }
     const float* p = data + r * cols + c;
-    const auto a = static_cast<double>(p[0]), b = static_cast<double>(p[1]);
-    const auto cc = static_cast<double>(p[cols]), d = static_cast<double>(p[cols + 1]);
-    const double top = a + tu * (b - a), bottom = cc + tu * (d - cc);
-    h = top + tv * (bottom - top);
-    return h == h &&
-           (!hasNodata || ((a != nodata) & (b != nodata) & (cc != nodata) & (d != nodata)));
+    return bilinearPatch<Grad>(static_cast<double>(p[0]), static_cast<double>(p[1]),
+                               static_cast<double>(p[cols]), static_cast<double>(p[cols + 1]), tu,
+                               tv, nodata, hasNodata, out);
+  }
+  /// Height only (evalResident<false>).
+  [[nodiscard]] bool evalResident(double u, double v, double& h) const noexcept {
+    CellValue cv;
+    const bool ok = evalResident<false>(u, v, cv);
+    h = cv.h;
+    return ok;
   }
 };
+
+/// The unit normal in the grid frame, (x, y, h) with row 0 north, of a surface with
+/// gradient (∂h/∂u, ∂h/∂v) per index: ∂h/∂x = ∂h/∂u / dx and ∂h/∂y = −∂h/∂v / dy. One
+/// definition for the fast and generic paths, so that both give the same bits; the
+/// reciprocal is used only where it is exact (powers of two: the same bits as dividing).
+[[nodiscard]] inline glm::dvec3 gridNormal(const DemIndexer& m, double dhdu, double dhdv) noexcept {
+  const double hx = m.recip ? dhdu * m.idx : dhdu / m.dx;
+  const double hy = -(m.recip ? dhdv * m.idy : dhdv / m.dy);
+  return glm::normalize(glm::dvec3(-hx, -hy, 1.0));
+}
 
 /// The block of a paged source that the calling thread read last (see SampleSource::block):
 /// runs of queries inside one block cost no call into the source. Keyed by the source's
@@ -138,50 +194,57 @@ inline const PublishedBlock* enterBlock(const BlockTable& table, std::uint64_t s
 #endif
 }
 
-/// Bilinear height from a block whose whole cell (c, r) = (⌊u⌋, ⌊v⌋) holds (u, v), given
-/// c and r. False leaves the point to the generic kernel (also for NaN: it fails the bounds).
-template <class Block>
-inline bool cellBilinear(const Block& b, double u, double v, std::int64_t c, std::int64_t r,
-                         double nodata, bool hasNodata, double& h) noexcept {
+/// Bilinear height (and gradient, when Grad) from a block whose whole cell
+/// (c, r) = (⌊u⌋, ⌊v⌋) holds (u, v), given c and r. False leaves the point to the generic
+/// kernel (also for NaN: it fails the bounds; and, when Grad, near a cell line: see
+/// ResidentBilinear::offLines).
+template <bool Grad, class Block>
+inline bool cellBilinear(const Block& b, const ResidentBilinear& f, double u, double v,
+                         std::int64_t c, std::int64_t r, CellValue& out) noexcept {
   if (!(u >= b.uLo && u < b.uHi && v >= b.vLo && v < b.vHi)) return false;
+  const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
+  if constexpr (Grad) {
+    if (!f.offLines(tu, tv)) [[unlikely]]
+      return false;
+  }
   // The bounds above make c, r non-negative and inside the block. c and r arrive signed:
   // unsigned conversions from double cost a branch each on x86-64.
   const std::size_t stride = b.stride;
   const auto* p = reinterpret_cast<const float*>(  // NOLINT(performance-no-int-to-ptr)
       b.origin +
       (static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(c)) * sizeof(float));
-  const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
-  const auto a = static_cast<double>(p[0]), bb = static_cast<double>(p[1]);
-  const auto cc = static_cast<double>(p[stride]), d = static_cast<double>(p[stride + 1]);
-  const double top = a + tu * (bb - a), bottom = cc + tu * (d - cc);
-  h = top + tv * (bottom - top);
-  return h == h &&
-         (!hasNodata || ((a != nodata) & (bb != nodata) & (cc != nodata) & (d != nodata)));
+  return bilinearPatch<Grad>(static_cast<double>(p[0]), static_cast<double>(p[1]),
+                             static_cast<double>(p[stride]), static_cast<double>(p[stride + 1]), tu,
+                             tv, f.nodata, f.hasNodata, out);
 }
-/// Bilinear height from a block when the whole cell of (u, v) lies in it (false for NaN).
-/// False leaves the point to the generic kernel.
-template <class Block>
-inline bool blockBilinear(const Block& b, double u, double v, double nodata, bool hasNodata,
-                          double& h) noexcept {
+/// Bilinear height (and gradient) from a block when the whole cell of (u, v) lies in it
+/// (false for NaN). False leaves the point to the generic kernel.
+template <bool Grad, class Block>
+inline bool blockBilinear(const Block& b, const ResidentBilinear& f, double u, double v,
+                          CellValue& out) noexcept {
   if (!(u >= b.uLo && u < b.uHi && v >= b.vLo && v < b.vHi)) return false;
-  return cellBilinear(b, u, v, static_cast<std::int64_t>(u), static_cast<std::int64_t>(v), nodata,
-                      hasNodata, h);
+  return cellBilinear<Grad>(b, f, u, v, static_cast<std::int64_t>(u), static_cast<std::int64_t>(v),
+                            out);
 }
-/// Bilinear height for a cell across a block edge (its samples in two or four published
-/// blocks), read lock-free: each sample from its block under the thread's hazard record, the
-/// block of the cell's first sample last, which then becomes the thread's block. Out of line
-/// (TopoDem.cpp). False leaves the point to the generic path.
+/// Bilinear height (and gradient, when grad) for a cell across a block edge (its samples in
+/// two or four published blocks), read lock-free: each sample from its block under the
+/// thread's hazard record, the block of the cell's first sample last, which then becomes
+/// the thread's block. Out of line (TopoDem.cpp). False leaves the point to the generic path.
 [[gnu::cold]] bool straddlingBilinear(const ResidentBilinear& f, const BlockTable& table,
-                                      std::uint64_t source, double u, double v, double& h) noexcept;
+                                      std::uint64_t source, double u, double v, bool grad,
+                                      CellValue& out) noexcept;
 
-/// Bilinear height on a paged source: from the thread's last block if it holds the cell,
-/// else from the block table (a lock-free switch, the random-access case), also for a cell
-/// across a block edge. False leaves the point to the generic path (not resident, missing
-/// samples, outside the sample centres).
-inline bool pagedBilinear(const ResidentBilinear& f, const BlockTable* table, std::uint64_t source,
-                          double u, double v, double& h) noexcept {
+/// Bilinear height (and gradient, when Grad) on a paged source: from the thread's last
+/// block if it holds the cell, else from the block table (a lock-free switch, the
+/// random-access case), also for a cell across a block edge. False leaves the point to the
+/// generic path (not resident, missing samples, outside the sample centres; when Grad, near
+/// a cell line). Always inlined: in the batch loops GCC otherwise calls it out of line.
+template <bool Grad>
+[[gnu::always_inline]] inline bool pagedBilinear(const ResidentBilinear& f, const BlockTable* table,
+                                                 std::uint64_t source, double u, double v,
+                                                 CellValue& out) noexcept {
   const ThreadBlock& tb = tlBlock;
-  if (tb.source == source && blockBilinear(tb, u, v, f.nodata, f.hasNodata, h)) [[likely]] {
+  if (tb.source == source && blockBilinear<Grad>(tb, f, u, v, out)) [[likely]] {
     return true;
   }
   if (table == nullptr) return false;
@@ -193,9 +256,17 @@ inline bool pagedBilinear(const ResidentBilinear& f, const BlockTable* table, st
   if (uc >= table->cols() || ur >= table->rows()) return false;
   const PublishedBlock* b = enterBlock(*table, source, ur, uc, false);
   if (b == nullptr) return false;
-  if (cellBilinear(*b, u, v, c, r, f.nodata, f.hasNodata, h)) [[likely]]
+  if (cellBilinear<Grad>(*b, f, u, v, c, r, out)) [[likely]]
     return true;
-  return straddlingBilinear(f, *table, source, u, v, h);
+  return straddlingBilinear(f, *table, source, u, v, Grad, out);
+}
+/// Height only (pagedBilinear<false>).
+inline bool pagedBilinear(const ResidentBilinear& f, const BlockTable* table, std::uint64_t source,
+                          double u, double v, double& h) noexcept {
+  CellValue cv;
+  const bool ok = pagedBilinear<false>(f, table, source, u, v, cv);
+  h = cv.h;
+  return ok;
 }
 }  // namespace detail
 
@@ -263,6 +334,11 @@ class TopoDem {
   glm::dvec2 slack_{0.0};              // grid_.edgeSlack()
 
   [[nodiscard]] HeightSample heightGeneric(double x, double y, Interpolation interp) const;
+  [[nodiscard]] SurfaceSample surfaceGeneric(double x, double y, Interpolation interp,
+                                             NormalFrame frame) const;
+  /// s with its grid-frame normal taken to the body-fixed frame (normalStatus Unmappable
+  /// where the placement cannot map the point). Requires s.normalValid().
+  [[nodiscard]] SurfaceSample toBodyFixedNormal(SurfaceSample s, double x, double y) const;
 };
 
 inline HeightSample TopoDem::height(double x, double y, Interpolation interp) const {
@@ -279,6 +355,25 @@ inline HeightSample TopoDem::height(double x, double y, Interpolation interp) co
     }
   }
   return heightGeneric(x, y, interp);
+}
+
+inline SurfaceSample TopoDem::surface(double x, double y, Interpolation interp,
+                                      NormalFrame frame) const {
+  if (interp == Interpolation::Bilinear) {
+    // The normal comes from the height's four samples (their two further differences), on
+    // height()'s fast paths.
+    const double u = index_.u(x), v = index_.v(y);
+    detail::CellValue cv;
+    const bool ok = fast_.data != nullptr
+                        ? fast_.evalResident<true>(u, v, cv)
+                        : detail::pagedBilinear<true>(fast_, table_, sourceId_, u, v, cv);
+    if (ok) [[likely]] {
+      const SurfaceSample s{cv.h, detail::gridNormal(index_, cv.dhdu, cv.dhdv), QueryStatus::Ok,
+                            QueryStatus::Ok};
+      return frame == NormalFrame::Grid ? s : toBodyFixedNormal(s, x, y);
+    }
+  }
+  return surfaceGeneric(x, y, interp, frame);
 }
 
 }  // namespace regolith::topo
