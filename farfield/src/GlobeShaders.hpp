@@ -31,6 +31,7 @@ uniform float uFocal;         // focal length, pixels
 uniform mat3 uEyeToScaled;    // eye axes → scaled space (· a): diag(1, 1, a/b)·Rbodyᵀ·Rcamᵀ
 uniform vec3 uCentre;         // the sphere's centre from the eye, scaled space (−e)
 uniform float uC;             // |e|² − 1, from double (> 0)
+uniform float uSqrtC;         // √c from double if c < 1/2, else 0
 uniform float uNearOverA;     // camera near / a
 uniform float uAOverB;        // a / b
 uniform vec3 uSun;            // unit direction to the sun, body axes
@@ -58,7 +59,9 @@ void main() {
   // (a pixel's worth at 10^11 m through a narrow field of view).
   float b = dot(dh, uCentre);
   vec3 l = uK > 0.0 ? (dot(w, dh) * dh - w) / uK : uCentre - b * dh;
-  float disc = 1.0 - dot(l, l);
+  // Near the horizon of a low eye (c < 1/2) b ≈ √c is small and b² − c keeps more digits
+  // than 1 − |l|² (whose rounding, ε·|c|, is 1e-3 px of horizon there): pick per frame.
+  float disc = uSqrtC > 0.0 ? (b - uSqrtC) * (b + uSqrtC) : 1.0 - dot(l, l);
   bool hit = disc >= 0.0 && b > 0.0;
   float sq = sqrt(max(disc, 0.0));
   // Hit − centre = (s − b)·dh − l with s − b = −√disc: unit, and no cancellation. On a miss
@@ -66,10 +69,10 @@ void main() {
   vec3 n = normalize(-(l + sq * dh));
   // Geodetic normal (body axes): the gradient of x² + y² + (a/b)²·z² at (n.x, n.y, n.z·a/b).
   vec3 g = normalize(vec3(n.xy, n.z * uAOverB));
-  float lat = atan(g.z, length(g.xy));
-  float lon = atan(n.y, n.x);
   vec3 albedo = uColour;
   if (uTextured != 0) {
+    float lat = atan(g.z, length(g.xy));
+    float lon = atan(n.y, n.x);
     // Tarini's seam fix: u and a copy that jumps at 0° instead of ±180°; each quad takes the
     // derivatives of the one that is continuous there, so ±180° gets no coarse-mip line.
     float u1 = lon / (2.0 * PI) + 0.5;

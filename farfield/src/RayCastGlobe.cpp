@@ -216,6 +216,7 @@ GlobeFrame RayCastGlobe::draw(const clod::Camera& camera, const GlobeBody& body,
   p.set("uEyeToScaled", glm::mat3(eyeToScaled));
   p.set("uCentre", glm::vec3(-geometry.eyeScaled));
   p.set("uC", static_cast<float>(geometry.c));
+  p.set("uSqrtC", geometry.c < 0.5 ? static_cast<float>(std::sqrt(geometry.c)) : 0.0F);
   p.set("uNearOverA", static_cast<float>(camera.near / body.a));
   p.set("uAOverB", static_cast<float>(body.a / body.b));
   p.set("uSun", glm::vec3(glm::normalize(rt * sunDirection)));
