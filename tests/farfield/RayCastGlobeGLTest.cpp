@@ -448,6 +448,7 @@ TEST(RayCastGlobeGLTest, TexturedPolesAndSeamHaveNoLineOrDot) {
 }
 
 TEST(RayCastGlobeGLTest, RasterisedTrianglesDepthTestAgainstTheGlobe) {
+  (void)test::glContext();
   const GlobeBody body = mars({3.0e10, 1.0e10, 0.0}, rotationXZ(0.0, 15.0));
   const clod::Camera cam = lookingAtCentre(body, -10.0, 45.0, 2.0e7, 25.0, 480, 360);
   const Oracle o = oracle(cam, body);
@@ -485,7 +486,6 @@ void main() { oColour = vec4(0.0, 1.0, 0.0, 1.0); }
       glVertexArrayAttribFormat(vao.id(), 0, 3, GL_FLOAT, GL_FALSE, 0);
       glVertexArrayAttribBinding(vao.id(), 0, 0);
       glEnableVertexArrayAttrib(vao.id(), 0);
-      (void)test::glContext();
       const gl::RenderTarget target(cam.width, cam.height);
       target.clear(kClear);
       RayCastGlobe globe;
