@@ -89,13 +89,15 @@ void main() {
     dy.x *= cos(lat);
     albedo *= textureGrad(uAlbedo, vec2(u1, v), dx, dy).rgb;
   }
-  if (!hit) discard;
+  // Near root s = c / (b + √disc) (b − √disc would cancel above the nadir from a low eye);
+  // view distance t = s / |d|·a, depth = near / t. Hits nearer than the near plane are
+  // clipped, as the rasteriser clips triangles there.
+  float depth = uNearOverA * dl * (b + sq) / uC;
+  if (!hit || depth > 1.0) discard;
 #ifdef COUNT_RAYS
   atomicCounterIncrement(uHit);
 #endif
-  // Near root s = c / (b + √disc) (b − √disc would cancel above the nadir from a low eye);
-  // view distance t = s / |d|·a, depth = near / t.
-  gl_FragDepth = uNearOverA * dl * (b + sq) / uC;
+  gl_FragDepth = depth;
   float diffuse = max(dot(g, uSun), 0.0);
   oColour = vec4(albedo * (uAmbient + (1.0 - uAmbient) * diffuse), 1.0);
 }

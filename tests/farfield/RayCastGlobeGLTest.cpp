@@ -69,8 +69,9 @@ OraclePixel oracleAt(const clod::Camera& cam, const GlobeBody& body, double x, d
   if (disc < 0) return p;
   const L t = (-B - std::sqrt(disc)) / (2 * A);
   if (t <= 0) return p;
-  p.hit = true;
   const double view = static_cast<double>(t) * glm::dot(r, cam.forward());
+  if (view < cam.near) return p;  // clipped by the near plane
+  p.hit = true;
   p.depth = cam.near / view;
   L q[3];
   for (int i = 0; i < 3; ++i) q[i] = o[i] + t * dir[i];
@@ -351,6 +352,25 @@ TEST(RayCastGlobeGLTest, Wgs84NadirFrom1KilometreHasNoCancellation) {
   cam.height = 240;
   cam.near = 0.5;
   checkBothProxies("wgs84_nadir_1km", cam, body, glm::normalize(glm::dvec3(1.0, 1.0, 0.0)));
+}
+
+TEST(RayCastGlobeGLTest, MarsFrom1MillimetreLookingAtTheHorizonMatchesOracle) {
+  // 1 mm above the ground: |e| − 1 = 3e-10, below float's resolution of the eye vector; the
+  // quadratic's constant c = |e|² − 1 comes from double. A 90° field and a near plane of
+  // 2 mm: the steepest rays meet the ground nearer than the near plane and are clipped.
+  const topo::Body mb = topo::Body::marsEllipsoid();
+  const GlobeBody body = mars({0.0, 0.0, 0.0}, glm::dmat3(1.0));
+  const double lat = -62.0, lon = -100.0;
+  const glm::dmat3 enu = mb.enuFrame(lat, lon);
+  clod::Camera cam;
+  cam.position = mb.toBodyFixed({lat, lon, 1.0e-3});
+  cam.target = cam.position + glm::normalize(enu[1] - 0.2 * enu[0] - 0.01 * enu[2]);
+  cam.up = enu[2];
+  cam.fovYDegrees = 90.0;
+  cam.width = 480;
+  cam.height = 360;
+  cam.near = 2.0e-3;
+  checkBothProxies("mars_horizon_1mm", cam, body, glm::normalize(enu[2] + enu[0]));
 }
 
 /// A smooth, periodic test map: R peaks at ±180°, G follows latitude, B wiggles in longitude.
