@@ -104,10 +104,15 @@ struct GlobeProxyGeometry {
 /// the distance, which at 10^11 m would cancel), and the near root as c / (b + √disc) (never
 /// b − √disc, which cancels above the nadir from a low eye). Depth = near / view distance.
 ///
+/// Low eye: for c < 1/2 the discriminant is (b − √c)(b + √c) instead, which keeps the
+/// horizon of an eye a few metres or millimetres up to the float ray's own precision.
+/// Hits nearer than the camera's near plane are discarded, as the rasteriser clips there.
+///
 /// Draws into the bound framebuffer, whose viewport must be camera.width × camera.height at
 /// origin (0, 0), with the reversed-Z state of gl::RenderTarget::bind() (gl::useReversedZ).
-/// The relief is not shaded (no height texture): the surface is the smooth ellipsoid.
-/// Move-only; belongs to its GL context's thread.
+/// Leaves its program bound and the culling state as it found it. The relief is not shaded
+/// (no height texture): the surface is the smooth ellipsoid. Move-only; belongs to its GL
+/// context's thread.
 class RayCastGlobe {
  public:
   /// Compiles the shaders. Throws InvalidArgument if polygonPoints < 3 or > 4096, GlError
