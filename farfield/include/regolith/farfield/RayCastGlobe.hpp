@@ -80,11 +80,12 @@ struct GlobeProxyGeometry {
 
 /// Builds the proxy of `body` seen from `camera`. The polygon is built in the scaled space:
 /// the silhouette circle of the unit sphere seen from the eye has its centre at
-/// (1 − 1/|e|²)·(−e) from the eye and radius √(1 − 1/|e|²); the N-gon whose edges touch it,
-/// its first vertex towards the camera's up, is scaled by (1 + 1e-6) and mapped back. The
-/// box is the body's [−a, a]² × [−b, b] inflated by 1e-6 of the eye's distance plus 1e-6 of
-/// a, so that float rounding of its vertices cannot cut a silhouette pixel.
-/// Throws InvalidArgument for a non-finite or non-positive radius or a non-finite centre.
+/// (1 − 1/|e|²)·(−e) from the eye and radius √(1 − 1/|e|²); the N-gon whose edges touch it
+/// (vertices at radius / cos(π/N), plus 1e-6·(|e| + 1)), its first vertex towards the
+/// camera's up, is mapped back by the body's scale and rotation. The box is the body's [−a, a]² ×
+/// [−b, b] inflated by 1e-6 of the eye's distance plus 1e-6 of a, so that float rounding of its
+/// vertices cannot cut a silhouette pixel. Throws InvalidArgument for a non-finite or non-positive
+/// radius or a non-finite centre.
 [[nodiscard]] GlobeProxyGeometry globeProxy(const clod::Camera& camera, const GlobeBody& body,
                                             GlobeProxy proxy, int polygonPoints);
 
@@ -98,7 +99,9 @@ struct GlobeProxyGeometry {
 /// Precision: the GPU never sees a position of planetary magnitude. The CPU forms the eye
 /// relative to the body in double, in the scaled space, and hands the shader that vector,
 /// the quadratic's constant term |e|² − 1 (exact in double), and the eye → scaled-space
-/// matrix. The shader takes the ray through the pixel centre from gl_FragCoord, and solves
+/// matrix. The shader takes the ray through the pixel centre from gl_FragCoord, as the ray
+/// through the centre's own pixel (parallel to the centre by construction) plus a small
+/// offset that the float matrix rounds in proportion to its size, and solves
 /// the quadratic in the form that loses no digits in float: the discriminant as 1 − |l|²
 /// with l the ray's closest approach to the centre (never the difference of two squares of
 /// the distance, which at 10^11 m would cancel), and the near root as c / (b + √disc) (never
