@@ -20,7 +20,9 @@
 //                  centres, so both are within 0.5 px of it.
 // Counters: <variant>_ms (mean frame time, ms); <variant>_cast and _hit (fragments that ran
 // the ray cast and rays that hit, from a separate counting draw so that the atomics do not
-// weigh on the timed frames) and _miss (the fraction cast in vain); sphere_segments,
+// weigh on the timed frames) and _miss (the fraction cast in vain); <variant>_fs (fragment
+// shader invocations from a GL_FRAGMENT_SHADER_INVOCATIONS query: llvmpipe shades whole 2 × 2
+// quads, so quads cut by a proxy's edges count in full, for each triangle); sphere_segments,
 // sphere_triangles; coverage_diff_px (pixels covered by exactly one of polygon16 and
 // uvsphere); box_over_polygon16 and polygon16_over_uvsphere (ratios of frame times, clear
 // included, from the same interleaved frames).
@@ -254,6 +256,19 @@ void globe(benchmark::State& state, bool horizon) {
     target.clear(kClear);
     const farfield::GlobeFrame f = var.globe->draw(v.camera, *var.body, v.sun);
     var.globe->setCountRays(false);
+    // Fragment shader invocations as the driver counts them (GL 4.6 / ARB_pipeline_
+    // statistics_query; Mesa counts helper invocations of partly covered quads too).
+    GLuint query = 0;
+    glGenQueries(1, &query);
+    target.clear(kClear);
+    glBeginQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB, query);
+    (void)var.globe->draw(v.camera, *var.body, v.sun);
+    glEndQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB);
+    GLuint64 invocations = 0;
+    glGetQueryObjectui64v(query, GL_QUERY_RESULT, &invocations);
+    glDeleteQueries(1, &query);
+    if (glGetError() == GL_NO_ERROR)
+      state.counters[var.name + "_fs"] = static_cast<double>(invocations);
     state.counters[var.name + "_cast"] = static_cast<double>(f.raysCast);
     state.counters[var.name + "_hit"] = static_cast<double>(f.raysHit);
     state.counters[var.name + "_miss"] =
