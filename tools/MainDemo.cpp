@@ -392,6 +392,8 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
       << " s in all; " << std::setprecision(0) << flyover.startDistance / 1e3 << " km to "
       << std::setprecision(1) << flyover.endDistance
       << " m from the rover, focus Mars → Victoria at frame " << flyover.focusSwitchFrame << ")\n";
+  out << "  far field: PGM drew Mars beyond the clipmaps in " << flyover.farFieldFrames
+      << " frames, the impostor in " << flyover.impostorFrames << " (docs/far-field.md)\n";
   if (!flyover.datasetsPerFrame.empty()) {
     const auto [lo, hi] =
         std::minmax_element(flyover.datasetsPerFrame.begin(), flyover.datasetsPerFrame.end());

@@ -38,10 +38,14 @@ uniform vec3 uSun;            // unit direction to the sun, body axes
 uniform vec3 uColour;
 uniform float uAmbient;
 uniform int uTextured;
+uniform int uKeepDrawn;
+layout(binding = 1) uniform sampler2D uDrawnDepth;  // depth before this draw (0 = empty)
 
 const float PI = 3.14159265358979;
 
 void main() {
+  // Hand-off: pixels something else already drew keep it.
+  if (uKeepDrawn != 0 && texelFetch(uDrawnDepth, ivec2(gl_FragCoord.xy), 0).r > 0.0) discard;
 #ifdef COUNT_RAYS
   atomicCounterIncrement(uCast);
 #endif

@@ -162,7 +162,7 @@ void RayCastGlobe::setProxy(GlobeProxy proxy, int polygonPoints) {
 }
 
 GlobeFrame RayCastGlobe::draw(const clod::Camera& camera, const GlobeBody& body,
-                              const glm::dvec3& sunDirection) {
+                              const glm::dvec3& sunDirection, GLuint keepDepth) {
   constexpr std::string_view op = "farfield::RayCastGlobe::draw()";
   if (!(std::isfinite(sunDirection.x) && std::isfinite(sunDirection.y) &&
         std::isfinite(sunDirection.z) && glm::length(sunDirection) > 0.0))
@@ -224,6 +224,8 @@ GlobeFrame RayCastGlobe::draw(const clod::Camera& camera, const GlobeBody& body,
   p.set("uAmbient", options_.ambient);
   p.set("uTextured", body.albedoTexture != 0 ? 1 : 0);
   glBindTextureUnit(0, body.albedoTexture);
+  p.set("uKeepDrawn", keepDepth != 0 ? 1 : 0);
+  glBindTextureUnit(1, keepDepth);
   if (options_.countRays) {
     const std::array<GLuint, 2> zero{0, 0};
     glNamedBufferSubData(counters_.id(), 0, sizeof(zero), zero.data());
@@ -249,6 +251,7 @@ GlobeFrame RayCastGlobe::draw(const clod::Camera& camera, const GlobeBody& body,
   else
     glDisable(GL_CULL_FACE);
   glBindTextureUnit(0, 0);
+  glBindTextureUnit(1, 0);
 
   if (options_.countRays) {
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_ATOMIC_COUNTER_BARRIER_BIT);

@@ -74,6 +74,57 @@ TEST(MarsVictoriaGLTest, FlyoverGoesFromMarsWholeToTheRover) {
   std::filesystem::remove_all(dir);
 }
 
+// The far field draws Mars beyond the planet clipmap, which keeps only its levels of at most
+// 180°: frame by frame the planet covers the same pixels as when the clipmap drew every level
+// (but at the limb, where PGM's grid and the clipmap's lattice cut it differently), and PGM
+// drew in the frames where the planet is seen whole.
+TEST(MarsVictoriaGLTest, FarFieldDrawsMarsBeyondTheClipmapWithoutGaps) {
+  test::glContext();
+  const auto dir = std::filesystem::path(::testing::TempDir()) / "regolith_farfield_flyover";
+  std::filesystem::remove_all(dir);
+  FlyoverOptions o;
+  o.frames = 5;
+  o.width = 192;
+  o.height = 128;
+  o.multiView = false;
+  o.scene = small();
+  o.outputDir = dir / "with";
+  const FlyoverSummary with = renderFlyover(o);
+  o.scene.farField = false;
+  o.outputDir = dir / "without";
+  const FlyoverSummary without = renderFlyover(o);
+  EXPECT_GE(with.farFieldFrames, 2);
+  EXPECT_EQ(without.farFieldFrames, 0);
+  for (std::size_t f = 0; f < 5; ++f) {
+    const gl::RgbaImage a = gl::readPng(with.files[f].string());
+    const gl::RgbaImage b = gl::readPng(without.files[f].string());
+    const auto background = [](const gl::RgbaImage& img, int x, int y) {
+      return img.is(x, y, 5, 5, 10);
+    };
+    int differ = 0, planet = 0;
+    for (int y = 1; y + 1 < o.height; ++y) {
+      for (int x = 1; x + 1 < o.width; ++x) {
+        planet += background(b, x, y) ? 0 : 1;
+        if (background(a, x, y) == background(b, x, y)) continue;
+        // A pixel within one pixel of the limb (one of its 8 neighbours differs in the
+        // reference) may go either way.
+        bool limb = false;
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            limb = limb || background(b, x + dx, y + dy) != background(b, x, y);
+          }
+        }
+        if (!limb) {
+          ++differ;
+          ADD_FAILURE() << "frame " << f << ": pixel (" << x << ", " << y << ") differs";
+        }
+      }
+    }
+    EXPECT_EQ(differ, 0) << "frame " << f << " (" << planet << " planet pixels)";
+  }
+  std::filesystem::remove_all(dir);
+}
+
 // With a rover position given (where a traverse stopped), the fly-over ends there: the ruts
 // pressed only around that position show in the last frame, which they could not if the
 // camera descended on the layout's rover 250 m away.

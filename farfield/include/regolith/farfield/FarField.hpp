@@ -6,6 +6,8 @@
 #include <regolith/clod/Camera.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/farfield/PgmRenderer.hpp>
+#include <regolith/farfield/RayCastGlobe.hpp>
+#include <regolith/gl/GlObjects.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 
 #include <glm/vec3.hpp>
@@ -20,13 +22,19 @@ enum class FarFieldMode { Pgm, Impostor, None };
 /// What one FarField::draw() did.
 struct FarFieldFrame {
   FarFieldMode mode = FarFieldMode::None;
-  PgmFrame pgm;  ///< the PGM frame (mode Pgm; spheres are filled in for Impostor too)
+  PgmFrame pgm;      ///< the PGM frame (mode Pgm; spheres are filled in for Impostor too)
+  GlobeFrame globe;  ///< the impostor's frame (mode Impostor)
 };
 
 /// A body's far field: draws it by PGM while the view has a secondary sphere (r_s > 0) and
 /// hands over to the ray-cast impostor beyond, filling in around what the target already
 /// shows (the near-field clipmaps drawn first). The camera is body-fixed (the body's centre
 /// at the origin). Needs a current GL 4.5 context; belongs to its thread.
+///
+/// The impostor is the body's ellipsoid (RayCastGlobe, polygon proxy) textured with PGM's
+/// own albedo of the equirectangular layer (the height ramp or the flat albedo of
+/// PgmOptions), so the switch changes the geometry by the relief only: at the distance where
+/// r_s reaches 0 (about 10 radii for Mars) that is under a pixel or two.
 class FarField {
  public:
   /// Keeps the layers (shared; they must describe `layers.body()`).
@@ -37,6 +45,7 @@ class FarField {
 
   [[nodiscard]] const HeightLayers& layers() const noexcept { return *layers_; }
   [[nodiscard]] PgmRenderer& pgm() noexcept { return pgm_; }
+  [[nodiscard]] RayCastGlobe& globe() noexcept { return globe_; }
 
   /// Draws the body into `target` where it has no depth yet (keepDrawn) or over it by the
   /// depth test. `sun`: unit direction towards the light, body-fixed.
@@ -46,6 +55,10 @@ class FarField {
  private:
   std::shared_ptr<const HeightLayers> layers_;
   PgmRenderer pgm_;
+  RayCastGlobe globe_;
+  gl::Texture albedo_;
+  gl::Texture drawnDepth_{0};
+  int depthWidth_ = 0, depthHeight_ = 0;
 };
 
 }  // namespace regolith::farfield

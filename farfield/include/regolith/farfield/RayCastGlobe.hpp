@@ -130,8 +130,12 @@ class RayCastGlobe {
   /// Draws `body` seen from `camera`, lit by the unit direction towards the sun
   /// `sunDirection` (scene axes). Throws InvalidArgument for a bad body (globeProxy) or a
   /// non-finite sun direction, GlError if GL reports an error.
-  GlobeFrame draw(const clod::Camera& camera, const GlobeBody& body,
-                  const glm::dvec3& sunDirection);
+  ///
+  /// `keepDepth`: a depth texture of the target's size holding what was drawn before (0:
+  /// none). Pixels where it is non-zero are left alone: the impostor fills in only around
+  /// what is drawn (FarField's hand-off).
+  GlobeFrame draw(const clod::Camera& camera, const GlobeBody& body, const glm::dvec3& sunDirection,
+                  GLuint keepDepth = 0);
 
  private:
   GlobeOptions options_;
