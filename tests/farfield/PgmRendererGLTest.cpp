@@ -8,6 +8,7 @@
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Body.hpp>
 
+#include "farfield/RayMarchOracle.hpp"
 #include "gl/GlContext.hpp"
 
 #include <glm/geometric.hpp>
@@ -276,6 +277,17 @@ TEST(PgmRendererGL, AMountainBehindTheHorizonRisesIntoView) {
   ASSERT_GE(top, 0);
   EXPECT_LT(top, horizon - 10);                     // the mountain stands well above the horizon
   EXPECT_LE(std::abs(top + 0.5 - expectTop), 1.5);  // its top where the oracle has it
+
+  // The whole image against brute-force ray marching of the same surface in double:
+  // silhouettes (the mountain against the sky, the horizon) within one pixel.
+  test::OracleSurface surface{
+      moon, [&layers](double lat, double lon) { return layers.heightAt(lat, lon); },
+      layers.minHeight(), layers.maxHeight()};
+  const test::OracleImage oracle = test::rayMarch(cam, surface, 200.0);
+  const test::SilhouetteReport report = test::compareSilhouettes(oracle, depth);
+  std::printf("oracle: %s\n", report.describe().c_str());
+  test::savePng("pgm_mountain_oracle", test::depthPicture(oracle));
+  EXPECT_EQ(report.misplacedPixels(), 0U) << report.describe();
 }
 
 TEST(PgmRendererGL, ACameraBelowTheMountainTopSeesItAboveTheHorizontal) {
@@ -320,6 +332,14 @@ TEST(PgmRendererGL, ACameraBelowTheMountainTopSeesItAboveTheHorizontal) {
   }
   EXPECT_LE(std::abs(top + 0.5 - expectTop), 1.5);
   for (const float z : depth.depth) ASSERT_TRUE(std::isfinite(z));
+  // Against brute-force ray marching of the layers' surface: silhouettes within a pixel.
+  test::OracleSurface surface{
+      moon, [&layers](double lat, double lon) { return layers.heightAt(lat, lon); },
+      layers.minHeight(), layers.maxHeight()};
+  const test::SilhouetteReport report =
+      test::compareSilhouettes(test::rayMarch(cam, surface, 100.0), depth);
+  std::printf("oracle: %s\n", report.describe().c_str());
+  EXPECT_EQ(report.misplacedPixels(), 0U) << report.describe();
 }
 
 TEST(PgmRendererGL, SecondarySphereVanishingSwitchesToTheImpostor) {
