@@ -5,6 +5,7 @@
 #include <regolith/compose/FromStore.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
+#include <regolith/farfield/FarField.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 
@@ -50,6 +51,7 @@ struct Args {
   int clipmapSize = 255;
   std::size_t cacheMb = 256;
   std::optional<double> spacing;  // catalogue: the composed grid's spacing, degrees
+  bool noFarField = false;
 };
 
 /// What a render draws: a store's grid, or a catalogue's composed surface over a global
@@ -66,7 +68,8 @@ struct Terrain {
   bool latLonGrid = false;  // the pyramid's grid is latitude/longitude (degrees)
   std::string what;         // for messages and the summary
   std::shared_ptr<store::PatchCache> cache;
-  std::shared_ptr<const void> keepAlive;  // pagers, stores, catalogue
+  std::shared_ptr<const void> keepAlive;                    // pagers, stores, catalogue
+  std::shared_ptr<const compose::ComposedSurface> surface;  // a catalogue's
 };
 
 /// Height at grid point (a, b) from the finest level that has a sample there, or nullopt.
@@ -135,6 +138,7 @@ Terrain catalogueTerrain(const Args& a) {
     frame << "a polar stereographic grid at " << f.spacingMetres << " m";
   }
   t.planet = true;  // the command line speaks longitude, latitude
+  t.surface = surface;
   t.height = [surface](double lon, double lat) -> std::optional<double> {
     const topo::HeightSample hs = surface->height(lat, lon);
     return hs.valid() ? std::optional<double>(hs.height) : std::nullopt;
@@ -255,11 +259,50 @@ void runRender(const Args& a, std::ostream& report) {
     const double el = 35.0 * std::numbers::pi / 180.0;
     request.clipmap.lightDirection = glm::vec3(std::cos(el) * horizontal + std::sin(el) * enu[2]);
   }
+  // A planet: the far field (docs/far-field.md) draws it beyond the clipmap, so the clipmap
+  // keeps only its levels whose window spans at most 180° (a wider one reaches over a pole
+  // onto ground it already covers, and the two copies fight in the depth test).
+  if (planet && !a.noFarField) {
+    farfield::LayerOptions lo;
+    lo.equirectWidth = 2048;
+    lo.capSize = 512;
+    std::shared_ptr<const farfield::HeightLayers> layers;
+    if (terrain.surface) {
+      layers = std::make_shared<const farfield::HeightLayers>(
+          farfield::HeightLayers::fromSurface(*terrain.surface, lo));
+    } else {
+      std::size_t k = 0;
+      while (k + 1 < pyramid->levelCount() && pyramid->level(k).grid.cols() > 4096) ++k;
+      layers =
+          std::make_shared<const farfield::HeightLayers>(farfield::HeightLayers::fromPlanetGrid(
+              *pyramid->body(), pyramid->level(k).grid, *pyramid->level(k).source,
+              pyramid->latitudeType(), lo));
+    }
+    const glm::vec3 light = request.clipmap.lightDirection;
+    const clod::ClipmapOptions clipmapLook = request.clipmap;
+    request.afterTerrain = [layers, light, clipmapLook](const gl::RenderTarget& into,
+                                                        const clod::Camera& camera) {
+      farfield::PgmOptions po;
+      po.heightColours = false;  // the clipmap's albedo and lighting: one look
+      po.high = clipmapLook.albedo;
+      po.ambient = clipmapLook.ambient;
+      // Made and dropped here, while render()'s GL context is current.
+      farfield::FarField farField(layers, po);
+      farField.draw(into, camera, glm::dvec3(light), true);
+    };
+    if (terrain.latLonGrid) {
+      std::size_t levels = 0;
+      while (levels < pyramid->levelCount() &&
+             (request.clipmap.size - 1) * std::abs(pyramid->level(levels).grid.spacingY()) <=
+                 180.0) {
+        ++levels;
+      }
+      request.clipmap.levels = std::max<std::size_t>(levels, 1);
+    }
+  }
   if (terrain.latLonGrid) {
-    // On a coarse planet, shrink the levels to the largest odd size whose finest window
-    // spans at most 180°: a wider window reaches over a pole onto ground it already covers,
-    // and the two copies of that ground (lit from different neighbours) fight in the depth
-    // test, which shows as a shading step (docs/clod.md, "Not done yet").
+    // On a coarse planet whose finest window alone spans more than 180°, shrink the levels
+    // to the largest odd size within 180° (docs/clod.md, "Not done yet").
     const double dy = g0.spacingY();
     const int fit = static_cast<int>(std::floor(180.0 / dy)) / 2 * 2 + 1;
     if (fit < request.clipmap.size && fit >= 15) {
@@ -357,6 +400,9 @@ void addRenderCommand(CLI::App& app) {
                   "surface is drawn on, degrees (default: the finest height dataset's, at least "
                   "1e-6)")
       ->check(FiniteRange(1e-7, 10.0));
+  cmd->add_flag("--no-far-field", a->noFarField,
+                "Planets: draw only the clipmap, every level, instead of its levels within 180° "
+                "and the far field (projective grid mapping, docs/far-field.md) beyond them");
   cmd->add_option("--clipmap-size", a->clipmapSize,
                   "Vertices per clipmap level side (odd, 15 to 2047)")
       ->check(CLI::Range(15, 2047))

@@ -211,6 +211,7 @@ gl::RgbaImage render(std::shared_ptr<const HeightPyramid> pyramid, const RenderR
     gl::RenderTarget target(cam.width, cam.height);
     target.clear(request.background);
     terrain.draw(cam);
+    if (request.afterTerrain) request.afterTerrain(target, cam);
     image = target.readColor();
     const Legend legend = Legend::of(terrain, cam);
     if (!legend.empty()) {

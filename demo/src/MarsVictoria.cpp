@@ -316,37 +316,12 @@ std::shared_ptr<const farfield::HeightLayers> MarsVictoriaScene::farFieldLayers(
     return std::make_shared<const farfield::HeightLayers>(
         farfield::HeightLayers::fromSurface(*composed_, lo));
   }
-  // The planet grid, read whole at the finest level at most 4096 samples wide (one
-  // readWindow: the generated planet computes its samples on demand, block by block, so one
-  // sample() per texel would recompute a block each time), then bilinear per texel.
+  // The planet grid at its finest level at most 4096 samples wide, read whole.
   const clod::HeightPyramid& planet = *mars_;
   std::size_t k = 0;
   while (k + 1 < planet.levelCount() && planet.level(k).grid.cols() > 4096) ++k;
-  const auto& level = planet.level(k);
-  const std::size_t rows = level.grid.rows(), cols = level.grid.cols();
-  auto samples = std::make_shared<std::vector<float>>(rows * cols);
-  level.source->readWindow(0, 0, rows, cols, *samples);
-  const topo::TopoGrid grid = level.grid;
-  const topo::Body body = *planet.body();
-  return std::make_shared<const farfield::HeightLayers>(farfield::HeightLayers::build(
-      body,
-      [samples, grid, body, rows, cols](double lat, double lon, double) {
-        const double latC = body.planetocentricFromPlanetodetic(lat);
-        const glm::dvec2 idx = grid.fractionalIndex(topo::wrapLongitude180(lon), latC);
-        const double c = std::clamp(idx.x, 0.0, static_cast<double>(cols - 1));
-        const double r = std::clamp(idx.y, 0.0, static_cast<double>(rows - 1));
-        const auto c0 =
-            static_cast<std::size_t>(std::min(std::floor(c), static_cast<double>(cols - 2)));
-        const auto r0 =
-            static_cast<std::size_t>(std::min(std::floor(r), static_cast<double>(rows - 2)));
-        const double fc = c - static_cast<double>(c0), fr = r - static_cast<double>(r0);
-        const auto at = [&](std::size_t rr, std::size_t cc) {
-          return static_cast<double>((*samples)[rr * cols + cc]);
-        };
-        return (1 - fr) * ((1 - fc) * at(r0, c0) + fc * at(r0, c0 + 1)) +
-               fr * ((1 - fc) * at(r0 + 1, c0) + fc * at(r0 + 1, c0 + 1));
-      },
-      lo));
+  return std::make_shared<const farfield::HeightLayers>(farfield::HeightLayers::fromPlanetGrid(
+      *planet.body(), planet.level(k).grid, *planet.level(k).source, planet.latitudeType(), lo));
 }
 
 std::size_t MarsVictoriaScene::planetClipmapLevels() const {

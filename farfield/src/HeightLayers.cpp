@@ -11,6 +11,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <string>
 #include <thread>
@@ -168,6 +169,47 @@ HeightLayers HeightLayers::fromSurface(const compose::ComposedSurface& surface,
         const topo::HeightSample s = surface.heightAt(lat, lon, metres);
         return s.status == topo::QueryStatus::Ok ? s.height
                                                  : std::numeric_limits<double>::quiet_NaN();
+      },
+      options);
+}
+
+HeightLayers HeightLayers::fromPlanetGrid(const topo::Body& body, const topo::TopoGrid& grid,
+                                          const topo::SampleSource& source,
+                                          topo::LatitudeType latitudeType,
+                                          const LayerOptions& options) {
+  const std::size_t rows = grid.rows(), cols = grid.cols();
+  if (rows < 2 || cols < 2 || rows * cols > (std::size_t{1} << 26)) {
+    throw InvalidArgument(core::format({.operation = "farfield::HeightLayers::fromPlanetGrid()",
+                                        .field = "grid size",
+                                        .value = core::number(rows) + " x " + core::number(cols),
+                                        .expected = "2..2^26 samples, at least 2 x 2"}));
+  }
+  auto samples = std::make_shared<std::vector<float>>(rows * cols);
+  source.readWindow(0, 0, rows, cols, *samples);
+  const bool wrap = std::abs(static_cast<double>(cols) * grid.spacingX() - 360.0) < 1e-6 * 360.0;
+  return build(
+      body,
+      [samples, grid, body, rows, cols, wrap, latitudeType](double lat, double lon, double) {
+        const double y = body.fromPlanetodetic(lat, latitudeType);
+        const glm::dvec2 idx = grid.fractionalIndex(topo::wrapLongitude180(lon), y);
+        double c = idx.x;
+        if (wrap) {
+          c = std::fmod(c, static_cast<double>(cols));
+          if (c < 0.0) c += static_cast<double>(cols);
+        } else {
+          c = std::clamp(c, 0.0, static_cast<double>(cols - 1));
+        }
+        const double r = std::clamp(idx.y, 0.0, static_cast<double>(rows - 1));
+        const auto c0 = static_cast<std::size_t>(std::floor(c));
+        const auto r0 =
+            static_cast<std::size_t>(std::min(std::floor(r), static_cast<double>(rows - 2)));
+        const std::size_t c1 = wrap ? (c0 + 1) % cols : std::min(c0 + 1, cols - 1);
+        const double fc = c - static_cast<double>(c0), fr = r - static_cast<double>(r0);
+        const auto at = [&](std::size_t rr, std::size_t cc) {
+          return static_cast<double>((*samples)[rr * cols + cc]);
+        };
+        return (1 - fr) * ((1 - fc) * at(r0, c0) + fc * at(r0, c1)) +
+               fr * ((1 - fc) * at(r0 + 1, c0) + fc * at(r0 + 1, c1));
       },
       options);
 }

@@ -1512,6 +1512,27 @@ def test_render_planet_disc_has_the_projected_radius(work, planet):
     assert not mask[0, 0] and not mask[-1, -1]  # space around the disc
 
 
+@pytest.mark.parametrize("view", [[], ["--look-at", "20,10", "--distance", 800000, "--elevation", 15]])
+def test_render_planet_far_field_covers_what_the_full_clipmap_covers(work, planet, view):
+    # With the far field (default) the clipmap keeps its levels within 180° and PGM draws the
+    # rest; without it the clipmap draws every level. The planet covers the same pixels but
+    # within a pixel of the limb, and the far field changes the picture (it drew something).
+    with_ff, without = work / "render-ff.png", work / "render-noff.png"
+    run("render", planet, "-o", with_ff, "--width", 240, "--height", 180, *view)
+    run("render", planet, "-o", without, "--width", 240, "--height", 180, "--no-far-field", *view)
+    a, b = terrain_mask(read_png(with_ff)), terrain_mask(read_png(without))
+    assert b.sum() > 1000
+    differ = a != b
+    # Pixels within one pixel (8-neighbourhood) of the reference's limb may go either way.
+    pad = np.pad(b, 1, mode="edge")
+    limb = np.zeros_like(b)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            limb |= pad[1 + dy:1 + dy + b.shape[0], 1 + dx:1 + dx + b.shape[1]] != b
+    assert not (differ & ~limb).any(), np.argwhere(differ & ~limb)[:5]
+    assert not np.array_equal(read_png(with_ff), read_png(without))
+
+
 def test_render_oblique_view_of_the_crater(work, victoria):
     out = work / "render-victoria.png"
     p = run("render", victoria, "-o", out, "--width", 400, "--height", 300)

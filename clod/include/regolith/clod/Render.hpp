@@ -6,10 +6,12 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/gl/Image.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -28,6 +30,10 @@ struct RenderRequest {
   /// the image's top-right corner. renderToPng() also writes it beside the PNG as
   /// `<path>.legend.json` either way.
   bool legendInImage = true;
+  /// Called after the terrain is drawn and before the image is read: further passes into
+  /// the same target with the same camera (the command's far field, farfield::FarField,
+  /// draws the rest of a planet around the clipmap this way). The context is current.
+  std::function<void(const gl::RenderTarget&, const Camera&)> afterTerrain;
 };
 
 /// A camera at `position` looking along a heading (degrees clockwise from north: +y on a

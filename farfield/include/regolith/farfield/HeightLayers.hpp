@@ -5,6 +5,7 @@
 /// docs/far-field.md).
 
 #include <regolith/topo/Body.hpp>
+#include <regolith/topo/TopoGrid.hpp>
 
 #include <cstddef>
 #include <functional>
@@ -62,6 +63,16 @@ class HeightLayers {
   /// composition rule (compose::ComposedSurface::heightAt at the texel's spacing).
   static HeightLayers fromSurface(const compose::ComposedSurface& surface,
                                   const LayerOptions& options = {});
+
+  /// Resamples a planet latitude/longitude grid (x longitude, y latitude of `latitudeType`,
+  /// degrees), read whole with one readWindow() (a paged or generated source computes or
+  /// loads its blocks once, not once per texel), bilinear, longitudes wrapping where the
+  /// grid covers a whole turn; NaN samples count as no data. Pick a pyramid level of at most
+  /// a few thousand samples a side: throws InvalidArgument above 2^26 samples.
+  static HeightLayers fromPlanetGrid(const topo::Body& body, const topo::TopoGrid& grid,
+                                     const topo::SampleSource& source,
+                                     topo::LatitudeType latitudeType,
+                                     const LayerOptions& options = {});
 
   [[nodiscard]] const topo::Body& body() const noexcept { return body_; }
   [[nodiscard]] const LayerOptions& options() const noexcept { return options_; }
