@@ -5,6 +5,7 @@
 #include <glm/common.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <utility>
 
@@ -38,7 +39,7 @@ gl::RgbaImage albedoImage(const HeightLayers& layers, const PgmOptions& o) {
           img.rgba.data() + 4 * (static_cast<std::size_t>(j) * static_cast<std::size_t>(img.width) +
                                  static_cast<std::size_t>(i));
       for (int k = 0; k < 3; ++k) {
-        p[k] = static_cast<std::uint8_t>(std::clamp(c[k], 0.0F, 1.0F) * 255.0F + 0.5F);
+        p[k] = static_cast<std::uint8_t>(std::lround(std::clamp(c[k], 0.0F, 1.0F) * 255.0F));
       }
       p[3] = 255;
     }

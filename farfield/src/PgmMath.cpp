@@ -115,12 +115,10 @@ glm::dvec3 SamplingCamera::ray(double u, double v) const noexcept {
 Frustum viewFrustum(const glm::dvec3& forward, const glm::dvec3& right, const glm::dvec3& up,
                     double fovYRadians, double aspect) noexcept {
   const double th = std::tan(0.5 * fovYRadians), tw = th * aspect;
-  Frustum f;
-  f.corners[0] = glm::normalize(forward - tw * right - th * up);
-  f.corners[1] = glm::normalize(forward + tw * right - th * up);
-  f.corners[2] = glm::normalize(forward + tw * right + th * up);
-  f.corners[3] = glm::normalize(forward - tw * right + th * up);
-  return f;
+  return Frustum{{glm::normalize(forward - tw * right - th * up),
+                  glm::normalize(forward + tw * right - th * up),
+                  glm::normalize(forward + tw * right + th * up),
+                  glm::normalize(forward - tw * right + th * up)}};
 }
 
 SamplingCamera samplingCamera(const Frustum& view, const glm::dvec3& nadir, double tauTop,

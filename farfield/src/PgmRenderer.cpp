@@ -162,7 +162,7 @@ void PgmRenderer::setFrameUniforms(const clod::Camera& camera, const ReferenceSp
   g.set("uEquirect", 0);
   g.set("uNorth", 1);
   g.set("uSouth", 2);
-  g.set("uEquirectRows", static_cast<float>(layerOptions_.equirectWidth / 2));
+  g.set("uEquirectRows", 0.5F * static_cast<float>(layerOptions_.equirectWidth));
   g.set("uCapSize", static_cast<float>(layerOptions_.capSize));
   g.set("uCapRadius", static_cast<float>(capRadius_));
   g.set("uCapLat", static_cast<float>(layerOptions_.capLatitude * kDeg));
