@@ -53,7 +53,12 @@ BlockTable::BlockTable(std::size_t rows, std::size_t cols, std::size_t blockRows
   mappedBytes_ = bytes;
   // The counts: one per page of slots, then one per page of counts (how many of its
   // counts are not zero), each lazily backed like the slots.
-  const auto page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  // The system's page size (a power of two; 4 KiB where sysconf fails).
+  const long reported = sysconf(_SC_PAGESIZE);
+  const std::size_t page =
+      reported >= 4096 && std::has_single_bit(static_cast<std::size_t>(reported))
+          ? static_cast<std::size_t>(reported)
+          : 4096;
   pageShift_ = static_cast<unsigned>(std::countr_zero(page));
   const std::size_t slotPages = (bytes + page - 1) >> pageShift_;
   const std::size_t countsPerPage = page / sizeof(std::uint32_t);
