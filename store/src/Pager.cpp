@@ -1,9 +1,12 @@
+#include <regolith/core/Assert.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/topo/BlockTable.hpp>
 
 #include <algorithm>
 #include <atomic>
+#include <limits>
 #include <string>
 
 namespace regolith::store {
@@ -15,8 +18,49 @@ std::uint32_t nextGridId() {
   return next.fetch_add(1, std::memory_order_relaxed);
 }
 
-// Reads the patch `key` of `info` with one hyperslab read.
-std::shared_ptr<const Patch> loadPatch(const Store& store, const GridInfo& info,
+// A Store as a PageSource: its windows are hyperslab reads.
+class StorePages final : public PageSource {
+ public:
+  explicit StorePages(std::shared_ptr<const Store> store) : store_(std::move(store)) {}
+  std::vector<std::string> gridNames() const override { return store_->gridNames(); }
+  const GridInfo& grid(std::string_view name) const override { return store_->grid(name); }
+  void readWindow(std::string_view grid, std::size_t level, std::size_t row0, std::size_t col0,
+                  std::size_t rows, std::size_t cols, std::span<float> out) const override {
+    store_->readWindow(grid, level, row0, col0, rows, cols, out);
+  }
+  std::string name() const override { return store_->path().string(); }
+
+ private:
+  std::shared_ptr<const Store> store_;
+};
+
+// Checks what Store::open checks of a grid, for sources that are not stores: patch keys
+// must fit their 32-bit fields, and the block tables their reservation.
+void checkGrid(const PageSource& pages, const GridInfo& info) {
+  const auto bad = [&](const std::string& field, const std::string& value,
+                       std::string_view expected) {
+    const std::string file = pages.name();
+    throw InvalidArgument(core::format({"store::Pager()", file, field, value, expected}));
+  };
+  const std::string g = "grid '" + info.name + "' ";
+  if (info.rows == 0 || info.cols == 0 || info.rows > kMaxGridSide || info.cols > kMaxGridSide) {
+    bad(g + "size", core::number(info.rows) + "x" + core::number(info.cols),
+        "1 to 2^31 samples a side");
+  }
+  if (info.patchRows == 0 || info.patchCols == 0 ||
+      patchCount(info.rows, info.cols, info.patchRows, info.patchCols) > kMaxPatchesPerGrid) {
+    bad(g + "patch size", core::number(info.patchRows) + "x" + core::number(info.patchCols),
+        "> 0, with at most 2^35 patches in level 0");
+  }
+  if (info.levels == 0 || info.levels > 32 ||
+      (info.levels > 1 && info.levelRows(info.levels - 2) == 1 &&
+       info.levelCols(info.levels - 2) == 1)) {
+    bad(g + "levels", core::number(info.levels), "1 to the level of 1x1 samples");
+  }
+}
+
+// Reads the patch `key` of `info` with one window read (one hyperslab read from a store).
+std::shared_ptr<const Patch> loadPatch(const PageSource& pages, const GridInfo& info,
                                        const PatchKey& key) {
   const std::size_t level = key.level;
   const std::size_t row0 = std::size_t{key.row} * info.patchRows;
@@ -26,19 +70,19 @@ std::shared_ptr<const Patch> loadPatch(const Store& store, const GridInfo& info,
   p->rows = std::min(info.patchRows, info.levelRows(level) - row0);
   p->cols = std::min(info.patchCols, info.levelCols(level) - col0);
   p->samples.resize(p->rows * p->cols);
-  store.readWindow(info.name, level, row0, col0, p->rows, p->cols, p->samples);
+  pages.readWindow(info.name, level, row0, col0, p->rows, p->cols, p->samples);
   return p;
 }
 
 static_assert(kMaxPatchesPerGrid <= topo::BlockTable::kMaxBlocks,
               "every grid a store may hold has a block table");
 
-// One level of one grid, paged through the cache. Holds the store and the cache, so it
+// One level of one grid, paged through the cache. Holds the source and the cache, so it
 // stays usable after the Pager that made it is gone.
 class PagedSource final : public topo::SampleSource {
  public:
   PagedSource(const GridInfo& info, std::uint32_t gridId, std::size_t level,
-              std::shared_ptr<const Store> store, std::shared_ptr<PatchCache> cache)
+              std::shared_ptr<const PageSource> pages, std::shared_ptr<PatchCache> cache)
       : info_(info),
         rows_(info.levelRows(level)),
         cols_(info.levelCols(level)),
@@ -46,10 +90,10 @@ class PagedSource final : public topo::SampleSource {
         pc_(info.patchCols),
         gridId_(gridId),
         level_(static_cast<std::uint32_t>(level)),
-        store_(std::move(store)),
+        pages_(std::move(pages)),
         cache_(std::move(cache)),
         table_(cache_->blockTable(gridId, level_, rows_, cols_, pr_, pc_)),
-        loader_([this](const PatchKey& k) { return loadPatch(*store_, info_, k); }) {}
+        loader_([this](const PatchKey& k) { return loadPatch(*pages_, info_, k); }) {}
 
   std::size_t rows() const noexcept override { return rows_; }
   std::size_t cols() const noexcept override { return cols_; }
@@ -99,10 +143,10 @@ class PagedSource final : public topo::SampleSource {
     return cache_->get(key, loader_);
   }
 
-  const GridInfo& info_;  // owned by store_
+  const GridInfo& info_;  // owned by pages_
   std::size_t rows_, cols_, pr_, pc_;
   std::uint32_t gridId_, level_;
-  std::shared_ptr<const Store> store_;
+  std::shared_ptr<const PageSource> pages_;
   std::shared_ptr<PatchCache> cache_;
   std::shared_ptr<const topo::BlockTable> table_;  // lock-free hits on resident patches
   PatchCache::Loader loader_;  // made once: a std::function per lookup costs more than a hit
@@ -115,6 +159,7 @@ Pager::Pager(std::shared_ptr<const Store> store, std::shared_ptr<PatchCache> cac
   if (!store_ || !cache_) {
     throw InvalidArgument("store::Pager(): store and cache must not be null");
   }
+  pages_ = std::make_shared<StorePages>(store_);
   for (const std::string& name : store_->gridNames()) {
     const GridInfo& info = store_->grid(name);
     const std::uint32_t id = nextGridId();
@@ -123,17 +168,36 @@ Pager::Pager(std::shared_ptr<const Store> store, std::shared_ptr<PatchCache> cac
   }
 }
 
+Pager::Pager(std::shared_ptr<const PageSource> source, std::shared_ptr<PatchCache> cache)
+    : pages_(std::move(source)), cache_(std::move(cache)) {
+  if (!pages_ || !cache_) {
+    throw InvalidArgument("store::Pager(): source and cache must not be null");
+  }
+  for (const std::string& name : pages_->gridNames()) {
+    const GridInfo& info = pages_->grid(name);
+    checkGrid(*pages_, info);
+    const std::uint32_t id = nextGridId();
+    grids_.emplace(name, GridEntry{&info, id});
+    byId_.emplace(id, &info);
+  }
+}
+
+const Store& Pager::store() const noexcept {
+  REGOLITH_ASSERT(store_ != nullptr, "store::Pager::store(): this pager pages no Store");
+  return *store_;
+}
+
 const Pager::GridEntry& Pager::entry(std::string_view grid, std::size_t level,
                                      const char* op) const {
   const auto it = grids_.find(std::string(grid));
   if (it == grids_.end()) {
-    throw StoreError(std::string(op) + ": " + store_->path().string() + ": no grid '" +
-                     std::string(grid) + "'");
+    throw StoreError(std::string(op) + ": " + pages_->name() + ": no grid '" + std::string(grid) +
+                     "'");
   }
   if (level >= it->second.info->levels) {
-    throw StoreError(std::string(op) + ": " + store_->path().string() + ": grid '" +
-                     std::string(grid) + "' has " + std::to_string(it->second.info->levels) +
-                     " levels, level " + std::to_string(level) + " requested");
+    throw StoreError(std::string(op) + ": " + pages_->name() + ": grid '" + std::string(grid) +
+                     "' has " + std::to_string(it->second.info->levels) + " levels, level " +
+                     std::to_string(level) + " requested");
   }
   return it->second;
 }
@@ -141,14 +205,14 @@ const Pager::GridEntry& Pager::entry(std::string_view grid, std::size_t level,
 std::shared_ptr<const topo::SampleSource> Pager::source(std::string_view grid,
                                                         std::size_t level) const {
   const GridEntry& e = entry(grid, level, "store::Pager::source()");
-  return std::make_shared<PagedSource>(*e.info, e.id, level, store_, cache_);
+  return std::make_shared<PagedSource>(*e.info, e.id, level, pages_, cache_);
 }
 
 topo::TopoDem Pager::dem(std::string_view grid, std::size_t level) const {
   const GridEntry& e = entry(grid, level, "store::Pager::dem()");
   if (e.info->kind != GridKind::Dem) {
-    throw StoreError("store::Pager::dem(): " + store_->path().string() + ": grid '" +
-                     std::string(grid) + "' is a planet grid, expected a DEM");
+    throw StoreError("store::Pager::dem(): " + pages_->name() + ": grid '" + std::string(grid) +
+                     "' is a planet grid, expected a DEM");
   }
   return {topoGridOf(*e.info, level), placementOf(*e.info), source(grid, level)};
 }
@@ -156,8 +220,14 @@ topo::TopoDem Pager::dem(std::string_view grid, std::size_t level) const {
 topo::TopoPlanet Pager::planet(std::string_view grid, std::size_t level) const {
   const GridEntry& e = entry(grid, level, "store::Pager::planet()");
   if (e.info->kind != GridKind::Planet) {
-    throw StoreError("store::Pager::planet(): " + store_->path().string() + ": grid '" +
-                     std::string(grid) + "' is a DEM, expected a planet grid");
+    throw StoreError("store::Pager::planet(): " + pages_->name() + ": grid '" + std::string(grid) +
+                     "' is a DEM, expected a planet grid");
+  }
+  const auto first = pages_->rowMean(grid, level, 0);
+  const auto last = first ? pages_->rowMean(grid, level, e.info->levelRows(level) - 1) : first;
+  if (first && last) {
+    return {topoGridOf(*e.info, level), bodyOf(*e.info), e.info->latitudeType, source(grid, level),
+            topo::TopoPlanet::RowMeans{*first, *last}};
   }
   return {topoGridOf(*e.info, level), bodyOf(*e.info), e.info->latitudeType, source(grid, level)};
 }
@@ -186,8 +256,7 @@ std::shared_ptr<const Patch> Pager::patch(const PatchKey& key) const {
   const auto it = byId_.find(key.grid);
   if (it == byId_.end()) {
     throw InvalidArgument("store::Pager::patch(): patch key names grid id " +
-                          std::to_string(key.grid) + ", which is not a grid of " +
-                          store_->path().string());
+                          std::to_string(key.grid) + ", which is not a grid of " + pages_->name());
   }
   const GridInfo& info = *it->second;
   if (key.level >= info.levels ||
@@ -197,7 +266,7 @@ std::shared_ptr<const Patch> Pager::patch(const PatchKey& key) const {
                           ", row " + std::to_string(key.row) + ", col " + std::to_string(key.col) +
                           ") is outside grid '" + info.name + "'");
   }
-  return cache_->get(key, [&](const PatchKey& k) { return loadPatch(*store_, info, k); });
+  return cache_->get(key, [&](const PatchKey& k) { return loadPatch(*pages_, info, k); });
 }
 
 }  // namespace regolith::store

@@ -57,7 +57,7 @@ void Prefetcher::startTasks(std::unique_lock<std::mutex>& lock) {
 
 Prefetcher::Ticket Prefetcher::request(std::string_view grid,
                                        const std::vector<LevelWindow>& windows, int priority) {
-  const GridInfo& info = pager_->store().grid(grid);  // throws StoreError for unknown grids
+  const GridInfo& info = pager_->grid(grid);  // throws StoreError for unknown grids
   std::vector<Item> items;
   for (const LevelWindow& w : windows) {
     (void)pager_->keyOf(grid, w.level, 0, 0);  // throws StoreError for a missing level
@@ -87,7 +87,7 @@ Prefetcher::Ticket Prefetcher::request(std::string_view grid,
 std::vector<LevelWindow> Prefetcher::focusWindows(std::string_view grid, std::size_t row,
                                                   std::size_t col, std::size_t radius,
                                                   std::size_t finestLevel) const {
-  const GridInfo& info = pager_->store().grid(grid);
+  const GridInfo& info = pager_->grid(grid);
   std::vector<LevelWindow> out;
   for (std::size_t level = finestLevel; level < info.levels; ++level) {
     const std::size_t r = row >> level, c = col >> level;

@@ -4,8 +4,10 @@
 #include <regolith/topo/BlockTable.hpp>
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <fstream>
 #include <thread>
 #include <vector>
 
@@ -52,6 +54,47 @@ TEST(BlockTable, RetractedBlocksAreNoLongerFound) {
   EXPECT_EQ(t.find(3, 7), nullptr);
   t.retract(1, 1);
   EXPECT_EQ(t.find(5, 5), nullptr);
+}
+
+namespace {
+/// Resident set size of this process, bytes (/proc/self/statm, second field).
+std::size_t residentBytes() {
+  std::ifstream statm("/proc/self/statm");
+  std::size_t size = 0, resident = 0;
+  statm >> size >> resident;
+  return resident * static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
+}
+}  // namespace
+
+// The kernel is the oracle: a table of 2^20 × 2^21 samples in 64 × 64 blocks reserves 12 GiB
+// and costs nothing until blocks are published; publishing blocks far apart backs one page
+// each; retracting them gives the pages back, and the slots read empty again.
+TEST(BlockTable, MemoryFollowsThePublishedBlocksNotTheGrid) {
+  const std::size_t before = residentBytes();
+  BlockTable t(std::size_t{1} << 20, std::size_t{1} << 21, 64, 64);
+  const std::size_t opened = residentBytes();
+  EXPECT_LT(opened, before + (std::size_t{1} << 20));
+  constexpr std::size_t kBlocks = 2048;  // one per page: block rows 8 apart, 2^15 slots a row
+  PublishedBlock b;
+  for (std::size_t i = 0; i < kBlocks; ++i) t.publish(i * 8, i % 7, &b);
+  const std::size_t published = residentBytes();
+  const std::size_t pages = kBlocks * static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
+  EXPECT_GT(published, opened + pages / 2);  // the slots' pages are backed
+  for (std::size_t i = 0; i < kBlocks; ++i) {
+    ASSERT_EQ(t.find(i * 8 * 64, (i % 7) * 64 + 5), &b);
+    t.retract(i * 8, i % 7);
+  }
+  const std::size_t retracted = residentBytes();
+  EXPECT_LT(retracted, opened + pages / 8);  // and given back
+  for (std::size_t i = 0; i < kBlocks; ++i) ASSERT_EQ(t.find(i * 8 * 64, (i % 7) * 64), nullptr);
+  // A page holding two published slots stays until both are retracted.
+  PublishedBlock c;
+  t.publish(5, 0, &b);
+  t.publish(5, 1, &c);
+  t.retract(5, 0);
+  EXPECT_EQ(t.find(5 * 64, 64), &c);
+  t.retract(5, 1);
+  EXPECT_EQ(t.find(5 * 64, 64), nullptr);
 }
 
 TEST(BlockTable, PrefetchHintsNeverReadABlock) {

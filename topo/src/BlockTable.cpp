@@ -51,9 +51,81 @@ BlockTable::BlockTable(std::size_t rows, std::size_t cols, std::size_t blockRows
   }
   entries_ = static_cast<Entry*>(p);
   mappedBytes_ = bytes;
+  // The counts: one per page of slots, then one per page of counts (how many of its
+  // counts are not zero), each lazily backed like the slots.
+  // The system's page size (a power of two; 4 KiB where sysconf fails).
+  const long reported = sysconf(_SC_PAGESIZE);
+  const std::size_t page =
+      reported >= 4096 && std::has_single_bit(static_cast<std::size_t>(reported))
+          ? static_cast<std::size_t>(reported)
+          : 4096;
+  pageShift_ = static_cast<unsigned>(std::countr_zero(page));
+  const std::size_t slotPages = (bytes + page - 1) >> pageShift_;
+  const std::size_t countsPerPage = page / sizeof(std::uint32_t);
+  const std::size_t countPages = (slotPages + countsPerPage - 1) / countsPerPage;
+  countBytes_ = (countPages * countsPerPage + countPages) * sizeof(std::uint32_t);
+  void* q = mmap(nullptr, countBytes_, PROT_READ | PROT_WRITE,
+                 MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+  if (q == MAP_FAILED) {
+    const int err = errno;
+    munmap(entries_, mappedBytes_);
+    throw Error("topo::BlockTable(): " + sizes() + ": could not reserve " +
+                core::number(countBytes_) + " bytes of address space (" + std::strerror(err) + ")");
+  }
+  pageCounts_ = static_cast<std::uint32_t*>(q);
+  countPageCounts_ = pageCounts_ + countPages * countsPerPage;
 }
 
-BlockTable::~BlockTable() { munmap(entries_, mappedBytes_); }
+BlockTable::~BlockTable() {
+  munmap(pageCounts_, countBytes_);
+  munmap(entries_, mappedBytes_);
+}
+
+namespace {
+// Gives one page back to the kernel (it then reads as zeros). A failure only keeps it.
+void releasePage(void* page, unsigned pageShift) noexcept {
+  (void)madvise(page, std::size_t{1} << pageShift, MADV_DONTNEED);
+}
+}  // namespace
+
+void BlockTable::countSlot(std::size_t index, bool published) noexcept {
+  const std::size_t countsPerPage = (std::size_t{1} << pageShift_) / sizeof(std::uint32_t);
+  const std::size_t first = (index * sizeof(Entry)) >> pageShift_;
+  const std::size_t last = (index * sizeof(Entry) + sizeof(Entry) - 1) >> pageShift_;
+  for (std::size_t pg = first; pg <= last; ++pg) {
+    const std::size_t cp = pg / countsPerPage;
+    if (published) {
+      if (pageCounts_[pg]++ == 0) ++countPageCounts_[cp];
+      continue;
+    }
+    if (--pageCounts_[pg] != 0) continue;
+    // Every slot overlapping the page is empty: give it back. Readers racing with this
+    // read either the empty slots or the zero page, both "not published"; every hint
+    // pointer in it is null already.
+    releasePage(reinterpret_cast<char*>(entries_) + (pg << pageShift_), pageShift_);  // NOLINT
+    if (--countPageCounts_[cp] == 0) releasePage(pageCounts_ + cp * countsPerPage, pageShift_);
+  }
+}
+
+void BlockTable::publish(std::size_t blockRow, std::size_t blockCol,
+                         const PublishedBlock* block) noexcept {
+  const std::size_t i = blockRow * blocksPerRow_ + blockCol;
+  Entry& e = entries_[i];
+  // Counted before the slot's page is written (the counts are the writers' alone).
+  if (Slot(e.block).load(std::memory_order_relaxed) == nullptr) countSlot(i, true);
+  std::atomic_ref(e.hintStride).store(block->stride, std::memory_order_relaxed);
+  std::atomic_ref(e.hintData).store(block->data, std::memory_order_relaxed);
+  Slot(e.block).store(block, std::memory_order_release);
+}
+
+void BlockTable::retract(std::size_t blockRow, std::size_t blockCol) noexcept {
+  const std::size_t i = blockRow * blocksPerRow_ + blockCol;
+  Entry& e = entries_[i];
+  const bool wasPublished = Slot(e.block).load(std::memory_order_relaxed) != nullptr;
+  std::atomic_ref(e.hintData).store(nullptr, std::memory_order_relaxed);
+  Slot(e.block).store(nullptr, std::memory_order_seq_cst);
+  if (wasPublished) countSlot(i, false);
+}
 
 namespace hazard {
 namespace {

@@ -39,6 +39,14 @@ struct TopoPlanet::Located {
 
 TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
                        std::shared_ptr<const SampleSource> samples)
+    : TopoPlanet(std::move(grid), std::move(body), latitudeType, std::move(samples), nullptr) {}
+
+TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
+                       std::shared_ptr<const SampleSource> samples, RowMeans rowMeans)
+    : TopoPlanet(std::move(grid), std::move(body), latitudeType, std::move(samples), &rowMeans) {}
+
+TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
+                       std::shared_ptr<const SampleSource> samples, const RowMeans* rowMeans)
     : grid_(std::move(grid)),
       body_(std::move(body)),
       latType_(latitudeType),
@@ -71,8 +79,12 @@ TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
   northPoleV_ = (grid_.y0() - 90.0) / grid_.spacingY();
   southPoleV_ = (grid_.y0() + 90.0) / grid_.spacingY();
   slack_ = grid_.edgeSlack();
-  if (northCap_ || grid_.y0() >= 90.0) northPole_ = rowMean(*samples_, grid_, 0);
-  if (southCap_ || lastLat <= -90.0) southPole_ = rowMean(*samples_, grid_, grid_.rows() - 1);
+  if (northCap_ || grid_.y0() >= 90.0) {
+    northPole_ = rowMeans != nullptr ? rowMeans->first : rowMean(*samples_, grid_, 0);
+  }
+  if (southCap_ || lastLat <= -90.0) {
+    southPole_ = rowMeans != nullptr ? rowMeans->last : rowMean(*samples_, grid_, grid_.rows() - 1);
+  }
 }
 
 TopoPlanet::Located TopoPlanet::locate(const LatLon& ll) const {

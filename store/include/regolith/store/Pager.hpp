@@ -2,6 +2,7 @@
 /// \file
 /// Lazy paging of store grids into a shared patch cache.
 
+#include <regolith/store/PageSource.hpp>
 #include <regolith/store/PatchCache.hpp>
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/Pyramid.hpp>
@@ -10,12 +11,15 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <string_view>
 #include <unordered_map>
+#include <vector>
 
 namespace regolith::store {
 
-/// Serves the grids of one Store patch by patch (the JPL paper, section III.A): reading a
+/// Serves the grids of one Store (or of any PageSource, such as a procedural planet) patch by
+/// patch (the JPL paper, section III.A): reading a
 /// point loads only the aligned patch (one HDF5 chunk, patchRows × patchCols samples of
 /// one level) that holds it, with one hyperslab read, into a PatchCache shared by every
 /// grid and level. TopoDem and TopoPlanet built here answer exactly the queries of
@@ -31,9 +35,22 @@ class Pager {
  public:
   /// Throws InvalidArgument if store or cache is null.
   Pager(std::shared_ptr<const Store> store, std::shared_ptr<PatchCache> cache);
+  /// Pages grids computed on demand (Procedural.hpp) or held elsewhere, through the same
+  /// cache and sources as a store. Throws InvalidArgument if source or cache is null, or a
+  /// grid's levels or patch sizes are out of the store format's range.
+  Pager(std::shared_ptr<const PageSource> source, std::shared_ptr<PatchCache> cache);
 
-  [[nodiscard]] const Store& store() const noexcept { return *store_; }
+  /// Whether the grids come from a Store (false for other PageSources).
+  [[nodiscard]] bool hasStore() const noexcept { return store_ != nullptr; }
+  /// The store paged; requires hasStore() (an assertion).
+  [[nodiscard]] const Store& store() const noexcept;
+  /// What the pager reads from: the store, or the PageSource it was given.
+  [[nodiscard]] const PageSource& pages() const noexcept { return *pages_; }
   [[nodiscard]] PatchCache& cache() const noexcept { return *cache_; }
+  /// The grids' names, and one grid's description (StoreError for an unknown grid), whatever
+  /// the source: what consumers should ask instead of store().grid().
+  [[nodiscard]] std::vector<std::string> gridNames() const { return pages_->gridNames(); }
+  [[nodiscard]] const GridInfo& grid(std::string_view name) const { return pages_->grid(name); }
 
   /// The samples of one level of a grid, paged. Throws StoreError for an unknown grid or a
   /// level the grid does not have.
@@ -41,7 +58,9 @@ class Pager {
                                                                  std::size_t level = 0) const;
   /// A paged TopoDem of one level. Throws StoreError if the grid is a planet grid.
   [[nodiscard]] topo::TopoDem dem(std::string_view grid, std::size_t level = 0) const;
-  /// A paged TopoPlanet of one level. Throws StoreError if the grid is a DEM.
+  /// A paged TopoPlanet of one level. Throws StoreError if the grid is a DEM. Its pole
+  /// heights (the means of the first and last rows) come from PageSource::rowMean() where
+  /// the source offers it, else from the rows read through the cache.
   [[nodiscard]] topo::TopoPlanet planet(std::string_view grid, std::size_t level = 0) const;
   /// Every stored level of a grid, paged, in topo terms: what a renderer takes to draw a
   /// store (clod::HeightPyramid) without knowing the store. A DEM's levels are planar (x
@@ -64,7 +83,8 @@ class Pager {
   [[nodiscard]] const GridEntry& entry(std::string_view grid, std::size_t level,
                                        const char* op) const;
 
-  std::shared_ptr<const Store> store_;
+  std::shared_ptr<const Store> store_;       // null unless paging a Store
+  std::shared_ptr<const PageSource> pages_;  // the store's adapter, or the source given
   std::shared_ptr<PatchCache> cache_;
   std::unordered_map<std::string, GridEntry> grids_;
   std::unordered_map<std::uint32_t, const GridInfo*> byId_;

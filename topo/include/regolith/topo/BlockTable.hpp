@@ -57,11 +57,16 @@ struct PublishedBlock {
 ///
 /// Memory: the slots are one anonymous mapping of the whole table, reserved without backing
 /// (MAP_NORESERVE), so the operating system gives a page (170 slots) only when a block in it
-/// is first published: a table costs nothing at construction and grows with the area ever
-/// paged, 24 bytes per block of it, not with the grid (a 2^20 × 2^20 grid in 16 × 8 patches
-/// would otherwise take 192 GiB up front). Why not a radix tree: its extra dependent loads
-/// on every block switch would slow random queries, and the kernel's lazy zero pages give
-/// the same sparseness with none.
+/// is first published, and the table gives the page back (madvise MADV_DONTNEED, which
+/// leaves it reading as zeros, all slots empty) when the last block published in it is
+/// retracted. A table therefore costs nothing at construction, and at most one page per
+/// published block afterwards: it follows the cache's resident patches, not the grid nor
+/// the area ever paged (a 2^20 × 2^20 grid in 16 × 8 patches would otherwise take 192 GiB
+/// up front, and a random walk over a 2^20 × 2^21 grid in 256 × 256 patches would keep up to
+/// 768 MiB of pages it once touched). Counts of published slots per page, in a second such
+/// mapping whose pages are given back in the same way, tell when a page empties. Why not a radix
+/// tree: its extra dependent loads on every block switch would slow random queries, and the
+/// kernel's lazy zero pages give the same sparseness with none.
 class BlockTable {
  public:
   /// The most bytes of address space one table may reserve (2^40, 1 TiB; the table of a
@@ -99,18 +104,12 @@ class BlockTable {
     return blockRow < blocksPerCol_ && blockCol < blocksPerRow_;
   }
   /// Publishes block (blockRow, blockCol), which must be complete (data and geometry).
-  void publish(std::size_t blockRow, std::size_t blockCol, const PublishedBlock* block) noexcept {
-    Entry& e = entries_[blockRow * blocksPerRow_ + blockCol];
-    std::atomic_ref(e.hintStride).store(block->stride, std::memory_order_relaxed);
-    std::atomic_ref(e.hintData).store(block->data, std::memory_order_relaxed);
-    Slot(e.block).store(block, std::memory_order_release);
-  }
+  /// Writers only (under the owner's lock).
+  void publish(std::size_t blockRow, std::size_t blockCol, const PublishedBlock* block) noexcept;
   /// Removes block (blockRow, blockCol); readers may still use it until it is reclaimed.
-  void retract(std::size_t blockRow, std::size_t blockCol) noexcept {
-    Entry& e = entries_[blockRow * blocksPerRow_ + blockCol];
-    std::atomic_ref(e.hintData).store(nullptr, std::memory_order_relaxed);
-    Slot(e.block).store(nullptr, std::memory_order_seq_cst);
-  }
+  /// Gives the slot's page back to the kernel when no block of it is published any more.
+  /// Writers only (under the owner's lock).
+  void retract(std::size_t blockRow, std::size_t blockCol) noexcept;
 
   /// Asks the processor to fetch the bilinear cell of sample (r, c) (rows r and r + 1) and
   /// the block's header into the cache, if the block is published. A hint only: it reads
@@ -158,6 +157,17 @@ class BlockTable {
   unsigned rowShift_ = 0, colShift_ = 0;  // their log2 when pow2_
   Entry* entries_ = nullptr;              // the mapping (mutable through atomic_ref)
   std::size_t mappedBytes_ = 0;
+  /// Counts slot `index` in (published) or out of the pages it overlaps, giving back the
+  /// pages that empty.
+  void countSlot(std::size_t index, bool published) noexcept;
+
+  /// Published slots overlapping each page of the mapping (a slot may straddle two pages
+  /// and counts in both), then the non-zero counts of each page of those counts: a second
+  /// lazily backed mapping, written by writers only, whose pages are given back as well.
+  std::uint32_t* pageCounts_ = nullptr;
+  std::uint32_t* countPageCounts_ = nullptr;
+  std::size_t countBytes_ = 0;
+  unsigned pageShift_ = 12;  // log2 of the system page size
 };
 
 /// Hazard records: one per thread, process-wide (the hazard domain is per-process

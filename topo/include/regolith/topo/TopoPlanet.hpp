@@ -38,6 +38,18 @@ class TopoPlanet {
   TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
              std::shared_ptr<const SampleSource> samples);
 
+  /// The means of a grid's first and last rows' valid samples (NaN if none), summed in
+  /// double in column order: what the constructor above reads the two rows for, to find the
+  /// pole heights of a grid with polar caps.
+  struct RowMeans {
+    double first = 0.0, last = 0.0;
+  };
+  /// As above, with the row means known beforehand (computed as RowMeans says), for sources
+  /// whose rows are costly to read whole: a computed planet 2^21 samples wide
+  /// (store::proceduralMars()). Equal means give a planet equal to the one above.
+  TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
+             std::shared_ptr<const SampleSource> samples, RowMeans rowMeans);
+
   [[nodiscard]] const TopoGrid& grid() const noexcept { return grid_; }
   [[nodiscard]] const Body& body() const noexcept { return body_; }
   [[nodiscard]] LatitudeType latitudeType() const noexcept { return latType_; }
@@ -76,6 +88,9 @@ class TopoPlanet {
   [[nodiscard]] double southPoleHeight() const noexcept { return southPole_; }
 
  private:
+  TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
+             std::shared_ptr<const SampleSource> samples, const RowMeans* rowMeans);
+
   struct Located;
   [[nodiscard]] Located locate(const LatLon& ll) const;
   [[nodiscard]] SurfaceSample surfaceImpl(const LatLon& ll, Interpolation interp, NormalFrame frame,
