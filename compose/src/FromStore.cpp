@@ -20,7 +20,7 @@ namespace regolith::compose {
 
 std::shared_ptr<const Dataset> datasetFromStore(const store::Pager& pager, std::string_view grid,
                                                 DatasetOptions options) {
-  const store::GridInfo& info = pager.store().grid(grid);
+  const store::GridInfo& info = pager.grid(grid);
   if (options.name.empty()) options.name = info.name;
   if (!options.heightRange && info.statistics && info.statistics->validSamples > 0) {
     options.heightRange = std::array<double, 2>{info.statistics->min, info.statistics->max};
@@ -184,7 +184,7 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
     if (d.contains("feather_nodata_samples")) {
       const double w =
           number(path, d["feather_nodata_samples"], where + ".feather_nodata_samples", 1e-3, 1e6);
-      const auto& info = pager->store().grid(grid);
+      const auto& info = pager->grid(grid);
       o.mask = featherMask(store::topoGridOf(info, 0), *pager->source(grid, 0), w, false);
     }
     datasets.push_back(datasetFromStore(*pager, grid, std::move(o)));

@@ -241,7 +241,7 @@ void MarsVictoriaScene::compose() {
       compose::DatasetOptions eo;
       eo.featherMetres = d.featherMetres;
       if (d.featherNodataSamples > 0.0) {
-        eo.mask = compose::featherMask(store::topoGridOf(pager->store().grid(d.grid)),
+        eo.mask = compose::featherMask(store::topoGridOf(pager->grid(d.grid)),
                                        *pager->source(d.grid), d.featherNodataSamples);
       }
       catalogue->add(compose::datasetFromStore(*pager, d.grid, eo));
