@@ -157,7 +157,36 @@ struct WriteOptions {
   /// Compute level 0's height statistics while writing and store them with each grid
   /// (format 1.3, docs/store-format.md); the import does.
   bool statistics = false;
+  /// Bytes the writer may hold to build one grid's pyramid: its bands, the chunks being
+  /// computed and encoded, the per-thread scratch (docs/import.md, "Memory"). Where two
+  /// full-width bands per level would exceed it, each level is built in column tiles, the
+  /// level below read back from the file; the file's content does not depend on it. Below
+  /// writerMemoryMinimum() it is refused (InvalidArgument). 0: no bound. Not counted: the
+  /// source's own caches (GDAL_CACHEMAX), HDF5's metadata cache, the code and libraries.
+  std::size_t memoryBudgetBytes = std::size_t{1} << 30U;
 };
+
+/// How writeStore() builds one grid's pyramid within WriteOptions::memoryBudgetBytes
+/// (estimates of the writer's own buffers, in bytes).
+struct WriterMemoryPlan {
+  /// Holding two full-width bands per level (the fastest way).
+  std::size_t untiledBytes = 0;
+  /// The least any grid needs: a column tile one chunk wide, and each thread's scratch.
+  std::size_t minimumBytes = 0;
+  /// 0: whole-width bands; otherwise the chunk columns per column tile.
+  std::size_t tileChunks = 0;
+  /// The estimate for the way chosen.
+  std::size_t plannedBytes = 0;
+};
+
+/// The writer's memory plan for a grid of rows × cols level-0 samples under `options`
+/// (levels, patch size, threads, budget); a budget below minimumBytes is not checked here.
+[[nodiscard]] WriterMemoryPlan writerMemoryPlan(std::size_t rows, std::size_t cols,
+                                                const WriteOptions& options);
+
+/// The smallest WriteOptions::memoryBudgetBytes writeStore() accepts with these options
+/// (patch size and threads): WriterMemoryPlan::minimumBytes.
+[[nodiscard]] std::size_t writerMemoryMinimum(const WriteOptions& options);
 
 /// One grid to write: its description (levels, patch size and sample type are set by the
 /// writer) and its level-0 heights in metres. Samples that are NaN (or equal info.nodata)
