@@ -99,16 +99,17 @@ std::size_t memoryBudgetOf(const Args& a, const store::ImportOptions& o) {
     throw InvalidArgument("import: --memory-mb " + std::to_string(a.memoryMb) +
                           " is beyond this machine's address space");
   }
+  // The default grows to the minimum (patches above 4096), as the library's does.
+  if (a.memoryMb * kMiB == store::kDefaultMemoryBudget) return store::kDefaultMemoryBudget;
   const std::size_t least = store::writerMemoryMinimum(o);
   if (a.memoryMb * kMiB < least) {
     const std::size_t leastMb = (least + kMiB - 1) / kMiB;
-    throw InvalidArgument(
-        "import: --memory-mb " + std::to_string(a.memoryMb) + " is below the minimum of " +
-        std::to_string(leastMb) + " MiB for --patch " + std::to_string(o.patchRows) + " with " +
-        (a.threads == 0 ? std::string("all cores") : "--threads " + std::to_string(a.threads)) +
-        " (one column tile of one patch, and each thread's scratch); "
-        "expected at least " +
-        std::to_string(leastMb) + ", or 0 for no bound");
+    throw InvalidArgument("import: --memory-mb " + std::to_string(a.memoryMb) +
+                          " is below the minimum of " + std::to_string(leastMb) +
+                          " MiB for --patch " + std::to_string(o.patchRows) +
+                          " (one column tile of one patch, and one thread's scratch); "
+                          "expected at least " +
+                          std::to_string(leastMb) + ", or 0 for no bound");
   }
   return a.memoryMb * kMiB;
 }
@@ -159,9 +160,10 @@ void printSummary(const std::string& out, const store::ImportReport& r, std::siz
      << " (the whole process, GDAL's and HDF5's caches included)\n";
   os << "  memory budget:  " << (budgetBytes == 0 ? std::string("none") : mebibytes(budgetBytes))
      << " (--memory-mb): "
-     << (r.memory.tileChunks == 0
-             ? std::string("whole-width bands")
-             : "column tiles of " + std::to_string(r.memory.tileChunks) + " patches")
+     << (r.memory.tileChunks == 0 ? std::string("whole-width bands")
+                                  : "column tiles of " + std::to_string(r.memory.tileChunks) +
+                                        " patches on " + std::to_string(r.memory.threads) +
+                                        (r.memory.threads == 1 ? " thread" : " threads"))
      << ", writer's buffers about " << mebibytes(r.memory.plannedBytes) << "\n";
 }
 
@@ -198,8 +200,9 @@ void addImportCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--memory-mb", a->memoryMb,
                   "MiB the writer may hold to build the pyramid; past it, levels are built in "
-                  "column tiles read back from the file (same file, slower). Not counted: "
-                  "GDAL's cache (GDAL_CACHEMAX) and HDF5's. 0: no bound")
+                  "column tiles read back from the file (same levels, slower). Not counted: "
+                  "GDAL's cache (GDAL_CACHEMAX) and HDF5's. 0: no bound; the default grows to "
+                  "the minimum of patches above 4096")
       ->capture_default_str();
   cmd->add_option("--nodata", a->nodata,
                   "A further source value (before scale/offset) that means missing, beside "

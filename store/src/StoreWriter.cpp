@@ -677,24 +677,30 @@ std::size_t levelCount(const GridInfo& info, const WriteOptions& o) {
 
 WriterMemoryPlan planMemory(const GridInfo& info, std::size_t levels, const WriteOptions& o) {
   const std::size_t chunk = o.patchRows * o.patchCols * sizeof(float);
-  const std::size_t threads = threadCount(o) * kScratchChunksPerThread * chunk;
+  const std::size_t perThread = kScratchChunksPerThread * chunk;
   const std::size_t perTileChunk = 4 * chunk + encodedBound(chunk);
   WriterMemoryPlan plan;
-  plan.minimumBytes = perTileChunk + threads;
+  plan.threads = threadCount(o);
+  plan.minimumBytes = perTileChunk + perThread;  // one chunk column, one thread
   const auto band = [&](std::size_t k) {
     return std::min(o.patchRows, info.levelRows(k)) * info.levelCols(k) * sizeof(float);
   };
-  plan.untiledBytes = encodedBound(band(0)) + threads;
+  plan.untiledBytes = encodedBound(band(0)) + plan.threads * perThread;
   for (std::size_t k = 0; k < levels; ++k) plan.untiledBytes += 4 * band(k);
-  const std::size_t budget = o.memoryBudgetBytes;
+  std::size_t budget = o.memoryBudgetBytes;
+  if (budget == kDefaultMemoryBudget) budget = std::max(budget, plan.minimumBytes);
   if (budget == 0 || plan.untiledBytes <= budget) {
     plan.plannedBytes = plan.untiledBytes;
     return plan;
   }
+  // Column tiles: every thread the budget allows beside one tile chunk, then the widest tile.
+  const std::size_t room = budget > perTileChunk ? budget - perTileChunk : 0;
+  plan.threads = std::clamp<std::size_t>(room / perThread, 1, plan.threads);
   const std::size_t chunkCols = (info.cols + o.patchCols - 1) / o.patchCols;
-  const std::size_t fits = budget > threads ? (budget - threads) / perTileChunk : 0;
+  const std::size_t scratch = plan.threads * perThread;
+  const std::size_t fits = budget > scratch ? (budget - scratch) / perTileChunk : 0;
   plan.tileChunks = std::clamp<std::size_t>(fits, 1, chunkCols);
-  plan.plannedBytes = plan.tileChunks * perTileChunk + threads;
+  plan.plannedBytes = plan.tileChunks * perTileChunk + scratch;
   return plan;
 }
 
@@ -925,6 +931,10 @@ void writeTiles(hid_t group, const Prepared& p, const WriteOptions& o, Progress&
 void writeGrid(hid_t grids, const GridSource& src, const Prepared& p, const WriteOptions& o,
                Progress& progress, const Context& ctx) {
   const GridInfo& info = p.info;
+  // The threads the memory budget allows (all of them unless it forces column tiles).
+  const WriterMemoryPlan plan = planMemory(info, info.levels, o);
+  WriteOptions oPlanned = o;
+  oPlanned.threads = static_cast<unsigned>(plan.threads);
   const bool tiled = !p.tiles.empty();
   hdf5::Group group = createGroup(grids, info.name, ctx);
   writeAttributes(group.get(), info, tiled, o.statistics, ctx);
@@ -959,8 +969,7 @@ void writeGrid(hid_t grids, const GridSource& src, const Prepared& p, const Writ
     blockStats[{br0, c0}] = b;
   };
   {
-    const std::size_t tileChunks = planMemory(info, info.levels, o).tileChunks;
-    Pyramid pyramid(group.get(), p, o, tileChunks, progress, ctx);
+    Pyramid pyramid(group.get(), p, oPlanned, plan.tileChunks, progress, ctx);
     // Level 0 band by band; each band flows up the pyramid as soon as its pair is complete.
     // The source and the progress callback run without the HDF5 lock: the source may itself
     // be a pager reading another store.
@@ -1023,14 +1032,14 @@ void writeStore(const std::filesystem::path& path, std::span<const GridSource> g
   const Context ctx("store::writeStore()", path);
   validateOptions(options, ctx);
   if (const std::size_t least = writerMemoryMinimum(options);
-      options.memoryBudgetBytes != 0 && options.memoryBudgetBytes < least) {
+      options.memoryBudgetBytes != 0 && options.memoryBudgetBytes != kDefaultMemoryBudget &&
+      options.memoryBudgetBytes < least) {
     invalid(ctx, "options.memoryBudgetBytes is " + std::to_string(options.memoryBudgetBytes) +
                      " bytes, below the minimum of " + std::to_string(least) +
                      " bytes for patches of " + std::to_string(options.patchRows) + "x" +
-                     std::to_string(options.patchCols) + " and " +
-                     std::to_string(threadCount(options)) +
-                     " threads (one column tile of one chunk, and each thread's scratch); "
-                     "expected at least that, or 0 for no bound");
+                     std::to_string(options.patchCols) +
+                     " (one column tile of one chunk, and one thread's scratch); expected at "
+                     "least that, or 0 for no bound");
   }
   std::filesystem::path dir = path.parent_path();
   if (dir.empty()) dir = ".";

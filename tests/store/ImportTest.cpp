@@ -1281,16 +1281,20 @@ TEST(ImportMemory, ABudgetSmallerThanTwoBandsBuildsColumnTilesAndTheSameLevels) 
       EXPECT_EQ(whole.memory.tileChunks, 0U);  // the default budget holds whole bands
       EXPECT_GT(whole.memory.untiledBytes, 0U);
       EXPECT_GT(whole.peakRssBytes, 0U);
-      // The least budget: column tiles of one chunk; a little more: tiles of three.
+      // The least budget: column tiles of one chunk on one thread; the scratch of both
+      // threads (10 chunks each) and three tile chunks (4 read back + 5/4 encoded each):
+      // tiles of three on two threads.
       const std::size_t least = writerMemoryMinimum(o);
       const std::size_t chunk = o.patchRows * o.patchCols * sizeof(float);
-      for (const std::size_t budget : {least, least + 2 * (4 * chunk + chunk + chunk / 4)}) {
+      const std::size_t three = 2 * 10 * chunk + 3 * (4 * chunk + chunk + chunk / 4);
+      for (const std::size_t budget : {least, three}) {
         ASSERT_GT(whole.memory.untiledBytes, least);
         if (whole.memory.untiledBytes <= budget) continue;  // a small fixture: bands fit
         ImportOptions t = o;
         t.memoryBudgetBytes = budget;
         const ImportReport tiled = importRaster(fixture(name), scratch("tiles.h5"), t);
         EXPECT_EQ(tiled.memory.tileChunks, budget == least ? 1U : 3U);
+        EXPECT_EQ(tiled.memory.threads, budget == least ? 1U : 2U);
         EXPECT_LE(tiled.memory.plannedBytes, budget);
         expectSameBits(Store::open(scratch("whole.h5")), Store::open(scratch("tiles.h5")), "g");
       }
@@ -1323,9 +1327,9 @@ TEST(ImportMemory, ATiledGridBuildsItsLevelOneFromItsTilesInColumnTiles) {
 
 TEST(ImportMemory, ABudgetBelowOneColumnTileIsRefusedNamingTheOptionAndTheMinimum) {
   ImportOptions o = smallPatches();  // 64x48 patches, 2 threads
-  // One tile of one chunk: 4 chunks read back + 5/4 chunk encoded; 10 chunks per thread.
+  // One tile of one chunk: 4 chunks read back + 5/4 chunk encoded; 10 chunks for one thread.
   const std::size_t chunk = 64 * 48 * sizeof(float);
-  const std::size_t least = 4 * chunk + chunk + chunk / 4 + 2 * 10 * chunk;
+  const std::size_t least = 4 * chunk + chunk + chunk / 4 + 10 * chunk;
   EXPECT_EQ(writerMemoryMinimum(o), least);
   o.memoryBudgetBytes = least - 1;
   const fs::path out = scratch("too-small.h5");
@@ -1339,11 +1343,23 @@ TEST(ImportMemory, ABudgetBelowOneColumnTileIsRefusedNamingTheOptionAndTheMinimu
               "store::writeStore(): " + out.string() + ": options.memoryBudgetBytes is " +
                   std::to_string(least - 1) + " bytes, below the minimum of " +
                   std::to_string(least) +
-                  " bytes for patches of 64x48 and 2 threads (one column tile of one chunk, "
-                  "and each thread's scratch); expected at least that, or 0 for no bound");
+                  " bytes for patches of 64x48 (one column tile of one chunk, and one thread's "
+                  "scratch); expected at least that, or 0 for no bound");
   }
   EXPECT_FALSE(fs::exists(out));
   // 0: no bound.
   o.memoryBudgetBytes = 0;
   EXPECT_EQ(importRaster(fixture("S11E119.hgt"), out, o).memory.tileChunks, 0U);
+  // The default budget grows to the minimum of patches it cannot hold (8192²: 256 MiB a
+  // chunk), and builds a wide grid in tiles of one chunk on one thread.
+  WriteOptions big;
+  big.patchRows = big.patchCols = 8192;
+  big.threads = 4;
+  const WriterMemoryPlan plan = writerMemoryPlan(65536, 1U << 20U, big);
+  const std::size_t bigChunk = std::size_t{8192} * 8192 * sizeof(float);
+  EXPECT_EQ(plan.minimumBytes, 15 * bigChunk + bigChunk / 4);
+  EXPECT_GT(plan.minimumBytes, kDefaultMemoryBudget);
+  EXPECT_EQ(plan.tileChunks, 1U);
+  EXPECT_EQ(plan.threads, 1U);
+  EXPECT_EQ(plan.plannedBytes, plan.minimumBytes);
 }
