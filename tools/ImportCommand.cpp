@@ -1,5 +1,6 @@
 // `regolith import SOURCE... --out STORE`: GDAL rasters into a store (store/Import.hpp,
 // docs/import.md).
+#include <regolith/core/Error.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Import.hpp>
 
@@ -15,6 +16,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -33,6 +35,7 @@ struct Args {
   int deflate = 0;
   std::string compression = "deflate";
   unsigned threads = 0;
+  std::size_t memoryMb = 1024;
   double nodata = 0.0;
   std::string body;
   std::vector<std::size_t> window;
@@ -84,7 +87,35 @@ std::optional<store::HeightMapOptions> heightMapOf(const Args& a) {
   return h;
 }
 
-void printSummary(const std::string& out, const store::ImportReport& r, std::ostream& os) {
+std::string mebibytes(std::size_t bytes) {
+  return shortestNumber(std::round(static_cast<double>(bytes) / 1048576.0 * 10.0) / 10.0) + " MiB";
+}
+
+/// The budget in bytes of --memory-mb; refuses one below the writer's minimum.
+std::size_t memoryBudgetOf(const Args& a, const store::ImportOptions& o) {
+  constexpr std::size_t kMiB = std::size_t{1} << 20U;
+  if (a.memoryMb == 0) return 0;
+  if (a.memoryMb > std::numeric_limits<std::size_t>::max() / kMiB) {
+    throw InvalidArgument("import: --memory-mb " + std::to_string(a.memoryMb) +
+                          " is beyond this machine's address space");
+  }
+  // The default grows to the minimum (patches above 4096), as the library's does.
+  if (a.memoryMb * kMiB == store::kDefaultMemoryBudget) return store::kDefaultMemoryBudget;
+  const std::size_t least = store::writerMemoryMinimum(o);
+  if (a.memoryMb * kMiB < least) {
+    const std::size_t leastMb = (least + kMiB - 1) / kMiB;
+    throw InvalidArgument("import: --memory-mb " + std::to_string(a.memoryMb) +
+                          " is below the minimum of " + std::to_string(leastMb) +
+                          " MiB for --patch " + std::to_string(o.patchRows) +
+                          " (one column tile of one patch, and one thread's scratch); "
+                          "expected at least " +
+                          std::to_string(leastMb) + ", or 0 for no bound");
+  }
+  return a.memoryMb * kMiB;
+}
+
+void printSummary(const std::string& out, const store::ImportReport& r, std::size_t budgetBytes,
+                  std::ostream& os) {
   const store::GridInfo& g = r.info;
   const bool dem = g.kind == store::GridKind::Dem;
   os << "Wrote " << out << " from " << r.tiles << (r.tiles == 1 ? " file" : " files") << "\n";
@@ -125,6 +156,15 @@ void printSummary(const std::string& out, const store::ImportReport& r, std::ost
      << "\n";
   os << "  tiles:          " << r.tiles << "\n";
   os << "  seconds:        " << shortestNumber(std::round(r.seconds * 100.0) / 100.0) << "\n";
+  os << "  peak RSS:       " << (r.peakRssBytes > 0 ? mebibytes(r.peakRssBytes) : "unknown")
+     << " (the whole process, GDAL's and HDF5's caches included)\n";
+  os << "  memory budget:  " << (budgetBytes == 0 ? std::string("none") : mebibytes(budgetBytes))
+     << " (--memory-mb): "
+     << (r.memory.tileChunks == 0 ? std::string("whole-width bands")
+                                  : "column tiles of " + std::to_string(r.memory.tileChunks) +
+                                        " patches on " + std::to_string(r.memory.threads) +
+                                        (r.memory.threads == 1 ? " thread" : " threads"))
+     << ", writer's buffers about " << mebibytes(r.memory.plannedBytes) << "\n";
 }
 
 }  // namespace
@@ -157,6 +197,12 @@ void addImportCommand(CLI::App& app) {
       ->check(CLI::IsMember({"deflate", "zfp"}))
       ->capture_default_str();
   cmd->add_option("--threads", a->threads, "Threads building the pyramid (0: all cores)")
+      ->capture_default_str();
+  cmd->add_option("--memory-mb", a->memoryMb,
+                  "MiB the writer may hold to build the pyramid; past it, levels are built in "
+                  "column tiles read back from the file (same levels, slower). Not counted: "
+                  "GDAL's cache (GDAL_CACHEMAX) and HDF5's. 0: no bound; the default grows to "
+                  "the minimum of patches above 4096")
       ->capture_default_str();
   cmd->add_option("--nodata", a->nodata,
                   "A further source value (before scale/offset) that means missing, beside "
@@ -200,6 +246,7 @@ void addImportCommand(CLI::App& app) {
     o.deflate = a->deflate;
     o.codec = store::codecNamed(a->compression);
     o.threads = a->threads;
+    o.memoryBudgetBytes = memoryBudgetOf(*a, o);
     if (cmd->count("--nodata") > 0) o.nodata = a->nodata;
     o.body = a->body;
     o.strict = a->strict;
@@ -219,7 +266,7 @@ void addImportCommand(CLI::App& app) {
       const std::vector<std::filesystem::path> tiles(a->sources.begin(), a->sources.end());
       report = store::importTiles(tiles, a->out, o);
     }
-    printSummary(a->out, report, std::cout);
+    printSummary(a->out, report, o.memoryBudgetBytes, std::cout);
   });
 }
 

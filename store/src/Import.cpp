@@ -6,6 +6,7 @@
 #include "ImportChecks.hpp"
 
 #include <cpl_json.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
@@ -54,6 +55,13 @@ ImportReport reportOf(const gdal::Raster& r) {
 /// The grid as written: what the store reports back (levels, patch size).
 GridInfo writtenInfo(const std::filesystem::path& store, const std::string& name) {
   return Store::open(store).grid(name);
+}
+
+/// The process's peak resident set size in bytes (Linux: ru_maxrss is in KiB); 0 if unknown.
+std::size_t peakRssBytes() {
+  rusage u{};
+  if (getrusage(RUSAGE_SELF, &u) != 0 || u.ru_maxrss < 0) return 0;
+  return static_cast<std::size_t>(u.ru_maxrss) * 1024U;
 }
 
 double secondsSince(std::chrono::steady_clock::time_point t0) {
@@ -157,6 +165,8 @@ ImportReport importRaster(const std::filesystem::path& raster, const std::filesy
   rep.missingSamples = r->missingRead();
   rep.voidMarkerAssumed = r->voidsRead() > 0;  // the note only where such voids exist
   rep.info = writtenInfo(store, rep.info.name);
+  rep.memory = writerMemoryPlan(rep.info.rows, rep.info.cols, options);
+  rep.peakRssBytes = peakRssBytes();
   rep.seconds = secondsSince(t0);
   return rep;
 }
@@ -273,6 +283,8 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
   rep.missingSamples += rows * cols - covered;
   rep.voidMarkerAssumed = voids > 0;
   rep.info = writtenInfo(store, src.info.name);
+  rep.memory = writerMemoryPlan(rep.info.rows, rep.info.cols, options);
+  rep.peakRssBytes = peakRssBytes();
   rep.seconds = secondsSince(t0);
   return rep;
 }

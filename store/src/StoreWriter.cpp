@@ -421,6 +421,23 @@ class LevelWriter {
         "cannot write grid '" + info_.name + "' dataset '" + name_ + "'");
   }
 
+  /// Reads rows [row0, row0 + nr) × columns [col0, col0 + nc), already written, into `out`
+  /// (row-major, as stored: missing samples are the stored nodata value).
+  void read(std::size_t row0, std::size_t col0, std::size_t nr, std::size_t nc, float* out) const {
+    const hdf5::Lock lock;
+    const std::string what = "cannot read back grid '" + info_.name + "' dataset '" + name_ + "'";
+    const std::array<hsize_t, 2> start{row0, col0}, count{nr, nc};
+    const hdf5::Dataspace fileSpace(hdf5::check(H5Dget_space(ds_.get()), ctx_, what));
+    hdf5::check(H5Sselect_hyperslab(fileSpace.get(), H5S_SELECT_SET, start.data(), nullptr,
+                                    count.data(), nullptr),
+                ctx_, what);
+    const hdf5::Dataspace memSpace(
+        hdf5::check(H5Screate_simple(2, count.data(), nullptr), ctx_, what));
+    hdf5::check(
+        H5Dread(ds_.get(), H5T_NATIVE_FLOAT, memSpace.get(), fileSpace.get(), H5P_DEFAULT, out),
+        ctx_, what);
+  }
+
   void close() {
     const hdf5::Lock lock;
     hdf5::check(H5Dclose(ds_.release()), ctx_,
@@ -604,38 +621,103 @@ std::vector<unsigned char> encodeChunk(const float* block, std::size_t nr, std::
 
 /// Writes rows [r0, r0 + nr) of a dataset whose chunks are `chunk`, chunk column by chunk
 /// column: block(c0, nc, out) fills the nr×nc block at column c0 (on a worker thread), the
-/// encoded chunks are then written in order.
+/// encoded chunks are then written in order. With groupChunks > 0 the band goes in column
+/// tiles of that many chunks, each computed, encoded and written before the next, and
+/// beforeGroup(c0, nc) (if set) runs first for the tile's columns [c0, c0 + nc) on the calling
+/// thread. The file does not depend on the grouping.
 void writeBandChunks(
     const LevelWriter& writer, const std::array<hsize_t, 2>& chunk, std::size_t r0, std::size_t nr,
     std::size_t cols, float fill, const WriteOptions& o,
     const std::function<void(std::size_t, std::size_t, std::vector<float>&)>& block,
-    Progress& progress, const std::string& what, const Context& ctx) {
+    Progress& progress, const std::string& what, const Context& ctx, std::size_t groupChunks = 0,
+    const std::function<void(std::size_t, std::size_t)>& beforeGroup = {}) {
   const std::size_t cc = chunk[1];
   const std::size_t n = (cols + cc - 1) / cc;
-  std::vector<std::vector<unsigned char>> encoded(n);
-  parallelFor(n, o, [&](std::size_t k) {
-    checkCancel(o, ctx);  // before every chunk
-    std::vector<float> b;
-    const std::size_t c0 = k * cc, nc = std::min(cc, cols - c0);
-    block(c0, nc, b);
-    encoded[k] = encodeChunk(b.data(), nr, nc, chunk, fill, o);
-  });
-  for (std::size_t k = 0; k < n; ++k) {
-    writer.writeChunk(r0, k * cc, encoded[k]);
-    std::vector<unsigned char>().swap(encoded[k]);
-    progress.advance(static_cast<double>(nr * std::min(cc, cols - k * cc)), what);
+  const std::size_t group = groupChunks == 0 ? n : std::min(groupChunks, n);
+  for (std::size_t g0 = 0; g0 < n; g0 += group) {
+    const std::size_t gn = std::min(group, n - g0);
+    if (beforeGroup) beforeGroup(g0 * cc, std::min(gn * cc, cols - g0 * cc));
+    std::vector<std::vector<unsigned char>> encoded(gn);
+    parallelFor(gn, o, [&](std::size_t i) {
+      checkCancel(o, ctx);  // before every chunk
+      std::vector<float> b;
+      const std::size_t c0 = (g0 + i) * cc, nc = std::min(cc, cols - c0);
+      block(c0, nc, b);
+      encoded[i] = encodeChunk(b.data(), nr, nc, chunk, fill, o);
+    });
+    for (std::size_t i = 0; i < gn; ++i) {
+      const std::size_t c0 = (g0 + i) * cc;
+      writer.writeChunk(r0, c0, encoded[i]);
+      std::vector<unsigned char>().swap(encoded[i]);
+      progress.advance(static_cast<double>(nr * std::min(cc, cols - c0)), what);
+    }
   }
+}
+
+// ---- the writer's memory (WriteOptions::memoryBudgetBytes, docs/import.md "Memory") --------
+// Estimates of the buffers the writer itself holds, in units of one chunk C of floats:
+// - each thread: a block (C), its 4 fine samples (4C), encodeChunk's padded, raw, shuffled and
+//   compressed copies (4C, the compressor's bound rounded up): 10C;
+// - whole-width bands: per level a held band, the pair it joins (twice), and the band being
+//   made (4 bands of that level), and level 0's encoded chunks (5/4 of a band);
+// - column tiles of T chunks: the fine tile read back (4TC) and its encoded chunks (5/4 TC).
+
+constexpr std::size_t kScratchChunksPerThread = 10;
+
+std::size_t encodedBound(std::size_t bytes) { return bytes + bytes / 4; }
+
+std::size_t levelCount(const GridInfo& info, const WriteOptions& o) {
+  if (o.levels != 0) return std::min(o.levels, format::maxLevels(info.rows, info.cols));
+  std::size_t levels = 1;
+  while (info.levelRows(levels - 1) > o.patchRows || info.levelCols(levels - 1) > o.patchCols) {
+    ++levels;
+  }
+  return levels;
+}
+
+WriterMemoryPlan planMemory(const GridInfo& info, std::size_t levels, const WriteOptions& o) {
+  const std::size_t chunk = o.patchRows * o.patchCols * sizeof(float);
+  const std::size_t perThread = kScratchChunksPerThread * chunk;
+  const std::size_t perTileChunk = 4 * chunk + encodedBound(chunk);
+  WriterMemoryPlan plan;
+  plan.threads = threadCount(o);
+  plan.minimumBytes = perTileChunk + perThread;  // one chunk column, one thread
+  const auto band = [&](std::size_t k) {
+    return std::min(o.patchRows, info.levelRows(k)) * info.levelCols(k) * sizeof(float);
+  };
+  plan.untiledBytes = encodedBound(band(0)) + plan.threads * perThread;
+  for (std::size_t k = 0; k < levels; ++k) plan.untiledBytes += 4 * band(k);
+  std::size_t budget = o.memoryBudgetBytes;
+  if (budget == kDefaultMemoryBudget) budget = std::max(budget, plan.minimumBytes);
+  if (budget == 0 || plan.untiledBytes <= budget) {
+    plan.plannedBytes = plan.untiledBytes;
+    return plan;
+  }
+  // Column tiles: every thread the budget allows beside one tile chunk, then the widest tile.
+  const std::size_t room = budget > perTileChunk ? budget - perTileChunk : 0;
+  plan.threads = std::clamp<std::size_t>(room / perThread, 1, plan.threads);
+  const std::size_t chunkCols = (info.cols + o.patchCols - 1) / o.patchCols;
+  const std::size_t scratch = plan.threads * perThread;
+  const std::size_t fits = budget > scratch ? (budget - scratch) / perTileChunk : 0;
+  plan.tileChunks = std::clamp<std::size_t>(fits, 1, chunkCols);
+  plan.plannedBytes = plan.tileChunks * perTileChunk + scratch;
+  return plan;
 }
 
 /// Builds the pyramid band by band: a band of level k (up to patchRows rows, full width) is
 /// written, then kept until the band after it arrives, and the two make one band of level
-/// k + 1. Each level holds at most two bands in memory.
+/// k + 1. Each level holds at most two bands in memory. With tileChunks > 0 (the memory
+/// budget is smaller than that) no band is kept: each is built in column tiles of that many
+/// chunks, and a band of level k + 1 reads the two bands below back from the file (level 1 of
+/// a tiled grid: from its tiles), tile by tile. Both ways give the same file.
 class Pyramid {
  public:
-  Pyramid(hid_t group, const Prepared& p, const WriteOptions& o, Progress& progress,
-          const Context& ctx)
-      : info_(p.info),
+  Pyramid(hid_t group, const Prepared& p, const WriteOptions& o, std::size_t tileChunks,
+          Progress& progress, const Context& ctx)
+      : p_(p),
+        info_(p.info),
         o_(o),
+        tileChunks_(tileChunks),
         progress_(progress),
         ctx_(ctx),
         tiled_(!p.tiles.empty()),
@@ -657,6 +739,10 @@ class Pyramid {
     checkCancel(o_, ctx_);
     if (!writers_[0] && info_.levels == 1) return;  // tiled, no pyramid: nothing to build
     const std::size_t cols = info_.cols;
+    if (tileChunks_ > 0) {
+      level0Tiled(r0, nr, block);
+      return;
+    }
     Band band{r0, nr, std::vector<float>(nr * cols)};
     const auto fill = [&](std::size_t c0, std::size_t nc, std::vector<float>& out) {
       block(r0, c0, nr, nc, out);
@@ -687,6 +773,29 @@ class Pyramid {
   }
 
  private:
+  /// level0Band() in column tiles, keeping nothing: level 1 reads the band back.
+  void level0Tiled(std::size_t r0, std::size_t nr,
+                   const std::function<void(std::size_t, std::size_t, std::size_t, std::size_t,
+                                            std::vector<float>&)>& block) {
+    const std::size_t cols = info_.cols;
+    const auto fill = [&](std::size_t c0, std::size_t nc, std::vector<float>& out) {
+      block(r0, c0, nr, nc, out);
+    };
+    if (writers_[0]) {
+      writeBandChunks(*writers_[0], format::chunkShape(info_, 0), r0, nr, cols,
+                      Missing{info_.nodata}.stored(), o_, fill, progress_,
+                      "grid '" + info_.name + "' level 0", ctx_, tileChunks_);
+    } else {
+      // Tiled grid: the blocks only feed the statistics (and check the samples).
+      const std::size_t cc = info_.patchCols;
+      parallelFor((cols + cc - 1) / cc, o_, [&](std::size_t k) {
+        std::vector<float> b;
+        fill(k * cc, std::min(cc, cols - k * cc), b);
+      });
+    }
+    push(1, Band{r0, nr, {}});
+  }
+
   struct Band {
     std::size_t row0 = 0, rows = 0;
     std::vector<float> data;  // rows × levelCols, row-major
@@ -714,24 +823,40 @@ class Pyramid {
     coarseBand(level, pair);
   }
 
-  /// Level `level`'s band made of fine rows [fine.row0, fine.row0 + fine.rows).
+  /// Level `level`'s band made of fine rows [fine.row0, fine.row0 + fine.rows): from
+  /// fine.data, or (column tiles) read back tile by tile.
   void coarseBand(std::size_t level, const Band& fine) {
     checkCancel(o_, ctx_);
     const std::size_t fineCols = info_.levelCols(level - 1);
     const std::size_t cols = info_.levelCols(level);
     const std::size_t r0 = fine.row0 / 2, nr = (fine.rows + 1) / 2;
-    Band band{r0, nr, std::vector<float>(nr * cols)};
+    const bool keep = tileChunks_ == 0;
+    Band band{r0, nr, keep ? std::vector<float>(nr * cols) : std::vector<float>{}};
+    // Column tiles: fine columns [tileCol0, tileCol0 + tileCols) of the band, read back.
+    std::vector<float> tile;
+    std::size_t tileCol0 = 0, tileCols = 0;
+    const auto readTile = [&](std::size_t c0, std::size_t nc) {
+      tileCol0 = 2 * c0;
+      tileCols = std::min(2 * nc, fineCols - tileCol0);
+      tile.resize(fine.rows * tileCols);
+      if (writers_[level - 1]) {
+        writers_[level - 1]->read(fine.row0, tileCol0, fine.rows, tileCols, tile.data());
+      } else {
+        mosaicBlock(p_, fine.row0, tileCol0, fine.rows, tileCols, tile.data(), ctx_);
+      }
+    };
     const FineReader reader = [&](std::size_t fr0, std::size_t fc0, std::size_t fnr,
                                   std::size_t fnc, float* data) {
+      const float* from = keep ? fine.data.data() : tile.data();
+      const std::size_t stride = keep ? fineCols : tileCols, col0 = keep ? 0 : tileCol0;
       for (std::size_t r = 0; r < fnr; ++r) {
-        std::copy_n(
-            fine.data.begin() + static_cast<std::ptrdiff_t>((fr0 - fine.row0 + r) * fineCols + fc0),
-            fnc, data + r * fnc);
+        std::copy_n(from + (fr0 - fine.row0 + r) * stride + (fc0 - col0), fnc, data + r * fnc);
       }
     };
     const auto fill = [&](std::size_t c0, std::size_t nc, std::vector<float>& out) {
       std::vector<float> scratch;
       coarseBlock(reader, info_, level, r0, c0, nr, nc, scratch, out);
+      if (!keep) return;
       for (std::size_t r = 0; r < nr; ++r) {
         std::copy_n(out.begin() + static_cast<std::ptrdiff_t>(r * nc), nc,
                     band.data.begin() + static_cast<std::ptrdiff_t>(r * cols + c0));
@@ -739,12 +864,16 @@ class Pyramid {
     };
     writeBandChunks(*writers_[level], format::chunkShape(info_, level), r0, nr, cols,
                     Missing{info_.nodata}.stored(), o_, fill, progress_,
-                    "grid '" + info_.name + "' level " + std::to_string(level), ctx_);
+                    "grid '" + info_.name + "' level " + std::to_string(level), ctx_, tileChunks_,
+                    keep ? std::function<void(std::size_t, std::size_t)>{} : readTile);
+    std::vector<float>().swap(tile);
     push(level + 1, std::move(band));
   }
 
+  const Prepared& p_;
   const GridInfo& info_;
   const WriteOptions& o_;
+  std::size_t tileChunks_;
   Progress& progress_;
   const Context& ctx_;
   bool tiled_;
@@ -802,14 +931,28 @@ void writeTiles(hid_t group, const Prepared& p, const WriteOptions& o, Progress&
 void writeGrid(hid_t grids, const GridSource& src, const Prepared& p, const WriteOptions& o,
                Progress& progress, const Context& ctx) {
   const GridInfo& info = p.info;
+  // The threads the memory budget allows (all of them unless it forces column tiles).
+  const WriterMemoryPlan plan = planMemory(info, info.levels, o);
+  WriteOptions oPlanned = o;
+  oPlanned.threads = static_cast<unsigned>(plan.threads);
   const bool tiled = !p.tiles.empty();
   hdf5::Group group = createGroup(grids, info.name, ctx);
   writeAttributes(group.get(), info, tiled, o.statistics, ctx);
   if (tiled) writeTiles(group.get(), p, o, progress, ctx);
-  // Level 0's statistics, per block keyed by its position and summed in that order, so
-  // that they do not depend on the threads.
+  // Level 0's statistics, per block keyed by its position and summed in that order (band by
+  // band, then along the band), so that they do not depend on the threads.
   std::mutex statsMutex;
   std::map<std::pair<std::size_t, std::size_t>, BlockStats> blockStats;
+  BlockStats all;
+  const auto sumBand = [&] {
+    for (const auto& [key, b] : blockStats) {
+      all.min = std::min(all.min, b.min);
+      all.max = std::max(all.max, b.max);
+      all.sum += b.sum;
+      all.count += b.count;
+    }
+    blockStats.clear();
+  };
   const Missing missing{info.nodata};
   const auto collect = [&](std::size_t br0, std::size_t c0, const std::vector<float>& out) {
     if (!o.statistics) return;
@@ -826,7 +969,7 @@ void writeGrid(hid_t grids, const GridSource& src, const Prepared& p, const Writ
     blockStats[{br0, c0}] = b;
   };
   {
-    Pyramid pyramid(group.get(), p, o, progress, ctx);
+    Pyramid pyramid(group.get(), p, oPlanned, plan.tileChunks, progress, ctx);
     // Level 0 band by band; each band flows up the pyramid as soon as its pair is complete.
     // The source and the progress callback run without the HDF5 lock: the source may itself
     // be a pager reading another store.
@@ -843,17 +986,11 @@ void writeGrid(hid_t grids, const GridSource& src, const Prepared& p, const Writ
                            }
                            collect(br0, c0, out);
                          });
+      sumBand();
     }
     pyramid.close();
   }
   if (o.statistics) {
-    BlockStats all;
-    for (const auto& [key, b] : blockStats) {
-      all.min = std::min(all.min, b.min);
-      all.max = std::max(all.max, b.max);
-      all.sum += b.sum;
-      all.count += b.count;
-    }
     const double nan = std::numeric_limits<double>::quiet_NaN();
     const bool none = all.count == 0;
     hdf5::writeDouble(group.get(), format::kHeightMin, none ? nan : all.min, ctx);
@@ -879,10 +1016,31 @@ Codec codecNamed(std::string_view name) {
                         "', expected deflate or zfp");
 }
 
+WriterMemoryPlan writerMemoryPlan(std::size_t rows, std::size_t cols, const WriteOptions& options) {
+  GridInfo info;
+  info.rows = rows;
+  info.cols = cols;
+  return planMemory(info, levelCount(info, options), options);
+}
+
+std::size_t writerMemoryMinimum(const WriteOptions& options) {
+  return writerMemoryPlan(1, 1, options).minimumBytes;
+}
+
 void writeStore(const std::filesystem::path& path, std::span<const GridSource> grids,
                 const WriteOptions& options) {
   const Context ctx("store::writeStore()", path);
   validateOptions(options, ctx);
+  if (const std::size_t least = writerMemoryMinimum(options);
+      options.memoryBudgetBytes != 0 && options.memoryBudgetBytes != kDefaultMemoryBudget &&
+      options.memoryBudgetBytes < least) {
+    invalid(ctx, "options.memoryBudgetBytes is " + std::to_string(options.memoryBudgetBytes) +
+                     " bytes, below the minimum of " + std::to_string(least) +
+                     " bytes for patches of " + std::to_string(options.patchRows) + "x" +
+                     std::to_string(options.patchCols) +
+                     " (one column tile of one chunk, and one thread's scratch); expected at "
+                     "least that, or 0 for no bound");
+  }
   std::filesystem::path dir = path.parent_path();
   if (dir.empty()) dir = ".";
   std::vector<Prepared> prepared;

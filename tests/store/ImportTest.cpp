@@ -28,6 +28,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -1243,4 +1244,122 @@ TEST(ImportProvenance, TheStoreRecordsSourceFilesDigestsGdalAndTheDecidingLabelF
   for (int i = 0; i < 6; ++i) EXPECT_EQ(gt[i].ToDouble(), o.gt[static_cast<std::size_t>(i)]);
   EXPECT_NE(root.GetString("crs_wkt").find("3396000"), std::string::npos);  // the sphere
   EXPECT_EQ(Store::open(scratch("provenance.h5")).formatVersion(), (std::array<int, 2>{1, 4}));
+}
+
+// ---- the writer's memory budget (WriteOptions::memoryBudgetBytes) ---------------------------
+
+namespace {
+
+/// Every level of two grids holds the same bits (NaN payloads included), read with the store
+/// reader.
+void expectSameBits(const Store& a, const Store& b, const std::string& grid) {
+  ASSERT_EQ(a.grid(grid).levels, b.grid(grid).levels);
+  for (std::size_t k = 0; k < a.grid(grid).levels; ++k) {
+    if (k == 0 && a.tiled(grid)) continue;  // level 0 of a mosaic lives in its tiles
+    const std::vector<float> u = readLevel(a, grid, k), v = readLevel(b, grid, k);
+    ASSERT_EQ(u.size(), v.size());
+    EXPECT_EQ(std::memcmp(u.data(), v.data(), u.size() * sizeof(float)), 0) << "level " << k;
+  }
+  const std::optional<HeightStatistics> sa = a.grid(grid).statistics, sb = b.grid(grid).statistics;
+  ASSERT_TRUE(sa && sb);
+  EXPECT_EQ(sb->validSamples, sa->validSamples);
+  EXPECT_EQ(sb->min, sa->min);
+  EXPECT_EQ(sb->max, sa->max);
+  EXPECT_EQ(sb->mean, sa->mean);
+}
+
+}  // namespace
+
+TEST(ImportMemory, ABudgetSmallerThanTwoBandsBuildsColumnTilesAndTheSameLevels) {
+  for (const std::string name : {"S11E119.hgt", "Shoemaker_1k.tif", "dem_nodata.dem"}) {
+    for (const int deflate : {0, 4}) {
+      SCOPED_TRACE(name + " deflate " + std::to_string(deflate));
+      ImportOptions o = smallPatches();
+      o.deflate = deflate;
+      o.gridName = "g";
+      const ImportReport whole = importRaster(fixture(name), scratch("whole.h5"), o);
+      EXPECT_EQ(whole.memory.tileChunks, 0U);  // the default budget holds whole bands
+      EXPECT_GT(whole.memory.untiledBytes, 0U);
+      EXPECT_GT(whole.peakRssBytes, 0U);
+      // The least budget: column tiles of one chunk on one thread; the scratch of both
+      // threads (10 chunks each) and three tile chunks (4 read back + 5/4 encoded each):
+      // tiles of three on two threads.
+      const std::size_t least = writerMemoryMinimum(o);
+      const std::size_t chunk = o.patchRows * o.patchCols * sizeof(float);
+      const std::size_t three = 2 * 10 * chunk + 3 * (4 * chunk + chunk + chunk / 4);
+      for (const std::size_t budget : {least, three}) {
+        ASSERT_GT(whole.memory.untiledBytes, least);
+        if (whole.memory.untiledBytes <= budget) continue;  // a small fixture: bands fit
+        ImportOptions t = o;
+        t.memoryBudgetBytes = budget;
+        const ImportReport tiled = importRaster(fixture(name), scratch("tiles.h5"), t);
+        EXPECT_EQ(tiled.memory.tileChunks, budget == least ? 1U : 3U);
+        EXPECT_EQ(tiled.memory.threads, budget == least ? 1U : 2U);
+        EXPECT_LE(tiled.memory.plannedBytes, budget);
+        expectSameBits(Store::open(scratch("whole.h5")), Store::open(scratch("tiles.h5")), "g");
+      }
+    }
+  }
+}
+
+TEST(ImportMemory, ATiledGridBuildsItsLevelOneFromItsTilesInColumnTiles) {
+  const fs::path src = fixture("Shoemaker_1k.tif");
+  const GridInfo whole = describeRaster(src);
+  const std::vector<fs::path> tiles = cutTiles(src, "shoemaker-mem", whole.rows, whole.cols);
+  ImportOptions o = smallPatches();
+  o.gridName = "s";
+  (void)importTiles(tiles, scratch("mosaic-whole.h5"), o);
+  o.memoryBudgetBytes = writerMemoryMinimum(o);
+  const ImportReport tiled = importTiles(tiles, scratch("mosaic-tiles.h5"), o);
+  EXPECT_EQ(tiled.memory.tileChunks, 1U);
+  expectSameBits(Store::open(scratch("mosaic-whole.h5")), Store::open(scratch("mosaic-tiles.h5")),
+                 "s");
+  // And level 1 up equal the single import's.
+  (void)importRaster(src, scratch("mosaic-single.h5"), o);
+  const Store single = Store::open(scratch("mosaic-single.h5"));
+  const Store mosaic = Store::open(scratch("mosaic-tiles.h5"));
+  for (std::size_t k = 1; k < single.grid("s").levels; ++k) {
+    const std::vector<float> u = readLevel(single, "s", k), v = readLevel(mosaic, "s", k);
+    ASSERT_EQ(u.size(), v.size());
+    EXPECT_EQ(std::memcmp(u.data(), v.data(), u.size() * sizeof(float)), 0) << "level " << k;
+  }
+}
+
+TEST(ImportMemory, ABudgetBelowOneColumnTileIsRefusedNamingTheOptionAndTheMinimum) {
+  ImportOptions o = smallPatches();  // 64x48 patches, 2 threads
+  // One tile of one chunk: 4 chunks read back + 5/4 chunk encoded; 10 chunks for one thread.
+  const std::size_t chunk = 64 * 48 * sizeof(float);
+  const std::size_t least = 4 * chunk + chunk + chunk / 4 + 10 * chunk;
+  EXPECT_EQ(writerMemoryMinimum(o), least);
+  o.memoryBudgetBytes = least - 1;
+  const fs::path out = scratch("too-small.h5");
+  std::error_code ec;
+  fs::remove(out, ec);
+  try {
+    (void)importRaster(fixture("S11E119.hgt"), out, o);
+    FAIL() << "expected InvalidArgument";
+  } catch (const InvalidArgument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "store::writeStore(): " + out.string() + ": options.memoryBudgetBytes is " +
+                  std::to_string(least - 1) + " bytes, below the minimum of " +
+                  std::to_string(least) +
+                  " bytes for patches of 64x48 (one column tile of one chunk, and one thread's "
+                  "scratch); expected at least that, or 0 for no bound");
+  }
+  EXPECT_FALSE(fs::exists(out));
+  // 0: no bound.
+  o.memoryBudgetBytes = 0;
+  EXPECT_EQ(importRaster(fixture("S11E119.hgt"), out, o).memory.tileChunks, 0U);
+  // The default budget grows to the minimum of patches it cannot hold (8192²: 256 MiB a
+  // chunk), and builds a wide grid in tiles of one chunk on one thread.
+  WriteOptions big;
+  big.patchRows = big.patchCols = 8192;
+  big.threads = 4;
+  const WriterMemoryPlan plan = writerMemoryPlan(65536, 1U << 20U, big);
+  const std::size_t bigChunk = std::size_t{8192} * 8192 * sizeof(float);
+  EXPECT_EQ(plan.minimumBytes, 15 * bigChunk + bigChunk / 4);
+  EXPECT_GT(plan.minimumBytes, kDefaultMemoryBudget);
+  EXPECT_EQ(plan.tileChunks, 1U);
+  EXPECT_EQ(plan.threads, 1U);
+  EXPECT_EQ(plan.plannedBytes, plan.minimumBytes);
 }

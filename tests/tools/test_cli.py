@@ -976,6 +976,61 @@ def orthographic_off_the_map_tif(path):
     ds = None
 
 
+def wide_geotiff(path, rows, cols):
+    """A float32 GeoTIFF on WGS84 longitude/latitude, smooth heights with a few voids."""
+    y, x = np.mgrid[0:rows, 0:cols].astype(np.float64)
+    h = (1000.0 * np.sin(x / 97.0) * np.cos(y / 53.0) + 0.37 * x).astype(np.float32)
+    h[::37, ::41] = -9999.0
+    ds = gdal.GetDriverByName("GTiff").Create(str(path), cols, rows, 1, gdal.GDT_Float32)
+    ds.SetGeoTransform([10.0, 1e-4, 0.0, 5.0, 0.0, -1e-4])
+    srs = osr.SpatialReference()
+    srs.ImportFromEPSG(4326)
+    ds.SetProjection(srs.ExportToWkt())
+    band = ds.GetRasterBand(1)
+    band.SetNoDataValue(-9999.0)
+    band.WriteArray(h)
+    ds = None
+
+
+def test_import_memory_budget_tiles_the_pyramid_to_the_same_bits(work):
+    src = work / "wide.tif"
+    wide_geotiff(src, 300, 4096)
+    whole, tiled = work / "wide-whole.h5", work / "wide-tiled.h5"
+    p = run("import", src, "--out", whole, "--patch", 32, "--deflate", 2, "--grid", "w")
+    assert summary_field(p.stdout, "memory budget").startswith(
+        "1024 MiB (--memory-mb): whole-width bands, writer's buffers about ")
+    rss = summary_field(p.stdout, "peak RSS")
+    assert rss.endswith(" MiB (the whole process, GDAL's and HDF5's caches included)"), rss
+    assert float(rss.split()[0]) > 1.0
+    # Two bands of 32 x 4096 floats per level are about 4 MiB: 1 MiB tiles the pyramid.
+    p = run("import", src, "--out", tiled, "--patch", 32, "--deflate", 2, "--grid", "w",
+            "--memory-mb", 1)
+    budget = summary_field(p.stdout, "memory budget")
+    assert budget.startswith("1 MiB (--memory-mb): column tiles of "), budget
+    assert " patches on " in budget, budget
+    with h5py.File(whole, "r") as a, h5py.File(tiled, "r") as b:
+        levels = int(a["grids/w"].attrs["levels"])
+        assert levels == int(b["grids/w"].attrs["levels"]) > 5
+        for k in range(levels):
+            u, v = a[f"grids/w/level{k}"][...], b[f"grids/w/level{k}"][...]
+            assert u.dtype == v.dtype == np.float32
+            assert np.array_equal(u.view(np.uint32), v.view(np.uint32)), f"level {k}"
+    assert np.array_equal(store_heights(tiled, "w"), gdal_heights(src), equal_nan=True)
+
+
+def test_import_memory_budget_below_one_tile_is_refused(work):
+    out = work / "too-small.h5"
+    p = run("import", dem_fixture("Shoemaker_1k.tif"), "--out", out, "--patch", 1024,
+            "--threads", 2, "--memory-mb", 60, check=False)
+    assert p.returncode != 0
+    # One 1024 x 1024 chunk is 4 MiB: a tile of one chunk read back (4) and encoded (5/4),
+    # and 10 chunks of scratch for one thread: 15.25 chunks, 61 MiB.
+    assert ("import: --memory-mb 60 is below the minimum of 61 MiB for --patch 1024 (one "
+            "column tile of one patch, and one thread's scratch); expected at least 61, or 0 "
+            "for no bound") in p.stderr, p.stderr
+    assert not out.exists()
+
+
 def test_import_errors(work):
     junk = work / "junk.tif"
     junk.write_bytes(b"II*\0 this is not really a TIFF")

@@ -111,6 +111,13 @@ struct ImportReport {
   /// ImportOptions::strict refuses them instead.
   std::size_t implausibleSamples = 0;
   double plausibleLimit = 0.0;
+  /// How the writer built the pyramid within ImportOptions::memoryBudgetBytes (whole-width
+  /// bands, or column tiles of so many chunks), and its estimate of its own buffers.
+  WriterMemoryPlan memory{};
+  /// The process's peak resident set size when the import ended (getrusage's ru_maxrss), in
+  /// bytes: everything the process has held since it started, GDAL's block cache, HDF5's
+  /// caches and the libraries included; 0 where the system does not say.
+  std::size_t peakRssBytes = 0;
   /// Number of source files.
   std::size_t tiles = 1;
   /// Wall time of the import.

@@ -132,6 +132,9 @@ enum class Codec : std::uint8_t {
 /// HDF5's registered id of the H5Z-ZFP filter.
 inline constexpr int kZfpFilterId = 32013;
 
+/// WriteOptions::memoryBudgetBytes by default: 1 GiB.
+inline constexpr std::size_t kDefaultMemoryBudget = std::size_t{1} << 30U;
+
 struct WriteOptions {
   /// HDF5 chunk (= pager patch) size; 256×256 by default.
   std::size_t patchRows = 256, patchCols = 256;
@@ -157,7 +160,41 @@ struct WriteOptions {
   /// Compute level 0's height statistics while writing and store them with each grid
   /// (format 1.3, docs/store-format.md); the import does.
   bool statistics = false;
+  /// Bytes the writer may hold to build one grid's pyramid: its bands, the chunks being
+  /// computed and encoded, the per-thread scratch (docs/import.md, "Memory"). Where two
+  /// full-width bands per level would exceed it, each level is built in column tiles, the
+  /// level below read back from the file, on as many of the threads as it allows; the file's
+  /// content does not depend on it. Below writerMemoryMinimum() it is refused
+  /// (InvalidArgument), except kDefaultMemoryBudget, which grows to the minimum (patches
+  /// above 4096²). 0: no bound. Not counted: the source's own caches (GDAL_CACHEMAX), HDF5's
+  /// metadata cache, the code and libraries.
+  std::size_t memoryBudgetBytes = kDefaultMemoryBudget;
 };
+
+/// How writeStore() builds one grid's pyramid within WriteOptions::memoryBudgetBytes
+/// (estimates of the writer's own buffers, in bytes).
+struct WriterMemoryPlan {
+  /// Holding two full-width bands per level (the fastest way).
+  std::size_t untiledBytes = 0;
+  /// The least any grid needs: a column tile one chunk wide, and one thread's scratch.
+  std::size_t minimumBytes = 0;
+  /// The threads that build the grid: all of WriteOptions::threads, or as many as the budget
+  /// allows beside one tile chunk when it forces column tiles.
+  std::size_t threads = 0;
+  /// 0: whole-width bands; otherwise the chunk columns per column tile.
+  std::size_t tileChunks = 0;
+  /// The estimate for the way chosen.
+  std::size_t plannedBytes = 0;
+};
+
+/// The writer's memory plan for a grid of rows × cols level-0 samples under `options`
+/// (levels, patch size, threads, budget); a budget below minimumBytes is not checked here.
+[[nodiscard]] WriterMemoryPlan writerMemoryPlan(std::size_t rows, std::size_t cols,
+                                                const WriteOptions& options);
+
+/// The smallest WriteOptions::memoryBudgetBytes writeStore() accepts with these options
+/// (their patch size): WriterMemoryPlan::minimumBytes.
+[[nodiscard]] std::size_t writerMemoryMinimum(const WriteOptions& options);
 
 /// One grid to write: its description (levels, patch size and sample type are set by the
 /// writer) and its level-0 heights in metres. Samples that are NaN (or equal info.nodata)
