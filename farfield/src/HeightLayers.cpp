@@ -5,6 +5,8 @@
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/farfield/PgmMath.hpp>
 
+#include "Checks.hpp"
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -25,12 +27,7 @@ constexpr double kDeg = kPi / 180.0;
 constexpr const char* kOp = "farfield::HeightLayers::build()";
 
 void requireRange(const char* field, double v, double lo, double hi) {
-  if (!(v >= lo && v <= hi)) {
-    const std::string value = core::number(v);
-    const std::string expected = "in [" + core::number(lo) + ", " + core::number(hi) + "]";
-    throw InvalidArgument(
-        core::format({.operation = kOp, .field = field, .value = value, .expected = expected}));
-  }
+  detail::requireRange(kOp, field, v, lo, hi);
 }
 
 /// Bilinear read of a row-major layer at fractional texel coordinates (texel centres at

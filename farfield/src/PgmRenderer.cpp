@@ -3,6 +3,7 @@
 #include <regolith/farfield/PgmRenderer.hpp>
 #include <regolith/gl/GlError.hpp>
 
+#include "Checks.hpp"
 #include "PgmShaders.hpp"
 
 #include <glm/geometric.hpp>
@@ -24,12 +25,7 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr const char* kOp = "farfield::PgmRenderer()";
 
 void requireRange(const char* field, double v, double lo, double hi) {
-  if (!(v >= lo && v <= hi)) {
-    const std::string value = core::number(v);
-    const std::string expected = "in [" + core::number(lo) + ", " + core::number(hi) + "]";
-    throw InvalidArgument(
-        core::format({.operation = kOp, .field = field, .value = value, .expected = expected}));
-  }
+  detail::requireRange(kOp, field, v, lo, hi);
 }
 
 /// A mipmapped R32F texture of a layer (rows from the bottom), wrapping in s if asked.
@@ -315,20 +311,23 @@ void PgmRenderer::reduce(const gl::RenderTarget& target, PgmFrame& frame) {
   frameIndex_ = static_cast<int>(other);
 }
 
-std::vector<glm::vec4> PgmRenderer::readGridPositions() const {
-  std::vector<glm::vec4> out(static_cast<std::size_t>(options_.gridWidth) *
-                             static_cast<std::size_t>(options_.gridHeight));
-  glGetTextureImage(gridPos_.id(), 0, GL_RGBA, GL_FLOAT,
+namespace {
+
+std::vector<glm::vec4> readGrid(GLuint texture, int width, int height) {
+  std::vector<glm::vec4> out(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  glGetTextureImage(texture, 0, GL_RGBA, GL_FLOAT,
                     static_cast<GLsizei>(out.size() * sizeof(glm::vec4)), out.data());
   return out;
 }
 
+}  // namespace
+
+std::vector<glm::vec4> PgmRenderer::readGridPositions() const {
+  return readGrid(gridPos_.id(), options_.gridWidth, options_.gridHeight);
+}
+
 std::vector<glm::vec4> PgmRenderer::readGridNormals() const {
-  std::vector<glm::vec4> out(static_cast<std::size_t>(options_.gridWidth) *
-                             static_cast<std::size_t>(options_.gridHeight));
-  glGetTextureImage(gridNrm_.id(), 0, GL_RGBA, GL_FLOAT,
-                    static_cast<GLsizei>(out.size() * sizeof(glm::vec4)), out.data());
-  return out;
+  return readGrid(gridNrm_.id(), options_.gridWidth, options_.gridHeight);
 }
 
 }  // namespace regolith::farfield

@@ -1,6 +1,8 @@
 // The PGM geometry (farfield/PgmMath.hpp) against outside oracles: ray–sphere intersection
 // solved directly in long double, PROJ's polar stereographic and topo::Body's frames.
 
+#include <regolith/core/Error.hpp>
+#include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/farfield/PgmMath.hpp>
 #include <regolith/topo/Body.hpp>
 
@@ -257,6 +259,41 @@ TEST(PgmMath, EllipsoidHelpersMatchTheBody) {
           << lat;
     }
   }
+}
+
+}  // namespace
+}  // namespace regolith::farfield
+
+namespace regolith::farfield {
+namespace {
+
+TEST(HeightLayers, BadOptionsAreNamedWithTheirRange) {
+  const topo::Body mars = topo::Body::marsSphere();
+  const auto flat = [](double, double, double) { return 0.0; };
+  LayerOptions o;
+  o.equirectWidth = 63;
+  try {
+    (void)HeightLayers::build(mars, flat, o);
+    FAIL() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(),
+                 "farfield::HeightLayers::build(): equirectWidth is 63, expected in [64, 16384]");
+  }
+  o.equirectWidth = 130;
+  o.capLatitude = 89.0;
+  EXPECT_THROW((void)HeightLayers::build(mars, flat, o), InvalidArgument);
+  o.capLatitude = 60.0;
+  o.equirectWidth = 129;  // odd
+  EXPECT_THROW((void)HeightLayers::build(mars, flat, o), InvalidArgument);
+  o.equirectWidth = 128;
+  EXPECT_THROW((void)HeightLayers::build(mars, HeightLayers::HeightFunction{}, o), InvalidArgument);
+  // NaN heights are missing texels, set to 0 and counted.
+  o.capSize = 16;
+  const HeightLayers l = HeightLayers::build(
+      mars, [](double lat, double, double) { return lat > 80.0 ? std::nan("") : 5.0; }, o);
+  EXPECT_GT(l.missing(), 0U);
+  EXPECT_EQ(l.maxHeight(), 5.0);
+  EXPECT_EQ(l.minHeight(), 0.0);
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 // the ground, and the hard cases of issue 19.
 
 #include <regolith/clod/Camera.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/farfield/FarField.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/farfield/PgmRenderer.hpp>
 #include <regolith/gl/RenderTarget.hpp>
@@ -455,6 +457,49 @@ TEST(PgmRendererGL, MinimumVisibleRadiusIsReadBackStalledOrAFrameLater) {
   }
   std::printf("stalled %.3f m, lagged %.3f m after %d frames\n", stalled, lagged, frames);
   EXPECT_NEAR(lagged, stalled, 1e-3);
+}
+
+}  // namespace
+}  // namespace regolith::farfield
+
+namespace regolith::farfield {
+namespace {
+
+TEST(PgmRendererGL, BadOptionsAndCameraAreNamed) {
+  test::glContext();
+  LayerOptions lo;
+  lo.equirectWidth = 64;
+  lo.capSize = 16;
+  const HeightLayers layers = HeightLayers::build(
+      topo::Body::moon(), [](double, double, double) { return 0.0; }, lo);
+  PgmOptions o;
+  o.gridWidth = 4;
+  try {
+    PgmRenderer pgm(layers, o);
+    FAIL() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "farfield::PgmRenderer(): gridWidth is 4, expected in [8, 4096]");
+  }
+  o.gridWidth = 16;
+  o.zeta = 0.0;
+  EXPECT_THROW(PgmRenderer(layers, o), InvalidArgument);
+  o.zeta = 0.9;
+  PgmRenderer pgm(layers, o);
+  gl::RenderTarget target(32, 32);
+  clod::Camera cam;
+  cam.position = {3.0 * kMoon, 0.0, 0.0};
+  cam.target = {0.0, 0.0, 0.0};
+  cam.width = 40;
+  cam.height = 32;
+  try {
+    (void)pgm.draw(target, cam, {1.0, 0.0, 0.0});
+    FAIL() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(
+        e.what(),
+        "farfield::PgmRenderer::draw(): camera size is 40 x 32, expected the target's 32 x 32");
+  }
+  EXPECT_THROW(FarField(nullptr), InvalidArgument);
 }
 
 }  // namespace
