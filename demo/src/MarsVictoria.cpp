@@ -382,6 +382,34 @@ scenegraph::Pose flyoverCamera(double t, const glm::dvec3& rover, double startDi
   return scenegraph::Pose::lookAt(target + dist * dir, target, up);
 }
 
+namespace {
+
+/// The far field of Mars for a scene's renderer (null when options.farField is off): PGM in
+/// the planet clipmap's albedo and light, so the two look alike where they meet.
+std::unique_ptr<farfield::FarField> marsFarField(const MarsVictoriaScene& scene,
+                                                 const MarsVictoriaOptions& options) {
+  if (!options.farField) return nullptr;
+  farfield::PgmOptions po;
+  po.gridWidth = po.gridHeight = 512;
+  po.heightColours = false;
+  po.high = MarsVictoriaScene::kPlanetAlbedo;
+  po.ambient = clod::ClipmapOptions{}.ambient;
+  return std::make_unique<farfield::FarField>(scene.farFieldLayers(), po);
+}
+
+/// Draws Mars beyond the clipmaps into `target`, where nothing is drawn yet, for `camera`'s
+/// view of `focus`'s render list.
+farfield::FarFieldMode drawFarField(farfield::FarField& farField, const scenegraph::SceneGraph& g,
+                                    const scenegraph::PaperSceneNodes& n, scenegraph::NodeId camera,
+                                    scenegraph::NodeId focus, const clod::SceneView& view,
+                                    const gl::RenderTarget& target) {
+  const clod::Camera marsCamera = clod::cameraInItem(g.relative(n.mars, camera), view);
+  const glm::dvec3 sun = g.relative(n.mars, focus).applyVector(glm::normalize(view.lightInFocus));
+  return farField.draw(target, marsCamera, sun, true).mode;
+}
+
+}  // namespace
+
 gl::RgbaImage renderSceneView(const SceneViewOptions& options) {
   if (options.width < 1 || options.height < 1)
     throw InvalidArgument("renderSceneView(): image " + std::to_string(options.width) + "×" +
@@ -408,6 +436,9 @@ gl::RgbaImage renderSceneView(const SceneViewOptions& options) {
     view.lightInFocus = scene.lightInFocus(n.victoria);
     target.clear({0.02F, 0.02F, 0.04F, 1.0F});
     renderer.draw(g.renderList(n.victoria, cam), view);
+    if (const auto farField = marsFarField(scene, options.scene)) {
+      (void)drawFarField(*farField, g, n, cam, n.victoria, view, target);
+    }
     image = target.readColor();
   }  // GL objects go before the context
   return image;
@@ -443,15 +474,7 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
     clod::SceneRenderer renderer;
     scene.registerWith(renderer);
     gl::RenderTarget target(options.width, options.height);
-    std::unique_ptr<farfield::FarField> farField;
-    if (options.scene.farField) {
-      farfield::PgmOptions po;
-      po.gridWidth = po.gridHeight = 512;
-      po.heightColours = false;  // the planet clipmap's albedo and lighting: one look
-      po.high = MarsVictoriaScene::kPlanetAlbedo;
-      po.ambient = clod::ClipmapOptions{}.ambient;
-      farField = std::make_unique<farfield::FarField>(scene.farFieldLayers(), po);
-    }
+    const std::unique_ptr<farfield::FarField> farField = marsFarField(scene, options.scene);
     double renderSeconds = 0.0;
     // Over the pole: the first 40% of the frames follow the great circle through the pole
     // and Victoria's meridian at 2000 km, from 20° beyond the pole to above Victoria, looking
