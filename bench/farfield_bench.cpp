@@ -10,6 +10,8 @@
 //       Counters: error_px_median and error_px_p99, the screen-space error of the drawn
 //       surface against the layers' exact surface in double (the height error of each
 //       pixel's point, over its distance, times the focal length), measured once per case.
+//   cull/<view>/on|off   the same frame (grid 256, screen 1024) with and without culling the
+//       mesh's folded, clockwise triangles (PgmOptions::cullFolds), side by side.
 //   readback/<mode>   the primary sphere's minimum-radius reduction: none (Fixed), read at
 //       once (Stall), or a frame later through a fence (Lagged); global view, grid 512,
 //       screen 1024.
@@ -134,12 +136,14 @@ double quantile(const std::vector<double>& v, double q) {
   return v.empty() ? 0.0 : v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
 }
 
-void pgmFrame(benchmark::State& state, const std::string& name, int grid, int screen) {
+void pgmFrame(benchmark::State& state, const std::string& name, int grid, int screen,
+              bool cullFolds = true) {
   const View v = view(name, screen);
   const farfield::HeightLayers& l = layers(v.layerWidth);
   farfield::PgmOptions o;
   o.gridWidth = o.gridHeight = grid;
   o.timePasses = true;
+  o.cullFolds = cullFolds;
   farfield::PgmRenderer pgm(l, o);
   gl::RenderTarget target(screen, screen);
   const glm::dvec3 sun = glm::normalize(glm::dvec3(1.0, 0.5, 0.6));
@@ -248,6 +252,17 @@ int main(int argc, char** argv) {
             ->UseRealTime()
             ->MinWarmUpTime(0.0);
       }
+    }
+  }
+  for (const char* name : {"global", "low", "victoria"}) {
+    for (const bool cull : {false, true}) {
+      const std::string label =
+          std::string("cull/") + name + (cull ? "/on" : "/off") + "/grid:256/screen:1024";
+      benchmark::RegisterBenchmark(label.c_str(),
+                                   [=](benchmark::State& s) { pgmFrame(s, name, 256, 1024, cull); })
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()
+          ->MinWarmUpTime(0.0);
     }
   }
   for (const auto& [label, mode] :

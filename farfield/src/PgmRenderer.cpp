@@ -240,7 +240,17 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
   const float none = 3.0e38F;
   glClearNamedFramebufferfv(fbo, GL_COLOR, 1, &none);
   target.bind();
-  glDisable(GL_CULL_FACE);
+  // The grid's triangles are counter-clockwise on screen wherever the surface faces the eye;
+  // where the grid folds back over itself (the ground behind the limb that the occluded-area
+  // sampling reaches, drawn and then hidden) they turn clockwise, and culling them saves
+  // their rasterisation (PgmOptions::cullFolds, docs/far-field.md).
+  if (options_.cullFolds) {
+    glEnable(GL_CULL_FACE);
+    glFrontFace(GL_CCW);
+    glCullFace(GL_BACK);
+  } else {
+    glDisable(GL_CULL_FACE);
+  }
   glEnable(GL_PRIMITIVE_RESTART_FIXED_INDEX);
   glBindTextureUnit(0, gridPos_.id());
   glBindTextureUnit(1, gridNrm_.id());
@@ -250,6 +260,7 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
   glDrawElements(GL_TRIANGLE_STRIP, indexCount_, GL_UNSIGNED_INT, nullptr);
   if (options_.timePasses) glEndQuery(GL_TIME_ELAPSED);
   glDisable(GL_PRIMITIVE_RESTART_FIXED_INDEX);
+  glDisable(GL_CULL_FACE);
   glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT1, 0, 0);
   glNamedFramebufferDrawBuffer(fbo, GL_COLOR_ATTACHMENT0);
   frame.drawn = true;

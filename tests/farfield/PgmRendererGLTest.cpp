@@ -292,6 +292,68 @@ TEST(PgmRendererGL, AMountainBehindTheHorizonRisesIntoView) {
   EXPECT_EQ(report.misplacedPixels(), 0U) << report.describe();
 }
 
+// Culling the clockwise triangles (PgmOptions::cullFolds) removes only triangles that the
+// surface in front hides: every view draws the same colour and depth, bit for bit, with and
+// without it. A view where a culled triangle showed would differ here.
+TEST(PgmRendererGL, CullingTheFoldedTrianglesChangesNoPixel) {
+  test::glContext();
+  const double lonM = 200e3 / kMoon / kDegree;
+  const HeightLayers layers = moonLayers(mountain(0.0, lonM, 10000.0, 40000.0));
+  const topo::Body moon = topo::Body::moon();
+  struct View {
+    const char* name = "";
+    clod::Camera cam;
+  };
+  clod::Camera behind;
+  behind.position = moon.toBodyFixed({0.0, 0.0, 1000.0});
+  behind.target = moon.toBodyFixed({0.0, lonM, 2000.0});
+  behind.up = {1.0, 0.0, 0.0};
+  behind.fovYDegrees = 8.0;
+  behind.width = 320;
+  behind.height = 240;
+  behind.near = 1.0;
+  const View views[] = {
+      {"global", looking({3.0 * kMoon, 0.0, 0.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, 1.0})},
+      {"limb", looking(moon.toBodyFixed({10.0, -20.0, 300e3}), moon.toBodyFixed({0.0, 5.0, 0.0}),
+                       {0.0, 0.0, 1.0}, 60.0)},
+      {"pole", looking({0.2 * kMoon, 0.0, 1.5 * kMoon}, {0.0, 0.0, kMoon}, {1.0, 0.0, 0.0}, 70.0)},
+      {"mountain_behind_horizon", behind},
+  };
+  for (const View& v : views) {
+    gl::RgbaImage colour[2];
+    gl::DepthImage depth[2];
+    std::size_t bodyPixels = 0;
+    for (int cull = 0; cull < 2; ++cull) {
+      PgmOptions options;
+      options.readback = PrimaryReadback::Stall;
+      options.cullFolds = cull == 1;
+      PgmRenderer pgm(layers, options);
+      gl::RenderTarget target(v.cam.width, v.cam.height);
+      for (int frame = 0; frame < 2; ++frame) {  // the second frame uses the measured r_p
+        target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+        ASSERT_TRUE(pgm.draw(target, v.cam, glm::normalize(glm::dvec3(0.3, -1.0, 0.2))).drawn)
+            << v.name;
+      }
+      colour[cull] = target.readColor();
+      depth[cull] = target.readDepth();
+    }
+    for (const float z : depth[1].depth) bodyPixels += z > 0.0F ? 1U : 0U;
+    std::size_t colourDiffs = 0, depthDiffs = 0;
+    for (std::size_t i = 0; i < colour[0].rgba.size(); ++i) {
+      colourDiffs += colour[0].rgba[i] != colour[1].rgba[i] ? 1U : 0U;
+    }
+    for (std::size_t i = 0; i < depth[0].depth.size(); ++i) {
+      depthDiffs += depth[0].depth[i] != depth[1].depth[i] ? 1U : 0U;
+    }
+    std::printf("[ cull %s ] body pixels %zu, differing colour bytes %zu, depths %zu\n", v.name,
+                bodyPixels, colourDiffs, depthDiffs);
+    test::savePng(std::string("pgm_cull_") + v.name, colour[1]);
+    EXPECT_GT(bodyPixels, 1000U) << v.name;  // the view shows the body
+    EXPECT_EQ(colourDiffs, 0U) << v.name;
+    EXPECT_EQ(depthDiffs, 0U) << v.name;
+  }
+}
+
 TEST(PgmRendererGL, ACameraBelowTheMountainTopSeesItAboveTheHorizontal) {
   test::glContext();
   const double lonM = 40e3 / kMoon / kDegree;  // 40 km away, 10 km high; the eye 1 km up

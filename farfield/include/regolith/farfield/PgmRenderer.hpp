@@ -48,6 +48,11 @@ struct PgmOptions {
   /// Time each pass with GL timer queries (read at the end of draw(), which then waits for
   /// the GPU): PgmFrame::gridMs, meshMs and reduceMs. For benchmarks.
   bool timePasses = false;
+  /// Cull the mesh's clockwise triangles: where the grid folds back over itself (the ground
+  /// behind the limb that the occluded-area sampling reaches) its triangles turn clockwise
+  /// on screen and are hidden by the surface in front. Off draws them too, for the test that
+  /// shows culling changes no pixel and for the benchmark of what it saves.
+  bool cullFolds = true;
 };
 
 /// What one draw() did.
