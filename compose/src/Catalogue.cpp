@@ -3,10 +3,12 @@
 #include <regolith/core/Message.hpp>
 
 #include <glm/common.hpp>
+#include <glm/vec3.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <numeric>
 #include <string>
@@ -35,6 +37,14 @@ bool segmentHitsBox(const glm::dvec3& p0, const glm::dvec3& inv, const glm::dvec
   return true;
 }
 
+bool boxesOverlap(const glm::dvec3& alo, const glm::dvec3& ahi, const glm::dvec3& blo,
+                  const glm::dvec3& bhi) noexcept {
+  return alo.x <= bhi.x && blo.x <= ahi.x && alo.y <= bhi.y && blo.y <= ahi.y && alo.z <= bhi.z &&
+         blo.z <= ahi.z;
+}
+
+constexpr int kLatCells = 180, kLonCells = 360;  // cellCandidates(): 1° cells
+
 bool boxOutsidePlane(const glm::dvec3& lo, const glm::dvec3& hi, const glm::dvec4& p) noexcept {
   // The box corner farthest along the plane's normal.
   const glm::dvec3 v(p.x >= 0.0 ? hi.x : lo.x, p.y >= 0.0 ? hi.y : lo.y, p.z >= 0.0 ? hi.z : lo.z);
@@ -49,13 +59,112 @@ Snapshot::Snapshot(topo::Body body, std::vector<CatalogueEntry> entries, std::ui
   if (!entries_.empty()) {
     hLow_ = std::numeric_limits<double>::infinity();
     hHigh_ = -hLow_;
+    bandLow_ = hLow_;
+    bandHigh_ = hHigh_;
     for (const auto& e : entries_) {
       hLow_ = std::min(hLow_, e.dataset->heightRange()[0]);
       hHigh_ = std::max(hHigh_, e.dataset->heightRange()[1]);
+      bandLow_ = std::min(bandLow_, e.dataset->ellipsoidHeightRange()[0]);
+      bandHigh_ = std::max(bandHigh_, e.dataset->ellipsoidHeightRange()[1]);
     }
     nodes_.reserve(2 * entries_.size());
     build(0, static_cast<std::uint32_t>(entries_.size()));
   }
+}
+
+/// A lazily filled list per cell: published with a compare-and-swap, so two threads that
+/// build one cell at once keep the first list and free the second. (Hand-written: no Debian
+/// library offers a lock-free, grow-only table, and a mutex here would serialise queries.)
+struct Snapshot::CellTable {
+  using List = std::vector<std::uint32_t>;
+  std::unique_ptr<std::atomic<const List*>[]> lists {
+    new std::atomic<const List*>[ static_cast<std::size_t>(kLatCells) * kLonCells ]()
+  };
+  CellTable() = default;
+  CellTable(const CellTable&) = delete;
+  CellTable& operator=(const CellTable&) = delete;
+  CellTable(CellTable&&) = delete;
+  CellTable& operator=(CellTable&&) = delete;
+  ~CellTable() {
+    for (std::size_t i = 0; i < static_cast<std::size_t>(kLatCells) * kLonCells; ++i) {
+      delete lists[i].load(std::memory_order_relaxed);
+    }
+  }
+};
+
+Snapshot::~Snapshot() {
+  for (auto& table : cells_) delete table.load(std::memory_order_relaxed);
+}
+
+std::vector<std::uint32_t> Snapshot::cellList(int latCell, int lonCell, Role role) const {
+  std::vector<std::uint32_t> out;
+  if (nodes_.empty()) return out;
+  // The cell's shell between the lowest and highest height, boxed: its points at every half
+  // degree and both heights, grown by more than any arc between them bulges (a chord over
+  // half a degree stands R·(1 − cos 0.25°) off its arc; the margin is R·(1 − cos 1°)).
+  glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
+  const double lat0 = latCell - 90.0, lon0 = lonCell - 180.0;
+  for (int i = 0; i <= 2; ++i) {
+    for (int j = 0; j <= 2; ++j) {
+      for (const double h : {bandLow_, bandHigh_}) {
+        const glm::dvec3 p = body_.toBodyFixed({lat0 + 0.5 * i, lon0 + 0.5 * j, h});
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+      }
+    }
+  }
+  const double reach = body_.equatorialRadius() + std::max(std::abs(bandLow_), std::abs(bandHigh_));
+  const double margin = reach * (1.0 - std::cos(std::numbers::pi / 180.0)) + 1.0;
+  lo -= glm::dvec3(margin);
+  hi += glm::dvec3(margin);
+  std::uint32_t stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& n = nodes_[stack[--top]];
+    if (!boxesOverlap(lo, hi, n.lo, n.hi)) continue;
+    if (n.count > 0) {
+      for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
+        const std::uint32_t e = order_[i];
+        const auto& b = entries_[e].dataset->bounds();
+        if (entries_[e].dataset->options().role == role && boxesOverlap(lo, hi, b[0], b[1])) {
+          out.push_back(e);
+        }
+      }
+    } else {
+      stack[top++] = n.right;
+      stack[top++] = n.left;
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::span<const std::uint32_t> Snapshot::cellCandidates(double latDeg, double lonDeg,
+                                                        Role role) const {
+  if (nodes_.empty() || !std::isfinite(latDeg) || !std::isfinite(lonDeg)) return {};
+  const double lon = lonDeg - 360.0 * std::floor((lonDeg + 180.0) / 360.0);  // [-180, 180)
+  const int latCell = std::clamp(static_cast<int>(std::floor(latDeg + 90.0)), 0, kLatCells - 1);
+  const int lonCell = std::clamp(static_cast<int>(std::floor(lon + 180.0)), 0, kLonCells - 1);
+  std::atomic<CellTable*>& slot = cells_[static_cast<std::size_t>(role) % kRoles];
+  CellTable* table = slot.load(std::memory_order_acquire);
+  if (table == nullptr) {
+    auto fresh = std::make_unique<CellTable>();
+    if (slot.compare_exchange_strong(table, fresh.get(), std::memory_order_acq_rel)) {
+      table = fresh.release();
+    }
+  }
+  std::atomic<const CellTable::List*>& cell =
+      table->lists[static_cast<std::size_t>(latCell) * kLonCells +
+                   static_cast<std::size_t>(lonCell)];
+  const CellTable::List* list = cell.load(std::memory_order_acquire);
+  if (list == nullptr) {
+    auto fresh = std::make_unique<const CellTable::List>(cellList(latCell, lonCell, role));
+    if (cell.compare_exchange_strong(list, fresh.get(), std::memory_order_acq_rel)) {
+      list = fresh.release();
+    }
+  }
+  return *list;
 }
 
 std::uint32_t Snapshot::build(std::uint32_t first, std::uint32_t count) {
@@ -104,15 +213,16 @@ std::uint32_t Snapshot::build(std::uint32_t first, std::uint32_t count) {
 std::size_t Snapshot::covering(double latDeg, double lonDeg, std::vector<std::uint32_t>& out,
                                Role role) const {
   if (nodes_.empty()) return 0;
-  // The normal line from the lowest to the highest height: p(h) = p(0) + h·n, with one
+  // The normal line through the band of heights: p(h) = p(0) + h·n, with one
   // sine and cosine per angle (Body::toBodyFixed() twice would take them twice).
   const double phi = latDeg * (std::numbers::pi / 180.0), lam = lonDeg * (std::numbers::pi / 180.0);
   const double sp = std::sin(phi), cp = std::cos(phi), sl = std::sin(lam), cl = std::cos(lam);
   const double a = body_.equatorialRadius(), e2 = body_.eccentricitySquared();
   const double nu = a / std::sqrt(1.0 - e2 * sp * sp);  // prime-vertical radius N
   const glm::dvec3 up(cp * cl, cp * sl, sp);
-  const glm::dvec3 p0 = glm::dvec3(nu * cp * cl, nu * cp * sl, nu * (1.0 - e2) * sp) + hLow_ * up;
-  const glm::dvec3 d = (hHigh_ - hLow_) * up;
+  const glm::dvec3 p0 =
+      glm::dvec3(nu * cp * cl, nu * cp * sl, nu * (1.0 - e2) * sp) + bandLow_ * up;
+  const glm::dvec3 d = (bandHigh_ - bandLow_) * up;
   const glm::dvec3 inv(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
   std::uint32_t stack[64];
   int top = 0;

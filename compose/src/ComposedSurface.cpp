@@ -111,26 +111,45 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
                                         bool wantNormal, std::vector<Share>* shares) const {
   const ScratchLease lease;
   Scratch& s = lease.get();
-  s.candidates.clear();
   s.members.clear();
-  snapshot_->covering(latDeg, lonDeg, s.candidates);
   const auto entries = snapshot_->entries();
   ComposedSample out;
   bool sawNodata = false, sawUnmappable = false, sawOutside = false;
   double finest = std::numeric_limits<double>::infinity();
-  for (const std::uint32_t e : s.candidates) {
-    const Dataset& d = *entries[e].dataset;
-    const std::size_t level = metres > 0.0 ? d.levelFor(metres) : 0;
-    Contribution c = d.evaluate(latDeg, lonDeg, level, wantNormal, false);
-    if (c.status != QueryStatus::Ok) {
-      sawNodata |= c.status == QueryStatus::Nodata;
-      sawUnmappable |= c.status == QueryStatus::Unmappable;
-      sawOutside |= c.status == QueryStatus::OutsideGrid;
-      continue;
+  const auto evaluateAll = [&](std::span<const std::uint32_t> candidates) {
+    for (const std::uint32_t e : candidates) {
+      const Dataset& d = *entries[e].dataset;
+      const std::size_t level = metres > 0.0 ? d.levelFor(metres) : 0;
+      Contribution c = d.evaluate(latDeg, lonDeg, level, wantNormal, false);
+      if (c.status != QueryStatus::Ok) {
+        sawNodata |= c.status == QueryStatus::Nodata;
+        sawUnmappable |= c.status == QueryStatus::Unmappable;
+        sawOutside |= c.status == QueryStatus::OutsideGrid;
+        continue;
+      }
+      if (!(c.coverage > 0.0)) continue;
+      finest = std::min(finest, d.groundSpacing());
+      s.members.push_back({e, c, 1.0, d.groundSpacing(), d.options().priority, 0, {}, {}});
     }
-    if (!(c.coverage > 0.0)) continue;
-    finest = std::min(finest, d.groundSpacing());
-    s.members.push_back({e, c, 1.0, d.groundSpacing(), d.options().priority, 0, {}, {}});
+  };
+  const auto exactCandidates = [&]() -> std::span<const std::uint32_t> {
+    s.candidates.clear();
+    snapshot_->covering(latDeg, lonDeg, s.candidates);
+    return s.candidates;
+  };
+  // The candidates of the point's 1° cell (a table look-up) while they are few: a dataset
+  // among them that does not reach the point answers OutsideGrid and is skipped, so the
+  // composition is the same as from the exact catalogue query, which takes a walk of the
+  // index and a sine and cosine per angle. Many candidates: the exact query, fewer evaluations.
+  constexpr std::size_t kCellCandidatesAtMost = 4;
+  const std::span<const std::uint32_t> cell = snapshot_->cellCandidates(latDeg, lonDeg);
+  const bool fromCell = cell.size() <= kCellCandidatesAtMost;
+  evaluateAll(fromCell ? cell : exactCandidates());
+  if (s.members.empty() && fromCell && !cell.empty()) {
+    // Nothing covers the point: its status (nodata, unmappable or outside) is that of the
+    // exact candidates, which the cell's extra ones must not change.
+    sawNodata = sawUnmappable = sawOutside = false;
+    evaluateAll(exactCandidates());
   }
   if (s.members.empty()) {
     out.status = sawNodata                        ? QueryStatus::Nodata

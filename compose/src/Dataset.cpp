@@ -204,10 +204,15 @@ Dataset::GridPoint Dataset::locate(double latDeg, double lonDeg) const {
     p.x = xyh.x;
     p.y = xyh.y;
     p.mapped = std::isfinite(p.x) && std::isfinite(p.y);
+    // A tangent plane's (x, y) are those of the point's foot on the plane, which the point
+    // on the far side of the body shares: there it lies about a diameter below the plane.
+    // Half the polar radius below is far beyond any DEM's own curvature drop (R·(1 − cos θ)
+    // for a DEM reaching θ from its origin: 0.13 R at 30°).
+    p.farSide = placement_->localTangentPlane() != nullptr && xyh.z < h - 0.5 * body_.polarRadius();
   } catch (const DomainError&) {
     p.mapped = false;
   }
-  p.inside = p.mapped && g.contains(p.x, p.y);
+  p.inside = p.mapped && !p.farSide && g.contains(p.x, p.y);
   return p;
 }
 
@@ -298,8 +303,10 @@ void Dataset::computeBounds() {
     const double zlo = lo <= -90.0 + 1e-9 ? -zr : std::sin(lo * kDeg) * zr - 0.01 * zr;
     const double zhi = hi >= 90.0 - 1e-9 ? zr : std::sin(hi * kDeg) * zr + 0.01 * zr;
     bounds_ = {glm::dvec3(-xr, -xr, std::max(-zr, zlo)), glm::dvec3(xr, xr, std::min(zr, zhi))};
+    ellipsoidHeights_ = heightRange_;
     return;
   }
+  double eLow = std::numeric_limits<double>::infinity(), eHigh = -eLow;
   constexpr std::size_t kN = 17;
   const topo::TopoGrid& grid = levels_.front().level.grid;
   glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
@@ -329,6 +336,13 @@ void Dataset::computeBounds() {
       }
       lo = glm::min(lo, glm::min(p0, p1));
       hi = glm::max(hi, glm::max(p0, p1));
+      if (isPlanet()) {
+        eLow = std::min(eLow, hlo);
+        eHigh = std::max(eHigh, hhi);
+      } else {
+        eLow = std::min(eLow, std::min(body_.toGeodetic(p0).height, body_.toGeodetic(p1).height));
+        eHigh = std::max(eHigh, std::max(body_.toGeodetic(p0).height, body_.toGeodetic(p1).height));
+      }
       if (std::isfinite(prev.x)) step = std::max(step, glm::length(p1 - prev));
       if (std::isfinite(prevRow[c].x)) step = std::max(step, glm::length(p1 - prevRow[c]));
       prev = p1;
@@ -339,6 +353,8 @@ void Dataset::computeBounds() {
   // body (step²/8R), far less than the quarter step added here; a tangent-plane DEM is flat.
   const glm::dvec3 pad(0.25 * step + 1.0);
   bounds_ = {lo - pad, hi + pad};
+  ellipsoidHeights_ =
+      std::isfinite(eLow) ? std::array<double, 2>{eLow - pad.x, eHigh + pad.x} : heightRange_;
 }
 
 std::size_t Dataset::levelFor(double metres) const noexcept {

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <random>
@@ -77,6 +78,102 @@ TEST(Catalogue, CoveringFindsEveryDatasetThatContainsThePoint) {
     EXPECT_LE(found.size(), 4U);
   }
   EXPECT_GT(hits, 1000U);
+}
+
+// cellCandidates() (the table of 1° cells that composed point queries use) holds, for every
+// point, every dataset covering() returns there and so every dataset that contains it:
+// checked at random points, at cell corners and edges, at the poles and across the ±180°
+// seam (longitudes given as -180, 180 and beyond), from four threads at once, with each
+// cell's list built by whichever thread asks first.
+TEST(Catalogue, CellCandidatesHoldEveryCoveringDataset) {
+  Catalogue cat(kMars);
+  auto dems = scatteredDems(300, 23);
+  std::vector<std::array<double, 2>> points;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  // DEMs astride the seam and at both poles, where the cells are narrowest.
+  const auto pyr = demPyramid(50.0, 41, 41, [](double x, double y) { return 0.001 * x * y; });
+  for (const topo::Geodetic site :
+       {topo::Geodetic{0.0, 180.0, 0.0}, topo::Geodetic{89.99, 0.0, 0.0},
+        topo::Geodetic{-89.99, 45.0, 0.0}, topo::Geodetic{12.0, -179.995, 0.0}}) {
+    DatasetOptions o = named("edge");
+    o.heightRange = std::array<double, 2>{-500.0, 500.0};
+    dems.push_back(
+        Dataset::dem(pyr, topo::Placement(topo::LocalTangentPlane(kMars, site, 30.0)), o));
+  }
+  // A flat DEM 400 km across on the north pole: its plane stands up to 12 km above the
+  // ellipsoid at its corners, far outside its own height range [0, 1] (and its box, flat
+  // along z, is as thin); the catalogue still finds it there.
+  {
+    DatasetOptions o = named("wide");
+    o.heightRange = std::array<double, 2>{0.0, 1.0};
+    dems.push_back(
+        Dataset::dem(demPyramid(4000.0, 101, 101, [](double, double) { return 0.0; }),
+                     topo::Placement(topo::LocalTangentPlane(kMars, {90.0, 0.0, 0.0}, 0.0)), o));
+    EXPECT_GT(dems.back()->ellipsoidHeightRange()[1], 10000.0);
+    EXPECT_LT(dems.back()->ellipsoidHeightRange()[0], 0.0);
+    for (int j = 0; j < 400; ++j) {
+      points.push_back(
+          {90.0 - 4.0 * std::abs(u(rng)), 180.0 * u(rng)});  // to its corners and beyond
+    }
+  }
+  // A tangent plane's point on the far side of the body is not in the DEM, though its foot
+  // on the plane is (the north pole's foot on a south-polar plane is the plane's origin).
+  EXPECT_TRUE(dems[302]->contains(-89.99, 45.0));
+  EXPECT_FALSE(dems[302]->contains(89.99, -135.0));
+  EXPECT_FALSE(dems[301]->contains(-89.99, 180.0));
+  for (const auto& d : dems) cat.add(d);
+  const auto snap = cat.snapshot();
+  for (std::uint32_t k = 0; k < snap->size(); ++k) {  // around each dataset's origin
+    const auto& o = snap->entries()[k].dataset->placement()->localTangentPlane()->origin();
+    for (int j = 0; j < 8; ++j) {
+      points.push_back(
+          {std::clamp(o.latDeg + 0.02 * u(rng), -90.0, 90.0), o.lonDeg + 0.03 * u(rng)});
+    }
+  }
+  for (int j = 0; j < 2000; ++j) points.push_back({90.0 * u(rng), 540.0 * u(rng)});
+  for (const double lat : {-90.0, -89.5, -1.0, 0.0, 1.0, 89.0, 90.0}) {
+    for (const double lon : {-540.0, -180.0, -179.0, 0.0, 179.0, 180.0, 181.0}) {
+      points.push_back({lat, lon});
+    }
+  }
+  std::atomic<std::size_t> missing{0}, missingExact{0}, contained{0}, longest{0};
+  auto check = [&](std::size_t begin, std::size_t step) {
+    std::vector<std::uint32_t> found;
+    for (std::size_t i = begin; i < points.size(); i += step) {
+      const auto [lat, lon] = points[i];
+      const auto cell = snap->cellCandidates(lat, lon);
+      found.clear();
+      snap->covering(lat, lon, found);
+      for (const std::uint32_t e : found) {
+        if (!std::binary_search(cell.begin(), cell.end(), e)) ++missing;
+      }
+      std::sort(found.begin(), found.end());
+      for (std::uint32_t k = 0; k < snap->size(); ++k) {
+        if (snap->entries()[k].dataset->contains(lat, lon)) {
+          ++contained;
+          if (!std::binary_search(cell.begin(), cell.end(), k)) ++missing;
+          if (!std::binary_search(found.begin(), found.end(), k)) ++missingExact;
+        }
+      }
+      std::size_t seen = longest.load();
+      while (cell.size() > seen && !longest.compare_exchange_weak(seen, cell.size())) {
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < 4; ++t) threads.emplace_back(check, t, 4);
+  for (auto& t : threads) t.join();
+  EXPECT_EQ(missing.load(), 0U);
+  EXPECT_EQ(missingExact.load(), 0U);
+  EXPECT_GT(contained.load(), 2000U);  // the points do land in datasets
+  // The lists stay short: a cell holds the few datasets near it, not the catalogue.
+  EXPECT_LE(longest.load(), 12U);
+  // Role filter: no height dataset is an albedo candidate.
+  EXPECT_TRUE(snap->cellCandidates(0.0, 180.0, Role::Albedo).empty());
+  // An empty catalogue and a non-finite point have none.
+  EXPECT_TRUE(Catalogue(kMars).snapshot()->cellCandidates(0.0, 0.0).empty());
+  EXPECT_TRUE(snap->cellCandidates(std::nan(""), 0.0).empty());
 }
 
 TEST(Catalogue, QueriesVisitLogarithmicallyManyNodes) {

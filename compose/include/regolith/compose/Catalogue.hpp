@@ -34,6 +34,11 @@ struct CatalogueEntry {
 class Snapshot {
  public:
   Snapshot(topo::Body body, std::vector<CatalogueEntry> entries, std::uint64_t version);
+  ~Snapshot();
+  Snapshot(const Snapshot&) = delete;
+  Snapshot& operator=(const Snapshot&) = delete;
+  Snapshot(Snapshot&&) = delete;
+  Snapshot& operator=(Snapshot&&) = delete;
 
   [[nodiscard]] const topo::Body& body() const noexcept { return body_; }
   [[nodiscard]] std::span<const CatalogueEntry> entries() const noexcept { return entries_; }
@@ -46,11 +51,20 @@ class Snapshot {
 
   /// Appends to `out` the indices (into entries()) of the datasets of role `role` whose
   /// bounds the body's normal line at a planetodetic latitude/longitude crosses between
-  /// the lowest and the highest height: every dataset that can cover the point, and a few
+  /// the lowest and the highest height above the ellipsoid that any dataset reaches
+  /// (Dataset::ellipsoidHeightRange()): every dataset that can cover the point, and a few
   /// whose boxes merely reach it (Dataset::evaluate() decides). Returns the number of BVH
   /// nodes visited (the index's cost, for tests and benchmarks).
   std::size_t covering(double latDeg, double lonDeg, std::vector<std::uint32_t>& out,
                        Role role = Role::Height) const;
+  /// The indices of the datasets of role `role` whose bounds reach the shell of that band of
+  /// heights over the whole 1° × 1° latitude/longitude cell that holds
+  /// the point: every dataset covering() can return anywhere in that cell, and a few more
+  /// (Dataset::evaluate() decides). A query costs a table look-up instead of the index walk
+  /// and its trigonometry, for composed point queries (ComposedSurface). Each cell's list is
+  /// built on its first query and kept for the snapshot's life (lock-free; any thread).
+  [[nodiscard]] std::span<const std::uint32_t> cellCandidates(double latDeg, double lonDeg,
+                                                              Role role = Role::Height) const;
   /// Appends the indices of the datasets whose bounds are not wholly outside one of the
   /// `planes` (a, b, c, d: a·x + b·y + c·z + d ≥ 0 inside, body-fixed metres): "which
   /// datasets can this view see", for a view frustum's six planes. Returns the number of
@@ -64,6 +78,12 @@ class Snapshot {
     std::uint32_t left = 0, right = 0;   // inner (count == 0): children
   };
   std::uint32_t build(std::uint32_t first, std::uint32_t count);
+  [[nodiscard]] std::vector<std::uint32_t> cellList(int latCell, int lonCell, Role role) const;
+
+  /// cellCandidates()'s tables, one per role, each 180 × 360 lists (null until built).
+  struct CellTable;
+  static constexpr std::size_t kRoles = 3;
+  mutable std::array<std::atomic<CellTable*>, kRoles> cells_{};
 
   topo::Body body_;
   std::vector<CatalogueEntry> entries_;
@@ -71,6 +91,9 @@ class Snapshot {
   std::vector<Node> nodes_;
   std::vector<std::uint32_t> order_;
   double hLow_ = 0.0, hHigh_ = 0.0;
+  /// The band of heights above the ellipsoid that covering() and cellCandidates() search:
+  /// every dataset's Dataset::ellipsoidHeightRange().
+  double bandLow_ = 0.0, bandHigh_ = 0.0;
 };
 
 /// The datasets of one body. add() and remove() may be called from any thread while other

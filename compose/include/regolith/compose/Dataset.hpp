@@ -118,6 +118,13 @@ class Dataset {
   [[nodiscard]] double groundSpacing() const noexcept { return groundSpacing_; }
   /// Height range used for bounds, metres {lowest, highest}.
   [[nodiscard]] const std::array<double, 2>& heightRange() const noexcept { return heightRange_; }
+  /// Lowest and highest height above the body's ellipsoid, along its normal, that the
+  /// dataset's surface reaches, metres: heightRange() for a planet grid or map projection,
+  /// and wider for a tangent-plane DEM, whose plane rises above the ellipsoid away from its
+  /// origin (by about d²/2R at a distance d). Padded like bounds().
+  [[nodiscard]] const std::array<double, 2>& ellipsoidHeightRange() const noexcept {
+    return ellipsoidHeights_;
+  }
   /// Body-fixed axis-aligned box holding every point of the dataset from its lowest to its
   /// highest height: {min, max}, metres.
   [[nodiscard]] const std::array<glm::dvec3, 2>& bounds() const noexcept { return bounds_; }
@@ -152,6 +159,7 @@ class Dataset {
     double x = 0.0, y = 0.0;  ///< level-0 grid coordinates (planets: lon, lat in degrees)
     bool inside = false;
     bool mapped = false;
+    bool farSide = false;  ///< a tangent plane's (x, y) of a point on the body's far side
   };
   Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement> placement,
           DatasetOptions options);
@@ -171,6 +179,7 @@ class Dataset {
   double groundSpacing_ = 0.0;
   double planetNominal_ = 0.0;  // a planet grid's pixel on the equator, metres (geometric mean)
   std::array<double, 2> heightRange_{0.0, 0.0};
+  std::array<double, 2> ellipsoidHeights_{0.0, 0.0};
   std::array<glm::dvec3, 2> bounds_{};
   /// A DEM's quality on a kQualityLattice² lattice over level 0's pixel extent (row-major,
   /// row 0 north), read bilinearly: the placement's scale factors vary slowly, and
