@@ -396,6 +396,7 @@ def cache_speed(page):
         if pr:
             a.plot([r.get("capacity_MiB") for r in pr], [r.get("ns_per_request") for r in pr],
                    marker="o", color=colour, label=policy)
+    a.set_ylim(bottom=0)
     a.set(xscale="log", xlabel="cache budget (MiB)", ylabel="cache time per request (ns)",
           title=f"Cache's own cost, trace {trace}")
     a.grid(True, which="both", alpha=0.3)
@@ -409,13 +410,15 @@ def cache_speed(page):
         pts.sort(key=lambda p: p[0])
         b.plot([p[0] for p in pts], [p[1] for p in pts], "o-", color="tab:purple")
         for p in pts:
-            b.annotate(f"{p[2]:.0f} patch loads", (p[0], p[1]), fontsize=7, xytext=(4, 4),
-                       textcoords="offset points")
+            b.annotate(f"{p[2]:.0f} patch loads", (p[0], p[1]), fontsize=7, xytext=(0, 8),
+                       textcoords="offset points", ha="center")
             r = p[3]
             cells.append([name_cell(r), value_html(r.ptr + "/budget_MiB", r.get("budget_MiB")),
                           value_html(r.ptr + "/items_per_second", r.get("items_per_second"), 1e-6),
                           value_html(r.ptr + "/patch_loads", r.get("patch_loads"), fmt="{:.0f}"),
                           value_html(r.ptr + "/bytes_read_MB", r.get("bytes_read_MB"))])
+        b.set_ylim(bottom=0, top=1.2 * max(p[1] for p in pts))
+        b.set_xlim(0.5 * pts[0][0], 2.0 * pts[-1][0])
         b.set(xscale="log", xlabel="pager cache budget (MiB; the store is 64 MiB)",
               ylabel="traverse speed (M wheel queries/s)",
               title="Rover traverse through the pager (LRU)")
