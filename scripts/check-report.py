@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Checks a `regolith report` (the ctest regolith_report_quick, docs/accuracy-vs-time.md).
 
-    check-report.py --regolith BUILD/tools/regolith --out DIR [--no-run] [ARGS...]
+    check-report.py --regolith BUILD/tools/regolith --out DIR [--no-run] [--replot DIR2] [ARGS...]
 
 Runs `regolith report --out DIR` (quick mode; ARGS are passed on) unless --no-run, then
 checks DIR:
@@ -13,6 +13,8 @@ checks DIR:
     digits shown; strings exactly), and the page's remaining text has no digits at all;
   - every program of the run has at least one row, no figure says "not in this run", and the
     run's machine, date and command are those on the page.
+With --replot DIR2 it then runs `regolith report --from DIR/run.json --out DIR2`, which must
+run nothing, and checks DIR2 the same way (its run.json must equal DIR's).
 Prints what it checked; exits 1 with a list of the failures.
 """
 
@@ -83,6 +85,7 @@ class PageParser(html.parser.HTMLParser):
         super().__init__(convert_charrefs=True)
         self.images = []
         self.values = []  # (pointer, scale, text)
+        self.replot = []  # texts of data-replot elements: the `regolith report --from` command
         self.free_text = []
         self.stack = []  # open tags: (tag, value index or None)
         self.skip = 0  # inside <style>/<title>
@@ -98,6 +101,9 @@ class PageParser(html.parser.HTMLParser):
         if "data-json" in a:
             index = len(self.values)
             self.values.append([a["data-json"], float(a.get("data-scale", "1")), ""])
+        elif "data-replot" in a:
+            index = -1 - len(self.replot)
+            self.replot.append("")
         self.stack.append((tag, index))
 
     def handle_endtag(self, tag):
@@ -112,13 +118,18 @@ class PageParser(html.parser.HTMLParser):
         if self.skip:
             return
         for _, index in reversed(self.stack):
+            if index is not None and index < 0:
+                self.replot[-1 - index] += data
+                return
             if index is not None:
                 self.values[index][2] += data
                 return
         self.free_text.append(data)
 
 
-def check_report(out):
+def check_report(out, replot_command=None):
+    """Problems of the report in `out`; `replot_command`: the `regolith report --from` command
+    that wrote it, which the page must show (None: the page must show no re-plot command)."""
     problems = []
     with open(os.path.join(out, "run.json"), encoding="utf-8") as f:
         doc = json.load(f)
@@ -167,6 +178,11 @@ def check_report(out):
         integer = re.fullmatch(r"-?\d+", text) is not None
         if not math.isclose(shown_value, expected, rel_tol=5.01e-3, abs_tol=0.5 if integer else 0):
             problems.append(f"index.html: {pointer} shows {text}, run.json gives {expected:.6g}")
+    for text in parser.replot:
+        if text != replot_command:
+            problems.append(f"index.html: re-plot command {text!r}, expected {replot_command!r}")
+    if replot_command is not None and not parser.replot:
+        problems.append("index.html does not name the re-plot command")
     free = "".join(parser.free_text)
     for m in re.finditer(r"\d", free):
         context = free[max(0, m.start() - 40):m.end() + 40].replace("\n", " ")
@@ -192,6 +208,7 @@ def main():
     ap.add_argument("--regolith")
     ap.add_argument("--out", required=True)
     ap.add_argument("--no-run", action="store_true")
+    ap.add_argument("--replot", help="also re-plot DIR/run.json into this folder and check it")
     args, rest = ap.parse_known_args()
     if not args.no_run:
         if not args.regolith:
@@ -206,6 +223,23 @@ def main():
     problems, numbers, strings, images = check_report(args.out)
     print(f"check-report: {images} plots, {numbers} numbers and {strings} strings checked "
           f"against {os.path.join(args.out, 'run.json')}")
+    if args.replot:
+        if not args.regolith:
+            ap.error("--regolith is required with --replot")
+        run_json = os.path.join(args.out, "run.json")
+        done = subprocess.run([args.regolith, "report", "--from", run_json, "--out", args.replot],
+                              check=True, stderr=subprocess.PIPE, text=True)
+        if "[1/" in done.stderr:
+            problems.append(f"regolith report --from ran a benchmark: {done.stderr}")
+        with open(run_json, encoding="utf-8") as a, \
+                open(os.path.join(args.replot, "run.json"), encoding="utf-8") as b:
+            if json.load(a) != json.load(b):
+                problems.append(f"{args.replot}/run.json differs from {run_json}")
+        more, numbers, strings, images = check_report(
+            args.replot, f"regolith report --out {args.replot} --from {run_json}")
+        problems += more
+        print(f"check-report: re-plot: {images} plots, {numbers} numbers and {strings} strings "
+              f"checked against {os.path.join(args.replot, 'run.json')}")
     for p in problems:
         print("FAIL:", p)
     return 1 if problems else 0

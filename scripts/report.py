@@ -121,7 +121,8 @@ class Page:
         parts += ["; ", text_html("/date", run.doc["date"]), "; command: ",
                   f"<code>{text_html('/command', run.doc['command'])}</code>"]
         if replot:
-            parts += [" (re-plotted without running: <code>", esc(replot), "</code>)"]
+            parts += [" (re-plotted without running: <code><span data-replot=\"1\">",
+                      esc(replot), "</span></code>)"]
         self.caption_html = "".join(parts)
 
     def figure(self, fig, name, title, program, explanation, table):

@@ -33,13 +33,15 @@ set_property(SOURCE ReportCommand.cpp APPEND PROPERTY COMPILE_DEFINITIONS
 if(REGOLITH_BUILD_TESTS AND REGOLITH_BUILD_BENCH AND _report_python)
   # The quick report end to end (scripts/check-report.py): runs `regolith report` into a
   # fresh folder, then checks that every plot index.html shows is a valid PNG and that every
-  # number on the page is the number at its JSON pointer in this run's run.json. Needs the
+  # number on the page is the number at its JSON pointer in this run's run.json; then the
+  # same for `regolith report --from` of that run.json (re-plotting runs nothing). Needs the
   # bench programs built (ninja accuracy_table topo_bench store_bench cache_policies
   # precision_bench clod_bench farfield_bench effects_bench).
   add_test(NAME regolith_report_quick
            COMMAND ${_report_python} ${PROJECT_SOURCE_DIR}/scripts/check-report.py
                    --regolith $<TARGET_FILE:regolith>
-                   --out ${CMAKE_CURRENT_BINARY_DIR}/report-quick-test)
+                   --out ${CMAKE_CURRENT_BINARY_DIR}/report-quick-test
+                   --replot ${CMAKE_CURRENT_BINARY_DIR}/report-quick-test-replot)
   set_tests_properties(regolith_report_quick PROPERTIES TIMEOUT 400
     ENVIRONMENT "ASAN_OPTIONS=halt_on_error=1:detect_leaks=0")
 endif()

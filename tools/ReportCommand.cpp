@@ -204,7 +204,7 @@ fs::path benchProgram(const Args& a, const char* program) {
                           ": this regolith was built without the benchmark programs; configure "
                           "with -DREGOLITH_BUILD_BENCH=ON (or pass --bench-dir DIR)");
   }
-  const fs::path p = fs::path(a.benchDir) / program;
+  fs::path p = fs::path(a.benchDir) / program;
   if (!fs::exists(p)) {
     throw InvalidArgument(std::string(kCommand) + ": " + p.string() +
                           ": no such program; build it with `ninja -C <build> " + program +
@@ -363,11 +363,13 @@ void addReportCommand(CLI::App& app) {
       "their JSON in --out/run.json and writes --out/index.html with PNG plots "
       "(docs/accuracy-vs-time.md)");
   cmd->add_option("--out", a->out, "Folder for index.html, the plots and run.json")->required();
-  cmd->add_flag("--full", a->full,
-                "The long runs (tens of minutes) instead of the quick ones (about two minutes)");
+  auto* full = cmd->add_flag(
+      "--full", a->full,
+      "The long runs (tens of minutes) instead of the quick ones (about two minutes)");
   cmd->add_option("--from", a->from,
                   "Re-plot the run.json of an earlier report without running anything")
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingFile)
+      ->excludes(full);
   cmd->add_option("--bench-dir", a->benchDir,
                   "Folder of the benchmark programs (default: the build's bench/ folder)");
   cmd->add_option("--only", a->only,
