@@ -264,7 +264,7 @@ def kernels_speed(page):
     title = "Interpolation kernels: time per query on a large DEM"
     if not rows:
         return page.missing(title, "topo_bench")
-    fig, (a,) = new_fig(1, 8.0, 4.6)
+    fig, (a,) = new_fig(1, 8.0, 2.6 + 0.2 * len(rows))
     groups = {}
     for r in rows:
         parts = r.name.split("/")  # dem/<query>/<kernel>/<points>[_median]
@@ -454,7 +454,8 @@ def clipmap(page):
     if mesh:
         xs = [r.to_unit("real_time", "ms")[0] for r in mesh]
         a.plot(xs, [max(r.get("err_px_p99"), 1e-3) for r in mesh], "ks",
-               label="uniform mesh (level zero: the reference, error zero drawn at 0.001 px)")
+               label="uniform mesh of a pyramid level (level zero is the reference: error "
+                     "zero, drawn at 0.001 px)")
         b.plot([r.get("vertices") for r in mesh], xs, "ks", label="uniform mesh")
     b.xaxis.set_major_formatter(ticker.EngFormatter(sep=" "))
     b.xaxis.set_minor_formatter(ticker.NullFormatter())

@@ -104,7 +104,7 @@ std::vector<Step> steps() {
        true,
        {"--benchmark_filter=^pgm/low/grid:(256|512|1024|2048)/screen:512/",
         "--benchmark_min_time=0.01"},
-       {"--benchmark_filter=^pgm/", "--benchmark_min_time=0.5"}},
+       {"--benchmark_filter=^pgm/.*/screen:1024/", "--benchmark_min_time=0.5"}},
       {"effects_bench",
        "the cost of each scene-declared effect (GL)",
        true,
