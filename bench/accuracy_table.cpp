@@ -18,6 +18,8 @@
 #include <regolith/topo/TopoDem.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
+#include "JsonRows.hpp"
+
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
@@ -30,6 +32,7 @@
 #include <limits>
 #include <numbers>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace {
@@ -47,7 +50,7 @@ using regolith::topo::TopoGrid;
 constexpr double kPi = std::numbers::pi;
 constexpr double kExtent = 256.0;  // metres, both axes; sample centres from 0 to kExtent
 constexpr double kMargin = 8.0;    // random points stay this far from the edge
-constexpr std::size_t kPoints = 200000;
+constexpr std::size_t kDefaultPoints = 200000;
 constexpr int kTimingPasses = 5;
 
 // One plane wave A·sin(kx·x + ky·y + φ).
@@ -164,11 +167,33 @@ const char* kernelName(Interpolation k) {
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
+  // --points N (default 200000; fewer for a quick run), --json FILE: also write the rows
+  // as JSON for `regolith report` (counters in metres and radians, ns per query).
+  std::size_t points = kDefaultPoints;
+  std::string jsonPath;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if ((a == "--points" || a == "--json") && i + 1 < argc) {
+      const std::string v = argv[++i];
+      if (a == "--json") {
+        jsonPath = v;
+      } else {
+        points = static_cast<std::size_t>(std::stoull(v));
+      }
+    } else {
+      std::fprintf(stderr, "usage: accuracy_table [--points N] [--json FILE]\n");
+      return 2;
+    }
+  }
+  if (points == 0) {
+    std::fprintf(stderr, "accuracy_table: --points must be > 0\n");
+    return 2;
+  }
   std::mt19937_64 rng(20261122);
   std::uniform_real_distribution<double> coord(kMargin, kExtent - kMargin);
-  std::vector<double> xs(kPoints), ys(kPoints);
-  for (std::size_t i = 0; i < kPoints; ++i) {
+  std::vector<double> xs(points), ys(points);
+  for (std::size_t i = 0; i < points; ++i) {
     xs[i] = coord(rng);
     ys[i] = coord(rng);
   }
@@ -184,27 +209,41 @@ int main() {
   std::printf(
       "Grid: %.0f m x %.0f m, float samples; %zu random points at least %.0f m "
       "inside the edge; normals in the grid frame.\n\n",
-      kExtent, kExtent, kPoints, kMargin);
+      kExtent, kExtent, points, kMargin);
   std::printf(
       "| kernel | spacing (m) | max \\|dh\\| (m) | RMS dh (m) | max normal error (mrad) "
       "| RMS normal error (mrad) | height() ns/query | surface() ns/query |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|---:|\n");
   std::size_t failed = 0;
+  std::vector<regolith::bench::JsonRow> rows;
   for (const Interpolation k : kernels) {
     for (const double spacing : spacings) {
       const TopoDem dem = makeDem(spacing);
       const Row r = evaluate(dem, k, xs, ys);
       failed += r.failed;
-      const double valid = static_cast<double>(kPoints - r.failed);
+      const double valid = static_cast<double>(points - r.failed);
       std::printf("| %s | %g | %.3g | %.3g | %.3g | %.3g | %.1f | %.1f |\n", kernelName(k), spacing,
                   r.maxDh, std::sqrt(r.sumDh2 / valid), 1e3 * r.maxAng,
                   1e3 * std::sqrt(r.sumAng2 / valid), r.nsHeight, r.nsSurface);
+      char name[64];
+      std::snprintf(name, sizeof name, "accuracy/%s/spacing:%g", kernelName(k), spacing);
+      rows.push_back(regolith::bench::JsonRow{name, {}, {}}
+                         .label("kernel", kernelName(k))
+                         .set("spacing_m", spacing)
+                         .set("max_dh_m", r.maxDh)
+                         .set("rms_dh_m", std::sqrt(r.sumDh2 / valid))
+                         .set("max_normal_rad", r.maxAng)
+                         .set("rms_normal_rad", std::sqrt(r.sumAng2 / valid))
+                         .set("height_ns", r.nsHeight)
+                         .set("surface_ns", r.nsSurface)
+                         .set("points", static_cast<double>(points)));
     }
   }
   std::printf(
       "\nns/query: std::chrono, best of %d passes over the %zu points, single calls, "
       "one thread; indicative only (see topo_bench).\n",
-      kTimingPasses, kPoints);
+      kTimingPasses, points);
+  if (!jsonPath.empty()) regolith::bench::writeJsonRows(jsonPath, "accuracy_table", rows);
   if (failed != 0) {
     std::printf("\nWARNING: %zu queries did not return Ok.\n", failed);
     return 1;

@@ -40,6 +40,8 @@
 
 #include <regolith/store/PatchCache.hpp>
 
+#include "JsonRows.hpp"
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -369,9 +371,14 @@ struct Options {
   std::vector<std::size_t> capacities{4, 16, 64};
   std::vector<CachePolicy> policies{kAllPolicies.begin(), kAllPolicies.end()};
   std::string writeDir, readDir;
+  std::string jsonPath;
 };
 
-void report(const std::vector<Trace>& traces, const Options& o, const char* title) {
+/// Rows for --json: one per (replay mode, trace, capacity, policy), and one per hit-cost cell.
+std::vector<regolith::bench::JsonRow> gJsonRows;
+
+void report(const std::vector<Trace>& traces, const Options& o, const char* title,
+            const char* mode) {
   auto patch = std::make_shared<Patch>();
   patch->rows = kPatchSamples;
   patch->cols = kPatchSamples;
@@ -391,9 +398,10 @@ void report(const std::vector<Trace>& traces, const Options& o, const char* titl
     const std::uint64_t requests = t.requests();
     const std::size_t distinct = t.distinctKeys();
     for (const std::size_t cap : o.capacities) {
+      const std::uint64_t belady = beladyLoads(t, cap);
       std::printf("| %s | %llu | %zu | %zu | %llu |", t.name.c_str(),
                   static_cast<unsigned long long>(requests), distinct, cap,
-                  static_cast<unsigned long long>(beladyLoads(t, cap)));
+                  static_cast<unsigned long long>(belady));
       std::vector<double> row;
       for (const CachePolicy policy : o.policies) {
         const Result r = replay(t, policy, cap * patchBytes, o.decayPeriod, o.reps, patch);
@@ -403,6 +411,22 @@ void report(const std::vector<Trace>& traces, const Options& o, const char* titl
                     static_cast<unsigned long long>(r.stats.loads),
                     static_cast<unsigned long long>(r.stats.evictions));
         row.push_back(r.nsPerRequest);
+        gJsonRows.push_back(
+            regolith::bench::JsonRow{std::string("cache/") + mode + "/" + t.name + "/cap:" +
+                                         std::to_string(cap) + "/" + std::string(toString(policy)),
+                                     {},
+                                     {}}
+                .label("mode", mode)
+                .label("trace", t.name)
+                .label("policy", std::string(toString(policy)))
+                .set("capacity_patches", static_cast<double>(cap))
+                .set("capacity_MiB", static_cast<double>(cap * patchBytes) / (1024.0 * 1024.0))
+                .set("hit_rate", static_cast<double>(r.stats.hits) /
+                                     static_cast<double>(std::max<std::uint64_t>(requests, 1)))
+                .set("loads", static_cast<double>(r.stats.loads))
+                .set("belady_loads", static_cast<double>(belady))
+                .set("requests", static_cast<double>(requests))
+                .set("ns_per_request", r.nsPerRequest));
       }
       ns[ti].push_back(row);
       std::printf("\n");
@@ -461,8 +485,17 @@ void reportHitCost(const Options& o) {
   for (const std::size_t n : o.capacities) {
     for (const bool rotating : {false, true}) {
       std::printf("| %zu | %s |", n, rotating ? "rotating over all" : "one patch");
-      for (const CachePolicy p : o.policies)
-        std::printf(" %.1f |", hitCost(p, n, rotating, o, patch));
+      for (const CachePolicy p : o.policies) {
+        const double ns = hitCost(p, n, rotating, o, patch);
+        std::printf(" %.1f |", ns);
+        gJsonRows.push_back(regolith::bench::JsonRow{
+            std::string("cache/hit/") + (rotating ? "rotating" : "one") +
+                "/resident:" + std::to_string(n) + "/" + std::string(toString(p)),
+            {},
+            {}}.label("policy", std::string(toString(p)))
+                                .set("resident_patches", static_cast<double>(n))
+                                .set("ns_per_hit", ns));
+      }
       std::printf("\n");
       std::fflush(stdout);
     }
@@ -473,7 +506,7 @@ void usage(std::FILE* out) {
   std::fputs(
       "usage: cache_policies [--speed M_PER_S] [--scale F] [--reps N] [--decay-period N]\n"
       "                      [--capacities A,B,...] [--policies P,...]\n"
-      "                      [--write-traces DIR] [--read-traces DIR]\n"
+      "                      [--write-traces DIR] [--read-traces DIR] [--json FILE]\n"
       "  --speed          rover speed, m/s (default 4)\n"
       "  --scale          multiply every trace's length (default 1; 0.1 for a quick run)\n"
       "  --reps           timed replays per cell, the fastest is reported (default 3)\n"
@@ -481,7 +514,8 @@ void usage(std::FILE* out) {
       "  --capacities     cache sizes in 256x256-float patches (default 4,16,64)\n"
       "  --policies       any of HitCount,Lru,DecayingHitCount (default all three)\n"
       "  --write-traces   also write the generated traces to DIR/<name>.trace\n"
-      "  --read-traces    replay DIR/*.trace instead of generating traces\n",
+      "  --read-traces    replay DIR/*.trace instead of generating traces\n"
+      "  --json           also write every cell as JSON rows to FILE (regolith report)\n",
       out);
 }
 
@@ -528,6 +562,8 @@ Options parse(int argc, char** argv) {
       o.writeDir = value();
     } else if (a == "--read-traces") {
       o.readDir = value();
+    } else if (a == "--json") {
+      o.jsonPath = value();
     } else if (a == "--help" || a == "-h") {
       usage(stdout);
       std::exit(0);
@@ -572,12 +608,14 @@ int main(int argc, char** argv) {
         "cache_policies: speed %.3g m/s, scale %.3g, decay period %llu, %d reps, %s traces\n",
         o.speed, o.scale, static_cast<unsigned long long>(o.decayPeriod), o.reps,
         o.readDir.empty() ? "generated" : "recorded");
-    report(traces, o, "Raw: every request reaches the cache");
+    report(traces, o, "Raw: every request reaches the cache", "raw");
     std::vector<Trace> filtered;
     filtered.reserve(traces.size());
     for (const Trace& t : traces) filtered.push_back(behindFastPath(t));
-    report(filtered, o, "Fast path: only changes of patch per stream reach the cache");
+    report(filtered, o, "Fast path: only changes of patch per stream reach the cache", "fast-path");
     reportHitCost(o);
+    if (!o.jsonPath.empty())
+      regolith::bench::writeJsonRows(o.jsonPath, "cache_policies", gJsonRows);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "cache_policies: %s\n", e.what());
     return 1;

@@ -16,6 +16,7 @@
 // frame).
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/MeshRenderer.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 
@@ -212,7 +213,8 @@ BENCHMARK(panFrames)
 }  // namespace
 
 int main(int argc, char** argv) {
-  const gl::HeadlessContext context;  // one GL context for every case
+  const gl::HeadlessContext context;                             // one GL context for every case
+  benchmark::AddCustomContext("gl_renderer", gl::glRenderer());  // for regolith report
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

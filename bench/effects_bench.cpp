@@ -13,6 +13,7 @@
 // Run: build/bench/effects_bench --benchmark_min_time=40x   (about a minute)
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/TrackLayer.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Placement.hpp>
@@ -150,7 +151,8 @@ void effectFrame(benchmark::State& state, const std::string& name) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const gl::HeadlessContext context;  // one GL context for every case
+  const gl::HeadlessContext context;                             // one GL context for every case
+  benchmark::AddCustomContext("gl_renderer", gl::glRenderer());  // for regolith report
   for (const char* name :
        {"none", "albedo", "tracks", "noise", "heightColours", "latLon", "overlay"})
     benchmark::RegisterBenchmark(

@@ -27,6 +27,7 @@
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/farfield/PgmMath.hpp>
 #include <regolith/farfield/PgmRenderer.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Body.hpp>
@@ -241,6 +242,7 @@ void sampling(benchmark::State& state, const std::string& name) {
 
 int main(int argc, char** argv) {
   const gl::HeadlessContext context;
+  benchmark::AddCustomContext("gl_renderer", gl::glRenderer());  // for regolith report
   for (const char* name : {"global", "low", "victoria"}) {
     for (const int grid : {256, 512, 1024, 2048}) {
       for (const int screen : {256, 512, 1024}) {

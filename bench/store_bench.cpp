@@ -26,6 +26,7 @@
 #include <gdal.h>
 #include <hdf5.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -34,7 +35,9 @@
 #include <numbers>
 #include <random>
 #include <span>
+#include <string>
 #include <unordered_set>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -189,6 +192,7 @@ void roverPaged(benchmark::State& state, RoverQuery query, std::size_t budget) {
   }
   const double unique = static_cast<double>(uniquePatches(w));
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(w.xs.size()));
+  state.counters["budget_MiB"] = static_cast<double>(budget) / (1024.0 * 1024.0);
   state.counters["patch_loads"] = static_cast<double>(last.loads);
   state.counters["evictions"] = static_cast<double>(last.evictions);
   state.counters["bytes_read_MB"] = static_cast<double>(reads.bytesRead) / 1e6;
@@ -395,6 +399,83 @@ void coarse(benchmark::State& state, bool pyramid) {
     }
     benchmark::DoNotOptimize(out.data());
   }
+  // Accuracy: each coarse sample against the mean of the 8 × 8 level-0 samples it stands
+  // for (its footprint), summed in double from the in-memory samples (brute force).
+  double maxErr = 0.0, sum2 = 0.0;
+  const std::span<const float> fine = d.samples->data();
+  for (std::size_t r = 0; r < 256; ++r) {
+    for (std::size_t c = 0; c < 256; ++c) {
+      double mean = 0.0;
+      for (std::size_t i = 0; i < 8; ++i) {
+        for (std::size_t j = 0; j < 8; ++j) {
+          mean += static_cast<double>(fine[(8 * r + i) * kSize + 8 * c + j]);
+        }
+      }
+      mean /= 64.0;
+      const double e = std::abs(static_cast<double>(out[r * 256 + c]) - mean);
+      maxErr = std::max(maxErr, e);
+      sum2 += e * e;
+    }
+  }
+  state.counters["error_m_max"] = maxErr;
+  state.counters["error_m_rms"] = std::sqrt(sum2 / (256.0 * 256.0));
+}
+
+// ---- codecs: size against read time --------------------------------------------------------
+
+constexpr std::size_t kCodecSize = 2048;  // the top-left 2048² of the same terrain
+
+/// The store of the terrain's top-left kCodecSize² written with `codec` at deflate `level`
+/// (written once into the bench folder).
+fs::path codecStore(Codec codec, int level) {
+  const Data& d = data();
+  const fs::path path =
+      d.dir / (std::string("codec_") + codecName(codec) + "_" + std::to_string(level) + ".h5");
+  if (!fs::exists(path)) {
+    std::fprintf(stderr, "store_bench: writing %s\n", path.c_str());
+    GridInfo info = d.info;
+    info.rows = info.cols = kCodecSize;
+    const auto samples = InMemorySamples::fromFunction(kCodecSize, kCodecSize, terrain);
+    const std::vector<GridSource> grids{{info, samples}};
+    WriteOptions o;
+    o.patchRows = o.patchCols = kPatch;
+    o.levels = 1;
+    o.codec = codec;
+    o.deflate = level;
+    writeStore(path, grids, o);
+  }
+  return path;
+}
+
+/// Arg: the deflate level (0: uncompressed), or −1 for ZFP (reversible). Each iteration
+/// opens the store and reads every level-0 patch (the OS's page cache is warm: this is the
+/// decoding cost, not the disk's).
+void codecRead(benchmark::State& state) {
+  const Codec codec = state.range(0) < 0 ? Codec::Zfp : Codec::Deflate;
+  const int level = state.range(0) < 0 ? 0 : static_cast<int>(state.range(0));
+  fs::path path;
+  try {
+    path = codecStore(codec, level);
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());  // e.g. no HDF5 ZFP filter plugin
+    return;
+  }
+  std::vector<float> out(kPatch * kPatch);
+  for (auto _ : state) {
+    const Store store = Store::open(path);
+    for (std::size_t r = 0; r < kCodecSize; r += kPatch) {
+      for (std::size_t c = 0; c < kCodecSize; c += kPatch) {
+        store.readWindow("dem", 0, r, c, kPatch, kPatch, out);
+        benchmark::DoNotOptimize(out.data());
+      }
+    }
+  }
+  const double rawMB = static_cast<double>(kCodecSize * kCodecSize * sizeof(float)) / 1e6;
+  state.counters["MB"] = static_cast<double>(fs::file_size(path)) / 1e6;
+  state.counters["ratio"] = rawMB / (static_cast<double>(fs::file_size(path)) / 1e6);
+  state.counters["deflate"] = level;
+  state.SetBytesProcessed(state.iterations() *
+                          static_cast<std::int64_t>(kCodecSize * kCodecSize * sizeof(float)));
 }
 
 }  // namespace
@@ -443,6 +524,13 @@ int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("store/coarse/pyramid", coarse, true)->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("store/coarse/strided", coarse, false)
       ->Unit(benchmark::kMillisecond);
+  for (const auto& [name, arg] :
+       {std::pair{"none", 0}, std::pair{"deflate1", 1}, std::pair{"deflate6", 6},
+        std::pair{"deflate9", 9}, std::pair{"zfp", -1}}) {
+    benchmark::RegisterBenchmark((std::string("store/codec/") + name).c_str(), codecRead)
+        ->Arg(arg)
+        ->Unit(benchmark::kMillisecond);
+  }
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

@@ -55,6 +55,7 @@ int main(int argc, char** argv) try {
   regolith::tools::addInfoCommand(app);
   regolith::tools::addQueryCommand(app);
   regolith::tools::addRenderCommand(app);
+  regolith::tools::addReportCommand(app);
 
   try {
     refuseUnknownSubcommand(app, argc, argv);
