@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Builds (if needed) and runs each libFuzzer target of tests/fuzz for N seconds, one after the
-# other, and reports per target: executions, executions per second, new corpus units, and the
-# crashes, hangs, leaks and out-of-memory inputs found (docs/reliability.md, "Fuzzing").
+# Builds (if needed) and runs each libFuzzer target of tests/fuzz for N seconds (FUZZ_PARALLEL
+# at a time, by default one after the other), and reports per target: executions, executions
+# per second, new corpus units, and the crashes, hangs, leaks and out-of-memory inputs found
+# (docs/reliability.md, "Fuzzing").
 #
 #   bash scripts/fuzz.sh [seconds per target, default 60] [target ...]
 #   bash scripts/fuzz.sh --seeds        # rewrites the seed corpus (tests/fuzz/corpus)
@@ -14,6 +15,7 @@
 #   FUZZ_NICE        niceness of the fuzz processes (default 10: the machine is shared)
 #   FUZZ_TIMEOUT     seconds after which one input counts as a hang (default 20)
 #   FUZZ_JOBS        build jobs (default 2)
+#   FUZZ_PARALLEL    targets run at once (default 1)
 # The committed seeds (tests/fuzz/corpus/<target>) are copied into
 # <build>/fuzz/<target>/corpus, where the corpus grows from run to run; findings are written
 # to <build>/fuzz/<target>/run-<UTC time>/ (crash-*, timeout-*, leak-*, oom-*; slow-unit-*, an input
@@ -66,9 +68,8 @@ configure_and_build
 export ASAN_OPTIONS=${ASAN_OPTIONS:-halt_on_error=1:detect_leaks=1:quarantine_size_mb=16:max_malloc_fill_size=0}
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/tests/fuzz/lsan.supp:print_suppressions=0}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
-summary=()
-status=0
-for t in "${targets[@]}"; do
+run_target() {
+  local t=$1
   work=$build/fuzz/$t
   mkdir -p "$work/corpus"
   cp -n tests/fuzz/corpus/"$t"/* "$work/corpus/" 2>/dev/null || true
@@ -90,12 +91,33 @@ for t in "${targets[@]}"; do
   # slow-unit-* files (an input slower than 10 s, not a finding) keep the folder.
   rmdir "$found_dir" 2>/dev/null || true
   if ((rc != 0 || found > 0)); then
-    status=1
+    echo 1 >"$work/last-status"
     echo "fuzz: $t stopped with status $rc; the end of its log:"
     grep -E "ERROR|SUMMARY|Test unit written|deadly signal|uncaught|runtime error" "$log" | head -20
   fi
-  summary+=("$(printf '%-16s %10s runs %8s exec/s %6s new units   crashes %s, hangs %s, leaks %s, ooms %s; slow units %s' \
-    "$t" "${runs:-?}" "${rate:-?}" "${added:-?}" "$crashes" "$hangs" "$leaks" "$ooms" "$slow")")
+  printf '%s\n' "$(printf '%-16s %10s runs %8s exec/s %6s new units   crashes %s, hangs %s, leaks %s, ooms %s; slow units %s' \
+    "$t" "${runs:-?}" "${rate:-?}" "${added:-?}" "$crashes" "$hangs" "$leaks" "$ooms" "$slow")" \
+    >"$work/last-summary"
+}
+# FUZZ_PARALLEL targets run at once (default 1; CI runs as many as it has cores), each one
+# libFuzzer process; their output lines may interleave, the summary below is in order.
+parallel=${FUZZ_PARALLEL:-1}
+pids=()
+for t in "${targets[@]}"; do
+  rm -f "$build/fuzz/$t/last-status" "$build/fuzz/$t/last-summary"
+  run_target "$t" &
+  pids+=($!)
+  if ((${#pids[@]} >= parallel)); then
+    wait "${pids[0]}" || true
+    pids=("${pids[@]:1}")
+  fi
+done
+for p in "${pids[@]}"; do wait "$p" || true; done
+summary=()
+status=0
+for t in "${targets[@]}"; do
+  [[ -f $build/fuzz/$t/last-status ]] && status=1
+  summary+=("$(cat "$build/fuzz/$t/last-summary" 2>/dev/null || echo "$t: no summary (the run did not finish)")")
 done
 echo
 echo "fuzz: ${seconds} s per target ($(nproc) cores, $(uname -m)); findings in $build/fuzz/<target>/run-*/"

@@ -136,7 +136,7 @@ run_shards "TSan store_tests" "$tsan_dir/tests/store/store_tests" \
 # this machine added to build-fuzz/fuzz/<target>/corpus. Any crash, hang or leak fails CI,
 # and its input stays in build-fuzz/fuzz/<target>/run-*/.
 section "Fuzz targets, ${REGOLITH_FUZZ_SECONDS:-30} s each (scripts/fuzz.sh)"
-FUZZ_BUILD_DIR=${FUZZ_BUILD_DIR:-build-fuzz} FUZZ_JOBS=$jobs FUZZ_NICE=0 \
+FUZZ_BUILD_DIR=${FUZZ_BUILD_DIR:-build-fuzz} FUZZ_JOBS=$jobs FUZZ_PARALLEL=$jobs FUZZ_NICE=0 \
   bash scripts/fuzz.sh "${REGOLITH_FUZZ_SECONDS:-30}"
 
 if [[ -n ${CCACHE_BASEDIR:-} ]]; then
