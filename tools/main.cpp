@@ -55,6 +55,9 @@ int main(int argc, char** argv) try {
   regolith::tools::addInfoCommand(app);
   regolith::tools::addQueryCommand(app);
   regolith::tools::addRenderCommand(app);
+#ifdef REGOLITH_HAVE_VIEW
+  regolith::tools::addViewCommand(app);
+#endif
 
   try {
     refuseUnknownSubcommand(app, argc, argv);
