@@ -96,8 +96,8 @@ ViewScene storeScene(const std::string& path, const std::string& grid, std::size
     t.farField = planetLayers(*pyramid);
     const double radius = pyramid->body()->equatorialRadius();
     o.size = 2.0 * radius;
-    // The whole planet, seen from 3.2 radii above a point at 20°N on the prime meridian,
-    // tilted so the limb shows its relief.
+    // The whole planet, seen from 3.2 radii out, looking at (0°E, 0°N) from 70° above its
+    // horizon, so the limb shows its relief.
     open.target = pyramid->position(0.0, 0.0, 0.0);
     open.headingDeg = 0.0;
     open.elevationDeg = 70.0;
