@@ -15,7 +15,7 @@ namespace {
 // atlas to manage for that; 50 five-row bitmaps are smaller than the code to load a font.
 // Each glyph is five rows of three columns, '#' set.
 struct Glyph {
-  char c;
+  char c{};
   std::array<std::string_view, 5> rows;
 };
 constexpr std::array<Glyph, 56> kFont{{

@@ -46,8 +46,15 @@ std::vector<ScriptStep> parseScript(const std::string& path) {
     std::string command;
     if (!(words >> command)) continue;
     const auto fail = [&](const std::string& expected) {
-      return InvalidArgument("view: --script " + path + ":" + std::to_string(lineNo) + ": '" +
-                             text + "': expected " + expected);
+      std::string message = "view: --script ";
+      message += path;
+      message += ":";
+      message += std::to_string(lineNo);
+      message += ": '";
+      message += text;
+      message += "': expected ";
+      message += expected;
+      return InvalidArgument(message);
     };
     const auto number = [&](const char* what) {
       double v = 0.0;

@@ -242,8 +242,9 @@ void Viewer::switchFocus(std::size_t viewport, std::size_t object) {
   ViewportState& s = viewports_[viewport].state;
   if (object == s.object) return;
   const scenegraph::NodeId from = scene_.objects[s.object].node, to = scene_.objects[object].node;
-  // A world point that stays put: the new focus's origin. Projected with the camera before
-  // (in the old focus frame) and after (in the new one), it must land on the same pixel.
+  // Two world points that stay put: the old focus's origin and the new one's. Projected
+  // with the camera before (in the old focus frame) and after (in the new one), each must
+  // land on the same pixel.
   const clod::SceneView view = viewOf(viewport);
   const auto project = [&](const ViewportState& st, const glm::dvec3& p) {
     clod::Camera c;
@@ -256,20 +257,25 @@ void Viewer::switchFocus(std::size_t viewport, std::size_t object) {
     c.near = view.near;
     return c.project(p);
   };
-  const glm::dvec3 before = project(s, scene_.graph->relative(from, to).translation);
+  const glm::dvec3 oldBefore = project(s, glm::dvec3(0.0));
+  const glm::dvec3 newBefore = project(s, scene_.graph->relative(from, to).translation);
   const scenegraph::Pose toFromOld = scene_.graph->relative(to, from);
   s.eye = toFromOld.apply(s.eye);
   s.target = toFromOld.apply(s.target);
   s.up = toFromOld.applyVector(s.up);
   const std::string oldName = scene_.objects[s.object].name;
   s.object = object;
-  const glm::dvec3 after = project(s, glm::dvec3(0.0));
-  char buf[320];
+  const glm::dvec3 oldAfter = project(s, toFromOld.translation);
+  const glm::dvec3 newAfter = project(s, glm::dvec3(0.0));
+  const std::string& newName = scene_.objects[object].name;
+  char buf[480];
   std::snprintf(buf, sizeof buf,
-                "focus %s -> %s (viewport %zu): the %s origin projects to (%.4f, %.4f) px before, "
+                "focus %s -> %s (viewport %zu): the %s origin projects to (%.4f, %.4f) px "
+                "before, (%.4f, %.4f) px after; the %s origin to (%.4f, %.4f) px before, "
                 "(%.4f, %.4f) px after",
-                oldName.c_str(), scene_.objects[object].name.c_str(), viewport + 1,
-                scene_.objects[object].name.c_str(), before.x, before.y, after.x, after.y);
+                oldName.c_str(), newName.c_str(), viewport + 1, oldName.c_str(), oldBefore.x,
+                oldBefore.y, oldAfter.x, oldAfter.y, newName.c_str(), newBefore.x, newBefore.y,
+                newAfter.x, newAfter.y);
   log_ << buf << '\n';
 }
 
