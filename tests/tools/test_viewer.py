@@ -221,3 +221,52 @@ def test_bad_script_line_is_named(work, planet):
     assert p.returncode != 0
     assert f"view: --script {script}:2: 'jump 3': expected one of wait, key, drag, scroll, move, " \
            "pick, screenshot, quit" in p.stderr
+
+
+PICK_XY = re.compile(r"pick (\d+) (\d+): x (\S+) y (\S+) height (\S+) m dataset (\S+)")
+
+
+def test_dem_store_opens_on_the_dem_and_picks_match_its_samples(work):
+    """A DEM store opens with the DEM from above at an angle, the whole grid drawn (the
+    clipmap reaches across it); picks give grid x, y and the height there, which must be the
+    bilinear height of the store's level-0 samples (h5py) at that x, y."""
+    path = work / "victoria.h5"
+    run("generate", "victoria", "--out", path, "--size", 401)
+    script = work / "dem.txt"
+    script.write_text(f"""wait 2
+screenshot {work}/dem-open.png
+pick 640 400
+pick 400 500
+pick 900 300
+drag 640 400 740 380
+key F
+key W
+wait 1
+screenshot {work}/dem-moved.png
+""")
+    out = run("view", path, "--script", script)
+    img = read_png(work / "dem-open.png")
+    terrain = np.abs(img - np.array([5, 5, 10])).sum(axis=2) > 12
+    assert terrain[H // 2 - 100:H // 2 + 100, W // 2 - 100:W // 2 + 100].mean() > 0.99
+    moved = read_png(work / "dem-moved.png")
+    assert (np.abs(below_hud(moved) - below_hud(img)).sum(axis=2) > 30).mean() > 0.2
+    picks = PICK_XY.findall(out)
+    assert len(picks) == 3, out
+    with h5py.File(path, "r") as f:
+        g = f["grids/victoria"]
+        x0, y0 = float(g.attrs["x0"]), float(g.attrs["y0"])
+        dx, dy = (float(v) for v in g.attrs["spacing"])
+        data = g["level0"][...].astype(np.float64)
+    for _, _, x, y, h, dataset in picks:
+        x, y, h = float(x), float(y), float(h)
+        assert dataset == "victoria"
+        c, r = (x - x0) / dx, (y0 - y) / dy
+        c0, r0 = int(c), int(r)
+        fc, fr = c - c0, r - r0
+        bil = ((1 - fr) * ((1 - fc) * data[r0, c0] + fc * data[r0, c0 + 1]) +
+               fr * ((1 - fc) * data[r0 + 1, c0] + fc * data[r0 + 1, c0 + 1]))
+        # A triangle against the bilinear patch between the same four samples differs by at
+        # most fc*fr*|h00 - h01 - h10 + h11| <= 0.25 * 2 * (max - min), plus the depth
+        # buffer's float precision at ~500 m (a few mm).
+        cell = data[r0:r0 + 2, c0:c0 + 2]
+        assert abs(h - bil) <= 0.5 * (cell.max() - cell.min()) + 0.01, (x, y, h, bil)

@@ -111,6 +111,13 @@ ViewScene storeScene(const std::string& path, const std::string& grid, std::size
                                  scenegraph::NodeKind::Camera);
     v.cameras.push_back(overview);
   } else {
+    // The renderer centres the clipmap on the camera's position clamped onto the grid (an
+    // edge, when the camera stands off to the side): the coarsest level must reach across
+    // the whole grid from there.
+    const auto& coarsest = pyramid->level(pyramid->levelCount() - 1).grid;
+    const std::size_t across = 2 * std::max(coarsest.rows(), coarsest.cols()) + 1;
+    t.options.size =
+        std::max(t.options.size, static_cast<int>(std::min<std::size_t>(across, 2047)));
     const auto& g = pyramid->level(0).grid;
     const double extent = std::max(g.east() - g.west(), g.north() - g.south());
     o.size = extent;
