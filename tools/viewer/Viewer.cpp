@@ -97,7 +97,7 @@ void Viewer::rebuild() {
   for (std::size_t t = 0; t < scene_.terrains.size(); ++t) {
     const ViewTerrain& terrain = scene_.terrains[t];
     if (!terrain.farField) {
-      farFields_.push_back(nullptr);
+      farFields_.emplace_back();
       continue;
     }
     farfield::PgmOptions po;
@@ -108,7 +108,10 @@ void Viewer::rebuild() {
     po.heightColours = terrain.options.effects.heightColours && !off_[t].contains("heightColours");
     po.high = terrain.options.albedo;
     po.ambient = terrain.options.ambient;
-    farFields_.push_back(std::make_unique<farfield::FarField>(terrain.farField, po));
+    // One per viewport: PGM's primary sphere comes from the previous frame's read-back of
+    // the same view (PrimaryReadback::Lagged), which another viewport's view would spoil.
+    farFields_.push_back({std::make_unique<farfield::FarField>(terrain.farField, po),
+                          std::make_unique<farfield::FarField>(terrain.farField, po)});
   }
 }
 
@@ -486,14 +489,14 @@ void Viewer::draw(int width, int height) {
     const clod::SceneFrame frame = renderer_->draw(scene_.graph->renderList(focus, camera), view);
     vertices_ += frame.vertices;
     for (std::size_t t = 0; t < scene_.terrains.size(); ++t) {
-      if (!farFields_[t]) continue;
+      farfield::FarField* farField = farFields_[t][k].get();
+      if (farField == nullptr) continue;
       const scenegraph::NodeId body = scene_.terrains[t].node;
       const clod::Camera inBody = clod::cameraInItem(scene_.graph->relative(body, camera), view);
-      const farfield::FarFieldFrame ff =
-          farFields_[t]->draw(*v.target, inBody, lightIn(body), true);
+      const farfield::FarFieldFrame ff = farField->draw(*v.target, inBody, lightIn(body), true);
       if (ff.mode == farfield::FarFieldMode::Pgm) {
-        vertices_ += static_cast<std::size_t>(farFields_[t]->pgm().options().gridWidth) *
-                     static_cast<std::size_t>(farFields_[t]->pgm().options().gridHeight);
+        vertices_ += static_cast<std::size_t>(farField->pgm().options().gridWidth) *
+                     static_cast<std::size_t>(farField->pgm().options().gridHeight);
       }
     }
     glBlitNamedFramebuffer(v.target->framebuffer(), image_->framebuffer(), 0, 0, v.width, v.height,

@@ -14,7 +14,9 @@
 
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <ostream>
@@ -103,9 +105,10 @@ class Viewer {
   ViewScene scene_;
   std::ostream& log_;
   std::unique_ptr<clod::SceneRenderer> renderer_;
-  std::vector<std::unique_ptr<farfield::FarField>> farFields_;  // per terrain, or null
-  std::vector<std::set<std::string>> off_;                      // per terrain: effects off
-  std::vector<std::pair<std::size_t, std::string>> toggles_;    // key 1..9 → (terrain, effect)
+  // Per terrain (none without far-field layers), one per viewport.
+  std::vector<std::array<std::unique_ptr<farfield::FarField>, 2>> farFields_;
+  std::vector<std::set<std::string>> off_;                    // per terrain: effects off
+  std::vector<std::pair<std::size_t, std::string>> toggles_;  // key 1..9 → (terrain, effect)
   std::vector<Viewport> viewports_;
   bool split_ = false;
   std::size_t active_ = 0;
