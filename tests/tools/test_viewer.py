@@ -179,6 +179,9 @@ key 4
 wait 1
 screenshot {work}/demo-colours.png
 pick 960 360
+key C
+wait 1
+screenshot {work}/demo-camera.png
 """)
     out = run("view", "--demo", "--script", script)
     switches = FOCUS.findall(out)
@@ -211,6 +214,21 @@ pick 960 360
     assert dataset == "victoria"
     # Victoria's site (scenegraph::PaperSceneLayout): lon -5.5, lat -2.05, a 1.2 km DEM.
     assert abs(float(lon) + 5.5) < 0.03 and abs(float(lat) + 2.05) < 0.03
+
+    # C: the right viewport shows the scene's first camera (the orbit camera, 20 km above
+    # Victoria looking down), the left one is unchanged.
+    camera = read_png(work / "demo-camera.png")
+    diff = np.abs(below_hud(camera) - below_hud(colours)).sum(axis=2) > 30
+    assert diff[:, right].mean() > 0.3 and diff[:, :W // 2 - 2].mean() < 0.005
+
+
+def test_no_display_is_a_clear_error(planet):
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    p = subprocess.run([BIN, "view", str(planet)], capture_output=True, text=True, timeout=120,
+                       env=env)
+    assert p.returncode != 0
+    assert "regolith: error: gl::Window(): glfwInit() failed" in p.stderr
+    assert "run under xvfb-run for a virtual one" in p.stderr
 
 
 def test_bad_script_line_is_named(work, planet):
