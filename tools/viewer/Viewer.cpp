@@ -424,6 +424,8 @@ void Viewer::handle(const gl::WindowEvent& event) {
     case Type::Key:
       if (event.press) {
         keyPressed(event.code);
+      } else if (fresh_.contains(event.code)) {
+        released_.insert(event.code);  // pressed and released before a frame: one step
       } else {
         held_.erase(event.code);
       }
@@ -456,7 +458,10 @@ void Viewer::handle(const gl::WindowEvent& event) {
       ViewportState& s = viewports_[active_].state;
       if (s.sceneCamera >= 0) break;
       const double factor = std::pow(0.85, event.y);
-      s.eye = s.target + (s.eye - s.target) * factor;
+      if (s.fly)  // the look-at point nearer: slower steps
+        s.target = s.eye + (s.target - s.eye) * factor;
+      else
+        s.eye = s.target + (s.eye - s.target) * factor;
       break;
     }
   }
@@ -465,7 +470,8 @@ void Viewer::handle(const gl::WindowEvent& event) {
 void Viewer::draw(int width, int height) {
   stepHeldKeys();
   // Keys pressed and released within one batch of events still move one step.
-  for (const int k : fresh_) held_.erase(k);
+  for (const int k : released_) held_.erase(k);
+  released_.clear();
   fresh_.clear();
   width = std::max(width, 2);
   height = std::max(height, 1);

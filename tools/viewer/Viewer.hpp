@@ -121,7 +121,7 @@ class Viewer {
   double cursorX_ = 0.0, cursorY_ = 0.0, pressX_ = 0.0, pressY_ = 0.0;
   int button_ = -1;
   bool dragged_ = false;
-  std::set<int> held_, fresh_;
+  std::set<int> held_, fresh_, released_;  // held down; pressed, released since the last frame
   std::vector<std::string> hudLines_;
   std::string pickLine_ = "CLICK TO PICK";
   double frameMs_ = 0.0;
