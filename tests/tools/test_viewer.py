@@ -288,3 +288,10 @@ screenshot {work}/dem-moved.png
         # buffer's float precision at ~500 m (a few mm).
         cell = data[r0:r0 + 2, c0:c0 + 2]
         assert abs(h - bil) <= 0.5 * (cell.max() - cell.min()) + 0.01, (x, y, h, bil)
+
+
+def test_help_names_the_options():
+    p = subprocess.run([BIN, "view", "--help"], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0
+    for word in ("--demo", "--script", "--grid", "--cache-mb", "--clipmap-size", "Example"):
+        assert word in p.stdout, word
