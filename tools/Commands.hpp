@@ -32,6 +32,8 @@ void printInfo(const std::string& file, bool json, std::ostream& out);
 void addQueryCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);
 void addReportCommand(CLI::App& app);
+/// `regolith view` (ViewCommand.cpp): registered only where GLFW is found.
+void addViewCommand(CLI::App& app);
 /// `regolith render CATALOGUE --look-at lon,lat --distance --elevation --heading` into `png`:
 /// one view of a catalogue file's composed surface (the main demo's pole views). Writes the
 /// command's one-line report to `report`.

@@ -56,6 +56,9 @@ int main(int argc, char** argv) try {
   regolith::tools::addQueryCommand(app);
   regolith::tools::addRenderCommand(app);
   regolith::tools::addReportCommand(app);
+#ifdef REGOLITH_HAVE_VIEW
+  regolith::tools::addViewCommand(app);
+#endif
 
   try {
     refuseUnknownSubcommand(app, argc, argv);

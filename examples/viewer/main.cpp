@@ -1,4 +1,6 @@
-// Interactive clipmap viewer (GLFW window, OpenGL 4.5 core).
+// Interactive clipmap viewer of one grid (gl::Window: a GLFW window, OpenGL 4.5 core). The
+// full viewer, on any store or the demo scene, is `regolith view` (docs/viewer.md); this
+// example shows the few calls a program needs to draw a clipmap in a window.
 //
 //   regolith_viewer [store.h5 grid]     a store's grid, paged; without arguments a
 //                                       synthetic 4097² crater DEM at 1 m
@@ -15,10 +17,10 @@
 #include <regolith/clod/FocusController.hpp>
 #include <regolith/clod/Render.hpp>
 #include <regolith/gl/RenderTarget.hpp>
+#include <regolith/gl/Window.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 
-#include <GLFW/glfw3.h>
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -28,6 +30,7 @@
 #include <cstdlib>
 #include <exception>
 #include <memory>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -67,6 +70,7 @@ struct Orbit {
   double heading = 30.0, pitch = 35.0, distance = 900.0;  // degrees, metres
   bool dragging = false;
   double lastX = 0.0, lastY = 0.0;
+  std::set<int> keys;  // held down
 };
 
 Camera orbitCamera(const Orbit& o, const HeightPyramid& pyramid, int width, int height) {
@@ -102,21 +106,7 @@ int main(int argc, char** argv) {
       throw std::invalid_argument("expected a store and a grid name, or nothing");
     const auto pyramid =
         positional.size() == 2 ? pyramidFromStore(positional[0], positional[1]) : syntheticDem();
-    if (glfwInit() == GLFW_FALSE) {
-      std::fprintf(stderr, "regolith_viewer: glfwInit() failed (no display?)\n");
-      return 1;
-    }
-    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
-    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
-    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-    GLFWwindow* window = glfwCreateWindow(1280, 720, "regolith viewer", nullptr, nullptr);
-    if (window == nullptr) {
-      std::fprintf(stderr, "regolith_viewer: no OpenGL 4.5 core window\n");
-      glfwTerminate();
-      return 1;
-    }
-    glfwMakeContextCurrent(window);
-    glfwSwapInterval(0);
+    gl::Window window(1280, 720, "regolith viewer");
     {
       Orbit orbit;
       const auto& g0 = pyramid->level(0).grid;
@@ -124,45 +114,47 @@ int main(int argc, char** argv) {
                                              0.5 * static_cast<double>(g0.cols()));
       orbit.target = pyramid->position(mid.x, mid.y, 0.0);
       if (pyramid->kind() == SurfaceKind::Planet) orbit.distance = 200e3;
-      glfwSetWindowUserPointer(window, &orbit);
-      glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) {
-        auto* o = static_cast<Orbit*>(glfwGetWindowUserPointer(w));
-        o->distance *= std::pow(0.9, dy);
-      });
       ClipmapOptions options;
       options.overlapDepthPush = 0.02F;  // finer levels win where levels overlap
       ClipmapTerrain terrain(pyramid, options);
       FocusController focus;
       int width = 1280, height = 720;
-      focus.addCamera(orbitCamera(orbit, *pyramid, width, height), glfwGetTime());
+      focus.addCamera(orbitCamera(orbit, *pyramid, width, height), gl::Window::time());
       auto target = std::make_unique<gl::RenderTarget>(width, height);
       // A scripted run (--frames) loads synchronously so its frames are deterministic.
       bool async = frameLimit == 0, tiedPrev = false, screenshotPrev = false, asyncPrev = false;
       long frames = 0;
       int shots = 0;
       double frameMs = 0.0;
-      while (glfwWindowShouldClose(window) == GLFW_FALSE) {
+      while (!window.shouldClose()) {
         const auto t0 = std::chrono::steady_clock::now();
-        glfwPollEvents();
-        const double now = glfwGetTime();
-        int fw = 0, fh = 0;
-        glfwGetFramebufferSize(window, &fw, &fh);
+        double mx = orbit.lastX, my = orbit.lastY;
+        for (const gl::WindowEvent& e : window.poll()) {
+          if (e.type == gl::WindowEvent::Type::Scroll) orbit.distance *= std::pow(0.9, e.y);
+          if (e.type == gl::WindowEvent::Type::CursorMove) {
+            mx = e.x;
+            my = e.y;
+          }
+          if (e.type == gl::WindowEvent::Type::MouseButton && e.code == 0) orbit.dragging = e.press;
+          if (e.type == gl::WindowEvent::Type::Key) {
+            if (e.press)
+              orbit.keys.insert(e.code);
+            else
+              orbit.keys.erase(e.code);
+          }
+        }
+        const auto down = [&](int key) { return orbit.keys.contains(key); };
+        const double now = gl::Window::time();
+        auto [fw, fh] = window.framebufferSize();
         if (fw > 0 && fh > 0 && (fw != width || fh != height)) {
           width = fw;
           height = fh;
           target = std::make_unique<gl::RenderTarget>(width, height);
         }
         // Mouse orbit.
-        double mx = 0.0, my = 0.0;
-        glfwGetCursorPos(window, &mx, &my);
-        if (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) {
-          if (orbit.dragging) {
-            orbit.heading += 0.3 * (mx - orbit.lastX);
-            orbit.pitch = std::clamp(orbit.pitch + 0.3 * (my - orbit.lastY), 2.0, 89.0);
-          }
-          orbit.dragging = true;
-        } else {
-          orbit.dragging = false;
+        if (orbit.dragging) {
+          orbit.heading += 0.3 * (mx - orbit.lastX);
+          orbit.pitch = std::clamp(orbit.pitch + 0.3 * (my - orbit.lastY), 2.0, 89.0);
         }
         orbit.lastX = mx;
         orbit.lastY = my;
@@ -173,26 +165,25 @@ int main(int argc, char** argv) {
         fwd = glm::normalize(fwd);
         const glm::dvec3 right = glm::cross(fwd, up);
         const double step = 0.01 * orbit.distance;
-        if (glfwGetKey(window, GLFW_KEY_W) == GLFW_PRESS) orbit.target += fwd * step;
-        if (glfwGetKey(window, GLFW_KEY_S) == GLFW_PRESS) orbit.target -= fwd * step;
-        if (glfwGetKey(window, GLFW_KEY_D) == GLFW_PRESS) orbit.target += right * step;
-        if (glfwGetKey(window, GLFW_KEY_A) == GLFW_PRESS) orbit.target -= right * step;
-        if (glfwGetKey(window, GLFW_KEY_ESCAPE) == GLFW_PRESS)
-          glfwSetWindowShouldClose(window, GLFW_TRUE);
-        const bool tieKey = glfwGetKey(window, GLFW_KEY_T) == GLFW_PRESS;
+        if (down('W')) orbit.target += fwd * step;
+        if (down('S')) orbit.target -= fwd * step;
+        if (down('D')) orbit.target += right * step;
+        if (down('A')) orbit.target -= right * step;
+        if (down(gl::keys::kEscape)) window.requestClose();
+        const bool tieKey = down('T');
         if (tieKey && !tiedPrev) {
           if (focus.tied()) {
             focus.untie();
           } else {
             const glm::dvec3 centre = orbit.target;
             focus.tieTo([centre] {
-              const double t = glfwGetTime();
+              const double t = gl::Window::time();
               return centre + glm::dvec3(200.0 * std::cos(0.2 * t), 200.0 * std::sin(0.2 * t), 0.0);
             });
           }
         }
         tiedPrev = tieKey;
-        const bool asyncKey = glfwGetKey(window, GLFW_KEY_L) == GLFW_PRESS;
+        const bool asyncKey = down('L');
         if (asyncKey && !asyncPrev) {
           async = !async;
           if (!async) terrain.finishLoading();
@@ -220,7 +211,7 @@ int main(int argc, char** argv) {
         glClear(GL_COLOR_BUFFER_BIT);
         glDisable(GL_SCISSOR_TEST);
 
-        const bool shotKey = glfwGetKey(window, GLFW_KEY_P) == GLFW_PRESS;
+        const bool shotKey = down('P');
         if (shotKey && !screenshotPrev) {
           char name[64];
           std::snprintf(name, sizeof name, "viewer-%03d.png", shots++);
@@ -239,11 +230,11 @@ int main(int argc, char** argv) {
           if (!finalShot.empty()) gl::writePng(finalShot, last);
           std::printf("%ld frames in a %dx%d window; terrain on %.0f%% of pixels%s%s\n", frames,
                       width, height, share, finalShot.empty() ? "" : "; saved ", finalShot.c_str());
-          glfwSetWindowShouldClose(window, GLFW_TRUE);
+          window.requestClose();
         }
         glBlitNamedFramebuffer(target->framebuffer(), 0, 0, 0, width, height, 0, 0, width, height,
                                GL_COLOR_BUFFER_BIT, GL_NEAREST);
-        glfwSwapBuffers(window);
+        window.swap();
         frameMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
                       .count();
         char title[160];
@@ -251,11 +242,9 @@ int main(int argc, char** argv) {
             title, sizeof title, "regolith viewer  %.1f ms  levels %zu-%zu  %zu vertices  %s%s",
             frameMs, frame.firstLevel, frame.firstLevel + frame.levelsDrawn - 1, frame.vertices,
             async ? "background loading" : "synchronous", focus.tied() ? "  focus: marker" : "");
-        glfwSetWindowTitle(window, title);
+        window.setTitle(title);
       }
     }
-    glfwDestroyWindow(window);
-    glfwTerminate();
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "regolith_viewer: %s\n", e.what());

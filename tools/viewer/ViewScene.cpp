@@ -1,0 +1,217 @@
+#include "ViewScene.hpp"
+
+#include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/scenegraph/PaperScene.hpp>
+#include <regolith/store/Pager.hpp>
+#include <regolith/store/Store.hpp>
+
+#include "StoreGrid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace regolith::tools::viewer {
+
+namespace {
+
+/// The height range of a pyramid: min and max of its coarsest level of at least 64 samples
+/// a side (or its finest), read whole.
+std::pair<float, float> heightRange(const clod::HeightPyramid& p) {
+  std::size_t k = p.levelCount() - 1;
+  while (k > 0 && std::min(p.level(k).grid.rows(), p.level(k).grid.cols()) < 64) --k;
+  const auto& level = p.level(k);
+  float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
+  for (std::size_t r = 0; r < level.grid.rows(); ++r) {
+    for (std::size_t c = 0; c < level.grid.cols(); ++c) {
+      const float h = level.source->sample(r, c);
+      if (!std::isfinite(h)) continue;
+      lo = std::min(lo, h);
+      hi = std::max(hi, h);
+    }
+  }
+  if (lo > hi) return {0.0F, 1.0F};
+  return {lo, std::max(hi, lo + 1.0F)};
+}
+
+/// The clipmap levels of a latitude/longitude grid whose windows span at most 180° (a wider
+/// one reaches over a pole onto ground it already covers; the far field draws beyond).
+std::size_t levelsWithin180(const clod::HeightPyramid& p, int size) {
+  std::size_t levels = 0;
+  while (levels < p.levelCount() &&
+         (size - 1) * std::abs(p.level(levels).grid.spacingY()) <= 180.0) {
+    ++levels;
+  }
+  return std::max<std::size_t>(levels, 1);
+}
+
+std::shared_ptr<const farfield::HeightLayers> planetLayers(const clod::HeightPyramid& p) {
+  farfield::LayerOptions lo;
+  lo.equirectWidth = 2048;
+  lo.capSize = 512;
+  std::size_t k = 0;
+  while (k + 1 < p.levelCount() && p.level(k).grid.cols() > 4096) ++k;
+  return std::make_shared<const farfield::HeightLayers>(farfield::HeightLayers::fromPlanetGrid(
+      *p.body(), p.level(k).grid, *p.level(k).source, p.latitudeType(), lo));
+}
+
+clod::Effects declaredEffects(const clod::HeightPyramid& p, bool latLon) {
+  clod::Effects e;
+  const auto [lo, hi] = heightRange(p);
+  e.heightColours = clod::HeightColours{lo, hi, true};
+  if (latLon) e.latLon = clod::LatLonLines{};
+  return e;
+}
+
+}  // namespace
+
+ViewScene storeScene(const std::string& path, const std::string& grid, std::size_t cacheBytes,
+                     int clipmapSize) {
+  ViewScene v;
+  auto store = std::make_shared<const store::Store>(store::Store::open(path));
+  const std::string name = chooseGrid(*store, grid, "view");
+  auto cache = std::make_shared<store::PatchCache>(cacheBytes);
+  auto pager = std::make_shared<const store::Pager>(store, cache);
+  auto pyramid = std::make_shared<const clod::HeightPyramid>(pager->pyramid(name));
+  const bool planet = pyramid->kind() == clod::SurfaceKind::Planet;
+  v.title = name + " of " + path;
+  v.graph = std::make_shared<scenegraph::SceneGraph>(planet ? "body" : "map");
+  ViewTerrain t;
+  t.name = name;
+  t.node = v.graph->add(v.graph->root(), name, scenegraph::Pose::identity(),
+                        scenegraph::NodeKind::Terrain, 0);
+  t.pyramid = pyramid;
+  t.options.size = clipmapSize;
+  t.options.effects = declaredEffects(*pyramid, planet || pyramid->placement().has_value());
+  ViewObject o{name, t.node, pyramid, 1.0};
+  OpeningView open;
+  if (planet) {
+    // The far field draws the planet beyond the clipmap's levels within 180°; a planet
+    // coarse enough that one window spans more than 180° gets smaller windows.
+    const double dy = std::abs(pyramid->level(0).grid.spacingY());
+    const int fit = static_cast<int>(std::floor(180.0 / dy)) / 2 * 2 + 1;
+    if (fit < t.options.size && fit >= 15) t.options.size = fit;
+    t.options.levels = levelsWithin180(*pyramid, t.options.size);
+    t.farField = planetLayers(*pyramid);
+    const double radius = pyramid->body()->equatorialRadius();
+    o.size = 2.0 * radius;
+    // The whole planet, seen from 3.2 radii out, looking at (0°E, 0°N) from 70° above its
+    // horizon, so the limb shows its relief.
+    open.target = pyramid->position(0.0, 0.0, 0.0);
+    open.headingDeg = 0.0;
+    open.elevationDeg = 70.0;
+    open.distance = 3.2 * radius;
+    v.bodyGrid = pyramid;
+    v.bodyNode = t.node;
+    ViewCamera overview{"overview", 0, 30.0, 1000.0};
+    const glm::dvec3 eye = pyramid->position(-60.0, 30.0, 4.0 * radius);
+    overview.node = v.graph->add(v.graph->root(), "overview",
+                                 scenegraph::Pose::lookAt(eye, glm::dvec3(0.0), {0.0, 0.0, 1.0}),
+                                 scenegraph::NodeKind::Camera);
+    v.cameras.push_back(overview);
+  } else {
+    // The renderer centres the clipmap on the camera's position clamped onto the grid (an
+    // edge, when the camera stands off to the side): the coarsest level must reach across
+    // the whole grid from there.
+    const auto& coarsest = pyramid->level(pyramid->levelCount() - 1).grid;
+    const std::size_t across = 2 * std::max(coarsest.rows(), coarsest.cols()) + 1;
+    t.options.size =
+        std::max(t.options.size, static_cast<int>(std::min<std::size_t>(across, 2047)));
+    const auto& g = pyramid->level(0).grid;
+    const double extent = std::max(g.east() - g.west(), g.north() - g.south());
+    o.size = extent;
+    const double cx = 0.5 * (g.west() + g.east()), cy = 0.5 * (g.south() + g.north());
+    const auto [lo, hi] = heightRange(*pyramid);
+    open.target = pyramid->position(cx, cy, 0.5 * static_cast<double>(lo + hi));
+    open.headingDeg = 20.0;
+    open.elevationDeg = 35.0;
+    open.distance = 1.2 * extent;
+  }
+  v.terrains.push_back(std::move(t));
+  v.objects.push_back(std::move(o));
+  v.openings.push_back(open);
+  v.cache = cache;
+  v.keepAlive = pager;
+  return v;
+}
+
+ViewScene demoScene() {
+  auto scene = std::make_shared<demo::MarsVictoriaScene>();
+  const scenegraph::PaperSceneNodes& n = scene->nodes();
+  ViewScene v;
+  v.title = "Mars/Victoria demo scene";
+  v.graph = std::shared_ptr<scenegraph::SceneGraph>(scene, &scene->graph());
+  // As MarsVictoriaScene::registerWith(), with the effects each terrain declares.
+  clod::ClipmapOptions planet;
+  planet.size = 127;
+  planet.levels = scene->planetClipmapLevels();
+  planet.albedo = demo::MarsVictoriaScene::kPlanetAlbedo;
+  const auto layers = scene->farFieldLayers();
+  planet.effects.heightColours = clod::HeightColours{static_cast<float>(layers->minHeight()),
+                                                     static_cast<float>(layers->maxHeight()), true};
+  planet.effects.latLon = clod::LatLonLines{};
+  clod::ClipmapOptions dem = planet;
+  dem.levels = 0;
+  dem.albedo = demo::MarsVictoriaScene::kDemAlbedo;
+  dem.effects = {};
+  std::vector<int> cuts{scenegraph::kDrawVictoria};
+  if (scene->secondDem()) cuts.push_back(scenegraph::kDrawSecondDem);
+  v.terrains.push_back(
+      {"mars", n.mars, scenegraph::kDrawMars, scene->mars(), planet, cuts, layers, 0});
+  clod::ClipmapOptions victoria = dem;
+  victoria.effects = declaredEffects(*scene->victoria(), true);
+  victoria.effects.noise = clod::StructuredNoise{0.3, 8.0, 4, 0.15F, std::nullopt};
+  v.terrains.push_back({"victoria",
+                        n.victoria,
+                        scenegraph::kDrawVictoria,
+                        scene->victoria(),
+                        victoria,
+                        {},
+                        nullptr,
+                        1});
+  if (scene->secondDem()) {
+    v.terrains.push_back({"second_dem",
+                          n.secondDem,
+                          scenegraph::kDrawSecondDem,
+                          scene->secondDem(),
+                          dem,
+                          {},
+                          nullptr,
+                          1});
+  }
+  v.meshes.push_back({scenegraph::kDrawRover, clod::roverMesh(), {0.85F, 0.85F, 0.8F}});
+  const double radius = scene->mars()->body()->equatorialRadius();
+  const auto& vg = scene->victoria()->level(0).grid;
+  const double extent = std::max(vg.east() - vg.west(), vg.north() - vg.south());
+  v.objects.push_back({"mars", n.mars, scene->mars(), 2.0 * radius});
+  v.objects.push_back({"victoria", n.victoria, scene->victoria(), extent});
+  if (scene->secondDem()) {
+    const auto& sg = scene->secondDem()->level(0).grid;
+    v.objects.push_back({"second_dem", n.secondDem, scene->secondDem(), sg.east() - sg.west()});
+  }
+  v.objects.push_back({"rover", n.rover, nullptr, 4.0});
+  v.cameras.push_back({"orbit", n.orbitCamera, 45.0, 100.0});
+  v.cameras.push_back({"mast", n.mastCamera, 45.0, 0.05});
+  v.cameras.push_back({"chase", n.chaseCamera, 45.0, 0.05});
+  // Left: Mars whole, Victoria's side towards the camera. Right: Victoria from above at 35°.
+  const topo::Geodetic site = scene->layout().victoriaOrigin;
+  OpeningView whole;
+  whole.object = 0;
+  whole.target = scene->mars()->position(site.lonDeg, site.latDeg, 0.0);
+  whole.elevationDeg = 75.0;
+  whole.distance = 3.2 * radius;
+  OpeningView crater;
+  crater.object = 1;
+  crater.target = {0.0, 0.0, scene->demHeight(0.0, 0.0)};
+  crater.headingDeg = 20.0;
+  crater.elevationDeg = 35.0;
+  crater.distance = 1.2 * extent;
+  v.openings = {whole, crater};
+  v.bodyGrid = scene->mars();
+  v.bodyNode = n.mars;
+  v.keepAlive = scene;
+  return v;
+}
+
+}  // namespace regolith::tools::viewer
