@@ -115,6 +115,13 @@ std::vector<glm::dvec2> readWaypoints(const std::string& path) {
   return points;
 }
 
+bool namesLatLon(const EffectOptions& o) {
+  clod::EffectRequest request;
+  for (const std::string& list : o.effects)
+    clod::addEffectList(request, list, kOp, clod::kCommandLineEffectOptions);
+  return request.latLon;
+}
+
 DeclaredEffects declareEffects(const EffectOptions& o, const EffectTerrain& t) {
   clod::EffectRequest request;
   for (const std::string& list : o.effects)

@@ -37,6 +37,10 @@ struct EffectOptions {
 /// --noise-octaves and --traverse to `cmd`.
 void addEffectOptions(CLI::App& cmd, EffectOptions& o);
 
+/// Whether --effects names latlon (a DEM is then drawn placed on its body). Throws as
+/// declareEffects() for an unknown name.
+[[nodiscard]] bool namesLatLon(const EffectOptions& o);
+
 /// What the render needs to know of its terrain to declare the effects.
 struct EffectTerrain {
   const clod::HeightPyramid* pyramid = nullptr;

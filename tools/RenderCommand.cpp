@@ -100,7 +100,12 @@ Terrain storeTerrain(const Args& a) {
   t.planet = info.kind == store::GridKind::Planet;
   t.cache = std::make_shared<store::PatchCache>(a.cacheMb << 20U);
   auto pager = std::make_shared<const store::Pager>(store, t.cache);
-  t.pyramid = std::make_shared<const clod::HeightPyramid>(pager->pyramid(gridName));
+  // Lat/lon lines need a DEM on its body: then it is drawn through its placement
+  // (body-fixed), else in its grid frame.
+  t.pyramid = !t.planet && namesLatLon(a.effects)
+                  ? std::make_shared<const clod::HeightPyramid>(pager->pyramid(gridName).levels,
+                                                                store::placementOf(info))
+                  : std::make_shared<const clod::HeightPyramid>(pager->pyramid(gridName));
   t.g0 = store::topoGridOf(info, 0);
   t.radius = store::bodyOf(info).equatorialRadius();
   t.height = [pager, gridName, &info](double pa, double pb) {
@@ -273,6 +278,10 @@ void runRender(const Args& a, std::ostream& report) {
   const DeclaredEffects effects = declareEffects(a.effects, effectTerrain);
   request.clipmap.effects = effects.effects;
   request.clipmap.trackWindow = effects.trackWindow;
+  if (!catalogue && pyramid->placement()) {  // a DEM drawn placed: lit as in its grid frame
+    request.clipmap.lightDirection =
+        clod::gridLightInScene(*pyramid, {ta, tb}, request.clipmap.lightDirection);
+  }
   if (catalogue) {
     // The sun 35° above the look-at point's horizon, from the west-north-west, wherever on
     // the body that is (the default light is fixed in body-fixed axes: from below at a

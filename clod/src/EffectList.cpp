@@ -4,6 +4,8 @@
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
 
+#include <glm/geometric.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -224,6 +226,18 @@ std::optional<std::array<double, 2>> heightRangeOf(const HeightPyramid& pyramid,
   }
   if (!(lo <= hi)) return std::nullopt;
   return std::array<double, 2>{lo, hi};
+}
+
+glm::vec3 gridLightInScene(const HeightPyramid& pyramid, glm::dvec2 g, glm::vec3 gridLight) {
+  const glm::dvec3 l = glm::normalize(glm::dvec3(gridLight));
+  if (!pyramid.placement()) return glm::vec3(l);
+  const double d = std::abs(pyramid.level(0).grid.spacingX());
+  const glm::dvec3 o = pyramid.position(g.x, g.y, 0.0);
+  const glm::dvec3 up = pyramid.up(o);
+  glm::dvec3 east = pyramid.position(g.x + d, g.y, 0.0) - o;
+  east = glm::normalize(east - up * glm::dot(east, up));
+  const glm::dvec3 north = glm::cross(up, east);
+  return glm::vec3(glm::normalize(l.x * east + l.y * north + l.z * up));
 }
 
 }  // namespace regolith::clod

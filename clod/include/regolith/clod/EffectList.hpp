@@ -9,6 +9,9 @@
 
 #include <regolith/clod/Effects.hpp>
 
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
 #include <array>
 #include <cstddef>
 #include <functional>
@@ -113,5 +116,12 @@ struct EffectDefaults {
 /// level 0's.
 [[nodiscard]] std::optional<std::array<double, 2>> heightRangeOf(
     const HeightPyramid& pyramid, std::size_t maxSamples = std::size_t{1} << 22U);
+
+/// A light direction given in a DEM's grid frame (x east, y north, z up; the default
+/// ClipmapOptions::lightDirection) turned into the scene frame of `pyramid` at grid point
+/// (x, y): the same for a plane, body-fixed for a placed DEM, so a DEM drawn placed (for
+/// lat/lon lines) is lit as in its grid frame. Unit length.
+[[nodiscard]] glm::vec3 gridLightInScene(const HeightPyramid& pyramid, glm::dvec2 gridPoint,
+                                         glm::vec3 gridLight);
 
 }  // namespace regolith::clod
