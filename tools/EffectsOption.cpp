@@ -83,8 +83,8 @@ void addEffectOptions(CLI::App& cmd, EffectOptions& o) {
 std::vector<glm::dvec2> readWaypoints(const std::string& path) {
   std::ifstream in(path);
   if (!in) {
-    throw InvalidArgument(
-        core::format({kOp, path, "--traverse", {}, "a readable CSV of waypoints 'x,y' (metres)"}));
+    throw InvalidArgument(core::format({kOp, path, "--traverse file", "not readable",
+                                        "a readable CSV file of waypoints 'x,y' (metres)"}));
   }
   std::vector<glm::dvec2> points;
   std::string line;
@@ -107,7 +107,9 @@ std::vector<glm::dvec2> readWaypoints(const std::string& path) {
         core::format({kOp, path, "--traverse line " + std::to_string(number),
                       "'" + std::string(text) + "'", "'x,y': two finite numbers (grid metres)"}));
   }
-  if (in.bad()) throw InvalidArgument(core::format({kOp, path, "--traverse", {}, "readable"}));
+  if (in.bad())
+    throw InvalidArgument(
+        core::format({kOp, path, "--traverse file", "not readable to its end", "a readable file"}));
   if (points.size() < 2) {
     throw InvalidArgument(core::format(
         {kOp, path, "--traverse waypoints", std::to_string(points.size()), "at least 2"}));
@@ -165,10 +167,10 @@ DeclaredEffects declareEffects(const EffectOptions& o, const EffectTerrain& t) {
             << d.effects.heightColours->maxHeight << "] m";
   }
   if (d.effects.latLon) {
-    summary << "; lat/lon lines "
-            << (d.effects.latLon->spacingDegrees > 0.0
-                    ? "every " + core::number(d.effects.latLon->spacingDegrees) + "°"
-                    : std::string("at an adaptive spacing"));
+    if (d.effects.latLon->spacingDegrees > 0.0)
+      summary << "; lat/lon lines every " << d.effects.latLon->spacingDegrees << "°";
+    else
+      summary << "; lat/lon lines at an adaptive spacing";
   }
   if (d.effects.noise) {
     summary << "; noise " << d.effects.noise->amplitude << " m, wavelength "
