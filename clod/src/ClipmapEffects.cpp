@@ -169,8 +169,10 @@ double ClipmapTerrain::latLonSpacing(const Camera& camera) const {
   const double wanted = ll->minPixelSpacing * degPerPixel;
   // 90, 60, 45, 30, 20, 15, 10, 5, 2, 1, then 1-2-5 steps down.
   std::vector<double> nice{90, 60, 45, 30, 20, 15, 10, 5, 2, 1};
-  for (double decade = 0.1; decade > 1e-7; decade *= 0.1)
-    for (double m : {5.0, 2.0, 1.0}) nice.push_back(m * decade);
+  // m / 10^k, not m × 0.1^k: the spacing reads 0.002 in the legend's JSON, not
+  // 0.0020000000000000005.
+  for (int k = 1; k <= 7; ++k)
+    for (double m : {5.0, 2.0, 1.0}) nice.push_back(m / std::pow(10.0, k));
   double best = nice.front();
   for (double s : nice)
     if (s >= wanted) best = s;
