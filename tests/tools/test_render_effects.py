@@ -262,6 +262,25 @@ def test_latlon_lines_lie_where_proj_puts_the_meridians_and_parallels(work, wide
     assert expected >= 3 and runs == expected, (runs, expected)
 
 
+def test_adaptive_latlon_spacing_keeps_lines_80_pixels_apart_on_a_placed_dem(work, wide):
+    """Without --latlon-spacing: the smallest of 90, 60, …, 0.01, 0.005, … degrees whose
+    lines are at least 80 pixels apart at the camera's altitude above the ground (here the
+    distance, straight down): worked out here from the focal length and Mars' radius."""
+    dist = 1800.0
+    out = work / "ll-adaptive.png"
+    p = run("render", wide, "-o", out, "--width", W, "--height", H, "--fov", FOV,
+            "--elevation", 90, "--distance", dist, "--effects", "latlon")
+    assert "lat/lon lines at an adaptive spacing" in p.stdout
+    f = (H / 2) / math.tan(math.radians(FOV / 2))
+    wanted = 80.0 * math.degrees(dist / f / MARS_A)
+    nice = [90, 60, 45, 30, 20, 15, 10, 5, 2, 1] + [m / 10 ** k for k in range(1, 8)
+                                                     for m in (5, 2, 1)]
+    expected = min(s for s in nice if s >= wanted)
+    assert expected == 0.01  # wanted 0.0074°: 0.005° would put lines 54 pixels apart
+    legend = json.loads((work / "ll-adaptive.png.legend.json").read_text())
+    assert legend == {"latLonSpacingDegrees": expected}
+
+
 def test_latlon_on_a_planet_draws_lines_only_with_the_effect(work, planet):
     bare, lined = work / "mars-bare.png", work / "mars-ll.png"
     run("render", planet, "-o", bare, "--width", 240, "--height", 180)
