@@ -72,7 +72,10 @@ void addParameters(PyEffects& out, const std::string& name, const py::dict& para
       throw InvalidArgument(std::string(kOp) + ": " + where + " has a key of type " + typeName(k) +
                             ", expected parameter names (str)");
     const std::string key = k.cast<std::string>();
-    const std::string at = where + "['" + key + "']";
+    std::string at = where;  // effects['name']['key']
+    at += "['";
+    at += key;
+    at += "']";
     if (name == "height-colours") {
       if (key != "range") unknown(key, "range");
       py::sequence seq;
