@@ -24,6 +24,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iomanip>
@@ -344,6 +345,12 @@ void runRender(const Args& a, std::ostream& report) {
     }
   }
   clod::renderToPng(pyramid, request, a.out);
+  // A legend beside the PNG describes this image only: one an earlier render left there
+  // goes when this one has none (no height colours or lat/lon lines).
+  if (!effects.effects.heightColours && !effects.effects.latLon) {
+    std::error_code ignored;
+    std::filesystem::remove(a.out + ".legend.json", ignored);
+  }
 
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -443,6 +443,20 @@ def test_traverse_errors_name_the_file_and_line(work, ramp, planet):
     assert not (work / "bad.png").exists()
 
 
+def test_the_legend_beside_the_png_is_always_this_images(work, ramp):
+    path, _ = ramp
+    out = work / "again.png"
+    legend = work / "again.png.legend.json"
+    run("render", path, "-o", out, *DOWN, "--effects", "height-colours", "--height-range",
+        "0,40")
+    assert json.loads(legend.read_text())["heightColours"]["max"] == 40
+    run("render", path, "-o", out, *DOWN, "--effects", "height-colours", "--height-range",
+        "0,30")
+    assert json.loads(legend.read_text())["heightColours"]["max"] == 30
+    run("render", path, "-o", out, *DOWN, "--effects", "noise")
+    assert not legend.exists()  # no legend for this image: the earlier one is gone
+
+
 # ---- undeclared effects cost nothing ------------------------------------------------------
 
 def test_without_effects_nothing_changes(work, ramp, planet):
