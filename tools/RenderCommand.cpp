@@ -1,5 +1,6 @@
 // `regolith render STORE|CATALOGUE`: one headless clipmap image of a store's grid, or of the
 // composed surface of a catalogue file, as a PNG.
+#include <regolith/clod/EffectList.hpp>
 #include <regolith/clod/Render.hpp>
 #include <regolith/compose/ComposedPyramid.hpp>
 #include <regolith/compose/FromStore.hpp>
@@ -11,6 +12,7 @@
 
 #include "CatalogueInfo.hpp"
 #include "Commands.hpp"
+#include "EffectsOption.hpp"
 #include "FiniteRange.hpp"
 #include "OutputFolder.hpp"
 #include "StoreGrid.hpp"
@@ -19,8 +21,10 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iomanip>
@@ -52,6 +56,7 @@ struct Args {
   std::size_t cacheMb = 256;
   std::optional<double> spacing;  // catalogue: the composed grid's spacing, degrees
   bool noFarField = false;
+  EffectOptions effects;
 };
 
 /// What a render draws: a store's grid, or a catalogue's composed surface over a global
@@ -70,6 +75,10 @@ struct Terrain {
   std::shared_ptr<store::PatchCache> cache;
   std::shared_ptr<const void> keepAlive;                    // pagers, stores, catalogue
   std::shared_ptr<const compose::ComposedSurface> surface;  // a catalogue's
+  /// Effects: the height range (a store's level-0 statistics, else the pyramid's samples)
+  /// and the DEM a traverse drives on (a store's DEM grid only).
+  std::function<std::optional<std::array<double, 2>>()> heightRange;
+  std::function<topo::TopoDem()> dem;
 };
 
 /// Height at grid point (a, b) from the finest level that has a sample there, or nullopt.
@@ -92,7 +101,12 @@ Terrain storeTerrain(const Args& a) {
   t.planet = info.kind == store::GridKind::Planet;
   t.cache = std::make_shared<store::PatchCache>(a.cacheMb << 20U);
   auto pager = std::make_shared<const store::Pager>(store, t.cache);
-  t.pyramid = std::make_shared<const clod::HeightPyramid>(pager->pyramid(gridName));
+  // Lat/lon lines need a DEM on its body: then it is drawn through its placement
+  // (body-fixed), else in its grid frame.
+  t.pyramid = !t.planet && namesLatLon(a.effects)
+                  ? std::make_shared<const clod::HeightPyramid>(pager->pyramid(gridName).levels,
+                                                                store::placementOf(info))
+                  : std::make_shared<const clod::HeightPyramid>(pager->pyramid(gridName));
   t.g0 = store::topoGridOf(info, 0);
   t.radius = store::bodyOf(info).equatorialRadius();
   t.height = [pager, gridName, &info](double pa, double pb) {
@@ -102,6 +116,12 @@ Terrain storeTerrain(const Args& a) {
   t.latLonGrid = t.planet;
   t.what = "grid '" + gridName + "' of " + a.store;
   t.keepAlive = pager;
+  t.heightRange = [&info, p = t.pyramid]() -> std::optional<std::array<double, 2>> {
+    if (info.statistics && info.statistics->validSamples > 0)
+      return std::array<double, 2>{info.statistics->min, info.statistics->max};
+    return clod::heightRangeOf(*p);
+  };
+  if (!t.planet) t.dem = [pager, gridName] { return pager->dem(gridName); };
   return t;
 }
 
@@ -151,6 +171,7 @@ Terrain catalogueTerrain(const Args& a) {
                                  : std::shared_ptr<store::PatchCache>(
                                        file->pagers.front(), &file->pagers.front()->cache());
   t.keepAlive = std::shared_ptr<const void>(file, file.get());
+  t.heightRange = [p = t.pyramid] { return clod::heightRangeOf(*p); };
   return t;
 }
 
@@ -250,6 +271,18 @@ void runRender(const Args& a, std::ostream& report) {
     }
   }
   request.clipmap.size = a.clipmapSize;
+  // Effects (docs/overlays.md): only those --effects names are built.
+  EffectTerrain effectTerrain{
+      pyramid.get(), terrain.heightRange,
+      terrain.dem,   terrain.what,
+      {ta, tb},      terrain.latLonGrid ? terrain.radius * std::numbers::pi / 180.0 : 1.0};
+  const DeclaredEffects effects = declareEffects(a.effects, effectTerrain);
+  request.clipmap.effects = effects.effects;
+  request.clipmap.trackWindow = effects.trackWindow;
+  if (!catalogue && pyramid->placement()) {  // a DEM drawn placed: lit as in its grid frame
+    request.clipmap.lightDirection =
+        clod::gridLightInScene(*pyramid, {ta, tb}, request.clipmap.lightDirection);
+  }
   if (catalogue) {
     // The sun 35° above the look-at point's horizon, from the west-north-west, wherever on
     // the body that is (the default light is fixed in body-fixed axes: from below at a
@@ -312,6 +345,12 @@ void runRender(const Args& a, std::ostream& report) {
     }
   }
   clod::renderToPng(pyramid, request, a.out);
+  // A legend beside the PNG describes this image only: one an earlier render left there
+  // goes when this one has none (no height colours or lat/lon lines).
+  if (!effects.effects.heightColours && !effects.effects.latLon) {
+    std::error_code ignored;
+    std::filesystem::remove(a.out + ".legend.json", ignored);
+  }
 
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -324,6 +363,7 @@ void runRender(const Args& a, std::ostream& report) {
            << static_cast<double>(stats.bytesLoaded) / 1048576.0 << " MiB loaded";
   }
   report << "\n";
+  if (!effects.summary.empty()) report << effects.summary << "\n";
 }
 
 }  // namespace
@@ -403,6 +443,7 @@ void addRenderCommand(CLI::App& app) {
   cmd->add_flag("--no-far-field", a->noFarField,
                 "Planets: draw only the clipmap, every level, instead of its levels within 180° "
                 "and the far field (projective grid mapping, docs/far-field.md) beyond them");
+  addEffectOptions(*cmd, a->effects);
   cmd->add_option("--clipmap-size", a->clipmapSize,
                   "Vertices per clipmap level side (odd, 15 to 2047)")
       ->check(CLI::Range(15, 2047))
@@ -415,6 +456,8 @@ void addRenderCommand(CLI::App& app) {
       "  regolith render victoria.h5 --position -450,0,2 --heading 90 --pitch -10\n"
       "  regolith render mars.h5 --look-at -5.5,-2 --distance 2e6 --elevation 60\n"
       "  regolith render moon.json --look-at 0,-88 --distance 1e6 --elevation 60\n"
+      "  regolith render victoria.h5 --effects height-colours,noise --height-range -80,20\n"
+      "  regolith render mars.h5 --effects latlon --latlon-spacing 15\n"
       "Exit status: 0 on success; non-zero with 'regolith: error: ...' on stderr otherwise "
       "(including when no OpenGL 4.5 context can be made).");
   cmd->callback([a] { runRender(*a, std::cout); });

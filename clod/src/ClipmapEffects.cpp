@@ -9,6 +9,7 @@
 #include "ClipmapEffectState.hpp"
 #include "ClipmapLevel.hpp"
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
@@ -148,13 +149,30 @@ double ClipmapTerrain::latLonSpacing(const Camera& camera) const {
   if (ll->spacingDegrees > 0.0) return ll->spacingDegrees;
   const topo::Body& body = *bodyOf(*pyramid_);
   const double r = body.equatorialRadius();
-  const double altitude = std::max(glm::length(camera.position) - r, 1.0);
+  // Altitude above the ground: the camera's height above the ellipsoid less the ground's at
+  // the focus (the coarsest level's nearest sample; 0 m off the grid or over nodata). Not
+  // |position| − r: below the equatorial radius (a DEM placed at −1.4 km) that was ≤ 0, and
+  // the lines came out a fraction of a pixel apart.
+  const auto& top = pyramid_->level(pyramid_->levelCount() - 1);
+  const glm::dvec2 f = glm::round(top.grid.fractionalIndex(gridOrigin_.x, gridOrigin_.y));
+  double groundHeight = 0.0;
+  if (f.x >= 0.0 && f.y >= 0.0 && f.x < static_cast<double>(top.grid.cols()) &&
+      f.y < static_cast<double>(top.grid.rows())) {
+    const float s =
+        top.source->sample(static_cast<std::size_t>(f.y), static_cast<std::size_t>(f.x));
+    if (!std::isnan(s) && !top.grid.isNodata(s)) groundHeight = static_cast<double>(s);
+  }
+  const glm::dvec3 ground = pyramid_->position(gridOrigin_.x, gridOrigin_.y, groundHeight);
+  const double altitude =
+      std::max(body.toGeodetic(camera.position).height - body.toGeodetic(ground).height, 1.0);
   const double degPerPixel = altitude / camera.focalPixels() / r * 180.0 / std::numbers::pi;
   const double wanted = ll->minPixelSpacing * degPerPixel;
   // 90, 60, 45, 30, 20, 15, 10, 5, 2, 1, then 1-2-5 steps down.
   std::vector<double> nice{90, 60, 45, 30, 20, 15, 10, 5, 2, 1};
-  for (double decade = 0.1; decade > 1e-7; decade *= 0.1)
-    for (double m : {5.0, 2.0, 1.0}) nice.push_back(m * decade);
+  // m / 10^k, not m × 0.1^k: the spacing reads 0.002 in the legend's JSON, not
+  // 0.0020000000000000005.
+  for (int k = 1; k <= 7; ++k)
+    for (double m : {5.0, 2.0, 1.0}) nice.push_back(m / std::pow(10.0, k));
   double best = nice.front();
   for (double s : nice)
     if (s >= wanted) best = s;
