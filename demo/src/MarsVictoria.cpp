@@ -510,4 +510,96 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
   return summary;
 }
 
+scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
+                                         const SceneRover& rover) {
+  const clod::Effects& fx = options.victoriaEffects;
+  if (fx.albedo || fx.noise || fx.heightColours || fx.latLon || fx.overlay)
+    throw InvalidArgument(
+        "demo::sceneDescription(): victoriaEffects other than tracks are not carried over");
+  if (options.marsStore.empty() != options.victoriaStore.empty())
+    throw InvalidArgument("demo::sceneDescription(): marsStore and victoriaStore go together");
+  const auto rgb = [](const glm::vec3& c) { return std::array<double, 3>{c.x, c.y, c.z}; };
+  scene::SceneDescription d;
+  d.folder = std::filesystem::current_path();
+  scene::Body mars;
+  mars.name = "mars";
+  scene::DataSource planet;
+  if (options.marsStore.empty()) {
+    planet.generate = "mars-planet";
+    planet.rows = options.planetRows;
+    planet.seed = options.seed;
+  } else {
+    planet.store = options.marsStore.string();
+    planet.grid = options.marsGrid;
+  }
+  mars.heights.push_back(planet);
+  if (options.composition) {
+    for (const MarsVictoriaOptions::StoreDataset& e : options.extraDatasets) {
+      scene::DataSource s;
+      s.store = e.store.string();
+      s.grid = e.grid;
+      s.featherMetres = e.featherMetres;
+      s.featherNodataSamples = e.featherNodataSamples;
+      mars.heights.push_back(s);
+    }
+  }
+  mars.composeDems = options.composition;
+  mars.farField = options.farField;
+  mars.look.colour = rgb(MarsVictoriaScene::kPlanetAlbedo);
+  mars.look.clipmapSize = options.clipmapSize;
+  d.bodies.push_back(mars);
+
+  const glm::vec3 demAlbedo = options.demAlbedo.value_or(MarsVictoriaScene::kDemAlbedo);
+  scene::Dem victoria;
+  victoria.name = "victoria";
+  victoria.body = "mars";
+  if (options.victoriaStore.empty()) {
+    victoria.heights.generate = "victoria";
+    victoria.heights.size = options.demSize;
+    victoria.heights.spacing = options.demSpacing;
+    victoria.heights.seed = options.seed;
+    victoria.placement =
+        scene::Dem::Placement{store::VictoriaGenerator::kOriginLatDeg,
+                              store::VictoriaGenerator::kOriginLonDeg, 0.0, true, 0.0};
+  } else {
+    victoria.heights.store = options.victoriaStore.string();
+    victoria.heights.grid = options.victoriaGrid;
+  }
+  victoria.heights.featherMetres = options.demFeatherMetres;
+  victoria.look.colour = rgb(demAlbedo);
+  victoria.look.clipmapSize = options.clipmapSize;
+  victoria.look.effects.tracks = fx.tracks != nullptr || !rover.traverse.empty();
+  d.dems.push_back(victoria);
+  if (options.secondDem) {
+    const scenegraph::PaperSceneLayout layout;
+    scene::Dem second = victoria;
+    second.name = "second_dem";
+    second.heights = {};
+    second.heights.generate = "victoria";
+    second.heights.size = options.secondDemSize;
+    second.heights.spacing = options.secondDemSpacing;
+    second.heights.seed = options.seed + 1;
+    second.heights.featherMetres = options.demFeatherMetres;
+    second.placement = scene::Dem::Placement{layout.secondDemOrigin.latDeg,
+                                             layout.secondDemOrigin.lonDeg, 0.0, true, 0.0};
+    second.look.effects = {};
+    d.dems.push_back(second);
+  }
+  scene::Object r;
+  r.name = "rover";
+  r.dem = "victoria";
+  if (rover.traverse.empty()) {
+    r.pose = scene::Object::Pose{rover.x, rover.y, rover.headingDeg};
+  } else {
+    scene::Object::Traverse t;
+    for (const glm::dvec2& w : rover.traverse) t.waypoints.push_back({w.x, w.y});
+    r.traverse = t;
+  }
+  d.objects.push_back(r);
+  // lightInFocus(): morning sun over Victoria, 35° up from the east (x east, y north, z up).
+  d.light.frame = "victoria";
+  d.light.direction = std::array<double, 3>{std::cos(35.0 * kDeg), -0.3, std::sin(35.0 * kDeg)};
+  return d;
+}
+
 }  // namespace regolith::demo

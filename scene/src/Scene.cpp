@@ -240,7 +240,8 @@ struct Scene::Impl {
 
   /// A body with several height datasets, or whose DEMs are composed into it: one composed
   /// surface (docs/composition.md) that the planet draws on its own lattice and each
-  /// composed DEM on its own (its samples there are the composed heights).
+  /// composed DEM on its own (its samples there are the composed heights). The catalogue
+  /// holds the planet grid, then the DEMs, then the further datasets (the demo's order).
   void composeBody(std::size_t i) {
     const Body& b = d.bodies[i];
     Terrain& t = terrainNamed(b.name);
@@ -252,6 +253,19 @@ struct Scene::Impl {
       compose::DatasetOptions po;
       po.name = b.name;
       catalogue->add(compose::Dataset::planet(levelsOf(*planet), po));
+      std::vector<std::pair<Terrain*, std::shared_ptr<const compose::Dataset>>> dems;
+      if (b.composeDems) {
+        for (std::size_t k = 0; k < d.dems.size(); ++k) {
+          if (d.dems[k].body != b.name) continue;
+          Terrain& dem = terrainNamed(d.dems[k].name);
+          compose::DatasetOptions o;
+          o.name = dem.name;
+          o.featherMetres = d.dems[k].heights.featherMetres;
+          auto data = compose::Dataset::dem(levelsOf(*dem.pyramid), dem.dem->placement(), o);
+          catalogue->add(data);
+          dems.emplace_back(&dem, std::move(data));
+        }
+      }
       for (std::size_t k = 1; k < b.heights.size(); ++k) {
         const DataSource& s = b.heights[k];
         compose::DatasetOptions o;
@@ -272,19 +286,6 @@ struct Scene::Impl {
           }
           catalogue->add(
               compose::Dataset::dem(levelsOf(*g.pyramid), store::placementOf(g.info), o));
-        }
-      }
-      std::vector<std::pair<Terrain*, std::shared_ptr<const compose::Dataset>>> dems;
-      if (b.composeDems) {
-        for (std::size_t k = 0; k < d.dems.size(); ++k) {
-          if (d.dems[k].body != b.name) continue;
-          Terrain& dem = terrainNamed(d.dems[k].name);
-          compose::DatasetOptions o;
-          o.name = dem.name;
-          o.featherMetres = d.dems[k].heights.featherMetres;
-          auto data = compose::Dataset::dem(levelsOf(*dem.pyramid), dem.dem->placement(), o);
-          catalogue->add(data);
-          dems.emplace_back(&dem, std::move(data));
         }
       }
       composed = std::make_shared<const compose::ComposedSurface>(catalogue->snapshot());
