@@ -380,6 +380,17 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
       demo::sceneDescription(fly.scene, {0.0, 0.0, 0.0, rover::defaultVictoriaPath()});
   sceneFile.cameras = views.cameras;
   const fs::path scenePath = o.outDir / "scene.json";
+  // Stores inside the output folder are named relative to it, so the folder can move.
+  const fs::path outAbs = fs::absolute(o.outDir).lexically_normal();
+  const auto relative = [&](scene::DataSource& s) {
+    if (s.store.empty()) return;
+    const fs::path rel = fs::absolute(s.store).lexically_normal().lexically_relative(outAbs);
+    if (!rel.empty() && *rel.begin() != "..") s.store = rel.string();
+  };
+  for (scene::Body& b : sceneFile.bodies)
+    for (scene::DataSource& s : b.heights) relative(s);
+  for (scene::Dem& m : sceneFile.dems) relative(m.heights);
+  sceneFile.folder = outAbs;
   scene::writeScene(sceneFile, scenePath);
   out << "  " << scenePath.string() << " (the scene of these views)" << std::endl;
 
