@@ -518,7 +518,10 @@ scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
         "demo::sceneDescription(): victoriaEffects other than tracks are not carried over");
   if (options.marsStore.empty() != options.victoriaStore.empty())
     throw InvalidArgument("demo::sceneDescription(): marsStore and victoriaStore go together");
-  const auto rgb = [](const glm::vec3& c) { return std::array<double, 3>{c.x, c.y, c.z}; };
+  const auto rgb = [](const glm::vec3& c) {
+    return std::array<double, 3>{static_cast<double>(c.x), static_cast<double>(c.y),
+                                 static_cast<double>(c.z)};
+  };
   scene::SceneDescription d;
   d.folder = std::filesystem::current_path();
   scene::Body mars;
