@@ -13,7 +13,7 @@ clang_format=${CLANG_FORMAT:-clang-format}
 command -v "$clang_format" >/dev/null || { echo "check-format: $clang_format not found" >&2; exit 2; }
 
 dirs=()
-for d in core topo store compose scenegraph rover gl clod render farfield demo tests tools bench examples bindings; do
+for d in core topo store compose scenegraph rover gl clod render farfield scene demo tests tools bench examples bindings; do
   [[ -d $d ]] && dirs+=("$d")
 done
 files=()

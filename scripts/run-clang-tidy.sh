@@ -33,7 +33,7 @@ command -v "$clang_tidy" >/dev/null || { echo "run-clang-tidy: $clang_tidy not f
 
 # Library sources of every module that exists, plus the command-line tool.
 shopt -s nullglob
-candidates=("$root"/{core,topo,store,compose,gl,clod,render,farfield,scenegraph,demo,rover}/src/*.cpp "$root"/tools/*.cpp "$root"/tools/src/*.cpp "$root"/tools/viewer/*.cpp)
+candidates=("$root"/{core,topo,store,compose,gl,clod,render,farfield,scene,scenegraph,demo,rover}/src/*.cpp "$root"/tools/*.cpp "$root"/tools/src/*.cpp "$root"/tools/viewer/*.cpp)
 shopt -u nullglob
 
 files=()

@@ -8,6 +8,7 @@
 #include "Commands.hpp"
 #include "OutputFolder.hpp"
 #include "ReportText.hpp"
+#include "SceneFiles.hpp"
 
 #include <CLI/CLI.hpp>
 #include <glm/geometric.hpp>
@@ -463,6 +464,10 @@ void printInfo(const std::string& file, bool json, std::ostream& out) {
   std::error_code ec;
   // GDAL's virtual paths (/vsizip/, /vsicurl/, ...) are rasters: `import` accepts them.
   const bool virtualPath = file.rfind("/vsi", 0) == 0;
+  if (!virtualPath && isSceneFile(file)) {
+    printSceneInfo(file, json, out);
+    return;
+  }
   if (!virtualPath && isCatalogueFile(file)) {
     printCatalogueInfo(file, json, out);
     return;

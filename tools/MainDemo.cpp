@@ -6,6 +6,8 @@
 #include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/gl/Image.hpp>
 #include <regolith/rover/Traverse.hpp>
+#include <regolith/scene/SceneDescription.hpp>
+#include <regolith/scene/SceneParts.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
@@ -235,32 +237,27 @@ TraverseRun runTraverse(const MainDemoOptions& o, const fs::path& victoria, std:
   t.path = rover::defaultVictoriaPath();
   TraverseRun run;
   run.budgetBytes = cache->stats().capacityBytes;
-  double nextStamp = 0.0;
   double nextReport = 0.0;
-  std::array<clod::WheelContact, rover::kWheels> imprint;
-  run.result = rover::runTraverse(dem, t, [&](const rover::StepState& s) {
-    if (s.distance >= nextStamp) {  // tracks: one imprint of all six wheels every 5 cm
-      for (std::size_t w = 0; w < rover::kWheels; ++w)
-        imprint[w] = clod::WheelContact{{s.wheels[w].x, s.wheels[w].y},
-                                        clod::RoverRuts::kWheelWidthMetres,
-                                        clod::RoverRuts::kDepthMetres};
-      run.tracks->step(imprint);
-      ++run.imprints;
-      nextStamp = s.distance + clod::RoverRuts::kSpacingMetres;
-    }
-    if (s.distance >= nextReport) {
-      out << "  " << std::fixed << std::setprecision(0) << std::setw(4) << s.distance << " m  x "
-          << std::setw(6) << std::setprecision(1) << s.chassis.x << "  y " << std::setw(6)
-          << s.chassis.y << "  height " << std::setw(7) << std::setprecision(2) << s.chassis.height
-          << " m  pitch " << std::setw(5) << std::setprecision(1) << s.chassis.pitch * 180.0 / M_PI
-          << "°  roll " << std::setw(5) << s.chassis.roll * 180.0 / M_PI << "°  cache "
-          << cache->stats().residentBytes / 1024 << " KiB\n";
-      nextReport = s.distance + 100.0;
-    }
-    run.last = s.chassis;
-    run.lastGround = s.ground;
-    return true;
-  });
+  // The six wheels pressed into the tracks every 5 cm (scene::driveAndPress(), as a scene
+  // file's traverse presses them).
+  const scene::TraverseEnd end =
+      scene::driveAndPress(dem, t, run.tracks.get(), [&](const rover::StepState& s) {
+        if (s.distance >= nextReport) {
+          out << "  " << std::fixed << std::setprecision(0) << std::setw(4) << s.distance
+              << " m  x " << std::setw(6) << std::setprecision(1) << s.chassis.x << "  y "
+              << std::setw(6) << s.chassis.y << "  height " << std::setw(7) << std::setprecision(2)
+              << s.chassis.height << " m  pitch " << std::setw(5) << std::setprecision(1)
+              << s.chassis.pitch * 180.0 / M_PI << "°  roll " << std::setw(5)
+              << s.chassis.roll * 180.0 / M_PI << "°  cache " << cache->stats().residentBytes / 1024
+              << " KiB\n";
+          nextReport = s.distance + 100.0;
+        }
+        run.lastGround = s.ground;
+        return true;
+      });
+  run.result = end.result;
+  run.imprints = end.imprints;
+  run.last = end.last;
   run.cache = cache->stats();
   run.reads = file->counters();
   return run;
@@ -269,6 +266,7 @@ TraverseRun runTraverse(const MainDemoOptions& o, const fs::path& victoria, std:
 struct RoverViews {
   fs::path mast, chase;
   std::size_t imprints = 0, trackTiles = 0;
+  std::vector<scene::Camera> cameras;  // as scene.json records them
 };
 
 /// Renders the scene with the tracks the traverse left from the rover's mast (looking back
@@ -290,17 +288,30 @@ RoverViews renderRoverViews(const MainDemoOptions& o, const demo::MarsVictoriaOp
   const glm::dvec3 p{trav.last.x, trav.last.y, trav.last.height};
   const glm::dvec3 fwd{std::sin(trav.last.heading), std::cos(trav.last.heading), 0.0};
   const glm::dvec3 up{0.0, 0.0, 1.0};
+  const auto render = [&](const std::string& name, const glm::dvec3& eye, const glm::dvec3& target,
+                          const fs::path& png) {
+    view.camera = scenegraph::Pose::lookAt(eye, target, up);
+    gl::writePng(png.string(), demo::renderSceneView(view));
+    out << "  " << png.string() << std::endl;
+    scene::Camera c;  // the same view, for scene.json
+    c.name = name;
+    c.frame = "victoria";
+    c.eye = {eye.x, eye.y, eye.z};
+    c.lookAt = {target.x, target.y, target.z};
+    c.up = {up.x, up.y, up.z};
+    c.fovY = view.fovYDegrees;
+    c.near = view.near;
+    c.width = view.width;
+    c.height = view.height;
+    v.cameras.push_back(c);
+  };
   // Mast: 2.1 m up, looking back along the tracks and down at the ground 15 m behind.
-  view.camera = scenegraph::Pose::lookAt(p + 2.1 * up + 0.4 * fwd, p - 15.0 * fwd, up);
   v.mast = o.outDir / "rover_view.png";
-  gl::writePng(v.mast.string(), demo::renderSceneView(view));
-  out << "  " << v.mast.string() << std::endl;
+  render("mast", p + 2.1 * up + 0.4 * fwd, p - 15.0 * fwd, v.mast);
   // Chase: 9 m ahead and 3.5 m up, looking back at the rover.
-  view.camera = scenegraph::Pose::lookAt(p + 9.0 * fwd + 3.5 * up, p - 4.0 * fwd + 0.5 * up, up);
   view.near = 0.1;
   v.chase = o.outDir / "rover_chase.png";
-  gl::writePng(v.chase.string(), demo::renderSceneView(view));
-  out << "  " << v.chase.string() << std::endl;
+  render("chase", p + 9.0 * fwd + 3.5 * up, p - 4.0 * fwd + 0.5 * up, v.chase);
   return v;
 }
 
@@ -316,7 +327,7 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
   refuseOverwritingInputs(
       "demo",
       {o.outDir / "rover_view.png", o.outDir / "rover_chase.png", o.outDir / "north_pole.png",
-       o.outDir / "south_pole.png"},
+       o.outDir / "south_pole.png", o.outDir / "scene.json"},
       {data.mars, data.victoria, data.northCap, data.southCap, data.strip, data.catalogue});
   out << "  " << data.mars.string() << ": " << data.marsNote << "\n  " << data.victoria.string()
       << ": " << data.victoriaNote << "\n";
@@ -363,6 +374,25 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
   const auto t4 = Clock::now();
   const RoverViews views = renderRoverViews(o, fly.scene, trav, out);
   const double viewSeconds = secondsSince(t4);
+  // The scene of the rover views as a file (docs/scene-format.md): `regolith render
+  // OUT/scene.json --camera mast` draws rover_view.png again, replaying the traverse.
+  scene::SceneDescription sceneFile =
+      demo::sceneDescription(fly.scene, {0.0, 0.0, 0.0, rover::defaultVictoriaPath()});
+  sceneFile.cameras = views.cameras;
+  const fs::path scenePath = o.outDir / "scene.json";
+  // Stores inside the output folder are named relative to it, so the folder can move.
+  const fs::path outAbs = fs::absolute(o.outDir).lexically_normal();
+  const auto relative = [&](scene::DataSource& s) {
+    if (s.store.empty()) return;
+    const fs::path rel = fs::absolute(s.store).lexically_normal().lexically_relative(outAbs);
+    if (!rel.empty() && *rel.begin() != "..") s.store = rel.string();
+  };
+  for (scene::Body& b : sceneFile.bodies)
+    for (scene::DataSource& s : b.heights) relative(s);
+  for (scene::Dem& m : sceneFile.dems) relative(m.heights);
+  sceneFile.folder = outAbs;
+  scene::writeScene(sceneFile, scenePath);
+  out << "  " << scenePath.string() << " (the scene of these views)" << std::endl;
 
   out << "[5/5] The poles from 2000 km: each cap composed over the global grid ("
       << data.catalogue.string() << ")" << std::endl;

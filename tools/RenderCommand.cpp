@@ -15,6 +15,7 @@
 #include "EffectsOption.hpp"
 #include "FiniteRange.hpp"
 #include "OutputFolder.hpp"
+#include "SceneFiles.hpp"
 #include "StoreGrid.hpp"
 
 #include <CLI/CLI.hpp>
@@ -57,6 +58,7 @@ struct Args {
   std::optional<double> spacing;  // catalogue: the composed grid's spacing, degrees
   bool noFarField = false;
   EffectOptions effects;
+  std::string camera;  // scene files (SceneRenderCommand.cpp)
 };
 
 /// What a render draws: a store's grid, or a catalogue's composed surface over a global
@@ -460,7 +462,16 @@ void addRenderCommand(CLI::App& app) {
       "  regolith render mars.h5 --effects latlon --latlon-spacing 15\n"
       "Exit status: 0 on success; non-zero with 'regolith: error: ...' on stderr otherwise "
       "(including when no OpenGL 4.5 context can be made).");
-  cmd->callback([a] { runRender(*a, std::cout); });
+  cmd->add_option("--camera", a->camera,
+                  "Scene files (docs/scene-format.md): the camera to render (its size, "
+                  "viewport and field of view are the scene's)");
+  cmd->callback([a] {
+    if (isSceneFile(a->store)) {
+      renderSceneFile(a->store, a->camera, a->out, std::cout);
+    } else {
+      runRender(*a, std::cout);
+    }
+  });
 }
 
 }  // namespace regolith::tools

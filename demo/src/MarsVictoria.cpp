@@ -8,6 +8,7 @@
 #include <regolith/farfield/FarField.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
 #include <regolith/gl/RenderTarget.hpp>
+#include <regolith/scene/SceneParts.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Pager.hpp>
@@ -31,30 +32,7 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// Bilinear height of a pyramid level at fractional (col, row), clamped to the grid.
-double bilinear(const clod::HeightPyramid::Level& level, double col, double row) {
-  const auto& g = level.grid;
-  const double c = std::clamp(col, 0.0, static_cast<double>(g.cols() - 1));
-  const double r = std::clamp(row, 0.0, static_cast<double>(g.rows() - 1));
-  const auto c0 =
-      static_cast<std::size_t>(std::min(std::floor(c), static_cast<double>(g.cols() - 2)));
-  const auto r0 =
-      static_cast<std::size_t>(std::min(std::floor(r), static_cast<double>(g.rows() - 2)));
-  const double fc = c - static_cast<double>(c0), fr = r - static_cast<double>(r0);
-  const auto s = [&](std::size_t rr, std::size_t cc) {
-    return static_cast<double>(level.source->sample(rr, cc));
-  };
-  return (1 - fr) * ((1 - fc) * s(r0, c0) + fc * s(r0, c0 + 1)) +
-         fr * ((1 - fc) * s(r0 + 1, c0) + fc * s(r0 + 1, c0 + 1));
-}
-
-// The planet's surface height (above its ellipsoid) at a planetodetic site.
-double planetHeightAt(const clod::HeightPyramid& planet, const topo::Geodetic& site) {
-  const double latC = planet.body()->planetocentricFromPlanetodetic(site.latDeg);
-  const auto& level = planet.level(0);
-  const glm::dvec2 idx = level.grid.fractionalIndex(topo::wrapLongitude180(site.lonDeg), latC);
-  return bilinear(level, idx.x, idx.y);
-}
+using scene::planetHeightAt;
 
 std::shared_ptr<const clod::HeightPyramid> demPyramid(const store::VictoriaGenerator& gen) {
   const store::GridInfo info = gen.gridInfo();
@@ -199,15 +177,7 @@ void MarsVictoriaScene::fromStores(const MarsVictoriaOptions& options) {
   finish();
 }
 
-namespace {
-topo::GridPyramid levelsOf(const clod::HeightPyramid& p) {
-  topo::GridPyramid g;
-  for (std::size_t l = 0; l < p.levelCount(); ++l) g.levels.push_back(p.level(l));
-  g.planetBody = p.kind() == clod::SurfaceKind::Planet ? p.body() : std::nullopt;
-  g.latitudeType = p.latitudeType();
-  return g;
-}
-}  // namespace
+using scene::levelsOf;
 
 void MarsVictoriaScene::compose() {
   // The catalogue: the planet, the DEMs on their tangent planes, and the extra store grids.
@@ -299,9 +269,7 @@ void MarsVictoriaScene::finish() {
 }
 
 double MarsVictoriaScene::demHeight(double x, double y) const {
-  const auto& level = victoria_->level(0);
-  const glm::dvec2 idx = level.grid.fractionalIndex(x, y);
-  return bilinear(level, idx.x, idx.y);
+  return scene::demHeightAt(*victoria_, x, y);
 }
 
 void MarsVictoriaScene::placeRover(double x, double y, double headingDeg) {
@@ -309,30 +277,12 @@ void MarsVictoriaScene::placeRover(double x, double y, double headingDeg) {
 }
 
 std::shared_ptr<const farfield::HeightLayers> MarsVictoriaScene::farFieldLayers() const {
-  farfield::LayerOptions lo;
-  lo.equirectWidth = 2048;
-  lo.capSize = 512;
-  if (composed_) {
-    return std::make_shared<const farfield::HeightLayers>(
-        farfield::HeightLayers::fromSurface(*composed_, lo));
-  }
-  // The planet grid at its finest level at most 4096 samples wide, read whole.
-  const clod::HeightPyramid& planet = *mars_;
-  std::size_t k = 0;
-  while (k + 1 < planet.levelCount() && planet.level(k).grid.cols() > 4096) ++k;
-  return std::make_shared<const farfield::HeightLayers>(farfield::HeightLayers::fromPlanetGrid(
-      *planet.body(), planet.level(k).grid, *planet.level(k).source, planet.latitudeType(), lo));
+  return scene::farFieldLayers(*mars_, composed_.get());
 }
 
 std::size_t MarsVictoriaScene::planetClipmapLevels() const {
   if (!options_.farField) return 0;
-  // Level k's window spans (size − 1) × its latitude spacing; keep those within 180°.
-  std::size_t levels = 0;
-  while (levels < mars_->levelCount() &&
-         (options_.clipmapSize - 1) * std::abs(mars_->level(levels).grid.spacingY()) <= 180.0) {
-    ++levels;
-  }
-  return std::max<std::size_t>(levels, 1);
+  return scene::planetLevelsWithFarField(*mars_, options_.clipmapSize);
 }
 
 void MarsVictoriaScene::registerWith(clod::SceneRenderer& renderer) const {
@@ -389,23 +339,7 @@ namespace {
 std::unique_ptr<farfield::FarField> marsFarField(const MarsVictoriaScene& scene,
                                                  const MarsVictoriaOptions& options) {
   if (!options.farField) return nullptr;
-  farfield::PgmOptions po;
-  po.gridWidth = po.gridHeight = 512;
-  po.heightColours = false;
-  po.high = MarsVictoriaScene::kPlanetAlbedo;
-  po.ambient = clod::ClipmapOptions{}.ambient;
-  return std::make_unique<farfield::FarField>(scene.farFieldLayers(), po);
-}
-
-/// Draws Mars beyond the clipmaps into `target`, where nothing is drawn yet, for `camera`'s
-/// view of `focus`'s render list.
-farfield::FarFieldMode drawFarField(farfield::FarField& farField, const scenegraph::SceneGraph& g,
-                                    const scenegraph::PaperSceneNodes& n, scenegraph::NodeId camera,
-                                    scenegraph::NodeId focus, const clod::SceneView& view,
-                                    const gl::RenderTarget& target) {
-  const clod::Camera marsCamera = clod::cameraInItem(g.relative(n.mars, camera), view);
-  const glm::dvec3 sun = g.relative(n.mars, focus).applyVector(glm::normalize(view.lightInFocus));
-  return farField.draw(target, marsCamera, sun, true).mode;
+  return scene::planetFarField(scene.farFieldLayers(), MarsVictoriaScene::kPlanetAlbedo);
 }
 
 }  // namespace
@@ -437,7 +371,7 @@ gl::RgbaImage renderSceneView(const SceneViewOptions& options) {
     target.clear({0.02F, 0.02F, 0.04F, 1.0F});
     renderer.draw(g.renderList(n.victoria, cam), view);
     if (const auto farField = marsFarField(scene, options.scene)) {
-      (void)drawFarField(*farField, g, n, cam, n.victoria, view, target);
+      (void)scene::drawFarField(*farField, g, n.mars, cam, n.victoria, view, target);
     }
     image = target.readColor();
   }  // GL objects go before the context
@@ -574,6 +508,101 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
   }
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;
+}
+
+scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
+                                         const SceneRover& rover) {
+  const clod::Effects& fx = options.victoriaEffects;
+  if (fx.albedo || fx.noise || fx.heightColours || fx.latLon || fx.overlay)
+    throw InvalidArgument(
+        "demo::sceneDescription(): victoriaEffects other than tracks are not carried over");
+  if (options.marsStore.empty() != options.victoriaStore.empty())
+    throw InvalidArgument("demo::sceneDescription(): marsStore and victoriaStore go together");
+  const auto rgb = [](const glm::vec3& c) {
+    return std::array<double, 3>{static_cast<double>(c.x), static_cast<double>(c.y),
+                                 static_cast<double>(c.z)};
+  };
+  scene::SceneDescription d;
+  d.folder = std::filesystem::current_path();
+  scene::Body mars;
+  mars.name = "mars";
+  scene::DataSource planet;
+  if (options.marsStore.empty()) {
+    planet.generate = "mars-planet";
+    planet.rows = options.planetRows;
+    planet.seed = options.seed;
+  } else {
+    planet.store = options.marsStore.string();
+    planet.grid = options.marsGrid;
+  }
+  mars.heights.push_back(planet);
+  if (options.composition) {
+    for (const MarsVictoriaOptions::StoreDataset& e : options.extraDatasets) {
+      scene::DataSource s;
+      s.store = e.store.string();
+      s.grid = e.grid;
+      s.featherMetres = e.featherMetres;
+      s.featherNodataSamples = e.featherNodataSamples;
+      mars.heights.push_back(s);
+    }
+  }
+  mars.composeDems = options.composition;
+  mars.farField = options.farField;
+  mars.look.colour = rgb(MarsVictoriaScene::kPlanetAlbedo);
+  mars.look.clipmapSize = options.clipmapSize;
+  d.bodies.push_back(mars);
+
+  const glm::vec3 demAlbedo = options.demAlbedo.value_or(MarsVictoriaScene::kDemAlbedo);
+  scene::Dem victoria;
+  victoria.name = "victoria";
+  victoria.body = "mars";
+  if (options.victoriaStore.empty()) {
+    victoria.heights.generate = "victoria";
+    victoria.heights.size = options.demSize;
+    victoria.heights.spacing = options.demSpacing;
+    victoria.heights.seed = options.seed;
+    victoria.placement =
+        scene::Dem::Placement{store::VictoriaGenerator::kOriginLatDeg,
+                              store::VictoriaGenerator::kOriginLonDeg, 0.0, true, 0.0};
+  } else {
+    victoria.heights.store = options.victoriaStore.string();
+    victoria.heights.grid = options.victoriaGrid;
+  }
+  victoria.heights.featherMetres = options.demFeatherMetres;
+  victoria.look.colour = rgb(demAlbedo);
+  victoria.look.clipmapSize = options.clipmapSize;
+  victoria.look.effects.tracks = fx.tracks != nullptr || !rover.traverse.empty();
+  d.dems.push_back(victoria);
+  if (options.secondDem) {
+    const scenegraph::PaperSceneLayout layout;
+    scene::Dem second = victoria;
+    second.name = "second_dem";
+    second.heights = {};
+    second.heights.generate = "victoria";
+    second.heights.size = options.secondDemSize;
+    second.heights.spacing = options.secondDemSpacing;
+    second.heights.seed = options.seed + 1;
+    second.heights.featherMetres = options.demFeatherMetres;
+    second.placement = scene::Dem::Placement{layout.secondDemOrigin.latDeg,
+                                             layout.secondDemOrigin.lonDeg, 0.0, true, 0.0};
+    second.look.effects = {};
+    d.dems.push_back(second);
+  }
+  scene::Object r;
+  r.name = "rover";
+  r.dem = "victoria";
+  if (rover.traverse.empty()) {
+    r.pose = scene::Object::Pose{rover.x, rover.y, rover.headingDeg};
+  } else {
+    scene::Object::Traverse t;
+    for (const glm::dvec2& w : rover.traverse) t.waypoints.push_back({w.x, w.y});
+    r.traverse = t;
+  }
+  d.objects.push_back(r);
+  // lightInFocus(): morning sun over Victoria, 35° up from the east (x east, y north, z up).
+  d.light.frame = "victoria";
+  d.light.direction = std::array<double, 3>{std::cos(35.0 * kDeg), -0.3, std::sin(35.0 * kDeg)};
+  return d;
 }
 
 }  // namespace regolith::demo

@@ -86,6 +86,8 @@ void bindRender(py::class_<DemTerrain, std::shared_ptr<DemTerrain>>& dem,
 void bindRover(py::module_& m);
 /// The paper's example scene: paper_scene(), render_scene(), render_flyover().
 void bindScene(py::module_& m);
+/// regolith.load_scene() and SceneFile (SceneFile.cpp).
+void bindSceneFile(py::module_& m);
 
 }  // namespace regolith::python
 

@@ -12,4 +12,5 @@ PYBIND11_MODULE(regolith, m) {
   bindCompose(m);
   bindRover(m);
   bindScene(m);
+  bindSceneFile(m);
 }

@@ -9,6 +9,7 @@
 #include <regolith/compose/ComposedSurface.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/gl/Image.hpp>
+#include <regolith/scene/SceneDescription.hpp>
 #include <regolith/scenegraph/PaperScene.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
 
@@ -213,5 +214,23 @@ gl::RgbaImage renderSceneView(const SceneViewOptions& options);
 /// descending from `startDistance` metres (at t = 0) to 6 m (at t = 1).
 [[nodiscard]] scenegraph::Pose flyoverCamera(double t, const glm::dvec3& rover,
                                              double startDistance = 8.0e6);
+
+/// Where the scene file's rover stands: at a pose on the Victoria DEM, or where a traverse of
+/// these waypoints (grid frame) stops, its tracks pressed into the DEM.
+struct SceneRover {
+  double x = 0.0, y = -395.0, headingDeg = 0.0;
+  std::vector<glm::dvec2> traverse;  ///< non-empty: replay this traverse instead
+};
+
+/// The Mars/Victoria scene of `options` as a scene description (docs/scene-format.md), no
+/// cameras (the caller adds its views; their frame "victoria" is the Victoria DEM's, as
+/// renderSceneView()'s camera): Mars from its generator or store (with the extra datasets and
+/// the DEMs composed into it under options.composition), the Victoria DEM and the second DEM,
+/// the rover, and the morning light of lightInFocus(). Scene (scene/Scene.hpp) draws it as
+/// renderSceneView() does, except Earth (a sub-pixel dot from Mars, left out). Store paths
+/// are written as given (relative ones resolve against the current folder). Effects other than
+/// tracks in options.victoriaEffects are not carried over (InvalidArgument).
+[[nodiscard]] scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
+                                                       const SceneRover& rover = {});
 
 }  // namespace regolith::demo

@@ -1,0 +1,69 @@
+#pragma once
+/// \file
+/// A scene built from its description: stores opened and paged, generators run, the scene
+/// graph built, traverses driven (their tracks pressed), and cameras rendered headless.
+
+#include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/gl/Image.hpp>
+#include <regolith/scene/SceneDescription.hpp>
+#include <regolith/scenegraph/SceneGraph.hpp>
+
+#include <cstddef>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace regolith::scene {
+
+struct SceneOptions {
+  /// Budget of the patch cache every store of the scene is paged through.
+  std::size_t cacheBytes = std::size_t{256} << 20;
+};
+
+/// A built scene. Building needs no GL; render() does (and makes an EGL context if none is
+/// current). Node names are the description's (bodies, DEMs, objects, cameras) under a root
+/// frame "root"; each body's frame is body-fixed, each DEM's its local tangent plane (x east,
+/// y north at heading 0, z up), each rover's x forward, y left, z up.
+///
+/// Not thread-safe; render() from the thread that owns the GL context.
+class Scene {
+ public:
+  /// Throws InvalidArgument naming the key for what the description's checks cannot see
+  /// (a store grid of the wrong kind, radii that differ from the store's, more than 4 DEMs
+  /// on a body), StoreError for bad stores, and what the generators and traverses throw.
+  explicit Scene(SceneDescription description, const SceneOptions& options = {});
+  /// readScene() then Scene().
+  static Scene load(const std::filesystem::path& path, const SceneOptions& options = {});
+  Scene(Scene&&) noexcept;
+  Scene& operator=(Scene&&) noexcept;
+  ~Scene();
+
+  [[nodiscard]] const SceneDescription& description() const noexcept;
+  [[nodiscard]] const scenegraph::SceneGraph& graph() const noexcept;
+  /// The heights drawn for a body or DEM (composed for a body with several datasets).
+  [[nodiscard]] const clod::HeightPyramid& terrain(const std::string& name) const;
+  /// The clipmap options render() registers for a body or DEM (effects included).
+  [[nodiscard]] const clod::ClipmapOptions& terrainOptions(const std::string& name) const;
+  /// A DEM's surface height at grid (x, y), bilinear in its finest level.
+  [[nodiscard]] double demHeight(const std::string& dem, double x, double y) const;
+  /// Where an object stands, in its DEM's frame (x, y, height on the surface), and its
+  /// heading (degrees clockwise from +y).
+  [[nodiscard]] glm::dvec4 objectPose(const std::string& object) const;
+  /// The direction towards the light in the frame of node `frame` (unit).
+  [[nodiscard]] glm::dvec3 lightIn(const std::string& frame) const;
+  /// The render list's focus for a camera (its `focus`, or its frame's terrain).
+  [[nodiscard]] std::string focusOf(const std::string& camera) const;
+
+  /// Renders camera `camera` (its size, viewport, intrinsics): every terrain and object, and
+  /// the far field of each body that has one. Throws InvalidArgument for an unknown camera
+  /// (listing the scene's cameras); GlError without GL.
+  [[nodiscard]] gl::RgbaImage render(const std::string& camera) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace regolith::scene

@@ -1,0 +1,515 @@
+#include <regolith/compose/Catalogue.hpp>
+#include <regolith/compose/ComposedPyramid.hpp>
+#include <regolith/compose/FromStore.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/core/Message.hpp>
+#include <regolith/gl/HeadlessContext.hpp>
+#include <regolith/gl/RenderTarget.hpp>
+#include <regolith/scene/Scene.hpp>
+#include <regolith/scene/SceneParts.hpp>
+#include <regolith/scenegraph/PaperScene.hpp>
+#include <regolith/store/Generate.hpp>
+#include <regolith/store/GridInfo.hpp>
+#include <regolith/store/Pager.hpp>
+#include <regolith/store/Store.hpp>
+#include <regolith/topo/Projection.hpp>
+
+#include <EGL/egl.h>
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <optional>
+#include <sstream>
+#include <utility>
+
+namespace regolith::scene {
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+constexpr std::size_t kMaxDemsPerBody = 4;  // clod::SceneRenderer::addCutOut()
+
+glm::dvec3 vec(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
+glm::vec3 colour(const std::array<double, 3>& a) {
+  return {static_cast<float>(a[0]), static_cast<float>(a[1]), static_cast<float>(a[2])};
+}
+
+/// One grid of a data source, as the scene needs it.
+struct Grid {
+  std::shared_ptr<const clod::HeightPyramid> pyramid;
+  store::GridInfo info;                               // its store's or generator's description
+  std::shared_ptr<const topo::SampleSource> samples;  // level 0 (for TopoDem)
+  std::shared_ptr<const store::Pager> pager;          // set for stores
+};
+
+}  // namespace
+
+struct Scene::Impl {
+  SceneDescription d;
+  std::shared_ptr<store::PatchCache> cache;
+  std::map<std::string, std::shared_ptr<const store::Pager>> pagers;  // by resolved path
+  scenegraph::SceneGraph graph{"root"};
+
+  struct Terrain {
+    std::string name;
+    int key = -1;
+    scenegraph::NodeId node = 0;
+    std::shared_ptr<const clod::HeightPyramid> pyramid;
+    clod::ClipmapOptions options;
+    bool planet = false;
+    std::shared_ptr<const farfield::HeightLayers> farField;  // planets with a far field
+    glm::vec3 albedo{0.0F};
+    std::string body;                  // DEMs: the body they sit on
+    std::optional<topo::TopoDem> dem;  // DEMs: for traverses
+  };
+  std::vector<Terrain> terrains;
+  struct Thing {
+    std::string name;
+    int key = -1;
+    scenegraph::NodeId node = 0;
+    glm::dvec4 pose{0.0};
+    glm::vec3 colour{0.0F};
+  };
+  std::vector<Thing> objects;
+  std::map<std::string, scenegraph::NodeId> cameras;
+  scenegraph::NodeId lightFrame = 0;
+  glm::dvec3 lightDirection{0.0, 0.0, 1.0};
+
+  [[noreturn]] void fail(const std::string& ptr, const std::string& what) const {
+    throw InvalidArgument("Scene: " + ptr + ": " + what);
+  }
+
+  const store::Pager& pager(const std::string& path) {
+    const std::filesystem::path p = d.resolve(path);
+    auto& slot = pagers[p.string()];
+    if (!slot) {
+      slot = std::make_shared<const store::Pager>(
+          std::make_shared<const store::Store>(store::Store::open(p)), cache);
+    }
+    return *slot;
+  }
+
+  Grid fromStore(const DataSource& s) {
+    const store::Pager& pg = pager(s.store);
+    Grid g;
+    g.info = pg.grid(s.grid);
+    g.pyramid = std::make_shared<const clod::HeightPyramid>(pg.pyramid(s.grid));
+    g.samples = pg.source(s.grid);
+    g.pager = pagers[d.resolve(s.store).string()];
+    return g;
+  }
+
+  static store::PlanetOf planetOf(const DataSource& s) {
+    return store::PlanetOf{s.seed, s.ellipsoid, s.craterDensity};
+  }
+
+  /// A generator's grid in memory (its pyramid by 2×2 means, computed once).
+  static Grid generated(const DataSource& s, double originHeight) {
+    Grid g;
+    clod::SurfaceKind kind = clod::SurfaceKind::Plane;
+    std::optional<topo::Body> body;
+    if (s.generate == "mars-planet") {
+      store::MarsPlanetOptions o;
+      o.rows = s.rows;
+      o.seed = s.seed;
+      o.ellipsoid = s.ellipsoid;
+      o.craterDensity = s.craterDensity;
+      const store::MarsPlanetGenerator gen(o);
+      g.info = gen.gridInfo();
+      g.samples = gen.samples();
+      kind = clod::SurfaceKind::Planet;
+      body = store::bodyOf(g.info);
+    } else if (s.generate == "victoria") {
+      store::VictoriaOptions o;
+      o.size = s.size;
+      o.spacing = s.spacing;
+      o.seed = s.seed;
+      o.originHeight = originHeight;
+      const store::VictoriaGenerator gen(o);
+      g.info = gen.gridInfo();
+      g.samples = gen.samples();
+    } else if (s.generate == "mars-cap") {
+      store::PolarCapOptions o;
+      o.pole = s.pole == "south" ? store::PolarCapOptions::Pole::South
+                                 : store::PolarCapOptions::Pole::North;
+      o.minLatitudeDeg = s.minLatitude;
+      o.spacing = s.spacing;
+      o.planet = planetOf(s);
+      const store::PolarCapGenerator gen(o);
+      g.info = gen.gridInfo();
+      g.samples = gen.samples();
+    } else {  // mars-strip (readScene() admits no other)
+      store::StripOptions o;
+      o.centreLatDeg = s.centreLat;
+      o.centreLonDeg = s.centreLon;
+      o.inclinationDeg = s.inclination;
+      o.length = s.length;
+      o.width = s.width;
+      o.spacing = s.spacing;
+      o.raggedness = s.raggedness;
+      o.planet = planetOf(s);
+      const store::StripGenerator gen(o);
+      g.info = gen.gridInfo();
+      g.samples = gen.samples();
+    }
+    g.pyramid = std::make_shared<const clod::HeightPyramid>(clod::HeightPyramid::fromSamples(
+        store::topoGridOf(g.info), g.samples, kind, body, g.info.latitudeType));
+    return g;
+  }
+
+  Grid grid(const DataSource& s, double originHeight = 0.0) {
+    return s.store.empty() ? generated(s, originHeight) : fromStore(s);
+  }
+
+  std::optional<clod::DrapedTexture> draped(const std::optional<DrapedSource>& s,
+                                            const std::string& ptr) {
+    if (!s) return std::nullopt;
+    if (s->data.store.empty()) fail(ptr + "/data", "a generator, expected a store grid");
+    clod::DrapedTexture t;
+    t.channels.push_back(fromStore(s->data).pyramid);
+    t.window = s->window;
+    t.opacity = static_cast<float>(s->opacity);
+    return t;
+  }
+
+  clod::Effects effects(const EffectsDescription& e, const std::string& ptr) {
+    clod::Effects out;
+    out.albedo = draped(e.albedo, ptr + "/albedo");
+    out.overlay = draped(e.overlay, ptr + "/overlay");
+    if (e.tracks) out.tracks = std::make_shared<clod::TrackLayer>(clod::RoverRuts::kTexelMetres);
+    if (e.heightColours) {
+      out.heightColours =
+          clod::HeightColours{static_cast<float>(e.heightColours->min),
+                              static_cast<float>(e.heightColours->max), e.heightColours->shaded};
+    }
+    if (e.latLon) {
+      clod::LatLonLines l;
+      l.spacingDegrees = e.latLon->spacing;
+      l.minPixelSpacing = e.latLon->minPixelSpacing;
+      l.colour = colour(e.latLon->colour);
+      l.widthPixels = static_cast<float>(e.latLon->width);
+      out.latLon = l;
+    }
+    if (e.noise) {
+      clod::StructuredNoise n;
+      n.amplitude = e.noise->amplitude;
+      n.wavelength = e.noise->wavelength;
+      n.octaves = e.noise->octaves;
+      n.albedoVariation = static_cast<float>(e.noise->albedoVariation);
+      out.noise = n;
+    }
+    return out;
+  }
+
+  Terrain& terrainNamed(const std::string& name) {
+    for (Terrain& t : terrains)
+      if (t.name == name) return t;
+    throw InvalidArgument("Scene: no body or DEM named '" + name + "'");
+  }
+
+  void buildBody(std::size_t i) {
+    const Body& b = d.bodies[i];
+    const std::string ptr = "/bodies/" + std::to_string(i);
+    Grid planet = grid(b.heights[0]);
+    if (planet.pyramid->kind() != clod::SurfaceKind::Planet)
+      fail(ptr + "/heights/0", "grid '" + planet.info.name + "' is not a planet grid");
+    const topo::Body& body = *planet.pyramid->body();
+    if (b.radii && (std::abs((*b.radii)[0] - body.equatorialRadius()) > 1.0 ||
+                    std::abs((*b.radii)[1] - body.polarRadius()) > 1.0)) {
+      std::ostringstream what;
+      what << '[' << core::number((*b.radii)[0]) << ", " << core::number((*b.radii)[1])
+           << "] differ from the heights' [" << core::number(body.equatorialRadius()) << ", "
+           << core::number(body.polarRadius()) << "] by more than 1 m";
+      fail(ptr + "/radii", what.str());
+    }
+    Terrain t;
+    t.name = b.name;
+    t.planet = true;
+    t.pyramid = planet.pyramid;
+    t.albedo = colour(b.look.colour);
+    t.options.size = b.look.clipmapSize;
+    t.options.albedo = t.albedo;
+    t.options.effects = effects(b.look.effects, ptr + "/effects");
+    t.key = static_cast<int>(terrains.size());
+    t.node =
+        graph.add(graph.root(), b.name, scenegraph::Pose{}, scenegraph::NodeKind::Terrain, t.key);
+    terrains.push_back(std::move(t));
+  }
+
+  /// A body with several height datasets, or whose DEMs are composed into it: one composed
+  /// surface (docs/composition.md) that the planet draws on its own lattice and each
+  /// composed DEM on its own (its samples there are the composed heights). The catalogue
+  /// holds the planet grid, then the DEMs, then the further datasets (the demo's order).
+  void composeBody(std::size_t i) {
+    const Body& b = d.bodies[i];
+    Terrain& t = terrainNamed(b.name);
+    const std::shared_ptr<const clod::HeightPyramid> planet = t.pyramid;
+    std::shared_ptr<const compose::ComposedSurface> composed;
+    if (b.heights.size() > 1 || b.composeDems) {
+      const topo::Body& body = *planet->body();
+      auto catalogue = std::make_shared<compose::Catalogue>(body);
+      compose::DatasetOptions po;
+      po.name = b.name;
+      catalogue->add(compose::Dataset::planet(levelsOf(*planet), po));
+      std::vector<std::pair<Terrain*, std::shared_ptr<const compose::Dataset>>> dems;
+      if (b.composeDems) {
+        for (std::size_t k = 0; k < d.dems.size(); ++k) {
+          if (d.dems[k].body != b.name) continue;
+          Terrain& dem = terrainNamed(d.dems[k].name);
+          compose::DatasetOptions o;
+          o.name = dem.name;
+          o.featherMetres = d.dems[k].heights.featherMetres;
+          auto data = compose::Dataset::dem(levelsOf(*dem.pyramid), dem.dem->placement(), o);
+          catalogue->add(data);
+          dems.emplace_back(&dem, std::move(data));
+        }
+      }
+      for (std::size_t k = 1; k < b.heights.size(); ++k) {
+        const DataSource& s = b.heights[k];
+        compose::DatasetOptions o;
+        o.featherMetres = s.featherMetres;
+        if (!s.store.empty()) {
+          const store::Pager& pg = pager(s.store);
+          if (s.featherNodataSamples > 0.0) {
+            o.mask = compose::featherMask(store::topoGridOf(pg.grid(s.grid)), *pg.source(s.grid),
+                                          s.featherNodataSamples);
+          }
+          catalogue->add(compose::datasetFromStore(pg, s.grid, o));
+        } else {
+          const Grid g = generated(s, 0.0);
+          o.name = g.info.name;
+          if (s.featherNodataSamples > 0.0) {
+            o.mask =
+                compose::featherMask(store::topoGridOf(g.info), *g.samples, s.featherNodataSamples);
+          }
+          catalogue->add(
+              compose::Dataset::dem(levelsOf(*g.pyramid), store::placementOf(g.info), o));
+        }
+      }
+      composed = std::make_shared<const compose::ComposedSurface>(catalogue->snapshot());
+      t.pyramid = std::make_shared<const clod::HeightPyramid>(compose::composedPlanetPyramid(
+          composed, planet->level(0).grid, planet->latitudeType(), planet->levelCount()));
+      for (auto& [dem, own] : dems) {
+        dem->pyramid = std::make_shared<const clod::HeightPyramid>(
+            compose::composedDemPyramid(composed, dem->pyramid->level(0).grid,
+                                        dem->dem->placement(), dem->pyramid->levelCount(), own)
+                .levels,
+            clod::SurfaceKind::Plane);
+      }
+    }
+    t.options.levels = b.farField ? planetLevelsWithFarField(*t.pyramid, b.look.clipmapSize) : 0;
+    if (b.farField) t.farField = farFieldLayers(*t.pyramid, composed.get());
+  }
+
+  void buildDem(std::size_t i) {
+    const Dem& dm = d.dems[i];
+    const std::string ptr = "/dems/" + std::to_string(i);
+    Terrain& bodyTerrain = terrainNamed(dm.body);
+    const topo::Body& body = *bodyTerrain.pyramid->body();
+    std::size_t onBody = 0;
+    for (const Dem& other : d.dems) onBody += other.body == dm.body ? 1U : 0U;
+    if (onBody > kMaxDemsPerBody)
+      fail(ptr + "/body", std::to_string(onBody) + " DEMs on '" + dm.body + "', expected at most " +
+                              std::to_string(kMaxDemsPerBody));
+    topo::Geodetic origin;
+    double heading = 0.0;
+    if (dm.placement) {
+      origin = {dm.placement->lat, dm.placement->lon, dm.placement->height};
+      if (dm.placement->surfaceHeight) origin.height = planetHeightAt(*bodyTerrain.pyramid, origin);
+      heading = dm.placement->heading;
+    }
+    Grid g = grid(dm.heights, origin.height);
+    if (g.pyramid->kind() != clod::SurfaceKind::Plane)
+      fail(ptr + "/heights", "grid '" + g.info.name + "' is not a DEM");
+    if (!dm.placement) {
+      if (g.info.placement.kind != store::PlacementInfo::Kind::LocalTangentPlane)
+        fail(ptr + "/placement",
+             "missing, and grid '" + g.info.name + "' is not on a local tangent plane");
+      origin = {g.info.placement.originLatDeg, g.info.placement.originLonDeg,
+                g.info.placement.originHeight};
+      heading = g.info.placement.headingDeg;
+    }
+    Terrain t;
+    t.name = dm.name;
+    t.body = dm.body;
+    t.pyramid = g.pyramid;
+    t.albedo = colour(dm.look.colour);
+    t.options.size = dm.look.clipmapSize;
+    t.options.levels = 0;
+    t.options.albedo = t.albedo;
+    t.options.effects = effects(dm.look.effects, ptr + "/effects");
+    const topo::Placement placement(topo::LocalTangentPlane(body, origin, heading));
+    t.dem.emplace(store::topoGridOf(g.info), placement, g.samples);
+    t.key = static_cast<int>(terrains.size());
+    t.node =
+        graph.add(bodyTerrain.node, dm.name, scenegraph::tangentPlanePose(body, origin, heading),
+                  scenegraph::NodeKind::Terrain, t.key);
+    terrains.push_back(std::move(t));
+  }
+
+  void buildObject(std::size_t i) {
+    const Object& o = d.objects[i];
+    const Terrain& dem = terrainNamed(o.dem);
+    Thing th;
+    th.name = o.name;
+    th.colour = colour(o.colour);
+    double x = 0.0, y = 0.0, heading = 0.0;
+    if (o.pose) {
+      x = o.pose->x;
+      y = o.pose->y;
+      heading = o.pose->heading;
+    } else {
+      rover::TraverseOptions to;
+      for (const auto& w : o.traverse->waypoints) to.path.emplace_back(w[0], w[1]);
+      to.speed = o.traverse->speed;
+      to.step = o.traverse->step;
+      const TraverseEnd end = driveAndPress(*dem.dem, to, dem.options.effects.tracks.get());
+      x = end.last.x;
+      y = end.last.y;
+      heading = end.last.heading * 180.0 / std::numbers::pi;
+    }
+    const double z = demHeightAt(*dem.pyramid, x, y);
+    th.pose = {x, y, z, heading};
+    th.key = static_cast<int>(terrains.size() + objects.size());
+    th.node = graph.add(dem.node, o.name, scenegraph::roverPose({x, y, z}, heading),
+                        scenegraph::NodeKind::Object, th.key);
+    objects.push_back(std::move(th));
+  }
+
+  void build() {
+    for (std::size_t i = 0; i < d.bodies.size(); ++i) buildBody(i);
+    for (std::size_t i = 0; i < d.dems.size(); ++i) buildDem(i);
+    for (std::size_t i = 0; i < d.bodies.size(); ++i) composeBody(i);
+    for (std::size_t i = 0; i < d.objects.size(); ++i) buildObject(i);
+    for (const Camera& c : d.cameras) {
+      cameras[c.name] = graph.add(graph.at(c.frame), c.name,
+                                  scenegraph::Pose::lookAt(vec(c.eye), vec(c.lookAt), vec(c.up)),
+                                  scenegraph::NodeKind::Camera);
+    }
+    const std::string lightFrameName = !d.light.frame.empty() ? d.light.frame
+                                       : !d.dems.empty()      ? d.dems.front().name
+                                                              : d.bodies.front().name;
+    lightFrame = graph.at(lightFrameName);
+    if (d.light.direction) {
+      lightDirection = glm::normalize(vec(*d.light.direction));
+    } else {
+      const double e = d.light.elevation * kDeg, a = d.light.azimuth * kDeg;
+      lightDirection = {std::cos(e) * std::sin(a), std::cos(e) * std::cos(a), std::sin(e)};
+    }
+  }
+
+  std::string focusOf(const Camera& c) const {
+    if (!c.focus.empty()) return c.focus;
+    for (const Terrain& t : terrains)
+      if (t.name == c.frame) return t.name;
+    for (const Object& o : d.objects)
+      if (o.name == c.frame) return o.dem;
+    return d.bodies.front().name;
+  }
+};
+
+Scene::Scene(SceneDescription description, const SceneOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->d = std::move(description);
+  impl_->cache = std::make_shared<store::PatchCache>(options.cacheBytes);
+  impl_->build();
+}
+
+Scene Scene::load(const std::filesystem::path& path, const SceneOptions& options) {
+  return Scene(readScene(path), options);
+}
+
+Scene::Scene(Scene&&) noexcept = default;
+Scene& Scene::operator=(Scene&&) noexcept = default;
+Scene::~Scene() = default;
+
+const SceneDescription& Scene::description() const noexcept { return impl_->d; }
+const scenegraph::SceneGraph& Scene::graph() const noexcept { return impl_->graph; }
+
+const clod::HeightPyramid& Scene::terrain(const std::string& name) const {
+  for (const Impl::Terrain& t : impl_->terrains)
+    if (t.name == name) return *t.pyramid;
+  throw InvalidArgument("Scene::terrain(): no body or DEM named '" + name + "'");
+}
+
+const clod::ClipmapOptions& Scene::terrainOptions(const std::string& name) const {
+  for (const Impl::Terrain& t : impl_->terrains)
+    if (t.name == name) return t.options;
+  throw InvalidArgument("Scene::terrainOptions(): no body or DEM named '" + name + "'");
+}
+
+double Scene::demHeight(const std::string& dem, double x, double y) const {
+  for (const Impl::Terrain& t : impl_->terrains)
+    if (t.name == dem && !t.planet) return demHeightAt(*t.pyramid, x, y);
+  throw InvalidArgument("Scene::demHeight(): no DEM named '" + dem + "'");
+}
+
+glm::dvec4 Scene::objectPose(const std::string& object) const {
+  for (const Impl::Thing& o : impl_->objects)
+    if (o.name == object) return o.pose;
+  throw InvalidArgument("Scene::objectPose(): no object named '" + object + "'");
+}
+
+glm::dvec3 Scene::lightIn(const std::string& frame) const {
+  return impl_->graph.relative(impl_->graph.at(frame), impl_->lightFrame)
+      .applyVector(impl_->lightDirection);
+}
+
+std::string Scene::focusOf(const std::string& camera) const {
+  const Camera* c = impl_->d.camera(camera);
+  if (!c) throw InvalidArgument("Scene::focusOf(): no camera named '" + camera + "'");
+  return impl_->focusOf(*c);
+}
+
+gl::RgbaImage Scene::render(const std::string& camera) const {
+  const Impl& s = *impl_;
+  const Camera* c = s.d.camera(camera);
+  if (!c) {
+    std::ostringstream names;
+    for (std::size_t i = 0; i < s.d.cameras.size(); ++i)
+      names << (i == 0 ? "" : ", ") << s.d.cameras[i].name;
+    throw InvalidArgument("Scene::render(): no camera named '" + camera +
+                          "', expected one of: " + (s.d.cameras.empty() ? "none" : names.str()));
+  }
+  std::unique_ptr<gl::HeadlessContext> context;
+  if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<gl::HeadlessContext>();
+  gl::RgbaImage image;
+  {
+    const scenegraph::NodeId focus = s.graph.at(focusOf(camera));
+    const scenegraph::NodeId cam = s.cameras.at(camera);
+    clod::SceneRenderer renderer;
+    for (const Impl::Terrain& t : s.terrains) renderer.addTerrain(t.key, t.pyramid, t.options);
+    for (const Impl::Terrain& t : s.terrains) {
+      if (t.planet) continue;
+      for (const Impl::Terrain& b : s.terrains)
+        if (b.name == t.body) renderer.addCutOut(b.key, t.key);
+    }
+    for (const Impl::Thing& o : s.objects) renderer.addMesh(o.key, clod::roverMesh(), o.colour);
+    gl::RenderTarget target(c->width, c->height);
+    clod::SceneView view;
+    view.fovYDegrees = c->fovY;
+    view.near = c->near;
+    view.width = c->width;
+    view.height = c->height;
+    if (c->viewport) {
+      view.x = (*c->viewport)[0];
+      view.y = (*c->viewport)[1];
+      view.width = (*c->viewport)[2];
+      view.height = (*c->viewport)[3];
+    }
+    view.lightInFocus = s.graph.relative(focus, s.lightFrame).applyVector(s.lightDirection);
+    target.clear({0.02F, 0.02F, 0.04F, 1.0F});
+    renderer.draw(s.graph.renderList(focus, cam), view);
+    for (const Impl::Terrain& t : s.terrains) {
+      if (!t.farField) continue;
+      const auto farField = planetFarField(t.farField, t.albedo);
+      (void)drawFarField(*farField, s.graph, t.node, cam, focus, view, target);
+    }
+    image = target.readColor();
+  }  // GL objects go before the context
+  return image;
+}
+
+}  // namespace regolith::scene

@@ -1,0 +1,115 @@
+#include <regolith/scene/SceneParts.hpp>
+#include <regolith/topo/Projection.hpp>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace regolith::scene {
+
+double bilinearHeight(const clod::HeightPyramid::Level& level, double col, double row) {
+  const auto& g = level.grid;
+  const double c = std::clamp(col, 0.0, static_cast<double>(g.cols() - 1));
+  const double r = std::clamp(row, 0.0, static_cast<double>(g.rows() - 1));
+  const auto c0 =
+      static_cast<std::size_t>(std::min(std::floor(c), static_cast<double>(g.cols() - 2)));
+  const auto r0 =
+      static_cast<std::size_t>(std::min(std::floor(r), static_cast<double>(g.rows() - 2)));
+  const double fc = c - static_cast<double>(c0), fr = r - static_cast<double>(r0);
+  const auto s = [&](std::size_t rr, std::size_t cc) {
+    return static_cast<double>(level.source->sample(rr, cc));
+  };
+  return (1 - fr) * ((1 - fc) * s(r0, c0) + fc * s(r0, c0 + 1)) +
+         fr * ((1 - fc) * s(r0 + 1, c0) + fc * s(r0 + 1, c0 + 1));
+}
+
+double planetHeightAt(const clod::HeightPyramid& planet, const topo::Geodetic& site) {
+  const double latC = planet.body()->planetocentricFromPlanetodetic(site.latDeg);
+  const auto& level = planet.level(0);
+  const glm::dvec2 idx = level.grid.fractionalIndex(topo::wrapLongitude180(site.lonDeg), latC);
+  return bilinearHeight(level, idx.x, idx.y);
+}
+
+double demHeightAt(const clod::HeightPyramid& dem, double x, double y) {
+  const auto& level = dem.level(0);
+  const glm::dvec2 idx = level.grid.fractionalIndex(x, y);
+  return bilinearHeight(level, idx.x, idx.y);
+}
+
+topo::GridPyramid levelsOf(const clod::HeightPyramid& p) {
+  topo::GridPyramid g;
+  for (std::size_t l = 0; l < p.levelCount(); ++l) g.levels.push_back(p.level(l));
+  g.planetBody = p.kind() == clod::SurfaceKind::Planet ? p.body() : std::nullopt;
+  g.latitudeType = p.latitudeType();
+  return g;
+}
+
+std::size_t planetLevelsWithFarField(const clod::HeightPyramid& planet, int clipmapSize) {
+  // Level k's window spans (size − 1) × its latitude spacing; keep those within 180°.
+  std::size_t levels = 0;
+  while (levels < planet.levelCount() &&
+         (clipmapSize - 1) * std::abs(planet.level(levels).grid.spacingY()) <= 180.0) {
+    ++levels;
+  }
+  return std::max<std::size_t>(levels, 1);
+}
+
+std::shared_ptr<const farfield::HeightLayers> farFieldLayers(
+    const clod::HeightPyramid& planet, const compose::ComposedSurface* composed) {
+  farfield::LayerOptions lo;
+  lo.equirectWidth = 2048;
+  lo.capSize = 512;
+  if (composed) {
+    return std::make_shared<const farfield::HeightLayers>(
+        farfield::HeightLayers::fromSurface(*composed, lo));
+  }
+  // The planet grid at its finest level at most 4096 samples wide, read whole.
+  std::size_t k = 0;
+  while (k + 1 < planet.levelCount() && planet.level(k).grid.cols() > 4096) ++k;
+  return std::make_shared<const farfield::HeightLayers>(farfield::HeightLayers::fromPlanetGrid(
+      *planet.body(), planet.level(k).grid, *planet.level(k).source, planet.latitudeType(), lo));
+}
+
+std::unique_ptr<farfield::FarField> planetFarField(
+    std::shared_ptr<const farfield::HeightLayers> layers, const glm::vec3& albedo) {
+  farfield::PgmOptions po;
+  po.gridWidth = po.gridHeight = 512;
+  po.heightColours = false;
+  po.high = albedo;
+  po.ambient = clod::ClipmapOptions{}.ambient;
+  return std::make_unique<farfield::FarField>(std::move(layers), po);
+}
+
+farfield::FarFieldMode drawFarField(farfield::FarField& farField, const scenegraph::SceneGraph& g,
+                                    scenegraph::NodeId planet, scenegraph::NodeId camera,
+                                    scenegraph::NodeId focus, const clod::SceneView& view,
+                                    const gl::RenderTarget& target) {
+  const clod::Camera planetCamera = clod::cameraInItem(g.relative(planet, camera), view);
+  const glm::dvec3 sun = g.relative(planet, focus).applyVector(glm::normalize(view.lightInFocus));
+  return farField.draw(target, planetCamera, sun, true).mode;
+}
+
+TraverseEnd driveAndPress(const topo::TopoDem& dem, const rover::TraverseOptions& options,
+                          clod::TrackLayer* tracks, const rover::StepCallback& onStep) {
+  TraverseEnd end;
+  double nextStamp = 0.0;
+  std::array<clod::WheelContact, rover::kWheels> imprint;
+  end.result = rover::runTraverse(dem, options, [&](const rover::StepState& s) {
+    if (tracks && s.distance >= nextStamp) {  // one imprint of all six wheels every 5 cm
+      for (std::size_t w = 0; w < rover::kWheels; ++w)
+        imprint[w] = clod::WheelContact{{s.wheels[w].x, s.wheels[w].y},
+                                        clod::RoverRuts::kWheelWidthMetres,
+                                        clod::RoverRuts::kDepthMetres};
+      tracks->step(imprint);
+      ++end.imprints;
+      nextStamp = s.distance + clod::RoverRuts::kSpacingMetres;
+    }
+    end.last = s.chassis;
+    return onStep ? onStep(s) : true;
+  });
+  return end;
+}
+
+}  // namespace regolith::scene

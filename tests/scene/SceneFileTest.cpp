@@ -1,0 +1,278 @@
+// The scene file: every class of error word for word, round trips, relative paths, and what
+// a built scene declares.
+#include <regolith/clod/TrackLayer.hpp>
+#include <regolith/core/Error.hpp>
+#include <regolith/scene/Scene.hpp>
+#include <regolith/scene/SceneDescription.hpp>
+#include <regolith/store/Generate.hpp>
+
+#include "support/StoreScratch.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <string>
+
+namespace regolith::scene {
+namespace {
+
+using nlohmann::json;
+
+/// A small valid scene: generated Mars (90 rows), a Victoria-like DEM, a rover, two cameras.
+json baseScene() {
+  return json::parse(R"({
+    "version": 1,
+    "bodies": [{"name": "mars", "heights": [{"generate": "mars-planet", "rows": 90, "seed": 3}]}],
+    "dems": [{"name": "victoria", "body": "mars",
+              "heights": {"generate": "victoria", "size": 201, "spacing": 4, "seed": 3},
+              "placement": {"lat": -2.05, "lon": -5.5, "height": "surface"},
+              "effects": {"tracks": true, "heightColours": {"min": -60, "max": 10}}}],
+    "objects": [{"name": "rover", "dem": "victoria", "pose": {"x": 0, "y": -360}}],
+    "cameras": [{"name": "above", "frame": "victoria", "eye": [0, 0, 900], "lookAt": [0, 0, 0],
+                 "up": [0, 1, 0]},
+                {"name": "chase", "frame": "rover", "eye": [-8, 0, 3], "lookAt": [0, 0, 0.5]}],
+    "light": {"frame": "victoria", "elevation": 35, "azimuth": 90}
+  })");
+}
+
+SceneDescription parse(const json& j) { return parseScene(j.dump(), "t.json", "/nowhere"); }
+
+std::string errorOf(const json& j) {
+  try {
+    (void)parse(j);
+  } catch (const InvalidArgument& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(SceneFile, ReadsTheBaseScene) {
+  const SceneDescription s = parse(baseScene());
+  ASSERT_EQ(s.bodies.size(), 1U);
+  EXPECT_EQ(s.bodies[0].heights[0].generate, "mars-planet");
+  EXPECT_EQ(s.bodies[0].heights[0].rows, 90U);
+  EXPECT_EQ(s.bodies[0].heights[0].seed, 3U);
+  ASSERT_EQ(s.dems.size(), 1U);
+  EXPECT_TRUE(s.dems[0].placement->surfaceHeight);
+  EXPECT_EQ(s.dems[0].look.effects.declared(),
+            (std::vector<std::string>{"tracks", "heightColours"}));
+  EXPECT_TRUE(s.bodies[0].look.effects.declared().empty());
+  ASSERT_EQ(s.cameras.size(), 2U);
+  EXPECT_EQ(s.cameras[1].fovY, 45.0);  // default
+  EXPECT_EQ(s.cameras[1].up, (std::array<double, 3>{0.0, 0.0, 1.0}));
+}
+
+TEST(SceneFile, UnknownKeysNameTheAllowedOnes) {
+  json j = baseScene();
+  j["cameras"][1]["fov"] = 60;
+  EXPECT_EQ(errorOf(j),
+            "t.json: /cameras/1/fov: unknown key, expected one of: name, frame, eye, lookAt, up, "
+            "fovY, near, width, height, viewport, focus");
+  j = baseScene();
+  j["dems"][0]["effects"]["heightColors"] = json::object();
+  EXPECT_EQ(errorOf(j),
+            "t.json: /dems/0/effects/heightColors: unknown key, expected one of: tracks, "
+            "heightColours, latLon, noise, albedo, overlay");
+  j = baseScene();
+  j["bodies"][0]["effects"] = {{"tracks", true}};  // tracks are for DEMs
+  EXPECT_EQ(errorOf(j),
+            "t.json: /bodies/0/effects/tracks: unknown key, expected one of: heightColours, "
+            "latLon, noise, albedo, overlay");
+  j = baseScene();
+  j["bodies"][0]["heights"][0]["size"] = 5;  // a victoria option on mars-planet
+  EXPECT_EQ(errorOf(j),
+            "t.json: /bodies/0/heights/0/size: unknown key, expected one of: generate, seed, "
+            "rows, ellipsoid, craterDensity, featherMetres");
+}
+
+TEST(SceneFile, TypesRangesAndFiniteNumbers) {
+  json j = baseScene();
+  j["cameras"][1]["fovY"] = 190;
+  EXPECT_EQ(errorOf(j), "t.json: /cameras/1/fovY: 190 is not in (0, 180)");
+  j["cameras"][1]["fovY"] = "wide";
+  EXPECT_EQ(errorOf(j), "t.json: /cameras/1/fovY: expected a number, got a string");
+  j = baseScene();
+  j["cameras"][0]["near"] = 0;
+  EXPECT_EQ(errorOf(j), "t.json: /cameras/0/near: 0 is not in > 0");
+  j = baseScene();
+  j["cameras"][0]["eye"] = {0, 0};
+  EXPECT_EQ(errorOf(j),
+            "t.json: /cameras/0/eye: expected an array of 3 numbers, got an array of 2");
+  j = baseScene();
+  j["cameras"][0]["width"] = 2.5;
+  EXPECT_EQ(errorOf(j), "t.json: /cameras/0/width: expected an integer, got 2.5");
+  j = baseScene();
+  j["dems"][0]["effects"]["heightColours"]["max"] = -70;
+  EXPECT_EQ(errorOf(j), "t.json: /dems/0/effects/heightColours/max: -70 is not > min (-60)");
+  j = baseScene();
+  j["dems"][0]["placement"]["lat"] = 91;
+  EXPECT_EQ(errorOf(j), "t.json: /dems/0/placement/lat: 91 is not in [-90, 90]");
+  j = baseScene();
+  j["dems"][0]["placement"]["height"] = "ground";
+  EXPECT_EQ(errorOf(j),
+            "t.json: /dems/0/placement/height: \"ground\" is not a number or \"surface\"");
+  // JSON has no NaN or infinity; a number too large for a double is refused as it is read.
+  const std::string huge = R"({"version": 1, "bodies": [{"name": "mars", "heights": [
+      {"generate": "mars-planet"}], "colour": [0.5, 1e999, 0.5]}]})";
+  try {
+    (void)parseScene(huge, "t.json", "/nowhere");
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "t.json: not JSON (number overflow parsing '1e999')");
+  }
+  j = baseScene();
+  j["version"] = 2;
+  EXPECT_EQ(errorOf(j), "t.json: /version: 2 is not in [1, 1]");
+  j = baseScene();
+  j.erase("version");
+  EXPECT_EQ(errorOf(j), "t.json: /version: missing, expected 1");
+  j = baseScene();
+  j["bodies"][0].erase("name");
+  EXPECT_EQ(errorOf(j), "t.json: /bodies/0/name: missing, expected a string");
+  j = baseScene();
+  j["bodies"][0]["heights"][0]["generate"] = "venus";
+  EXPECT_EQ(errorOf(j),
+            "t.json: /bodies/0/heights/0/generate: \"venus\" is not one of: mars-planet, "
+            "mars-cap, mars-strip, victoria");
+  j = baseScene();
+  j["objects"][0]["traverse"] = {{"waypoints", {{0, 0}, {1, 1}}}};
+  EXPECT_EQ(errorOf(j), "t.json: /objects/0: expected exactly one of \"pose\" and \"traverse\"");
+  EXPECT_THROW((void)parseScene("{\"version\": 1,", "t.json", "/"), InvalidArgument);
+}
+
+TEST(SceneFile, DuplicateNamesAndDanglingReferences) {
+  json j = baseScene();
+  j["dems"][0]["name"] = "mars";
+  EXPECT_EQ(errorOf(j), "t.json: /dems/0/name: \"mars\" is already the name of /bodies/0/name");
+  j = baseScene();
+  j["cameras"][1]["name"] = "rover";
+  EXPECT_EQ(errorOf(j),
+            "t.json: /cameras/1/name: \"rover\" is already the name of /objects/0/name");
+  j = baseScene();
+  j["cameras"][1]["frame"] = "rovr";
+  EXPECT_EQ(errorOf(j),
+            "t.json: /cameras/1/frame: \"rovr\" names no body, DEM or object (there are: mars, "
+            "victoria, rover)");
+  j = baseScene();
+  j["objects"][0]["dem"] = "mars";
+  EXPECT_EQ(errorOf(j), "t.json: /objects/0/dem: \"mars\" names no DEM (there are: victoria)");
+  j = baseScene();
+  j["dems"][0]["body"] = "earth";
+  EXPECT_EQ(errorOf(j), "t.json: /dems/0/body: \"earth\" names no body (there are: mars)");
+}
+
+TEST(SceneFile, StoresMustExist) {
+  json j = baseScene();
+  j["bodies"][0]["heights"].push_back({{"store", "caps.h5"}, {"grid", "north_cap"}});
+  EXPECT_EQ(errorOf(j), "t.json: /bodies/0/heights/1/store: no such file");
+}
+
+TEST(SceneFile, RoundTripAndRelativePaths) {
+  // A DEM store beside the scene, named relative to it.
+  const auto dir = test::scratchFile("scene", "round_trip");
+  std::filesystem::create_directories(dir / "data");
+  std::filesystem::create_directories(dir / "elsewhere");
+  store::VictoriaOptions vo;
+  vo.size = 65;
+  vo.spacing = 8.0;
+  vo.write.levels = 2;
+  store::VictoriaGenerator(vo).write(dir / "data" / "v.h5");
+  json j = baseScene();
+  j["dems"].push_back({{"name", "stored"},
+                       {"body", "mars"},
+                       {"heights", {{"store", "data/v.h5"}, {"grid", "victoria"}}}});
+  j["cameras"][0]["viewport"] = {10, 20, 300, 200};
+  j["light"] = {{"frame", "rover"}, {"direction", {0.5, -0.25, 1.0}}};
+  { std::ofstream(dir / "scene.json") << j.dump(2); }
+  const SceneDescription a = readScene(dir / "scene.json");
+  EXPECT_EQ(a.resolve(a.dems[1].heights.store), dir / "data" / "v.h5");
+  writeScene(a, dir / "copy.json");
+  const SceneDescription b = readScene(dir / "copy.json");
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(sceneJson(a, dir), sceneJson(b, dir));
+  // Written into another folder: the relative path is rewritten to reach the same file.
+  writeScene(a, dir / "elsewhere" / "moved.json");
+  const SceneDescription c = readScene(dir / "elsewhere" / "moved.json");
+  EXPECT_EQ(c.dems[1].heights.store, "../data/v.h5");
+  EXPECT_EQ(std::filesystem::weakly_canonical(c.resolve(c.dems[1].heights.store)),
+            std::filesystem::weakly_canonical(dir / "data" / "v.h5"));
+  // A scene that no longer reads back is not written.
+  SceneDescription bad = a;
+  bad.cameras[0].fovY = 190.0;
+  try {
+    writeScene(bad, dir / "bad.json");
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              (dir / "bad.json").string() + ": /cameras/0/fovY: 190 is not in (0, 180)");
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.json"));
+}
+
+TEST(Scene, BuildsOnlyWhatIsDeclared) {
+  const Scene s(parse(baseScene()));
+  EXPECT_EQ(s.terrainOptions("victoria").effects.declared(),
+            (std::vector<std::string>{"tracks", "heightColours"}));
+  EXPECT_TRUE(s.terrainOptions("mars").effects.declared().empty());
+  json j = baseScene();
+  j["dems"][0].erase("effects");
+  j["bodies"][0]["effects"] = {{"latLon", {{"spacing", 10}}}, {"noise", json::object()}};
+  const Scene t(parse(j));
+  EXPECT_TRUE(t.terrainOptions("victoria").effects.declared().empty());
+  EXPECT_EQ(t.terrainOptions("mars").effects.declared(),
+            (std::vector<std::string>{"noise", "latLon"}));
+  EXPECT_EQ(t.terrainOptions("mars").effects.latLon->spacingDegrees, 10.0);
+}
+
+TEST(Scene, GeneratorsAreDeterministicAndMatchTheGenerator) {
+  const Scene a(parse(baseScene())), b(parse(baseScene()));
+  store::VictoriaOptions vo;
+  vo.size = 201;
+  vo.spacing = 4.0;
+  vo.seed = 3;
+  const auto& level = a.terrain("victoria").level(0);
+  // The DEM sits on the planet: the generator's origin height is the planet's there, and
+  // its samples are the generator's with that origin height.
+  vo.originHeight = 0.0;
+  const auto direct = store::VictoriaGenerator(vo).samples();
+  for (const auto& [r, c] : {std::pair<std::size_t, std::size_t>{0, 0}, {100, 100}, {37, 150}}) {
+    EXPECT_EQ(level.source->sample(r, c), b.terrain("victoria").level(0).source->sample(r, c));
+    EXPECT_EQ(level.source->sample(r, c), direct->sample(r, c)) << r << ", " << c;
+  }
+  EXPECT_EQ(a.objectPose("rover"), b.objectPose("rover"));
+  EXPECT_EQ(a.objectPose("rover").z, a.demHeight("victoria", 0.0, -360.0));
+  json j = baseScene();
+  j["bodies"][0]["heights"][0]["seed"] = 4;
+  const Scene c(parse(j));
+  EXPECT_NE(c.terrain("mars").level(0).source->sample(40, 40),
+            a.terrain("mars").level(0).source->sample(40, 40));
+}
+
+TEST(Scene, UnknownCameraListsTheCameras) {
+  const Scene s(parse(baseScene()));
+  try {
+    (void)s.render("orbit");
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(),
+                 "Scene::render(): no camera named 'orbit', expected one of: above, chase");
+  }
+  EXPECT_EQ(s.focusOf("chase"), "victoria");
+  EXPECT_EQ(s.focusOf("above"), "victoria");
+}
+
+TEST(Scene, TraverseStopsAtItsEndAndPressesTracks) {
+  json j = baseScene();
+  j["objects"][0].erase("pose");
+  j["objects"][0]["traverse"] = {{"waypoints", {{-100, -300}, {-100, -280}}}, {"step", 0.01}};
+  const Scene s(parse(j));
+  const glm::dvec4 p = s.objectPose("rover");
+  EXPECT_NEAR(p.x, -100.0, 1e-6);
+  EXPECT_NEAR(p.y, -280.0, 0.02);
+  EXPECT_NEAR(p.w, 0.0, 1e-6);  // heading north
+  EXPECT_GT(s.terrainOptions("victoria").effects.tracks->tiles(), 0U);
+}
+
+}  // namespace
+}  // namespace regolith::scene

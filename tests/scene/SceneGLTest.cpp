@@ -1,0 +1,142 @@
+// Scenes rendered: pixels checked against the scene's geometry (the height colour of the DEM
+// under the camera, the sky above it), and the demo's scene, written as a file and read back,
+// drawing the demo's pixels.
+#include <regolith/clod/Effects.hpp>
+#include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/scene/Scene.hpp>
+#include <regolith/scene/SceneDescription.hpp>
+#include <regolith/scenegraph/Pose.hpp>
+
+#include "gl/GlContext.hpp"
+#include "support/StoreScratch.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+namespace regolith::scene {
+namespace {
+
+constexpr const char* kScene = R"({
+  "version": 1,
+  "bodies": [{"name": "mars", "heights": [{"generate": "mars-planet", "rows": 180, "seed": 3}]}],
+  "dems": [{"name": "victoria", "body": "mars",
+            "heights": {"generate": "victoria", "size": 301, "spacing": 4, "seed": 3},
+            "placement": {"lat": -2.05, "lon": -5.5, "height": "surface"},
+            "colour": [0.55, 0.75, 0.45]},
+           {"name": "coloured", "body": "mars",
+            "heights": {"generate": "victoria", "size": 301, "spacing": 4, "seed": 5},
+            "placement": {"lat": -2.3, "lon": -5.5, "height": "surface"},
+            "effects": {"heightColours": {"min": -80, "max": 20}}}],
+  "objects": [{"name": "rover", "dem": "victoria", "pose": {"x": 0, "y": -395, "heading": 30}}],
+  "cameras": [],
+  "light": {"frame": "victoria", "elevation": 40, "azimuth": 100}
+})";
+
+/// The scene above with one camera in `frame` (eye, look-at, up) of 160 × 120 pixels.
+SceneDescription withCamera(const std::string& frame, glm::dvec3 eye, glm::dvec3 at,
+                            glm::dvec3 up) {
+  SceneDescription d = parseScene(kScene, "gl.json", "/nowhere");
+  Camera c;
+  c.name = "view";
+  c.frame = frame;
+  c.eye = {eye.x, eye.y, eye.z};
+  c.lookAt = {at.x, at.y, at.z};
+  c.up = {up.x, up.y, up.z};
+  c.width = 160;
+  c.height = 120;
+  c.near = 1.0;
+  d.cameras.push_back(c);
+  return d;
+}
+
+TEST(SceneGL, HeightColoursUnderTheCameraAreTheDemsHeight) {
+  test::glContext();
+  // Straight down from 300 m over a point of the coloured DEM: the centre pixel shows the
+  // height colour (unlit) of the DEM's height there, computed on the CPU in double.
+  for (const glm::dvec2 p :
+       {glm::dvec2{-200.0, 130.0}, glm::dvec2{0.0, 0.0}, glm::dvec2{380.0, -20.0}}) {
+    const Scene s(withCamera("coloured", {p.x, p.y, 300.0}, {p.x, p.y, 0.0}, {0.0, 1.0, 0.0}));
+    const double h = s.demHeight("coloured", p.x, p.y);
+    const gl::RgbaImage image = s.render("view");
+    test::savePng("scene_height_colours_" + std::to_string(static_cast<int>(p.x)), image);
+    const glm::vec3 want = clod::heightColour(clod::HeightColours{-80.0F, 20.0F, false}, h);
+    const std::uint8_t* got = image.pixel(80, 60);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(static_cast<double>(got[k]), 255.0 * static_cast<double>(want[k]), 3.0)
+          << "channel " << k << " at (" << p.x << ", " << p.y << "), height " << h;
+    }
+  }
+}
+
+TEST(SceneGL, DemAlbedoBelowAndSkyAbove) {
+  test::glContext();
+  // Down at the green DEM's plains (lit): green above red. Up from the plains: the clear
+  // colour (0.02, 0.02, 0.04) everywhere, no terrain and no far field.
+  const Scene down(
+      withCamera("victoria", {-500.0, 500.0, 200.0}, {-500.0, 500.0, 0.0}, {0.0, 1.0, 0.0}));
+  const gl::RgbaImage a = down.render("view");
+  test::savePng("scene_dem_below", a);
+  EXPECT_GT(a.pixel(80, 60)[1], a.pixel(80, 60)[0] + 20);
+  const Scene up(
+      withCamera("victoria", {-500.0, 500.0, 50.0}, {-500.0, 500.0, 500.0}, {0.0, 1.0, 0.0}));
+  const gl::RgbaImage b = up.render("view");
+  test::savePng("scene_sky_above", b);
+  for (int y = 0; y < b.height; y += 7)
+    for (int x = 0; x < b.width; x += 7) ASSERT_TRUE(b.is(x, y, 5, 5, 10)) << x << ", " << y;
+  // From 40 km over the planet beside the DEMs, looking at Mars: the planet's colour, red
+  // above green (the planet's albedo 0.80, 0.52, 0.38).
+  const Scene planet(
+      withCamera("victoria", {0.0, 60000.0, 40000.0}, {0.0, 60000.0, 0.0}, {0.0, 1.0, 0.0}));
+  const gl::RgbaImage c = planet.render("view");
+  test::savePng("scene_planet_below", c);
+  EXPECT_GT(c.pixel(80, 60)[0], c.pixel(80, 60)[1] + 20);
+}
+
+TEST(SceneGL, DemoSceneFileDrawsTheDemosPixels) {
+  test::glContext();
+  // renderSceneView() with the demo's generated data, and the same view through the scene
+  // file the demo's description writes.
+  demo::SceneViewOptions view;
+  view.width = 320;
+  view.height = 180;
+  view.roverX = 10.0;
+  view.roverY = -390.0;
+  view.roverHeadingDeg = 20.0;
+  const glm::dvec3 eye{60.0, -470.0, 30.0}, at{0.0, -380.0, 0.0}, up{0.0, 0.0, 1.0};
+  view.camera = scenegraph::Pose::lookAt(eye, at, up);
+  const gl::RgbaImage drawn = demo::renderSceneView(view);
+  test::savePng("scene_demo_drawn", drawn);
+
+  SceneDescription d =
+      demo::sceneDescription(view.scene, {view.roverX, view.roverY, view.roverHeadingDeg, {}});
+  Camera c;
+  c.name = "view";
+  c.frame = "victoria";
+  c.eye = {eye.x, eye.y, eye.z};
+  c.lookAt = {at.x, at.y, at.z};
+  c.up = {up.x, up.y, up.z};
+  c.fovY = view.fovYDegrees;
+  c.near = view.near;
+  c.width = view.width;
+  c.height = view.height;
+  d.cameras.push_back(c);
+  const auto file = test::scratchFile("scene_gl", "demo_scene.json");
+  writeScene(d, file);
+  const gl::RgbaImage again = Scene::load(file).render("view");
+  test::savePng("scene_demo_again", again);
+  ASSERT_EQ(again.rgba.size(), drawn.rgba.size());
+  int differing = 0, largest = 0;
+  for (std::size_t i = 0; i < drawn.rgba.size(); ++i) {
+    const int diff = std::abs(static_cast<int>(drawn.rgba[i]) - static_cast<int>(again.rgba[i]));
+    differing += diff > 0 ? 1 : 0;
+    largest = std::max(largest, diff);
+  }
+  EXPECT_EQ(differing, 0) << "largest difference " << largest;
+}
+
+}  // namespace
+}  // namespace regolith::scene
