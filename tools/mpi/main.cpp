@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <cpl_json.h>
 #include <mpi.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -104,6 +105,14 @@ std::string broadcastString(std::string s, int rank) {
   if (rank != 0) s.resize(static_cast<std::size_t>(n));
   MPI_Bcast(s.data(), n, MPI_CHAR, 0, MPI_COMM_WORLD);
   return s;
+}
+
+/// This process's CPU seconds so far (user + system, all its threads).
+double cpuSeconds() {
+  rusage u{};
+  if (getrusage(RUSAGE_SELF, &u) != 0) return 0.0;
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
 }
 
 double seconds(std::chrono::steady_clock::time_point t0) {
@@ -327,6 +336,7 @@ int run(const Args& a, int rank, int size) {
   (void)std::signal(SIGINT, onTerminate);
 
   std::string error, blocks;
+  double statSeconds = 0.0;
   const auto tParts = std::chrono::steady_clock::now();
   const auto p = static_cast<std::size_t>(rank);
   try {
@@ -350,15 +360,24 @@ int run(const Args& a, int rank, int size) {
         (void)std::raise(SIGKILL);  // tests: a rank that dies with its part written
       }
       const bool noStats = !l.tiles.empty() && l.levels == 1;  // as the writer: none then
+      const auto tStats = std::chrono::steady_clock::now();
       if (!noStats) blocks = encodeBlocks(partBlockStats(part, l.grid, a.patch, a.patch));
+      statSeconds = seconds(tStats);
     }
   } catch (const std::exception& e) {
     error = e.what();
     if (error.empty()) error = "failed";
   }
   const double partSeconds = seconds(tParts);
+  // Wait for the slowest rank without spinning: OpenMPI's blocking collectives poll, which
+  // would take a core from the ranks still working when ranks share a node.
+  MPI_Request arrived = MPI_REQUEST_NULL;
+  MPI_Ibarrier(MPI_COMM_WORLD, &arrived);
+  for (int done = 0; MPI_Test(&arrived, &done, MPI_STATUS_IGNORE) == MPI_SUCCESS && done == 0;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
   std::ostringstream slow;
-  slow << partSeconds;
+  slow << partSeconds << " " << statSeconds << " " << cpuSeconds();
   const std::vector<std::string> errors = gather(error, rank, size);
   const std::vector<std::string> stats = gather(blocks, rank, size);
   const std::vector<std::string> times = gather(slow.str(), rank, size);
@@ -404,7 +423,15 @@ int run(const Args& a, int rank, int size) {
       }
       if (status == 0) {
         double slowest = 0.0;
-        for (const std::string& t : times) slowest = std::max(slowest, std::stod(t));
+        std::ostringstream ranks;
+        for (const std::string& t : times) {
+          std::istringstream in(t);
+          double wall = 0.0, stat = 0.0, cpu = 0.0;
+          in >> wall >> stat >> cpu;
+          slowest = std::max(slowest, wall);
+          ranks << (ranks.tellp() > 0 ? ", " : "") << "part " << wall << " s (statistics read-back "
+                << stat << " s), CPU " << cpu << " s";
+        }
         std::cout << "Wrote " << out.string() << ": grid '" << l.grid << "', " << l.rows
                   << " rows x " << l.cols << " cols, " << l.levels << " levels, from "
                   << a.sources.size() << (a.sources.size() == 1 ? " file" : " files") << " on "
@@ -417,6 +444,7 @@ int run(const Args& a, int rank, int size) {
         }
         std::cout << "\n  seconds:        " << seconds(t0) << " (parts " << slowest
                   << " on the slowest rank, joining " << seconds(tJoin) << ")\n";
+        std::cout << "  ranks:          " << ranks.str() << " (rank 0's CPU before the join)\n";
       }
     } else if (status == 0) {
       std::cout << "Wrote " << out.string() << ": grid '" << l.grid
