@@ -201,3 +201,22 @@ def test_a_killed_rank_fails_the_job_and_leaves_nothing(sources, tmp_path):
                env={"REGOLITH_MPI_TEST_KILL_RANK": "1"})
     assert r.returncode != 0
     assert list(tmp_path.iterdir()) == [], list(tmp_path.iterdir())
+
+
+def test_a_global_mosaic_is_imported_whole_and_equal(tmp_path):
+    # Geographic tiles 180 degrees high: importTiles() snaps the geometry of the whole mosaic
+    # only, so regolith-mpi does not split it (one part, on rank 0) and the store is the same.
+    big = tmp_path / "globe.tif"
+    write_tif(big, terrain(180, 360, 3), x0=-180.0, y0=90.0, dx=1.0)
+    tiles = []
+    for i in range(2):
+        for j in range(2):
+            t = tmp_path / f"g_{i}_{j}.tif"
+            gdal.Translate(str(t), str(big), srcWin=[j * 180, i * 90, 180, 90])
+            tiles.append(str(t))
+    single, multi = tmp_path / "single.h5", tmp_path / "multi.h5"
+    regolith(["import"] + tiles + ["--out", str(single), "--patch", "8"])
+    r = mpirun(2, ["import"] + tiles + ["--out", str(multi), "--patch", "8"])
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "one part (a global mosaic" in r.stdout, r.stdout
+    assert_same_store(single, multi)

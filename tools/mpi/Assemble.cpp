@@ -69,16 +69,19 @@ void copyAttributes(hid_t from, hid_t to, const std::string& what) {
     std::string name(static_cast<std::size_t>(std::max<ssize_t>(nameLength, 0)) + 1, '\0');
     check(H5Aget_name(a.get(), name.size(), name.data()), "cannot name an attribute of " + what);
     name.resize(static_cast<std::size_t>(nameLength));
-    const Id t = type(H5Aget_type(a.get()), "cannot type attribute " + name + " of " + what);
-    const Id s = space(H5Aget_space(a.get()), "cannot shape attribute " + name + " of " + what);
+    std::string about = "attribute ";
+    about += name;
+    about += " of ";
+    about += what;
+    const Id t = type(H5Aget_type(a.get()), "cannot type " + about);
+    const Id s = space(H5Aget_space(a.get()), "cannot shape " + about);
     const hssize_t n = H5Sget_simple_extent_npoints(s.get());
     std::vector<unsigned char> bytes(static_cast<std::size_t>(std::max<hssize_t>(n, 1)) *
                                      H5Tget_size(t.get()));
-    check(H5Aread(a.get(), t.get(), bytes.data()), "cannot read attribute " + name + " of " + what);
+    check(H5Aread(a.get(), t.get(), bytes.data()), "cannot read " + about);
     const Id b = attribute(H5Acreate2(to, name.c_str(), t.get(), s.get(), H5P_DEFAULT, H5P_DEFAULT),
-                           "cannot write attribute " + name + " of " + what);
-    check(H5Awrite(b.get(), t.get(), bytes.data()),
-          "cannot write attribute " + name + " of " + what);
+                           "cannot write " + about);
+    check(H5Awrite(b.get(), t.get(), bytes.data()), "cannot write " + about);
   }
 }
 
@@ -236,7 +239,7 @@ std::filesystem::path writeCoarseLevels(const Assembly& a) {
     if (id == H5Z_FILTER_DEFLATE) o.deflate = static_cast<int>(values[0]);
     if (id == store::kZfpFilterId) o.codec = store::Codec::Zfp;
   }
-  const std::filesystem::path coarse = a.scratch / "coarse.h5";
+  std::filesystem::path coarse = a.scratch / "coarse.h5";
   store::writeStore(coarse, std::span<const store::GridSource>(&src, 1), o);
   return coarse;
 }
@@ -246,7 +249,7 @@ std::filesystem::path writeCoarseLevels(const Assembly& a) {
 std::vector<BlockStats> partBlockStats(const std::filesystem::path& part, const std::string& grid,
                                        std::size_t patchRows, std::size_t patchCols) {
   const store::Store s = store::Store::open(part);
-  const store::GridInfo info = s.grid(grid);
+  const store::GridInfo& info = s.grid(grid);
   std::vector<BlockStats> blocks;
   std::vector<float> v;
   for (std::size_t r0 = 0; r0 < info.rows; r0 += patchRows) {
@@ -333,7 +336,9 @@ void assemble(const Assembly& a) {
       }
       for (std::size_t i = 0; i < a.tileCount; ++i) {
         const auto [p, j] = where[i];
-        const std::string from = gridPath + "/tiles/" + std::to_string(j);
+        std::string from = gridPath;
+        from += "/tiles/";
+        from += std::to_string(j);
         const std::string name = std::to_string(i);
         check(H5Ocopy(parts[p].get(), from.c_str(), tiles.get(), name.c_str(), H5P_DEFAULT,
                       H5P_DEFAULT),
@@ -352,7 +357,9 @@ void assemble(const Assembly& a) {
     // Levels 0 (1 when tiled) … top: every part's chunks at its rows.
     for (std::size_t k = tiled ? 1 : 0; k <= top && k < a.levels; ++k) {
       const std::string name = "level" + std::to_string(k);
-      const std::string from = gridPath + "/" + name;
+      std::string from = gridPath;
+      from += '/';
+      from += name;
       std::vector<Id> sources;
       for (std::size_t p = 0; p < parts.size(); ++p) {
         sources.push_back(dataset(H5Dopen2(parts[p].get(), from.c_str(), H5P_DEFAULT),

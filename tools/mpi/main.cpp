@@ -131,7 +131,26 @@ struct Layout {
   };
   std::vector<Tile> tiles;
   std::vector<std::vector<std::size_t>> partTiles;
+  /// Why there is one part only, where not for the grid's size.
+  std::string onePart;
 };
+
+/// Whether tiles make a mosaic whose geometry store::importTiles() snaps only as a whole:
+/// a geographic one 180° high, an equirectangular one 360° wide (within a pixel). Its parts
+/// would carry the unsnapped geometry; such a mosaic is not split (docs/scale.md).
+bool globalMosaic(const store::GridInfo& first, std::size_t rows, std::size_t cols) {
+  constexpr double kDeg = 57.29577951308232;
+  if (first.kind == store::GridKind::Planet) {
+    return static_cast<double>(rows + 1) * first.spacingY >= 180.0;
+  }
+  const store::PlacementInfo& pl = first.placement;
+  if (pl.kind != store::PlacementInfo::Kind::Equirectangular || pl.projectionRadius <= 0.0) {
+    return false;
+  }
+  const double cosTs = std::cos(pl.latTrueScaleDeg.value_or(0.0) / kDeg);
+  const double dlon = first.spacingX / (pl.projectionRadius * cosTs) * kDeg;
+  return static_cast<double>(cols + 1) * dlon >= 360.0;
+}
 
 Layout planImport(const Args& a, const store::ImportOptions& o, int ranks) {
   Layout l;
@@ -197,7 +216,11 @@ Layout planImport(const Args& a, const store::ImportOptions& o, int ranks) {
       }
       whole = whole && r0 == part.row0 && r1 == part.row1 && c0 == 0 && c1 == l.cols;
     }
-    if (!whole) {
+    if (!whole) l.onePart = "the tiles make no whole bands of patches";
+    if (globalMosaic(first, l.rows, l.cols)) {
+      l.onePart = "a global mosaic, whose geometry only the whole mosaic gives";
+    }
+    if (!l.onePart.empty()) {
       l.plan = SplitPlan{{PartRows{0, l.rows}}, 0};
       l.partTiles.clear();
     }
@@ -447,9 +470,10 @@ int run(const Args& a, int rank, int size) {
         std::cout << "  ranks:          " << ranks.str() << " (rank 0's CPU before the join)\n";
       }
     } else if (status == 0) {
-      std::cout << "Wrote " << out.string() << ": grid '" << l.grid
-                << "', one part (no split into whole patch bands), on rank 0 alone, " << seconds(t0)
-                << " seconds\n";
+      std::cout << "Wrote " << out.string() << ": grid '" << l.grid << "', one part ("
+                << (l.onePart.empty() ? std::string("too few rows for two bands of patches")
+                                      : l.onePart)
+                << "), on rank 0 alone, " << seconds(t0) << " seconds\n";
     }
     std::error_code ec;
     fs::remove_all(dir, ec);
@@ -459,7 +483,7 @@ int run(const Args& a, int rank, int size) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   int provided = 0;
   MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
   int rank = 0, size = 1;
@@ -515,4 +539,7 @@ int main(int argc, char** argv) {
   }
   MPI_Finalize();
   return rc;
+} catch (...) {
+  std::cerr << "regolith-mpi: unexpected failure\n";
+  return 1;
 }
