@@ -47,8 +47,9 @@ struct Args {
 
 // ---- cleanup when the job is killed ---------------------------------------------------------
 // mpirun ends the other ranks with SIGTERM when one dies. The handler replaces the process by
-// `sh -c 'rm -rf ...'` (execv is async-signal-safe): the parts folder and this process's
-// temporary of the target go, the target is never renamed into place.
+// `sh -c 'rm -rf ...'` (execv is async-signal-safe): the parts folder and rank 0's temporary
+// of the target go (any rank removes them: rank 0 may be the one that died); the target is
+// never renamed into place.
 std::string gPartsDir, gOut, gPid;
 
 extern "C" void onTerminate(int /*signal*/) {
@@ -354,7 +355,7 @@ int run(const Args& a, int rank, int size) {
   const fs::path dir = out.parent_path() / (out.filename().string() + ".parts-" + pid);
   gPartsDir = dir.string();
   gOut = out.string();
-  gPid = std::to_string(getpid());
+  gPid = pid;  // the target's temporary is rank 0's: <out>.tmp-<rank 0's pid>-<n>
   (void)std::signal(SIGTERM, onTerminate);
   (void)std::signal(SIGINT, onTerminate);
 
