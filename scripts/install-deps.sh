@@ -16,6 +16,9 @@ PACKAGES=(
   # the optional ZFP codec of stores: libzfp encodes chunks, the H5Z-ZFP plugin (filter
   # 32013, in HDF5's default plugin directory) decodes them for every HDF5 reader
   libzfp-dev hdf5-filter-plugin-zfp-serial
+  # regolith-mpi (tools/mpi, docs/scale.md): MPI coordinates the ranks, each rank writes with the
+  # serial HDF5 above (no parallel HDF5 build)
+  openmpi-bin libopenmpi-dev
   # maths and rendering: GLM, OpenGL/EGL through Mesa (llvmpipe; clod links libglvnd's
   # libOpenGL from libopengl-dev, no GLX), GLFW windows, PNG
   libglm-dev libegl-dev libgl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev libpng-dev

@@ -1,0 +1,49 @@
+#pragma once
+// regolith-mpi: the assembling rank joins the ranks' part stores into one store, copying their
+// encoded chunks as they are (HDF5 direct chunk I/O), and computes the levels above them.
+
+#include "MpiPlan.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace regolith::tools::mpi {
+
+/// Level 0's valid heights in one chunk-sized block, as the store writer sums them
+/// (docs/store-format.md, "Height statistics").
+struct BlockStats {
+  double min = 0.0, max = 0.0, sum = 0.0, count = 0.0;
+};
+
+/// The statistics blocks of level-0 rows [row0, row1) of grid `grid` of the part store `part`
+/// (its own rows 0 … row1 − row0), in row-major block order, read back from the part.
+[[nodiscard]] std::vector<BlockStats> partBlockStats(const std::filesystem::path& part,
+                                                     const std::string& grid, std::size_t patchRows,
+                                                     std::size_t patchCols);
+
+/// What the assembly joins.
+struct Assembly {
+  std::filesystem::path out;      // the target store (written through a temporary, then renamed)
+  std::filesystem::path scratch;  // a folder for the coarse levels' store
+  std::string grid;
+  std::vector<std::filesystem::path> parts;  // one store per SplitPlan part
+  SplitPlan plan;
+  std::size_t rows = 0, cols = 0, levels = 0, patchRows = 0, patchCols = 0;
+  /// Tiled grids: for each part, the global index of each of its tiles, in order.
+  std::vector<std::vector<std::size_t>> partTiles;
+  std::size_t tileCount = 0;
+  /// Every block's statistics, row-major over the whole grid.
+  std::vector<BlockStats> blocks;
+  /// The grid's provenance (tiled grids); empty: the first part's.
+  std::string provenance;
+  /// Threads for the coarse levels (0: all).
+  unsigned threads = 0;
+};
+
+/// Writes the store (core::writeFileAtomically). Throws regolith::Error naming the file.
+void assemble(const Assembly& a);
+
+}  // namespace regolith::tools::mpi
