@@ -33,13 +33,15 @@ struct Args {
 
 void runView(const Args& a) {
   if (a.demo == !a.store.empty())
-    throw InvalidArgument("view: give a store or --demo (one of the two)");
+    throw InvalidArgument("view: give a store, a scene file or --demo (one of them)");
   // Scene data first, so a bad store fails before a window opens.
   std::vector<viewer::ScriptStep> script;
   if (!a.script.empty()) script = viewer::parseScript(a.script);
+  const bool sceneFile = a.store.size() > 5 && a.store.ends_with(".json");
   viewer::ViewScene scene =
-      a.demo ? viewer::demoScene()
-             : viewer::storeScene(a.store, a.grid, a.cacheMb << 20U, a.clipmapSize);
+      a.demo      ? viewer::demoScene()
+      : sceneFile ? viewer::sceneFileScene(a.store, a.cacheMb << 20U)
+                  : viewer::storeScene(a.store, a.grid, a.cacheMb << 20U, a.clipmapSize);
   gl::Window window(a.width, a.height, "regolith view: " + scene.title);
   const std::string title = scene.title;
   auto [fw, fh] = window.framebufferSize();
@@ -89,10 +91,12 @@ void addViewCommand(CLI::App& app) {
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
       "view",
-      "Opens a store (one terrain) or the demo scene in an interactive window: orbit and fly "
+      "Opens a store (one terrain), a scene file or the demo scene in an interactive window: orbit "
+      "and fly "
       "cameras, focus switching, effect toggles, picking, split viewports, a HUD and "
       "screenshots (docs/viewer.md). Needs a display (xvfb-run for a virtual one)");
-  cmd->add_option("store", a->store, "Store file (HDF5)");
+  cmd->add_option("store", a->store,
+                  "Store file (HDF5), or a scene file (.json, docs/scene-format.md)");
   cmd->add_option("--grid", a->grid, "Grid to view (default: the store's only grid)");
   cmd->add_option("--cache-mb", a->cacheMb, "Patch cache budget in MiB")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 20U))

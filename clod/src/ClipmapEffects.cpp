@@ -21,16 +21,7 @@
 
 namespace regolith::clod {
 
-std::vector<std::string> Effects::declared() const {
-  std::vector<std::string> out;
-  if (albedo) out.emplace_back("albedo");
-  if (tracks) out.emplace_back("tracks");
-  if (noise) out.emplace_back("noise");
-  if (heightColours) out.emplace_back("heightColours");
-  if (latLon) out.emplace_back("latLon");
-  if (overlay) out.emplace_back("overlay");
-  return out;
-}
+std::vector<std::string> Effects::declared() const { return clod::declaredEffectNames(*this); }
 
 glm::vec3 heightColour(const HeightColours& c, double h) noexcept {
   const double t = std::clamp((h - static_cast<double>(c.minHeight)) /

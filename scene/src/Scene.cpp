@@ -440,6 +440,32 @@ const clod::ClipmapOptions& Scene::terrainOptions(const std::string& name) const
   throw InvalidArgument("Scene::terrainOptions(): no body or DEM named '" + name + "'");
 }
 
+scenegraph::SceneGraph& Scene::graph() noexcept { return impl_->graph; }
+
+std::vector<SceneTerrain> Scene::terrains() const {
+  std::vector<SceneTerrain> out;
+  for (const Impl::Terrain& t : impl_->terrains) {
+    out.push_back({t.name, t.planet, t.body, t.key, t.node, t.pyramid, t.options, t.farField});
+  }
+  return out;
+}
+
+std::vector<SceneObject> Scene::objects() const {
+  std::vector<SceneObject> out;
+  for (const Impl::Thing& o : impl_->objects) out.push_back({o.name, o.key, o.node, o.colour});
+  return out;
+}
+
+scenegraph::NodeId Scene::cameraNode(const std::string& camera) const {
+  const auto it = impl_->cameras.find(camera);
+  if (it == impl_->cameras.end()) {
+    throw InvalidArgument("Scene::cameraNode(): no camera named '" + camera + "'");
+  }
+  return it->second;
+}
+
+std::shared_ptr<const store::PatchCache> Scene::cache() const noexcept { return impl_->cache; }
+
 double Scene::demHeight(const std::string& dem, double x, double y) const {
   for (const Impl::Terrain& t : impl_->terrains)
     if (t.name == dem && !t.planet) return demHeightAt(*t.pyramid, x, y);

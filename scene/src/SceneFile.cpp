@@ -1,4 +1,5 @@
 // The scene file: JSON in and out, every key checked (docs/scene-format.md).
+#include <regolith/clod/Effects.hpp>
 #include <regolith/core/AtomicFile.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
@@ -693,14 +694,7 @@ SceneDescription parse(const std::string& text, const std::string& file, const f
 }  // namespace
 
 std::vector<std::string> EffectsDescription::declared() const {
-  std::vector<std::string> out;
-  if (albedo) out.emplace_back("albedo");
-  if (tracks) out.emplace_back("tracks");
-  if (noise) out.emplace_back("noise");
-  if (heightColours) out.emplace_back("heightColours");
-  if (latLon) out.emplace_back("latLon");
-  if (overlay) out.emplace_back("overlay");
-  return out;
+  return clod::declaredEffectNames(*this);
 }
 
 fs::path SceneDescription::resolve(const std::string& store) const {

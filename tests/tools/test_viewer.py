@@ -2,6 +2,7 @@
 this file under xvfb-run). Checked against outside oracles: a brute-force ray/terrain
 intersection in double over the store's own samples read with h5py, the projection of a
 fixed world point before and after a focus switch, and the pixels of the screenshots."""
+import json
 import math
 import os
 import re
@@ -220,6 +221,53 @@ screenshot {work}/demo-camera.png
     camera = read_png(work / "demo-camera.png")
     diff = np.abs(below_hud(camera) - below_hud(colours)).sum(axis=2) > 30
     assert diff[:, right].mean() > 0.3 and diff[:, :W // 2 - 2].mean() < 0.005
+
+
+SCENE_FILE = {
+    "version": 1,
+    "bodies": [{"name": "mars", "heights": [{"generate": "mars-planet", "rows": 180, "seed": 2}]}],
+    "dems": [{"name": "crater", "body": "mars",
+              "heights": {"generate": "victoria", "size": 201, "spacing": 4, "seed": 2},
+              "placement": {"lat": -2.05, "lon": -5.5, "height": "surface"},
+              "colour": [0.2, 0.8, 0.3],
+              "effects": {"heightColours": {"min": -80, "max": 20}}}],
+    "objects": [{"name": "rover", "dem": "crater", "pose": {"x": 0, "y": -360, "heading": 0}}],
+    "cameras": [{"name": "down", "frame": "crater", "eye": [-300, 300, 150],
+                 "lookAt": [-300, 300, 0], "up": [0, 1, 0], "width": 96, "height": 64,
+                 "near": 1}],
+    "light": {"frame": "crater", "elevation": 45, "azimuth": 90},
+}
+
+
+def test_scene_file_opens_split_toggles_its_declared_effect_and_picks_its_dem(work):
+    """A scene file (docs/scene-format.md) opens as scene::Scene builds it: the body whole on
+    the left, its DEM from above at 35 degrees on the right. The DEM's declared height
+    colours toggle on (the only effect the file declares, so the only toggle), and a pick at
+    the right viewport's centre names the DEM at the site the file places it."""
+    scene = work / "scene.json"
+    scene.write_text(json.dumps(SCENE_FILE))
+    script = work / "scene-script.txt"
+    script.write_text(f"""wait 2
+screenshot {work}/scene-before.png
+key 1
+wait 1
+screenshot {work}/scene-colours.png
+pick 960 360
+""")
+    out = run("view", scene, "--script", script)
+    assert "effect crater heightColours on: pipeline rebuilt" in out, out
+    before, colours = read_png(work / "scene-before.png"), read_png(work / "scene-colours.png")
+    right = slice(W // 2 + 2, W)
+    for half in (slice(0, W // 2 - 2), right):  # terrain in both viewports
+        t = np.abs(below_hud(before)[:, half] - np.array([5, 5, 10])).sum(axis=2) > 12
+        assert t.mean() > 0.2
+    blue = lambda img: (below_hud(img)[:, right][:, :, 2] > below_hud(img)[:, right][:, :, 0] + 30).mean()
+    assert blue(before) < 0.01 and blue(colours) > 0.05, (blue(before), blue(colours))
+    picks = PICK.findall(out)
+    assert len(picks) == 1, out
+    _, _, lon, lat, h, dataset = picks[0]
+    assert dataset == "crater"
+    assert abs(float(lon) + 5.5) < 0.03 and abs(float(lat) + 2.05) < 0.03
 
 
 def test_no_display_is_a_clear_error(planet):

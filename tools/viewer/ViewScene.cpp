@@ -1,6 +1,7 @@
 #include "ViewScene.hpp"
 
 #include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/scene/Scene.hpp>
 #include <regolith/scenegraph/PaperScene.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
@@ -211,6 +212,84 @@ ViewScene demoScene() {
   v.bodyGrid = scene->mars();
   v.bodyNode = n.mars;
   v.keepAlive = scene;
+  return v;
+}
+
+ViewScene sceneFileScene(const std::string& path, std::size_t cacheBytes) {
+  scene::SceneOptions options;
+  options.cacheBytes = cacheBytes;
+  auto built = std::make_shared<scene::Scene>(scene::Scene::load(path, options));
+  ViewScene v;
+  v.title = path;
+  v.graph = std::shared_ptr<scenegraph::SceneGraph>(built, &built->graph());
+  const std::vector<scene::SceneTerrain> terrains = built->terrains();
+  const scene::SceneTerrain* firstBody = nullptr;
+  const scene::SceneTerrain* firstDem = nullptr;
+  for (const scene::SceneTerrain& t : terrains) {
+    ViewTerrain vt;
+    vt.name = t.name;
+    vt.node = t.node;
+    vt.drawable = t.drawable;
+    vt.pyramid = t.pyramid;
+    vt.options = t.options;
+    vt.farField = t.farField;
+    vt.pickPriority = t.planet ? 0 : 1;
+    if (t.planet) {
+      for (const scene::SceneTerrain& d : terrains)
+        if (!d.planet && d.body == t.name) vt.cutOuts.push_back(d.drawable);
+    }
+    v.terrains.push_back(std::move(vt));
+    const auto& g = t.pyramid->level(0).grid;
+    const double size = t.planet ? 2.0 * t.pyramid->body()->equatorialRadius()
+                                 : std::max(g.east() - g.west(), g.north() - g.south());
+    v.objects.push_back({t.name, t.node, t.pyramid, size});
+    if (t.planet && firstBody == nullptr) firstBody = &t;
+    if (!t.planet && firstDem == nullptr) firstDem = &t;
+  }
+  for (const scene::SceneObject& o : built->objects()) {
+    v.meshes.push_back({o.drawable, clod::roverMesh(), o.colour});
+    v.objects.push_back({o.name, o.node, nullptr, 4.0});
+  }
+  for (const scene::Camera& c : built->description().cameras) {
+    v.cameras.push_back({c.name, built->cameraNode(c.name), c.fovY, c.near});
+  }
+  const auto indexOf = [&](const scene::SceneTerrain* t) {
+    return static_cast<std::size_t>(t - terrains.data());  // objects begin with the terrains
+  };
+  if (firstBody != nullptr) {
+    // The body whole from 3.2 radii, looking at its first DEM's site (or 0°E, 0°N).
+    const clod::HeightPyramid& p = *firstBody->pyramid;
+    double lon = 0.0, lat = 0.0;
+    for (const scene::Dem& d : built->description().dems) {
+      if (d.body == firstBody->name && d.placement) {
+        lon = d.placement->lon;
+        lat = d.placement->lat;
+        break;
+      }
+    }
+    OpeningView whole;
+    whole.object = indexOf(firstBody);
+    whole.target = p.position(lon, lat, 0.0);
+    whole.elevationDeg = 75.0;
+    whole.distance = 3.2 * p.body()->equatorialRadius();
+    v.openings.push_back(whole);
+    v.bodyGrid = firstBody->pyramid;
+    v.bodyNode = firstBody->node;
+  }
+  if (firstDem != nullptr) {
+    const auto& g = firstDem->pyramid->level(0).grid;
+    const double cx = 0.5 * (g.west() + g.east()), cy = 0.5 * (g.south() + g.north());
+    OpeningView crater;
+    crater.object = indexOf(firstDem);
+    crater.target = {cx, cy, built->demHeight(firstDem->name, cx, cy)};
+    crater.headingDeg = 20.0;
+    crater.elevationDeg = 35.0;
+    crater.distance = 1.2 * std::max(g.east() - g.west(), g.north() - g.south());
+    v.openings.push_back(crater);
+  }
+  if (v.openings.empty()) throw InvalidArgument("view: " + path + ": the scene has no body or DEM");
+  v.cache = built->cache();
+  v.keepAlive = built;
   return v;
 }
 

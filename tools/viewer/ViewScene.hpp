@@ -2,9 +2,9 @@
 // What `regolith view` shows, as a small interface a scene source fills: a scene graph, the
 // terrains drawn in its nodes' frames with the effects each declares, meshes, the objects
 // one can focus on and the scene's cameras. Today two sources fill it: a bare store
-// (storeScene(): one terrain) and the Mars/Victoria demo (demoScene()). A scene-file loader
-// (scene::Scene from scene.json) plugs in as a third function returning a ViewScene; the
-// viewer itself (Viewer.hpp) needs nothing else.
+// (storeScene(): one terrain), the Mars/Victoria demo (demoScene()) and a scene file
+// (sceneFileScene(): scene::Scene from scene.json); the viewer itself (Viewer.hpp) needs
+// nothing else.
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
@@ -102,5 +102,11 @@ ViewScene storeScene(const std::string& path, const std::string& grid, std::size
 /// field, the Victoria-like DEM and a second DEM, the rover and its cameras. Opens split:
 /// Mars whole on the left, Victoria from above at 35° on the right.
 ViewScene demoScene();
+
+/// A scene file (docs/scene-format.md) as scene::Scene builds and renders it: its bodies
+/// (with their far fields) and DEMs with the effects each declares, its rovers, its cameras.
+/// Opens on the first body whole and, if there is a DEM, split with the first DEM from above
+/// at 35°. Throws as scene::Scene::load() does (errors name the file and the key).
+ViewScene sceneFileScene(const std::string& path, std::size_t cacheBytes);
 
 }  // namespace regolith::tools::viewer

@@ -80,6 +80,21 @@ struct Effects {
   [[nodiscard]] std::vector<std::string> declared() const;
 };
 
+/// Names of the declared effects of any type with Effects' members (an unset optional or
+/// null pointer is not declared), in Effects::declared()'s order: one list for clod and for
+/// the scene file's description of the same effects (scene::EffectsDescription).
+template <class AnyEffects>
+[[nodiscard]] std::vector<std::string> declaredEffectNames(const AnyEffects& e) {
+  std::vector<std::string> out;
+  if (e.albedo) out.emplace_back("albedo");
+  if (e.tracks) out.emplace_back("tracks");
+  if (e.noise) out.emplace_back("noise");
+  if (e.heightColours) out.emplace_back("heightColours");
+  if (e.latLon) out.emplace_back("latLon");
+  if (e.overlay) out.emplace_back("overlay");
+  return out;
+}
+
 /// The height ramp's stops, first to last (a perceptual blue → green → yellow → red ramp).
 inline constexpr std::array<glm::vec3, 5> kHeightRamp{
     glm::vec3{0.19F, 0.21F, 0.58F}, glm::vec3{0.13F, 0.57F, 0.55F}, glm::vec3{0.37F, 0.79F, 0.38F},

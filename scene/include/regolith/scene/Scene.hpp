@@ -5,9 +5,13 @@
 
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/gl/Image.hpp>
 #include <regolith/scene/SceneDescription.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
+#include <regolith/store/PatchCache.hpp>
+
+#include <glm/vec3.hpp>
 
 #include <cstddef>
 #include <filesystem>
@@ -16,6 +20,27 @@
 #include <vector>
 
 namespace regolith::scene {
+
+/// A body or DEM as render() draws it (Scene::terrains()), for other front ends.
+struct SceneTerrain {
+  std::string name;
+  bool planet = false;  ///< a body's surface (else a DEM on `body`)
+  std::string body;     ///< DEMs: the body they sit on
+  int drawable = -1;    ///< its key in the render list
+  scenegraph::NodeId node = 0;
+  std::shared_ptr<const clod::HeightPyramid> pyramid;
+  clod::ClipmapOptions options;  ///< the look and the declared effects
+  /// Bodies drawn beyond their clipmap by the far field (null: none).
+  std::shared_ptr<const farfield::HeightLayers> farField;
+};
+
+/// An object (a rover) as render() draws it.
+struct SceneObject {
+  std::string name;
+  int drawable = -1;
+  scenegraph::NodeId node = 0;
+  glm::vec3 colour{0.8F};
+};
 
 struct SceneOptions {
   /// Budget of the patch cache every store of the scene is paged through.
@@ -42,6 +67,15 @@ class Scene {
 
   [[nodiscard]] const SceneDescription& description() const noexcept;
   [[nodiscard]] const scenegraph::SceneGraph& graph() const noexcept;
+  /// The graph for a front end that adds its own nodes (the viewer's free cameras).
+  [[nodiscard]] scenegraph::SceneGraph& graph() noexcept;
+  /// What render() draws: every body and DEM, and every object, in the description's order.
+  [[nodiscard]] std::vector<SceneTerrain> terrains() const;
+  [[nodiscard]] std::vector<SceneObject> objects() const;
+  /// A camera's node in graph() (InvalidArgument for an unknown name).
+  [[nodiscard]] scenegraph::NodeId cameraNode(const std::string& camera) const;
+  /// The patch cache every store of the scene is paged through.
+  [[nodiscard]] std::shared_ptr<const store::PatchCache> cache() const noexcept;
   /// The heights drawn for a body or DEM (composed for a body with several datasets).
   [[nodiscard]] const clod::HeightPyramid& terrain(const std::string& name) const;
   /// The clipmap options render() registers for a body or DEM (effects included).
