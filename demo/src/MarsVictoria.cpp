@@ -264,7 +264,7 @@ void MarsVictoriaScene::finish() {
       clod::SurfaceKind::Planet, earth));
 
   layout_.roverInDem = {0.0, -395.0, 0.0};
-  nodes_ = scenegraph::buildPaperScene(graph_, layout_);
+  nodes_ = demo::buildPaperScene(graph_, layout_);
   placeRover(0.0, -395.0, 0.0);
 }
 
@@ -293,21 +293,21 @@ void MarsVictoriaScene::registerWith(clod::SceneRenderer& renderer) const {
   clod::ClipmapOptions dem = planet;
   dem.levels = 0;
   dem.albedo = options_.demAlbedo.value_or(kDemAlbedo);
-  renderer.addTerrain(scenegraph::kDrawMars, mars_, planet);
+  renderer.addTerrain(demo::kDrawMars, mars_, planet);
   clod::ClipmapOptions victoria = dem;
   victoria.effects = options_.victoriaEffects;
-  renderer.addTerrain(scenegraph::kDrawVictoria, victoria_, victoria);
-  renderer.addCutOut(scenegraph::kDrawMars, scenegraph::kDrawVictoria);
+  renderer.addTerrain(demo::kDrawVictoria, victoria_, victoria);
+  renderer.addCutOut(demo::kDrawMars, demo::kDrawVictoria);
   if (second_) {
-    renderer.addTerrain(scenegraph::kDrawSecondDem, second_, dem);
-    renderer.addCutOut(scenegraph::kDrawMars, scenegraph::kDrawSecondDem);
+    renderer.addTerrain(demo::kDrawSecondDem, second_, dem);
+    renderer.addCutOut(demo::kDrawMars, demo::kDrawSecondDem);
   }
   clod::ClipmapOptions earth = planet;
   earth.levels = 0;
   earth.size = 31;
   earth.albedo = {0.3F, 0.45F, 0.8F};
-  renderer.addTerrain(scenegraph::kDrawEarth, earth_, earth);
-  renderer.addMesh(scenegraph::kDrawRover, clod::roverMesh(), {0.85F, 0.85F, 0.8F});
+  renderer.addTerrain(demo::kDrawEarth, earth_, earth);
+  renderer.addMesh(demo::kDrawRover, clod::roverMesh(), {0.85F, 0.85F, 0.8F});
 }
 
 glm::dvec3 MarsVictoriaScene::lightInFocus(scenegraph::NodeId focus) const {
@@ -356,7 +356,7 @@ gl::RgbaImage renderSceneView(const SceneViewOptions& options) {
     MarsVictoriaScene scene(options.scene);
     scene.placeRover(options.roverX, options.roverY, options.roverHeadingDeg);
     scenegraph::SceneGraph& g = scene.graph();
-    const scenegraph::PaperSceneNodes& n = scene.nodes();
+    const demo::PaperSceneNodes& n = scene.nodes();
     const scenegraph::NodeId cam =
         g.add(n.victoria, "view_camera", options.camera, scenegraph::NodeKind::Camera);
     clod::SceneRenderer renderer;
@@ -401,7 +401,7 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options) {
     MarsVictoriaScene scene(options.scene);
     if (options.rover) scene.placeRover(options.rover->x, options.rover->y, options.rover->z);
     scenegraph::SceneGraph& g = scene.graph();
-    const scenegraph::PaperSceneNodes& n = scene.nodes();
+    const demo::PaperSceneNodes& n = scene.nodes();
     const glm::dvec3 rover = g.relative(n.victoria, n.rover).translation;
     const scenegraph::NodeId cam = g.add(n.victoria, "flyover_camera", flyoverCamera(0.0, rover),
                                          scenegraph::NodeKind::Camera);
@@ -574,7 +574,7 @@ scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
   victoria.look.effects.tracks = fx.tracks != nullptr || !rover.traverse.empty();
   d.dems.push_back(victoria);
   if (options.secondDem) {
-    const scenegraph::PaperSceneLayout layout;
+    const demo::PaperSceneLayout layout;
     scene::Dem second = victoria;
     second.name = "second_dem";
     second.heights = {};

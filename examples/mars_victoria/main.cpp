@@ -21,6 +21,7 @@ namespace {
 // and the re-rooted one; the worst figure over all segments of each.
 int jitter(std::size_t frames) {
   using namespace regolith::scenegraph;
+  using namespace regolith::demo;
   JitterResult worst[3];
   std::size_t pointFrames = 0;
   const double starts[] = {-600.0, -500.0, -395.0, -300.0, -200.0, -100.0,

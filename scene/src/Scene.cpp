@@ -7,7 +7,7 @@
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/scene/Scene.hpp>
 #include <regolith/scene/SceneParts.hpp>
-#include <regolith/scenegraph/PaperScene.hpp>
+#include <regolith/scenegraph/SitePose.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Pager.hpp>

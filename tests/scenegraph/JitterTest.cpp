@@ -1,8 +1,8 @@
 // Screen-space jitter of the rover and nearby terrain vertices as the rover moves across
 // Victoria in 1 mm steps, for naive float32 pipelines and the re-rooted one (issue 6).
 #include <regolith/core/Error.hpp>
+#include <regolith/demo/PaperScene.hpp>
 #include <regolith/scenegraph/Jitter.hpp>
-#include <regolith/scenegraph/PaperScene.hpp>
 
 #include <gtest/gtest.h>
 
@@ -10,6 +10,10 @@
 
 namespace regolith::scenegraph {
 namespace {
+
+using demo::buildPaperScene;
+using demo::PaperSceneLayout;
+using demo::PaperSceneNodes;
 
 struct RoverRun {
   SceneGraph graph{"sun"};

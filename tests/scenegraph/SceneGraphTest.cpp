@@ -1,5 +1,5 @@
 #include <regolith/core/Error.hpp>
-#include <regolith/scenegraph/PaperScene.hpp>
+#include <regolith/demo/PaperScene.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
 #include <regolith/topo/Projection.hpp>
 
@@ -10,6 +10,12 @@
 
 namespace regolith::scenegraph {
 namespace {
+
+using demo::buildPaperScene;
+using demo::kDrawRover;
+using demo::kDrawVictoria;
+using demo::PaperSceneLayout;
+using demo::PaperSceneNodes;
 
 void expectNear(const glm::dvec3& a, const glm::dvec3& b, double tol) {
   EXPECT_NEAR(a.x, b.x, tol);

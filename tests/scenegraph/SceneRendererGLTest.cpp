@@ -23,6 +23,8 @@
 namespace regolith::scenegraph {
 namespace {
 
+using demo::kDrawMars;
+
 // The demo scene is this test's fixture until the scene-rendering layer has one of its own.
 using demo::flyoverCamera;
 using demo::MarsVictoriaOptions;

@@ -1,8 +1,8 @@
 #include "ViewScene.hpp"
 
 #include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/demo/PaperScene.hpp>
 #include <regolith/scene/Scene.hpp>
-#include <regolith/scenegraph/PaperScene.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 
@@ -139,7 +139,7 @@ ViewScene storeScene(const std::string& path, const std::string& grid, std::size
 
 ViewScene demoScene() {
   auto scene = std::make_shared<demo::MarsVictoriaScene>();
-  const scenegraph::PaperSceneNodes& n = scene->nodes();
+  const demo::PaperSceneNodes& n = scene->nodes();
   ViewScene v;
   v.title = "Mars/Victoria demo scene";
   v.graph = std::shared_ptr<scenegraph::SceneGraph>(scene, &scene->graph());
@@ -156,32 +156,19 @@ ViewScene demoScene() {
   dem.levels = 0;
   dem.albedo = demo::MarsVictoriaScene::kDemAlbedo;
   dem.effects = {};
-  std::vector<int> cuts{scenegraph::kDrawVictoria};
-  if (scene->secondDem()) cuts.push_back(scenegraph::kDrawSecondDem);
-  v.terrains.push_back(
-      {"mars", n.mars, scenegraph::kDrawMars, scene->mars(), planet, cuts, layers, 0});
+  std::vector<int> cuts{demo::kDrawVictoria};
+  if (scene->secondDem()) cuts.push_back(demo::kDrawSecondDem);
+  v.terrains.push_back({"mars", n.mars, demo::kDrawMars, scene->mars(), planet, cuts, layers, 0});
   clod::ClipmapOptions victoria = dem;
   victoria.effects = declaredEffects(*scene->victoria(), true);
   victoria.effects.noise = clod::StructuredNoise{0.3, 8.0, 4, 0.15F, std::nullopt};
-  v.terrains.push_back({"victoria",
-                        n.victoria,
-                        scenegraph::kDrawVictoria,
-                        scene->victoria(),
-                        victoria,
-                        {},
-                        nullptr,
-                        1});
+  v.terrains.push_back(
+      {"victoria", n.victoria, demo::kDrawVictoria, scene->victoria(), victoria, {}, nullptr, 1});
   if (scene->secondDem()) {
-    v.terrains.push_back({"second_dem",
-                          n.secondDem,
-                          scenegraph::kDrawSecondDem,
-                          scene->secondDem(),
-                          dem,
-                          {},
-                          nullptr,
-                          1});
+    v.terrains.push_back(
+        {"second_dem", n.secondDem, demo::kDrawSecondDem, scene->secondDem(), dem, {}, nullptr, 1});
   }
-  v.meshes.push_back({scenegraph::kDrawRover, clod::roverMesh(), {0.85F, 0.85F, 0.8F}});
+  v.meshes.push_back({demo::kDrawRover, clod::roverMesh(), {0.85F, 0.85F, 0.8F}});
   const double radius = scene->mars()->body()->equatorialRadius();
   const auto& vg = scene->victoria()->level(0).grid;
   const double extent = std::max(vg.east() - vg.west(), vg.north() - vg.south());

@@ -3,7 +3,7 @@
 #include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
-#include <regolith/scenegraph/PaperScene.hpp>
+#include <regolith/demo/PaperScene.hpp>
 
 #include "Common.hpp"
 
@@ -26,7 +26,7 @@ using scenegraph::SceneGraph;
 /// A built paper scene: the graph and the ids of its named nodes.
 struct PyScene {
   SceneGraph graph{"sun"};
-  scenegraph::PaperSceneNodes nodes;
+  demo::PaperSceneNodes nodes;
 };
 
 const char* kindName(scenegraph::NodeKind k) {
@@ -213,13 +213,13 @@ void bindScene(py::module_& m) {
       "paper_scene",
       [](bool secondDem) {
         auto s = std::make_shared<PyScene>();
-        scenegraph::PaperSceneLayout layout;
+        demo::PaperSceneLayout layout;
         layout.secondDem = secondDem;
-        s->nodes = scenegraph::buildPaperScene(s->graph, layout);
+        s->nodes = demo::buildPaperScene(s->graph, layout);
         return s;
       },
       py::arg("second_dem") = false,
-      "Builds the paper's example scene (scenegraph::buildPaperScene) and returns its SceneGraph.");
+      "Builds the paper's example scene (demo::buildPaperScene) and returns its SceneGraph.");
 
   m.def(
       "render_scene",

@@ -7,10 +7,10 @@
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/compose/ComposedSurface.hpp>
+#include <regolith/demo/PaperScene.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/gl/Image.hpp>
 #include <regolith/scene/SceneDescription.hpp>
-#include <regolith/scenegraph/PaperScene.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
 
 #include <cstddef>
@@ -78,7 +78,7 @@ struct MarsVictoriaOptions {
   bool farField = true;
 };
 
-/// The scene: graph (scenegraph::buildPaperScene), data and what each drawable key draws. Building
+/// The scene: graph (demo::buildPaperScene), data and what each drawable key draws. Building
 /// it needs no GL; registerWith() does. The DEMs' origin heights are those of the planet's surface
 /// (bilinear in its finest level) at their sites, so the plains meet the planet.
 class MarsVictoriaScene {
@@ -88,8 +88,8 @@ class MarsVictoriaScene {
 
   [[nodiscard]] scenegraph::SceneGraph& graph() noexcept { return graph_; }
   [[nodiscard]] const scenegraph::SceneGraph& graph() const noexcept { return graph_; }
-  [[nodiscard]] const scenegraph::PaperSceneNodes& nodes() const noexcept { return nodes_; }
-  [[nodiscard]] const scenegraph::PaperSceneLayout& layout() const noexcept { return layout_; }
+  [[nodiscard]] const demo::PaperSceneNodes& nodes() const noexcept { return nodes_; }
+  [[nodiscard]] const demo::PaperSceneLayout& layout() const noexcept { return layout_; }
   [[nodiscard]] const std::shared_ptr<const clod::HeightPyramid>& mars() const { return mars_; }
   [[nodiscard]] const std::shared_ptr<const clod::HeightPyramid>& victoria() const {
     return victoria_;
@@ -134,8 +134,8 @@ class MarsVictoriaScene {
 
   MarsVictoriaOptions options_;
   scenegraph::SceneGraph graph_{"sun"};
-  scenegraph::PaperSceneLayout layout_;
-  scenegraph::PaperSceneNodes nodes_;
+  demo::PaperSceneLayout layout_;
+  demo::PaperSceneNodes nodes_;
   std::shared_ptr<const clod::HeightPyramid> mars_, victoria_, second_, earth_;
   std::shared_ptr<void> pager_;  // keeps the stores' pager alive while the scene draws them
   std::shared_ptr<const compose::ComposedSurface> composed_;

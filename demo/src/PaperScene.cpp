@@ -1,11 +1,17 @@
 #include <regolith/core/Error.hpp>
-#include <regolith/scenegraph/PaperScene.hpp>
+#include <regolith/demo/PaperScene.hpp>
 #include <regolith/topo/Projection.hpp>
 
 #include <cmath>
 #include <numbers>
 
-namespace regolith::scenegraph {
+namespace regolith::demo {
+
+using scenegraph::NodeKind;
+using scenegraph::SceneGraph;
+using scenegraph::Pose;
+using scenegraph::roverPose;
+using scenegraph::tangentPlanePose;
 
 namespace {
 
@@ -18,19 +24,6 @@ Pose rotationAbout(const glm::dvec3& axis, double degrees) {
 }
 
 }  // namespace
-
-Pose tangentPlanePose(const topo::Body& body, const topo::Geodetic& origin, double headingDeg) {
-  const topo::LocalTangentPlane plane(body, origin, headingDeg);
-  return Pose::fromAxes(plane.originBodyFixed(), plane.xAxis(), plane.yAxis(), plane.zAxis());
-}
-
-Pose roverPose(const glm::dvec3& position, double headingDeg) {
-  // Heading clockwise from +y (north at heading 0): forward = (sin h, cos h, 0).
-  const double h = headingDeg * kDeg;
-  const glm::dvec3 fwd{std::sin(h), std::cos(h), 0.0};
-  const glm::dvec3 up{0.0, 0.0, 1.0};
-  return Pose::fromAxes(position, fwd, glm::cross(up, fwd), up);
-}
 
 PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layout) {
   if (graph.size() != 1)
@@ -83,4 +76,4 @@ PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layou
   return n;
 }
 
-}  // namespace regolith::scenegraph
+}  // namespace regolith::demo

@@ -1,14 +1,16 @@
 #pragma once
 /// \file
 /// The example scene of the JPL paper (section IV.B, figure 10): the Sun, Earth and Mars, the
-/// Victoria Crater DEM on Mars, a rover on the DEM and cameras, as a scene graph.
+/// Victoria Crater DEM on Mars, a rover on the DEM and cameras, as a scene graph: the demo
+/// scene's layout (scene code lives here, not in the scene-graph module).
 
 #include <regolith/scenegraph/SceneGraph.hpp>
+#include <regolith/scenegraph/SitePose.hpp>
 #include <regolith/topo/Body.hpp>
 
 #include <glm/vec3.hpp>
 
-namespace regolith::scenegraph {
+namespace regolith::demo {
 
 /// Drawable keys the paper scene gives its nodes (a renderer maps them to what it draws).
 enum PaperDrawable : int {
@@ -42,25 +44,16 @@ struct PaperSceneLayout {
 
 /// The nodes of a built paper scene.
 struct PaperSceneNodes {
-  NodeId sun = 0, earth = 0, mars = 0, victoria = 0, secondDem = 0, rover = 0;
+  scenegraph::NodeId sun = 0, earth = 0, mars = 0, victoria = 0, secondDem = 0, rover = 0;
   /// Cameras: one 20 km over Victoria looking down (child of Mars), the rover's mast camera
   /// (child of the rover, 2.1 m up in front of the mast head, looking ahead and 15° down), a chase
   /// camera behind the rover.
-  NodeId orbitCamera = 0, mastCamera = 0, chaseCamera = 0;
+  scenegraph::NodeId orbitCamera = 0, mastCamera = 0, chaseCamera = 0;
 };
 
 /// Builds the scene into an empty graph (whose root is taken as the Sun): Sun → Earth,
 /// Sun → Mars → Victoria → rover (→ mast and chase cameras), Mars → orbit camera,
 /// Mars → second DEM if asked. Throws InvalidArgument if the graph is not empty.
-PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layout = {});
+PaperSceneNodes buildPaperScene(scenegraph::SceneGraph& graph, const PaperSceneLayout& layout = {});
 
-/// The pose (DEM frame → Mars body-fixed) of a DEM whose local tangent plane has this
-/// planetodetic origin and heading.
-[[nodiscard]] Pose tangentPlanePose(const topo::Body& body, const topo::Geodetic& origin,
-                                    double headingDeg);
-
-/// The pose of a rover at `position` (DEM frame) with a heading (degrees clockwise from +y),
-/// its x forward, y left, z up.
-[[nodiscard]] Pose roverPose(const glm::dvec3& position, double headingDeg);
-
-}  // namespace regolith::scenegraph
+}  // namespace regolith::demo
