@@ -8,9 +8,9 @@
 namespace regolith::demo {
 
 using scenegraph::NodeKind;
-using scenegraph::SceneGraph;
 using scenegraph::Pose;
 using scenegraph::roverPose;
+using scenegraph::SceneGraph;
 using scenegraph::tangentPlanePose;
 
 namespace {
