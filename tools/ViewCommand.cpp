@@ -91,9 +91,8 @@ void addViewCommand(CLI::App& app) {
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
       "view",
-      "Opens a store (one terrain), a scene file or the demo scene in an interactive window: orbit "
-      "and fly "
-      "cameras, focus switching, effect toggles, picking, split viewports, a HUD and "
+      "Opens a store (one terrain), a scene file or the demo scene in an interactive window: "
+      "orbit and fly cameras, focus switching, effect toggles, picking, split viewports, a HUD and "
       "screenshots (docs/viewer.md). Needs a display (xvfb-run for a virtual one)");
   cmd->add_option("store", a->store,
                   "Store file (HDF5), or a scene file (.json, docs/scene-format.md)");
