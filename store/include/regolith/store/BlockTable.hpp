@@ -21,8 +21,10 @@
 /// execute a full fence), then frees a retracted block only if no record of its domain names
 /// it. The reader therefore needs no fence. Where membarrier is unavailable, a domain hands
 /// out no record for the lock-free path (joinDomain() gives null) and queries enter new
-/// blocks through the cache's lock. Under ThreadSanitizer, which does not model membarrier,
-/// the reader uses a sequentially consistent store instead.
+/// blocks through the cache's lock. ThreadSanitizer builds run this same protocol (TSan
+/// does not model membarrier, but it needs no more than the release stores of the records
+/// and the reclaimer's acquire loads to order a reader's last reads of a block before its
+/// free), so the TSan tests check the code that ships.
 ///
 /// Domains. Each cache has its own HazardDomain: its records (one per thread that has read
 /// its tables) and its recency clock. Two caches share nothing, so one cache's reclaimer
@@ -55,16 +57,16 @@ class HazardDomain : public std::enable_shared_from_this<HazardDomain> {
   /// record of an ended thread is reused). The record is given back when the thread ends.
   /// Requires that the domain is owned by a shared_ptr. Throws std::bad_alloc.
   [[nodiscard]] topo::HazardRecord& threadRecord();
-  /// threadRecord() where readers may skip the fence (membarrier(2) is registered, or under
-  /// ThreadSanitizer), else null: queries then do not use the tables. Clears the thread's
+  /// threadRecord() where readers may skip the fence (membarrier(2) is registered), else
+  /// null: queries then do not use the tables. Clears the thread's
   /// records in other domains (topo::BlockIndex::joinDomain()).
   [[nodiscard]] topo::HazardRecord* lockFreeRecord();
   /// Whether readers may use the lock-free path in this process (membarrier(2) registered).
   [[nodiscard]] static bool lockFree() noexcept;
 
   /// Reclaimer side, after retracting: a full memory barrier on every thread of the process
-  /// (membarrier), or a local full fence when membarrier is unavailable (then no query
-  /// announces hazards: they do not use the tables). False if the barrier could not be made;
+  /// (membarrier), or nothing when membarrier is unavailable (then no query announces
+  /// hazards: they do not use the tables). False if the barrier could not be made;
   /// then nothing retracted may be freed yet.
   [[nodiscard]] static bool barrier() noexcept;
   /// True if some thread's record of this domain names p. Call after barrier().

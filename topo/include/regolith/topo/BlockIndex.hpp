@@ -49,15 +49,13 @@ struct HazardRecord {
 /// Announces that this thread is about to read `p` (then re-check that p is still
 /// published before using it). No fence: the reclaimer's process-wide barrier
 /// (store::HazardDomain::barrier(), membarrier(2)) pairs with it, which is why a domain hands
-/// out records for the lock-free path only where that barrier exists. Under ThreadSanitizer,
-/// which does not model membarrier, the store is sequentially consistent instead.
+/// out records for the lock-free path only where that barrier exists. The same code runs
+/// under ThreadSanitizer: the release store is what gives the reclaimer's acquire loads their
+/// happens-before edge to the reads of the block that came before it, and membarrier(2)
+/// (which TSan does not model) only decides which value those loads see.
 inline void protect(HazardRecord& rec, const void* p) noexcept {
-#if defined(__SANITIZE_THREAD__)
-  rec.ptr.store(p, std::memory_order_seq_cst);
-#else
   rec.ptr.store(p, std::memory_order_release);
   std::atomic_signal_fence(std::memory_order_seq_cst);  // compiler-only; the barrier pairs
-#endif
 }
 
 /// The resident blocks of one source as readers see them: one slot per aligned

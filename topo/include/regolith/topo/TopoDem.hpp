@@ -174,8 +174,7 @@ inline const PublishedBlock* enterBlock(const BlockIndex& table, std::uint64_t s
   if (rec->ptr.load(relaxed) != b) {
     tlBlock.source = 0;  // the hazard leaves the thread's block
     protect(*rec, b);
-    // seq_cst: under TSan protect() is a seq_cst store that this load must not pass (on x86
-    // it is a plain load either way).
+    // seq_cst: the reclaimer's retract() is a seq_cst store (on x86 this is a plain load).
     if (slot.load(std::memory_order_seq_cst) != b) return nullptr;  // retracted meanwhile
     b->fastHits.store(b->fastHits.load(relaxed) + 1, relaxed);
     b->lastUse.store(table.now(), relaxed);
