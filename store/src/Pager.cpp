@@ -1,8 +1,8 @@
 #include <regolith/core/Assert.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
+#include <regolith/store/BlockTable.hpp>
 #include <regolith/store/Pager.hpp>
-#include <regolith/topo/BlockTable.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -74,7 +74,7 @@ std::shared_ptr<const Patch> loadPatch(const PageSource& pages, const GridInfo& 
   return p;
 }
 
-static_assert(kMaxPatchesPerGrid <= topo::BlockTable::kMaxBlocks,
+static_assert(kMaxPatchesPerGrid <= BlockTable::kMaxBlocks,
               "every grid a store may hold has a block table");
 
 // One level of one grid, paged through the cache. Holds the source and the cache, so it
@@ -122,7 +122,7 @@ class PagedSource final : public topo::SampleSource {
     }
   }
 
-  const topo::BlockTable* blockTable() const noexcept override { return table_.get(); }
+  const topo::BlockIndex* blockIndex() const noexcept override { return table_.get(); }
 
   bool block(std::size_t row, std::size_t col, topo::SampleBlock& out) const override {
     auto p = patchAt(row, col);
@@ -148,7 +148,7 @@ class PagedSource final : public topo::SampleSource {
   std::uint32_t gridId_, level_;
   std::shared_ptr<const PageSource> pages_;
   std::shared_ptr<PatchCache> cache_;
-  std::shared_ptr<const topo::BlockTable> table_;  // lock-free hits on resident patches
+  std::shared_ptr<const BlockTable> table_;  // lock-free hits on resident patches
   PatchCache::Loader loader_;  // made once: a std::function per lookup costs more than a hit
 };
 

@@ -11,20 +11,22 @@
 // insert(); either way a hit allocates nothing.
 //
 // Lock-free hits. With Lru and HitCount, every resident patch of a grid level that has a
-// topo::BlockTable (Pager sources register one) is published there, and queries entering it
-// count their hit in the patch's own counters without the lock (topo/BlockTable.hpp). The
+// BlockTable (Pager sources register one) is published there, and queries entering it
+// count their hit in the patch's own counters without the lock (store/BlockTable.hpp). The
 // index then lags behind those counters; eviction corrects it lazily: while the first
 // element's live (hits, lastUse) is newer than its indexed key, it is re-ranked with the live
 // key and the next first element examined. Keys only grow, so the victim is the one an eager
-// index would choose. Recency: events under the lock take a tick of one process-wide clock
-// (exact order); a lock-free hit is stamped with the clock's current value without
-// advancing it (topo::hazard::now()), so lock-free hits between two locked events tie, and
+// index would choose. Recency: events under the lock take a tick of the cache's clock (its
+// HazardDomain's; exact order); a lock-free hit is stamped with the clock's current value
+// without advancing it (topo::BlockIndex::now()), so lock-free hits between two locked
+// events tie, and
 // ties go to the lower key. Each lock-free hit costs at most one re-rank, so
 // eviction stays O(log n) amortised. DecayingHitCount publishes nothing: its scores are
 // rescaled under the lock, so all its hits take the lock.
 //
 // Reclamation. An evicted patch is retracted from its table and kept on a retired list until
-// no thread's hazard record names it (checked after a process-wide barrier), so a query that
+// no hazard record of the cache's domain names it (checked after a process-wide barrier), so
+// a query that
 // found it in the table a moment before can finish reading it. Retired patches no longer
 // count against the budget, like patches handed out by get(); each thread protects at most
 // one, so at most one per querying thread is retired at a time.
@@ -46,8 +48,8 @@
 // 260 ns of bookkeeping per miss.)
 
 #include <regolith/core/Error.hpp>
+#include <regolith/store/BlockTable.hpp>
 #include <regolith/store/PatchCache.hpp>
-#include <regolith/topo/BlockTable.hpp>
 
 #include <cmath>
 #include <condition_variable>
@@ -148,7 +150,7 @@ struct PatchCache::Impl {
     std::unique_ptr<Resident> res;
     std::size_t bytes = 0;
     RankIndex::iterator rank;
-    topo::BlockTable* table = nullptr;  // where the patch is published, if anywhere
+    BlockTable* table = nullptr;  // where the patch is published, if anywhere
   };
 
   /// A load in flight; the fields are guarded by the cache's mutex.
@@ -165,9 +167,9 @@ struct PatchCache::Impl {
   ~Impl() {
     // No source of this cache is alive (each holds the cache), so no query can be reading a
     // retired patch: free them all, and clear the hazard records that still name them.
-    for (const auto& r : retired) topo::hazard::forget(&r->block);
+    for (const auto& r : retired) hazards->forget(&r->block);
     for (const auto& [key, e] : entries) {
-      if (e.table != nullptr) topo::hazard::forget(&e.res->block);
+      if (e.table != nullptr) hazards->forget(&e.res->block);
     }
   }
   Impl(const Impl&) = delete;
@@ -175,6 +177,9 @@ struct PatchCache::Impl {
 
   const CachePolicy policy;
   const std::uint64_t decayPeriod;
+  /// The hazard records of this cache's readers and its recency clock, shared with its
+  /// tables (which outlive neither the cache nor their sources).
+  const std::shared_ptr<HazardDomain> hazards = std::make_shared<HazardDomain>();
 
   mutable std::mutex mutex;
   // Everything below is guarded by `mutex`.
@@ -183,7 +188,7 @@ struct PatchCache::Impl {
   RankIndex ranks;
   std::unordered_map<PatchKey, std::shared_ptr<Pending>, PatchKeyHash> inFlight;
   /// Block tables by (grid << 32 | level).
-  std::unordered_map<std::uint64_t, std::shared_ptr<topo::BlockTable>> tables;
+  std::unordered_map<std::uint64_t, std::shared_ptr<BlockTable>> tables;
   std::vector<std::unique_ptr<Resident>> retired;
   std::size_t residentBytes = 0;
   CacheStats counters;  // hits (under the lock), misses, loads, evictions, bytesLoaded
@@ -254,7 +259,7 @@ struct PatchCache::Impl {
     topo::PublishedBlock& b = e.res->block;
     ++e.res->lockedHits;
     const std::uint64_t hits = e.res->hits();
-    const std::uint64_t now = topo::hazard::tick();
+    const std::uint64_t now = hazards->tick();
     b.lastUse.store(now, relaxed);
     switch (policy) {
       case CachePolicy::Lru: rerank(e, 0.0, now); break;
@@ -296,9 +301,9 @@ struct PatchCache::Impl {
 
   /// Frees the retired patches that no thread may be reading any more.
   void reclaim() {
-    if (retired.empty() || !topo::hazard::barrier()) return;
-    std::erase_if(retired, [](const std::unique_ptr<Resident>& r) {
-      return !topo::hazard::isProtected(&r->block);
+    if (retired.empty() || !HazardDomain::barrier()) return;
+    std::erase_if(retired, [this](const std::unique_ptr<Resident>& r) {
+      return !hazards->isProtected(&r->block);
     });
   }
 
@@ -313,7 +318,7 @@ struct PatchCache::Impl {
   }
 
   /// Publishes a resident entry in `table` (which must be its grid level's).
-  static void publishIn(topo::BlockTable& table, const PatchKey& key, Entry& e) {
+  static void publishIn(BlockTable& table, const PatchKey& key, Entry& e) {
     if (!table.hasBlock(key.row, key.col)) return;  // a key outside the registered level
     topo::PublishedBlock& b = e.res->block;
     const Patch& p = *e.res->patch;
@@ -342,7 +347,7 @@ struct PatchCache::Impl {
     makeRoom(bytes);
     auto res = std::make_unique<Resident>();
     res->patch = std::move(patch);
-    const std::uint64_t now = topo::hazard::tick();
+    const std::uint64_t now = hazards->tick();
     res->block.lastUse.store(now, std::memory_order_relaxed);
     const auto rank = ranks.insert(Rank{0.0, now, key}).first;
     Entry* e = nullptr;
@@ -455,16 +460,15 @@ void PatchCache::insert(std::shared_ptr<const Patch> patch) {
   m.insertLocked(key, std::move(patch));
 }
 
-std::shared_ptr<const topo::BlockTable> PatchCache::blockTable(std::uint32_t grid,
-                                                               std::uint32_t level,
-                                                               std::size_t rows, std::size_t cols,
-                                                               std::size_t patchRows,
-                                                               std::size_t patchCols) {
+std::shared_ptr<const BlockTable> PatchCache::blockTable(std::uint32_t grid, std::uint32_t level,
+                                                         std::size_t rows, std::size_t cols,
+                                                         std::size_t patchRows,
+                                                         std::size_t patchCols) {
   Impl& m = *impl_;
   const std::lock_guard lock(m.mutex);
   const std::uint64_t tkey = Impl::tableKey(grid, level);
   if (const auto it = m.tables.find(tkey); it != m.tables.end()) {
-    const std::shared_ptr<topo::BlockTable>& slot = it->second;
+    const std::shared_ptr<BlockTable>& slot = it->second;
     if (slot->rows() != rows || slot->cols() != cols || slot->blockRows() != patchRows ||
         slot->blockCols() != patchCols) {
       throw InvalidArgument("store::PatchCache::blockTable(): grid " + std::to_string(grid) +
@@ -478,7 +482,7 @@ std::shared_ptr<const topo::BlockTable> PatchCache::blockTable(std::uint32_t gri
     return slot;
   }
   // Made before it is entered in the map, so a throwing constructor leaves no empty entry.
-  auto table = std::make_shared<topo::BlockTable>(rows, cols, patchRows, patchCols);
+  auto table = std::make_shared<BlockTable>(rows, cols, patchRows, patchCols, m.hazards);
   m.tables.emplace(tkey, table);
   if (m.publishes()) {
     for (auto& [key, e] : m.entries) {

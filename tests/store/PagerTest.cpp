@@ -188,7 +188,7 @@ TEST(Pager, GridsOutliveThePagerThatMadeThem) {
   EXPECT_TRUE(dem->height(0.0, 0.0).valid());
 }
 
-// ---- Lock-free hits on resident patches (topo/BlockTable.hpp, PatchCache.cpp) ----------
+// ---- Lock-free hits on resident patches (store/BlockTable.hpp, PatchCache.cpp) ----------
 
 namespace {
 // A point inside patch (pr, pc) of the DEM (128×128 patches, sample (r, c) at x = −500 + c,

@@ -400,7 +400,7 @@ TEST(Procedural, HugePlanetAnswersAnywhereWithinItsCacheBudget) {
 
 // What opening a planet costs: the Pager, its pyramid (a source and a block table per level)
 // and one query. The tables reserve address space for every patch of their level but are
-// backed only where patches get published (topo/BlockTable.hpp), and nothing else is sized
+// backed only where patches get published (store/BlockTable.hpp), and nothing else is sized
 // by the grid; a table allocated whole would take 24 bytes per patch: 12 GiB at 2^20 rows
 // in 64 × 64 patches.
 TEST(Procedural, MemoryAtOpenDoesNotGrowWithTheGrid) {

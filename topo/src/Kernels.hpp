@@ -79,9 +79,8 @@ inline thread_local std::shared_ptr<const void> tlBlockOwner;  // NOLINT
 inline const ThreadBlock& acquireBlock(const SampleSource& src, std::size_t r, std::size_t c) {
   ThreadBlock& tb = tlBlock;
   if (tb.source != src.id() || !tb.holds(r, c)) {
-    if (const BlockTable* table = src.blockTable(); table != nullptr) {
-      if (hazard::tlRecord == nullptr) hazard::acquire();  // once per thread
-      if (enterBlock(*table, src.id(), r, c, true) != nullptr) {
+    if (const BlockIndex* table = src.blockIndex(); table != nullptr) {
+      if (hazardFor(*table) != nullptr && enterBlock(*table, src.id(), r, c, true) != nullptr) {
         tlBlockOwner.reset();  // the hazard record protects the block now
         return tb;
       }

@@ -103,25 +103,39 @@ void requireFiniteArray(std::span<const double> a, const char* op, const char* f
 
 namespace detail {
 
-bool straddlingBilinear(const ResidentBilinear& f, const BlockTable& table, std::uint64_t source,
+HazardRecord* hazardFor(const BlockIndex& table) {
+  if (tlHazard.domain == table.domain()) return tlHazard.rec;
+  // Joining gives up the thread's hazards in other domains, one of which may protect the
+  // thread's block.
+  tlBlock.source = 0;
+  tlHazard = {};  // before joining: joinDomain() may throw
+  HazardRecord* rec = table.joinDomain();
+  if (rec != nullptr) tlHazard = {table.domain(), rec};
+  return rec;
+}
+
+bool straddlingBilinear(const ResidentBilinear& f, const BlockIndex& table, std::uint64_t source,
                         double u, double v, bool grad, CellValue& out) noexcept {
   // Without this, a rover crossing a block edge paid the generic kernel, whose samples
   // outside the thread's block come through the cache's lock: 2 % of a traverse's queries
   // took half of its time.
-  hazard::Record* rec = hazard::tlFastRecord;
-  if (rec == nullptr || !(u >= 0.0 && v >= 0.0 && u < f.uMax && v < f.vMax)) return false;
+  // Entered from pagedBilinear() after enterBlock() succeeded, so the thread's record is of
+  // the table's domain; checked anyway (it costs nothing here).
+  if (tlHazard.domain != table.domain()) return false;
+  HazardRecord* rec = tlHazard.rec;
+  if (!(u >= 0.0 && v >= 0.0 && u < f.uMax && v < f.vMax)) return false;
   const auto c = static_cast<std::size_t>(u), r = static_cast<std::size_t>(v);
   const double tu = u - static_cast<double>(c), tv = v - static_cast<double>(r);
   if (grad && !f.offLines(tu, tv)) return false;
   std::array<double, 4> s{};           // samples (r, c), (r, c + 1), (r + 1, c), (r + 1, c + 1)
   for (std::size_t k = 4; k-- > 0;) {  // (r, c) last: its block stays protected
     const std::size_t sr = r + k / 2, sc = c + k % 2;
-    const BlockTable::Slot slot = table.slot(sr, sc);
+    const BlockIndex::Slot slot = table.slot(sr, sc);
     const PublishedBlock* b = slot.load(std::memory_order_acquire);
     if (b == nullptr) return false;
     if (rec->ptr.load(std::memory_order_relaxed) != b) {
       tlBlock.source = 0;  // the hazard leaves the thread's block
-      hazard::protect(*rec, b);
+      protect(*rec, b);
       if (slot.load(std::memory_order_seq_cst) != b) return false;  // retracted meanwhile
     }
     s[k] = static_cast<double>(b->data[(sr - b->row0) * b->stride + (sc - b->col0)]);
@@ -145,7 +159,7 @@ TopoDem::TopoDem(TopoGrid grid, Placement placement, std::shared_ptr<const Sampl
   }
   resident_ = samples_->contiguous();
   sourceId_ = samples_->id();
-  table_ = samples_->blockTable();
+  table_ = samples_->blockIndex();
   const double dx = grid_.spacingX(), dy = grid_.spacingY();
   index_ = {
       grid_.x0(), grid_.y0(), dx, dy, 1.0 / dx, 1.0 / dy, isPowerOfTwo(dx) && isPowerOfTwo(dy)};
@@ -311,7 +325,7 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
     // 8 blocks at once to overlap their memory misses measured no faster (docs/paging.md).
     const detail::DemIndexer m = index_;
     const detail::ResidentBilinear f = fast_;
-    const BlockTable* table = table_;
+    const BlockIndex* table = table_;
     const std::uint64_t id = sourceId_;
     auto loop = [&](auto prefetch) {
       for (std::size_t i = 0; i < n; ++i) {
@@ -401,7 +415,7 @@ void TopoDem::surfaces(std::span<const double> xs, std::span<const double> ys,
     // batches that jump around the grid.
     const detail::DemIndexer m = index_;
     const detail::ResidentBilinear f = fast_;
-    const BlockTable* table = table_;
+    const BlockIndex* table = table_;
     const std::uint64_t id = sourceId_;
     auto loop = [&](auto inMemory, auto prefetch) {
       for (std::size_t i = 0; i < n; ++i) {

@@ -64,7 +64,7 @@ struct HeightStatistics {
 inline constexpr std::size_t kMaxGridSide = std::size_t{1} << 31;
 /// The most patches level 0 of a grid may have: 2^35 (34 billion; a 2^31 × 2^31 grid needs
 /// patches of 256 × 512 samples or more). The pager's block table reserves 24 bytes of
-/// address space per patch (topo/BlockTable.hpp), 768 GiB at this limit, touched only where
+/// address space per patch (store/BlockTable.hpp), 768 GiB at this limit, touched only where
 /// patches are loaded.
 inline constexpr std::size_t kMaxPatchesPerGrid = std::size_t{1} << 35;
 /// The patches of level 0 of a grid of rows × cols samples in patchRows × patchCols patches

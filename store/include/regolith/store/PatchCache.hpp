@@ -11,11 +11,9 @@
 #include <utility>
 #include <vector>
 
-namespace regolith::topo {
-class BlockTable;
-}
-
 namespace regolith::store {
+
+class BlockTable;
 
 /// Identifies one patch: an aligned block of one pyramid level of one grid.
 struct PatchKey {
@@ -124,14 +122,16 @@ class PatchCache {
   /// Inserts a patch loaded elsewhere (prefetch); counts as a load, not a hit or miss.
   void insert(std::shared_ptr<const Patch> patch);
 
-  /// The lock-free table of one grid level's resident patches (topo/BlockTable.hpp), made
+  /// The lock-free table of one grid level's resident patches (store/BlockTable.hpp), made
   /// on first request and kept for the cache's life: with Lru and HitCount, every resident
   /// patch of that level is published there, and queries entering it count their hit without
   /// the lock (DecayingHitCount publishes nothing). Throws InvalidArgument if the level was
   /// registered before with other sizes.
-  [[nodiscard]] std::shared_ptr<const topo::BlockTable> blockTable(
-      std::uint32_t grid, std::uint32_t level, std::size_t rows, std::size_t cols,
-      std::size_t patchRows, std::size_t patchCols);
+  [[nodiscard]] std::shared_ptr<const BlockTable> blockTable(std::uint32_t grid,
+                                                             std::uint32_t level, std::size_t rows,
+                                                             std::size_t cols,
+                                                             std::size_t patchRows,
+                                                             std::size_t patchCols);
 
   [[nodiscard]] CacheStats stats() const;
   void resetStats();

@@ -2,7 +2,7 @@
 /// \file
 /// A local Cartesian DEM placed on a body.
 
-#include <regolith/topo/BlockTable.hpp>
+#include <regolith/topo/BlockIndex.hpp>
 #include <regolith/topo/Placement.hpp>
 #include <regolith/topo/Query.hpp>
 #include <regolith/topo/TopoGrid.hpp>
@@ -134,7 +134,7 @@ struct ThreadBlock {
   /// Fractional (u, v) whose whole bilinear cell lies in the block:
   /// uLo ≤ u < uHi and vLo ≤ v < vHi (empty when there is no block).
   double uLo = 0.0, uHi = 0.0, vLo = 0.0, vHi = 0.0;
-  std::uintptr_t origin = 0;  // originOf(data, row0, col0, stride) (BlockTable.hpp)
+  std::uintptr_t origin = 0;  // originOf(data, row0, col0, stride) (BlockIndex.hpp)
 
   [[nodiscard]] bool holds(std::size_t r, std::size_t c) const noexcept {
     return data != nullptr && r >= row0 && c >= col0 && r - row0 < rows && c - col0 < cols;
@@ -143,10 +143,16 @@ struct ThreadBlock {
 inline thread_local ThreadBlock
     tlBlock;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
 
+/// The calling thread's hazard record for the domain of `table` (tlHazard), joining the
+/// domain if the thread's record is of another one; null where the domain has no lock-free
+/// path. A switch of domain gives up the thread's block (the domain joined clears the
+/// thread's records in other domains). Out of line (TopoDem.cpp); may throw.
+HazardRecord* hazardFor(const BlockIndex& table);
+
 /// Enters the block of `table` holding sample (r, c), if the table has one: protects it with
-/// the thread's hazard record (BlockTable.hpp: no lock, no fence) and counts a hit on it.
-/// Returns it, or null (the caller then takes the slow path, which also registers the
-/// thread's hazard record on first use). Requires r < rows and c < cols of the table.
+/// the thread's hazard record of the table's domain (BlockIndex.hpp: no lock, no fence) and
+/// counts a hit on it. Returns it, or null (the caller then takes the slow path, which also
+/// joins the table's domain: hazardFor()). Requires r < rows and c < cols of the table.
 ///
 /// A random query only announces the block (the hazard moves, so the thread's block is
 /// invalidated); the thread's block is set to it only when a second query in a row enters
@@ -154,11 +160,12 @@ inline thread_local ThreadBlock
 /// queries three times slower: stores cannot leave the store buffer before the memory
 /// misses of earlier queries are served, so the buffer filled and stalled the processor.
 /// `promote` sets the thread's block at once (callers that read it next).
-inline const PublishedBlock* enterBlock(const BlockTable& table, std::uint64_t source,
+inline const PublishedBlock* enterBlock(const BlockIndex& table, std::uint64_t source,
                                         std::size_t r, std::size_t c, bool promote) noexcept {
-  hazard::Record* rec = hazard::tlFastRecord;
-  if (rec == nullptr) return nullptr;
-  const BlockTable::Slot slot = table.slot(r, c);
+  // tlHazard.domain is 0 (never a table's) unless rec is set.
+  if (tlHazard.domain != table.domain()) return nullptr;
+  HazardRecord* rec = tlHazard.rec;
+  const BlockIndex::Slot slot = table.slot(r, c);
   const PublishedBlock* b = slot.load(std::memory_order_acquire);
   if (b == nullptr) return nullptr;
   constexpr auto relaxed = std::memory_order_relaxed;
@@ -166,12 +173,11 @@ inline const PublishedBlock* enterBlock(const BlockTable& table, std::uint64_t s
   // run of queries in b has begun, and it was counted when it was entered.
   if (rec->ptr.load(relaxed) != b) {
     tlBlock.source = 0;  // the hazard leaves the thread's block
-    hazard::protect(*rec, b);
-    // seq_cst: under TSan protect() is a seq_cst store that this load must not pass (on x86
-    // it is a plain load either way).
+    protect(*rec, b);
+    // seq_cst: the reclaimer's retract() is a seq_cst store (on x86 this is a plain load).
     if (slot.load(std::memory_order_seq_cst) != b) return nullptr;  // retracted meanwhile
     b->fastHits.store(b->fastHits.load(relaxed) + 1, relaxed);
-    b->lastUse.store(hazard::now(), relaxed);
+    b->lastUse.store(table.now(), relaxed);
     if (!promote) return b;
   }
   tlBlock = {source,    b->data, b->row0, b->col0, b->rows, b->cols,
@@ -230,7 +236,7 @@ inline bool blockBilinear(const Block& b, const ResidentBilinear& f, double u, d
 /// two or four published blocks), read lock-free: each sample from its block under the
 /// thread's hazard record, the block of the cell's first sample last, which then becomes
 /// the thread's block. Out of line (TopoDem.cpp). False leaves the point to the generic path.
-[[gnu::cold]] bool straddlingBilinear(const ResidentBilinear& f, const BlockTable& table,
+[[gnu::cold]] bool straddlingBilinear(const ResidentBilinear& f, const BlockIndex& table,
                                       std::uint64_t source, double u, double v, bool grad,
                                       CellValue& out) noexcept;
 
@@ -240,7 +246,7 @@ inline bool blockBilinear(const Block& b, const ResidentBilinear& f, double u, d
 /// generic path (not resident, missing samples, outside the sample centres; when Grad, near
 /// a cell line). Always inlined: in the batch loops GCC otherwise calls it out of line.
 template <bool Grad>
-[[gnu::always_inline]] inline bool pagedBilinear(const ResidentBilinear& f, const BlockTable* table,
+[[gnu::always_inline]] inline bool pagedBilinear(const ResidentBilinear& f, const BlockIndex* table,
                                                  std::uint64_t source, double u, double v,
                                                  CellValue& out) noexcept {
   const ThreadBlock& tb = tlBlock;
@@ -261,7 +267,7 @@ template <bool Grad>
   return straddlingBilinear(f, *table, source, u, v, Grad, out);
 }
 /// Height only (pagedBilinear<false>).
-inline bool pagedBilinear(const ResidentBilinear& f, const BlockTable* table, std::uint64_t source,
+inline bool pagedBilinear(const ResidentBilinear& f, const BlockIndex* table, std::uint64_t source,
                           double u, double v, double& h) noexcept {
   CellValue cv;
   const bool ok = pagedBilinear<false>(f, table, source, u, v, cv);
@@ -330,7 +336,7 @@ class TopoDem {
   detail::DemIndexer index_;
   detail::ResidentBilinear fast_;
   std::uint64_t sourceId_ = 0;         // samples_->id()
-  const BlockTable* table_ = nullptr;  // samples_->blockTable(), cached
+  const BlockIndex* table_ = nullptr;  // samples_->blockIndex(), cached
   glm::dvec2 slack_{0.0};              // grid_.edgeSlack()
 
   [[nodiscard]] HeightSample heightGeneric(double x, double y, Interpolation interp) const;

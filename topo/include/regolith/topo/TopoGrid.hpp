@@ -87,7 +87,7 @@ class TopoGrid {
   std::optional<float> nodata_;
 };
 
-class BlockTable;
+class BlockIndex;
 
 /// A resident block of samples: rows × cols samples starting at (row0, col0), row-major
 /// with `stride` floats between rows. `owner` keeps the memory alive (a paged source hands
@@ -126,10 +126,11 @@ class SampleSource {
   /// has no blocks (then queries read sample by sample). Queries keep the last block per
   /// thread, so a run of queries inside one block costs no call at all.
   virtual bool block(std::size_t row, std::size_t col, SampleBlock& out) const;
-  /// The lock-free table of this source's resident blocks (topo/BlockTable.hpp), or null.
-  /// Queries entering a new block look there first, and call block() only if the table has
-  /// no block for the point. The table must live as long as the source.
-  [[nodiscard]] virtual const BlockTable* blockTable() const noexcept { return nullptr; }
+  /// The lock-free table of this source's resident blocks (topo/BlockIndex.hpp; the store's
+  /// pager has one per grid level), or null. Queries entering a new block look there first,
+  /// and call block() only if the table has no block for the point. The table must live as
+  /// long as the source.
+  [[nodiscard]] virtual const BlockIndex* blockIndex() const noexcept { return nullptr; }
   /// A process-unique id, never reused, so per-thread query state can tell sources apart
   /// even when one is destroyed and another is allocated at the same address.
   [[nodiscard]] std::uint64_t id() const noexcept { return id_; }

@@ -1,7 +1,7 @@
-// BlockTable (lock-free lookup of published blocks) and the hazard records that let a
-// reclaimer know which retracted blocks a thread may still be reading.
+// BlockTable (lock-free lookup of published blocks) and the hazard domains whose records let
+// a reclaimer know which retracted blocks a thread may still be reading.
 #include <regolith/core/Error.hpp>
-#include <regolith/topo/BlockTable.hpp>
+#include <regolith/store/BlockTable.hpp>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -13,7 +13,8 @@
 #include <vector>
 
 using namespace regolith;
-using namespace regolith::topo;
+using namespace regolith::store;
+using topo::PublishedBlock;
 
 namespace {
 // Every sample finds the block of its own (row / blockRows, col / blockCols).
@@ -117,9 +118,9 @@ TEST(BlockTable, MemoryFollowsThePublishedBlocksNotTheGrid) {
   t.publish(5, 0, &b);
   t.publish(5, 1, &c);
   t.retract(5, 0);
-  EXPECT_EQ(t.find(5 * 64, 64), &c);
+  EXPECT_EQ(t.find(std::size_t{5} * 64, 64), &c);
   t.retract(5, 1);
-  EXPECT_EQ(t.find(5 * 64, 64), nullptr);
+  EXPECT_EQ(t.find(std::size_t{5} * 64, 64), nullptr);
 }
 
 TEST(BlockTable, PrefetchHintsNeverReadABlock) {
@@ -127,7 +128,7 @@ TEST(BlockTable, PrefetchHintsNeverReadABlock) {
   // the block: after a block is retracted and freed, prefetching its cells is a no-op (an
   // AddressSanitizer build would report a read of the freed block).
   BlockTable t(64, 64, 16, 16);
-  std::vector<float> samples(16 * 16, 1.0F);
+  std::vector<float> samples(std::size_t{16} * 16, 1.0F);
   auto* b = new PublishedBlock{samples.data(), 16, 32, 16, 16, 16, 32.0, 47.0, 16.0, 31.0};
   for (std::size_t r = 0; r < 64; r += 5)
     for (std::size_t c = 0; c < 64; c += 3) t.prefetchCell(r, c);  // nothing published
@@ -145,7 +146,7 @@ TEST(BlockTable, ZeroSizesAreRefusedClearly) {
   EXPECT_THROW(BlockTable(0, 10, 4, 4), InvalidArgument);
   EXPECT_THROW(BlockTable(10, 10, 4, 0), InvalidArgument);
   try {
-    BlockTable(10, 10, 0, 4);
+    const BlockTable t(10, 10, 0, 4);
     FAIL() << "no exception";
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("blocks of 0 x 4"), std::string::npos) << e.what();
@@ -153,51 +154,115 @@ TEST(BlockTable, ZeroSizesAreRefusedClearly) {
 }
 
 TEST(Hazard, AThreadProtectsOneBlockUntilItMovesOnOrEnds) {
+  const auto domain = std::make_shared<HazardDomain>();
   PublishedBlock a, b;
   std::atomic<int> step{0};
   std::thread reader([&] {
-    hazard::Record& rec = hazard::acquire();
-    EXPECT_EQ(&rec, hazard::tlRecord);
-    hazard::protect(rec, &a);
+    topo::HazardRecord& rec = domain->threadRecord();
+    EXPECT_EQ(&rec, &domain->threadRecord());  // one record per thread and domain
+    topo::protect(rec, &a);
     step = 1;
     while (step != 2) std::this_thread::yield();
-    hazard::protect(rec, &b);  // moves on: a is free to go
+    topo::protect(rec, &b);  // moves on: a is free to go
     step = 3;
     while (step != 4) std::this_thread::yield();
   });
   while (step != 1) std::this_thread::yield();
-  ASSERT_TRUE(hazard::barrier());
-  EXPECT_TRUE(hazard::isProtected(&a));
-  EXPECT_FALSE(hazard::isProtected(&b));
+  ASSERT_TRUE(HazardDomain::barrier());
+  EXPECT_TRUE(domain->isProtected(&a));
+  EXPECT_FALSE(domain->isProtected(&b));
   step = 2;
   while (step != 3) std::this_thread::yield();
-  ASSERT_TRUE(hazard::barrier());
-  EXPECT_FALSE(hazard::isProtected(&a));
-  EXPECT_TRUE(hazard::isProtected(&b));
+  ASSERT_TRUE(HazardDomain::barrier());
+  EXPECT_FALSE(domain->isProtected(&a));
+  EXPECT_TRUE(domain->isProtected(&b));
   step = 4;
   reader.join();  // the ended thread's record protects nothing
-  ASSERT_TRUE(hazard::barrier());
-  EXPECT_FALSE(hazard::isProtected(&b));
+  ASSERT_TRUE(HazardDomain::barrier());
+  EXPECT_FALSE(domain->isProtected(&b));
+}
+
+// One domain per cache: a thread's hazard in one domain protects nothing in another, each
+// domain's clock is its own, and a table reads the clock of its domain.
+TEST(Hazard, DomainsShareNeitherRecordsNorClocks) {
+  const auto one = std::make_shared<HazardDomain>();
+  const auto two = std::make_shared<HazardDomain>();
+  EXPECT_NE(one->id(), two->id());
+  EXPECT_NE(one->id(), 0U);
+  PublishedBlock a;
+  topo::HazardRecord& r1 = one->threadRecord();
+  topo::HazardRecord& r2 = two->threadRecord();
+  EXPECT_NE(&r1, &r2);
+  topo::protect(r1, &a);
+  ASSERT_TRUE(HazardDomain::barrier());
+  EXPECT_TRUE(one->isProtected(&a));
+  EXPECT_FALSE(two->isProtected(&a));
+  one->forget(&a);
+  EXPECT_FALSE(one->isProtected(&a));
+
+  const std::uint64_t before = two->now();
+  for (int i = 0; i < 100; ++i) (void)one->tick();
+  EXPECT_EQ(two->now(), before);
+  const BlockTable t1(10, 10, 4, 4, one), t2(10, 10, 4, 4, two);
+  EXPECT_EQ(t1.domain(), one->id());
+  EXPECT_EQ(t2.domain(), two->id());
+  EXPECT_EQ(t1.now(), one->now());
+  EXPECT_EQ(t2.now(), before);
+  EXPECT_EQ(&t1.hazards(), one.get());
+  // Where membarrier(2) is registered (this test machine), the lock-free path is open and
+  // joining gives the thread's record of the table's domain.
+  if (HazardDomain::lockFree()) {
+    EXPECT_EQ(t1.joinDomain(), &r1);
+    topo::protect(r1, &a);
+    // Joining the second domain gives up the thread's hazard in the first, so the first
+    // cache may free the block the thread read last there.
+    EXPECT_EQ(t2.joinDomain(), &r2);
+    ASSERT_TRUE(HazardDomain::barrier());
+    EXPECT_FALSE(one->isProtected(&a));
+  } else {
+    EXPECT_EQ(t1.joinDomain(), nullptr);
+  }
+  // A table made without a domain has one of its own.
+  const BlockTable own(10, 10, 4, 4);
+  EXPECT_NE(own.domain(), one->id());
+  EXPECT_NE(own.domain(), two->id());
+}
+
+// A record outlives neither its domain's use nor its thread: a thread's records are given
+// back when it ends, even for a domain already gone.
+TEST(Hazard, RecordsOfEndedThreadsAreReusedAndDomainsMayGoFirst) {
+  const auto domain = std::make_shared<HazardDomain>();
+  topo::HazardRecord* first = nullptr;
+  std::thread([&] { first = &domain->threadRecord(); }).join();
+  topo::HazardRecord* second = nullptr;
+  std::thread([&] { second = &domain->threadRecord(); }).join();
+  EXPECT_EQ(first, second);  // the ended thread's record, reused
+  std::thread([] {
+    auto gone = std::make_shared<HazardDomain>();
+    topo::protect(gone->threadRecord(), &gone);
+    gone.reset();  // the thread ends after its domain: nothing to give back, no crash
+  }).join();
 }
 
 TEST(Hazard, RecencyTicksAreUniqueAndIncreasingAcrossThreadsAndStampsAreNewer) {
-  std::uint64_t last = hazard::tick();
+  HazardDomain clock;
+  std::uint64_t last = clock.tick();
   for (int i = 0; i < 1000; ++i) {
-    const std::uint64_t t = hazard::tick();
+    const std::uint64_t t = clock.tick();
     ASSERT_GT(t, last);
     last = t;
   }
   // A lock-free hit's stamp is newer than every tick handed out before it, and does not
   // advance the clock.
-  EXPECT_GT(hazard::now(), last);
-  EXPECT_EQ(hazard::now(), hazard::now());
+  EXPECT_GT(clock.now(), last);
+  EXPECT_EQ(clock.now(), clock.now());
   // Ticks of several threads at once: all distinct.
   std::vector<std::uint64_t> ticks[4];
   {
     std::vector<std::thread> threads;
     for (auto& v : ticks) {
-      threads.emplace_back([&v] {
-        for (int i = 0; i < 2000; ++i) v.push_back(hazard::tick());
+      threads.emplace_back([&v, &clock] {
+        for (int i = 0; i < 2000; ++i) v.push_back(clock.tick());
       });
     }
     for (std::thread& t : threads) t.join();
@@ -210,5 +275,5 @@ TEST(Hazard, RecencyTicksAreUniqueAndIncreasingAcrossThreadsAndStampsAreNewer) {
   std::sort(all.begin(), all.end());
   EXPECT_EQ(std::adjacent_find(all.begin(), all.end()), all.end());
   EXPECT_GT(all.front(), last);
-  EXPECT_GT(hazard::now(), all.back());
+  EXPECT_GT(clock.now(), all.back());
 }
