@@ -1,7 +1,7 @@
 // rover_traverse: a six-wheel rover drives a path across the Victoria-like DEM placed on Mars,
 // querying height and normal under every wheel at every 1 ms step through the pager, with a
 // cache budget set on the command line. As it drives it presses its wheels into a track
-// overlay (clod::TrackLayer) every few centimetres; --image renders the DEM with those tracks
+// overlay (rover::TrackLayer) every few centimetres; --image renders the DEM with those tracks
 // from behind the rover's last position. Writes the wheel contacts as CSV if asked.
 //
 //   rover_traverse --cache-mb 4 --path "-560,-90 -430,-20 -300,250" --tracks tracks.csv
@@ -9,9 +9,9 @@
 //
 // Public API only (regolith::rover, regolith::store, regolith::clod).
 #include <regolith/clod/Render.hpp>
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 #include <regolith/rover/Traverse.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/Pager.hpp>
@@ -74,7 +74,7 @@ double mib(double bytes) { return bytes / 1048576.0; }
 /// Renders the DEM with the traverse's tracks, headless, from 9 m ahead of the rover's last
 /// position and 3.5 m up, looking back along its tracks.
 void renderTracks(const std::string& storePath, const std::string& grid,
-                  const rover::ChassisPose& last, std::shared_ptr<clod::TrackLayer> tracks,
+                  const rover::ChassisPose& last, std::shared_ptr<rover::TrackLayer> tracks,
                   const std::string& png) {
   auto st = std::make_shared<const store::Store>(store::Store::open(storePath));
   const store::Pager pager(st, std::make_shared<store::PatchCache>(std::size_t{64} << 20U));
@@ -98,7 +98,7 @@ void renderTracks(const std::string& storePath, const std::string& grid,
 int main(int argc, char** argv) try {
   CLI::App app{"A six-wheel rover drives a path across the Victoria-like DEM on Mars at 1 kHz"};
   std::string storePath = "out/rover/victoria.h5", grid = "victoria", pathText, tracks, image;
-  double cacheMb = 16.0, speed = 1.0, stepMs = 1.0, trackSpacing = clod::RoverRuts::kSpacingMetres;
+  double cacheMb = 16.0, speed = 1.0, stepMs = 1.0, trackSpacing = rover::RoverRuts::kSpacingMetres;
   std::size_t maxSteps = 0, trackEvery = 10, size = 1201;
   std::string policy = "lru";
   app.add_option("--store", storePath,
@@ -164,9 +164,9 @@ int main(int argc, char** argv) try {
       csv.precision(10);
     }
     constexpr double kDeg = 180.0 / std::numbers::pi;
-    using Ruts = clod::RoverRuts;
-    auto overlay = std::make_shared<clod::TrackLayer>(Ruts::kTexelMetres);
-    std::array<clod::WheelContact, rover::kWheels> imprint;
+    using Ruts = rover::RoverRuts;
+    auto overlay = std::make_shared<rover::TrackLayer>(Ruts::kTexelMetres);
+    std::array<rover::WheelImprint, rover::kWheels> imprint;
     std::size_t imprints = 0;
     double nextImprint = 0.0;
     rover::ChassisPose last;

@@ -1,5 +1,5 @@
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <numbers>
 #include <vector>
 
-namespace regolith::clod {
+namespace regolith::rover {
 namespace {
 
 TEST(TrackLayerTest, AContactPressesACosineSquaredRutOfTheWheelsWidth) {
@@ -36,7 +36,7 @@ TEST(TrackLayerTest, StepsPressContinuousRutsThatPersistAlongTheWholeTraverse) {
   // Six wheels driving 300 m east in 0.5 m steps: ruts everywhere along it, however far
   // the rover has gone since.
   for (int s = 0; s <= 600; ++s) {
-    std::vector<WheelContact> wheels;
+    std::vector<WheelImprint> wheels;
     for (double y : {-0.6, 0.6})
       for (double dx : {-0.5, 0.0, 0.5}) wheels.push_back({{0.5 * s + dx, y}, 0.3, 0.02});
     layer.step(wheels);
@@ -89,4 +89,4 @@ TEST(TrackLayerTest, BadContactsAreRejectedWithTheirValue) {
 }
 
 }  // namespace
-}  // namespace regolith::clod
+}  // namespace regolith::rover
