@@ -11,7 +11,7 @@
 #include <regolith/clod/Render.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
-#include <regolith/rover/TrackLayer.hpp>
+#include <regolith/rover/TrackPresser.hpp>
 #include <regolith/rover/Traverse.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/Pager.hpp>
@@ -19,7 +19,6 @@
 
 #include <CLI/CLI.hpp>
 
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -164,21 +163,13 @@ int main(int argc, char** argv) try {
       csv.precision(10);
     }
     constexpr double kDeg = 180.0 / std::numbers::pi;
-    using Ruts = rover::RoverRuts;
-    auto overlay = std::make_shared<rover::TrackLayer>(Ruts::kTexelMetres);
-    std::array<rover::WheelImprint, rover::kWheels> imprint;
-    std::size_t imprints = 0;
-    double nextImprint = 0.0;
+    auto overlay = std::make_shared<rover::TrackLayer>(rover::RoverRuts::kTexelMetres);
+    rover::TrackPressOptions press;
+    press.spacingMetres = trackSpacing;
+    rover::TrackPresser presser(*overlay, press);
     rover::ChassisPose last;
     const rover::TraverseResult r = rover::runTraverse(dem, o, [&](const rover::StepState& s) {
-      if (s.distance >= nextImprint) {  // the wheels press their ruts into the overlay
-        for (std::size_t i = 0; i < rover::kWheels; ++i)
-          imprint[i] = {
-              {s.wheels[i].x, s.wheels[i].y}, Ruts::kWheelWidthMetres, Ruts::kDepthMetres};
-        overlay->step(imprint);
-        ++imprints;
-        nextImprint = s.distance + trackSpacing;
-      }
+      (void)presser.press(s);  // the wheels press their ruts into the overlay
       last = s.chassis;
       if (csv.is_open() && s.step % trackEvery == 0) {
         for (std::size_t i = 0; i < rover::kWheels; ++i) {
@@ -219,7 +210,7 @@ int main(int argc, char** argv) try {
     std::printf("  chassis          max tilt %.2f deg, max contact residual %.4f m\n",
                 r.maxTilt * kDeg, r.maxResidual);
     std::printf("  track overlay    %zu imprints of the six wheels (every %.3g m), %zu tiles\n",
-                imprints, trackSpacing, overlay->tiles());
+                presser.imprints(), trackSpacing, overlay->tiles());
     if (!tracks.empty()) std::printf("  tracks           %s\n", tracks.c_str());
     if (!image.empty()) {
       renderTracks(storePath, grid, last, overlay, image);

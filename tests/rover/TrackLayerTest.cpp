@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <numbers>
 #include <vector>
@@ -58,7 +59,7 @@ TEST(TrackLayerTest, StepsPressContinuousRutsThatPersistAlongTheWholeTraverse) {
   EXPECT_LT(r[2] - r[0], 20);
   EXPECT_EQ(layer.dirtySince(layer.version()), (std::array<std::int64_t, 4>{0, 0, 0, 0}));
   // read() sees what depthAt() sees.
-  std::vector<float> window(40 * 40);
+  std::vector<float> window(std::size_t{40} * 40);
   layer.read(50000 - 20, 50000 - 20, 40, 40, window);
   EXPECT_FLOAT_EQ(window[20 * 40 + 20], layer.texel(50000, 50000));
   EXPECT_GT(window[20 * 40 + 20], 0.0F);
