@@ -12,10 +12,10 @@
 //
 // Run: build/bench/effects_bench --benchmark_min_time=40x   (about a minute)
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/gl/Gl.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
 #include <regolith/gl/RenderTarget.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 #include <regolith/topo/Placement.hpp>
 
 #include <benchmark/benchmark.h>
@@ -91,9 +91,9 @@ Effects effects(const std::string& name) {
   if (name == "heightColours") e.heightColours = HeightColours{-90.0F, 60.0F, true};
   if (name == "latLon") e.latLon = LatLonLines{};
   if (name == "tracks") {
-    auto layer = std::make_shared<TrackLayer>(0.02);
+    auto layer = std::make_shared<rover::TrackLayer>(0.02);
     for (int s = 0; s < 400; ++s) {  // 100 m of traverse through the view
-      std::vector<WheelContact> wheels;
+      std::vector<rover::WheelImprint> wheels;
       for (double y : {-0.6, 0.6})
         for (double dx : {-0.5, 0.0, 0.5})
           wheels.push_back({{-50.0 + 0.25 * s + dx, 20.0 + y}, 0.3, 0.03});

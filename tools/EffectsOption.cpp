@@ -1,9 +1,9 @@
 #include "EffectsOption.hpp"
 
 #include <regolith/clod/HeightPyramid.hpp>
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
+#include <regolith/rover/TrackPresser.hpp>
 #include <regolith/rover/Traverse.hpp>
 
 #include "FiniteRange.hpp"
@@ -179,26 +179,16 @@ DeclaredEffects declareEffects(const EffectOptions& o, const EffectTerrain& t) {
   if (request.tracks) {
     const std::vector<glm::dvec2> path = readWaypoints(o.traverse);
     const topo::TopoDem dem = t.dem();
-    using Ruts = clod::RoverRuts;
-    auto tracks = std::make_shared<clod::TrackLayer>(Ruts::kTexelMetres);
+    using Ruts = rover::RoverRuts;
+    auto tracks = std::make_shared<rover::TrackLayer>(Ruts::kTexelMetres);
     rover::TraverseOptions traverse;
     traverse.path = path;
     traverse.speed = 1.0;
-    traverse.step = 0.01;  // 1 cm a step; an imprint every 5 cm
-    double nextStamp = 0.0;
-    std::size_t imprints = 0;
-    std::array<clod::WheelContact, rover::kWheels> imprint;
+    traverse.step = 0.01;                  // 1 cm a step; an imprint every 5 cm
+    rover::TrackPresser presser(*tracks);  // RoverRuts
     const rover::TraverseResult r =
         rover::runTraverse(dem, traverse, [&](const rover::StepState& s) {
-          if (s.distance >= nextStamp) {
-            for (std::size_t w = 0; w < rover::kWheels; ++w) {
-              imprint[w] = clod::WheelContact{
-                  {s.wheels[w].x, s.wheels[w].y}, Ruts::kWheelWidthMetres, Ruts::kDepthMetres};
-            }
-            tracks->step(imprint);
-            ++imprints;
-            nextStamp = s.distance + Ruts::kSpacingMetres;
-          }
+          (void)presser.press(s);
           return true;
         });
     d.effects.tracks = tracks;
@@ -209,7 +199,7 @@ DeclaredEffects declareEffects(const EffectOptions& o, const EffectTerrain& t) {
     reach += 2.0;  // the wheels beside the path, and a margin
     const double texels = std::ceil(2.0 * reach / Ruts::kTexelMetres);
     d.trackWindow = static_cast<int>(std::clamp(texels, 256.0, 4096.0));
-    summary << "; tracks of " << r.distance << " m driven (" << imprints
+    summary << "; tracks of " << r.distance << " m driven (" << presser.imprints()
             << " six-wheel imprints from " << o.traverse << ")";
     if (texels > 4096.0) {
       summary << ", drawn within " << 0.5 * 4096.0 * Ruts::kTexelMetres

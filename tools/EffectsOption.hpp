@@ -61,7 +61,7 @@ struct DeclaredEffects {
 };
 
 /// Checks the options and builds the effects: tracks from the rover driving the --traverse
-/// waypoints over the DEM (ruts as the main demo presses them, clod::RoverRuts), with a
+/// waypoints over the DEM (ruts as the main demo presses them, rover::RoverRuts), with a
 /// track window that holds the traverse around the focus (at most 4096 texels). Throws
 /// InvalidArgument("render: ...") naming the option.
 [[nodiscard]] DeclaredEffects declareEffects(const EffectOptions& o, const EffectTerrain& t);

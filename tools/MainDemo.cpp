@@ -1,10 +1,10 @@
 #include "MainDemo.hpp"
 
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/AtomicFile.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/gl/Image.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 #include <regolith/rover/Traverse.hpp>
 #include <regolith/scene/SceneDescription.hpp>
 #include <regolith/scene/SceneParts.hpp>
@@ -221,8 +221,8 @@ struct TraverseRun {
   store::ReadCounters reads;
   std::size_t budgetBytes = 0;
   /// The overlay the rover presses its six wheels into as it drives (every 5 cm of travel).
-  std::shared_ptr<clod::TrackLayer> tracks =
-      std::make_shared<clod::TrackLayer>(clod::RoverRuts::kTexelMetres);
+  std::shared_ptr<rover::TrackLayer> tracks =
+      std::make_shared<rover::TrackLayer>(rover::RoverRuts::kTexelMetres);
   std::size_t imprints = 0;
   rover::ChassisPose last;  // where the rover stopped
   rover::GroundPose lastGround;

@@ -15,7 +15,7 @@ namespace regolith::clod {
 struct ClipmapTerrain::EffectState {
   EffectNeeds needs;
   std::unique_ptr<TextureClipmap> albedo, overlay;
-  // Tracks: an R32F window of the TrackLayer, texels [tx0, tx0 + n) × [ty0, ty0 + n).
+  // Tracks: an R32F window of the rover::TrackLayer, texels [tx0, tx0 + n) × [ty0, ty0 + n).
   gl::Texture tracks{0U};
   int trackWindow = 0;
   std::int64_t trackTx0 = 0, trackTy0 = 0;

@@ -2,9 +2,9 @@
 // Kept apart from ClipmapTerrain.cpp so the bare pipeline reads as before.
 
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/gl/GlError.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 
 #include "ClipmapEffectState.hpp"
 #include "ClipmapLevel.hpp"
@@ -221,7 +221,7 @@ void ClipmapTerrain::setEffectUniforms(const Camera& camera, ClipmapFrame& frame
     program_.set("uNoiseRegion", region);
   }
   if (e.tracks) {
-    const TrackLayer& layer = *e.tracks;
+    const rover::TrackLayer& layer = *e.tracks;
     const int n = st.trackWindow;
     const double texel = layer.texelMetres();
     const auto cx = static_cast<std::int64_t>(std::floor(o.x / texel)) - n / 2;

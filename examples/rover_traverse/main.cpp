@@ -1,7 +1,7 @@
 // rover_traverse: a six-wheel rover drives a path across the Victoria-like DEM placed on Mars,
 // querying height and normal under every wheel at every 1 ms step through the pager, with a
 // cache budget set on the command line. As it drives it presses its wheels into a track
-// overlay (clod::TrackLayer) every few centimetres; --image renders the DEM with those tracks
+// overlay (rover::TrackLayer) every few centimetres; --image renders the DEM with those tracks
 // from behind the rover's last position. Writes the wheel contacts as CSV if asked.
 //
 //   rover_traverse --cache-mb 4 --path "-560,-90 -430,-20 -300,250" --tracks tracks.csv
@@ -9,9 +9,9 @@
 //
 // Public API only (regolith::rover, regolith::store, regolith::clod).
 #include <regolith/clod/Render.hpp>
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
+#include <regolith/rover/TrackPresser.hpp>
 #include <regolith/rover/Traverse.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/Pager.hpp>
@@ -19,7 +19,6 @@
 
 #include <CLI/CLI.hpp>
 
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -74,7 +73,7 @@ double mib(double bytes) { return bytes / 1048576.0; }
 /// Renders the DEM with the traverse's tracks, headless, from 9 m ahead of the rover's last
 /// position and 3.5 m up, looking back along its tracks.
 void renderTracks(const std::string& storePath, const std::string& grid,
-                  const rover::ChassisPose& last, std::shared_ptr<clod::TrackLayer> tracks,
+                  const rover::ChassisPose& last, std::shared_ptr<rover::TrackLayer> tracks,
                   const std::string& png) {
   auto st = std::make_shared<const store::Store>(store::Store::open(storePath));
   const store::Pager pager(st, std::make_shared<store::PatchCache>(std::size_t{64} << 20U));
@@ -98,7 +97,7 @@ void renderTracks(const std::string& storePath, const std::string& grid,
 int main(int argc, char** argv) try {
   CLI::App app{"A six-wheel rover drives a path across the Victoria-like DEM on Mars at 1 kHz"};
   std::string storePath = "out/rover/victoria.h5", grid = "victoria", pathText, tracks, image;
-  double cacheMb = 16.0, speed = 1.0, stepMs = 1.0, trackSpacing = clod::RoverRuts::kSpacingMetres;
+  double cacheMb = 16.0, speed = 1.0, stepMs = 1.0, trackSpacing = rover::RoverRuts::kSpacingMetres;
   std::size_t maxSteps = 0, trackEvery = 10, size = 1201;
   std::string policy = "lru";
   app.add_option("--store", storePath,
@@ -164,21 +163,13 @@ int main(int argc, char** argv) try {
       csv.precision(10);
     }
     constexpr double kDeg = 180.0 / std::numbers::pi;
-    using Ruts = clod::RoverRuts;
-    auto overlay = std::make_shared<clod::TrackLayer>(Ruts::kTexelMetres);
-    std::array<clod::WheelContact, rover::kWheels> imprint;
-    std::size_t imprints = 0;
-    double nextImprint = 0.0;
+    auto overlay = std::make_shared<rover::TrackLayer>(rover::RoverRuts::kTexelMetres);
+    rover::TrackPressOptions press;
+    press.spacingMetres = trackSpacing;
+    rover::TrackPresser presser(*overlay, press);
     rover::ChassisPose last;
     const rover::TraverseResult r = rover::runTraverse(dem, o, [&](const rover::StepState& s) {
-      if (s.distance >= nextImprint) {  // the wheels press their ruts into the overlay
-        for (std::size_t i = 0; i < rover::kWheels; ++i)
-          imprint[i] = {
-              {s.wheels[i].x, s.wheels[i].y}, Ruts::kWheelWidthMetres, Ruts::kDepthMetres};
-        overlay->step(imprint);
-        ++imprints;
-        nextImprint = s.distance + trackSpacing;
-      }
+      (void)presser.press(s);  // the wheels press their ruts into the overlay
       last = s.chassis;
       if (csv.is_open() && s.step % trackEvery == 0) {
         for (std::size_t i = 0; i < rover::kWheels; ++i) {
@@ -219,7 +210,7 @@ int main(int argc, char** argv) try {
     std::printf("  chassis          max tilt %.2f deg, max contact residual %.4f m\n",
                 r.maxTilt * kDeg, r.maxResidual);
     std::printf("  track overlay    %zu imprints of the six wheels (every %.3g m), %zu tiles\n",
-                imprints, trackSpacing, overlay->tiles());
+                presser.imprints(), trackSpacing, overlay->tiles());
     if (!tracks.empty()) std::printf("  tracks           %s\n", tracks.c_str());
     if (!image.empty()) {
       renderTracks(storePath, grid, last, overlay, image);

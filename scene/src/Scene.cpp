@@ -178,7 +178,7 @@ struct Scene::Impl {
     clod::Effects out;
     out.albedo = draped(e.albedo, ptr + "/albedo");
     out.overlay = draped(e.overlay, ptr + "/overlay");
-    if (e.tracks) out.tracks = std::make_shared<clod::TrackLayer>(clod::RoverRuts::kTexelMetres);
+    if (e.tracks) out.tracks = std::make_shared<rover::TrackLayer>(rover::RoverRuts::kTexelMetres);
     if (e.heightColours) {
       out.heightColours =
           clod::HeightColours{static_cast<float>(e.heightColours->min),

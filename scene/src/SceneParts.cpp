@@ -92,19 +92,19 @@ farfield::FarFieldMode drawFarField(farfield::FarField& farField, const scenegra
 }
 
 TraverseEnd driveAndPress(const topo::TopoDem& dem, const rover::TraverseOptions& options,
-                          clod::TrackLayer* tracks, const rover::StepCallback& onStep) {
+                          rover::TrackLayer* tracks, const rover::StepCallback& onStep) {
   TraverseEnd end;
   double nextStamp = 0.0;
-  std::array<clod::WheelContact, rover::kWheels> imprint;
+  std::array<rover::WheelImprint, rover::kWheels> imprint;
   end.result = rover::runTraverse(dem, options, [&](const rover::StepState& s) {
     if (tracks && s.distance >= nextStamp) {  // one imprint of all six wheels every 5 cm
       for (std::size_t w = 0; w < rover::kWheels; ++w)
-        imprint[w] = clod::WheelContact{{s.wheels[w].x, s.wheels[w].y},
-                                        clod::RoverRuts::kWheelWidthMetres,
-                                        clod::RoverRuts::kDepthMetres};
+        imprint[w] = rover::WheelImprint{{s.wheels[w].x, s.wheels[w].y},
+                                         rover::RoverRuts::kWheelWidthMetres,
+                                         rover::RoverRuts::kDepthMetres};
       tracks->step(imprint);
       ++end.imprints;
-      nextStamp = s.distance + clod::RoverRuts::kSpacingMetres;
+      nextStamp = s.distance + rover::RoverRuts::kSpacingMetres;
     }
     end.last = s.chassis;
     return onStep ? onStep(s) : true;

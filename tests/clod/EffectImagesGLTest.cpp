@@ -5,7 +5,7 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/Legend.hpp>
 #include <regolith/clod/Render.hpp>
-#include <regolith/clod/TrackLayer.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 #include <regolith/topo/Placement.hpp>
 
 #include "EffectFixtures.hpp"
@@ -272,7 +272,7 @@ TEST(EffectImagesGLTest, TracksAppearExactlyWhereTheWheelsTouched) {
   test::glContext();
   const auto grid = test::centredGrid(129, 129, 0.25);  // 32 m of flat ground
   const auto pyramid = test::planePyramid(grid, [](double, double) { return 0.0; });
-  auto tracks = std::make_shared<TrackLayer>(0.02);
+  auto tracks = std::make_shared<rover::TrackLayer>(0.02);
   ClipmapOptions opt;
   opt.size = 63;
   opt.lightDirection = {0.8F, 0.1F, 0.35F};  // low sun from the east: ruts cast shading
@@ -299,7 +299,7 @@ TEST(EffectImagesGLTest, TracksAppearExactlyWhereTheWheelsTouched) {
     const glm::dvec2 c = centre(step);
     const glm::dvec2 dir = glm::normalize(centre(step + 1) - c);
     const glm::dvec2 side{-dir.y, dir.x};
-    std::vector<WheelContact> wheels;
+    std::vector<rover::WheelImprint> wheels;
     for (double s : {-1.0, 1.0})
       for (double along : {-0.5, 0.0, 0.5})
         wheels.push_back({c + side * (s * half) + dir * along, width, 0.025});
@@ -359,7 +359,7 @@ TEST(EffectImagesGLTest, TracksPersistAlongTheTraverseAndFollowTheFocus) {
   test::glContext();
   const auto grid = test::centredGrid(129, 129, 0.5);  // 64 m of flat ground
   const auto pyramid = test::planePyramid(grid, [](double, double) { return 0.0; });
-  auto tracks = std::make_shared<TrackLayer>(0.02);
+  auto tracks = std::make_shared<rover::TrackLayer>(0.02);
   ClipmapOptions opt;
   opt.size = 63;
   opt.lightDirection = {0.8F, 0.1F, 0.35F};
@@ -394,7 +394,7 @@ TEST(EffectImagesGLTest, TracksOnADemPlacedOnAPlanetFollowItsGridFrame) {
   auto zero = std::make_shared<topo::InMemorySamples>(65, 65, std::vector<float>(65 * 65, 0.0F));
   const auto pyramid =
       std::make_shared<const HeightPyramid>(HeightPyramid::fromSamples(grid, zero, placement));
-  auto tracks = std::make_shared<TrackLayer>(0.02);
+  auto tracks = std::make_shared<rover::TrackLayer>(0.02);
   ClipmapOptions opt;
   opt.size = 31;
   opt.trackWindow = 512;

@@ -2,8 +2,8 @@
 // uniform, no texture bind and no pass.
 
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 #include <regolith/topo/Placement.hpp>
 
 #include "EffectFixtures.hpp"
@@ -71,7 +71,7 @@ const std::map<std::string, std::vector<std::string>>& effectWords() {
 Effects only(const std::string& name) {
   Effects e;
   if (name == "albedo") e.albedo = smallTexture(1);
-  if (name == "tracks") e.tracks = std::make_shared<TrackLayer>(0.05);
+  if (name == "tracks") e.tracks = std::make_shared<rover::TrackLayer>(0.05);
   if (name == "noise") e.noise = StructuredNoise{};
   if (name == "heightColours") e.heightColours = HeightColours{0.0F, 40.0F, false};
   if (name == "latLon") e.latLon = LatLonLines{};

@@ -1,9 +1,9 @@
 // demo::MarsVictoriaScene and demo::renderFlyover(): the fly-over writes readable PNGs
 // from Mars whole down to the rover, switching the focus on the way.
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/gl/Image.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 #include <regolith/store/Generate.hpp>
 
 #include "gl/GlContext.hpp"
@@ -132,8 +132,8 @@ TEST(MarsVictoriaGLTest, FlyoverEndsAtTheGivenRoverWithItsTracks) {
   test::glContext();
   const auto dir = std::filesystem::path(::testing::TempDir()) / "regolith_flyover_rover_test";
   std::filesystem::remove_all(dir);
-  auto tracks = std::make_shared<clod::TrackLayer>(0.05);
-  std::array<clod::WheelContact, 6> step;
+  auto tracks = std::make_shared<rover::TrackLayer>(0.05);
+  std::array<rover::WheelImprint, 6> step;
   for (double y = -253.0; y <= -225.0; y += 0.05) {  // northwards, under the rover and ahead
     for (std::size_t w = 0; w < 6; ++w)
       step[w] = {{120.0 + (w % 2 == 0 ? -1.1 : 1.1), y + 1.1 - 1.05 * static_cast<double>(w / 2)},

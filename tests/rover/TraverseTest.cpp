@@ -1,12 +1,14 @@
 // The traverse on real stores paged through a budgeted cache and on in-memory DEMs: contacts
-// against direct TopoDem queries, the chassis on analytic planes, the cache budget, and bad
-// options.
+// against direct TopoDem queries, the chassis on analytic planes, an analytic in-memory DEM
+// with no store at all (and the ruts its wheels press), the cache budget, and bad options.
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
+#include <regolith/rover/TrackPresser.hpp>
 #include <regolith/rover/Traverse.hpp>
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
+#include <regolith/topo/Projection.hpp>
 #include <regolith/topo/TopoDem.hpp>
 
 #include <glm/geometric.hpp>
@@ -45,7 +47,7 @@ const std::filesystem::path& victoriaStore() {
 
 /// A plane h = gx·x + gy·y + h0 on a 201×201 grid at 1 m centred on (0, 0), 64×64 patches.
 std::filesystem::path planeStore(const std::string& name, double gx, double gy, double h0) {
-  const auto path = test::scratchFile("rover", name);
+  auto path = test::scratchFile("rover", name);
   store::GridSource g;
   g.info.name = "plane";
   g.info.rows = g.info.cols = 201;
@@ -200,9 +202,77 @@ TEST(TraverseTest, FlatPlaneIsLevel) {
   EXPECT_EQ(r.maxTilt, 0.0);
 }
 
+/// h(x, y) = x²/64 + y/8 − 40 on a 401×401 grid at 0.5 m centred on (0, 0), in memory: no
+/// store, no pager, no file. Its float samples are exact (multiples of 1/256 below 2^8).
+topo::TopoDem parabolicTrough() {
+  const topo::TopoGrid g(401, 401, -100.0, 100.0, 0.5, 0.5);
+  auto samples = topo::InMemorySamples::fromFunction(401, 401, [](std::size_t r, std::size_t c) {
+    const double x = -100.0 + 0.5 * static_cast<double>(c);
+    const double y = 100.0 - 0.5 * static_cast<double>(r);
+    return static_cast<float>(x * x / 64.0 + y / 8.0 - 40.0);
+  });
+  const topo::Placement mars(topo::LocalTangentPlane(topo::Body::marsSphere(), {-2.05, -5.5, 0.0}));
+  return {g, mars, samples};
+}
+
+TEST(TraverseTest, RunsOnAnAnalyticInMemoryDemItIsHanded) {
+  const topo::TopoDem dem = parabolicTrough();
+  TraverseOptions o;
+  o.path = {{0.0, -80.0}, {0.0, 60.0}, {70.0, 60.0}};  // north along the trough, then east
+  o.speed = 50.0;                                      // 5 cm per 1 ms step
+  TrackLayer tracks(RoverRuts::kTexelMetres);
+  TrackPresser presser(tracks);
+  std::size_t northSteps = 0;
+  const TraverseResult r = runTraverse(dem, o, [&](const StepState& s) {
+    // Oracle: bilinear interpolation of a function quadratic in x and linear in y is the
+    // function plus (x − x₀)(x₁ − x)/64, x₀ ≤ x ≤ x₁ the sample columns around x; its
+    // gradient is ((x₀ + x₁)/64, 1/8).
+    for (const WheelContact& c : s.wheels) {
+      const double x0 = -100.0 + 0.5 * std::floor((c.x + 100.0) / 0.5), x1 = x0 + 0.5;
+      const double h = (c.x * c.x + (c.x - x0) * (x1 - c.x)) / 64.0 + c.y / 8.0 - 40.0;
+      const glm::dvec3 n = glm::normalize(glm::dvec3(-(x0 + x1) / 64.0, -0.125, 1.0));
+      EXPECT_EQ(c.status, topo::QueryStatus::Ok);
+      EXPECT_NEAR(c.height, h, 1e-9) << "step " << s.step << " at (" << c.x << ", " << c.y << ")";
+      EXPECT_NEAR(glm::distance(c.normal, n), 0.0, 1e-9) << "step " << s.step;
+    }
+    if (s.ground.heading == 0.0) {
+      // Heading north along x = 0, the wheels stand at x = ±1.1 (track width 2.2 m), where
+      // the interpolated trough is (1.21 + 0.1·0.4)/64 = 1.25/64 high on both sides: the
+      // chassis pitches up the 1/8 slope, does not roll, and all six contacts lie in a plane.
+      for (const WheelContact& c : s.wheels) EXPECT_DOUBLE_EQ(std::abs(c.x), 1.1);
+      EXPECT_NEAR(s.chassis.pitch, std::atan(0.125), 1e-12);
+      EXPECT_NEAR(s.chassis.roll, 0.0, 1e-12);
+      EXPECT_NEAR(s.chassis.height, 1.25 / 64.0 + s.ground.y / 8.0 - 40.0, 1e-9);
+      EXPECT_NEAR(s.chassis.residual, 0.0, 1e-9);
+      ++northSteps;
+    }
+    (void)presser.press(s);
+    return true;
+  });
+  EXPECT_EQ(r.steps, 4201U);     // ⌊210 m / 5 cm⌋ + 1
+  EXPECT_EQ(northSteps, 2801U);  // 140 m north, the corner included
+  EXPECT_EQ(r.queries, 6 * r.steps);
+  EXPECT_NEAR(r.distance, 210.0, 1e-9);
+  // The steepest pose is the last, on the trough's side at x = 70 (slope x/32) and the 1/8
+  // slope; within 1e-3 rad, as six contacts on a curved surface fit a plane only roughly.
+  EXPECT_NEAR(r.maxTilt, std::atan(std::hypot(70.0 / 32.0, 0.125)), 1e-3);
+  // The ruts the wheels pressed on the way north: 5 cm texels centred 2.5 cm either side of
+  // the wheels' paths at x = ±1.1, each 0.03·cos²(π·0.025 / 0.4) deep; none between the
+  // wheels or beyond their 0.4 m width.
+  const double rut =
+      RoverRuts::kDepthMetres * std::pow(std::cos(std::numbers::pi * 0.025 / 0.4), 2.0);
+  EXPECT_GT(presser.imprints(), 2000U);
+  for (double y = -78.0; y < 55.0; y += 1.3) {
+    EXPECT_NEAR(tracks.depthAt({-1.1, y}), rut, 1e-7) << y;
+    EXPECT_NEAR(tracks.depthAt({1.1, y}), rut, 1e-7) << y;
+    EXPECT_EQ(tracks.depthAt({0.0, y}), 0.0) << y;
+    EXPECT_EQ(tracks.depthAt({1.5, y}), 0.0) << y;
+  }
+}
+
 TEST(TraverseTest, ResidentBytesNeverExceedTheBudget) {
   // Three 64×64 patches (16 KiB of samples each, plus overhead): the path crosses ~15.
-  const std::size_t budget = 3 * (64 * 64 * 4 + 1024);
+  const std::size_t budget = std::size_t{3} * (64 * 64 * 4 + 1024);
   const Paged traverse = paged(victoriaStore(), "victoria", budget);
   std::size_t over = 0, sampledPeak = 0;
   (void)runTraverse(traverse.dem, victoriaOptions(), [&](const StepState&) {

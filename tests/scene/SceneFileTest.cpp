@@ -1,7 +1,7 @@
 // The scene file: every class of error word for word, round trips, relative paths, and what
 // a built scene declares.
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 #include <regolith/scene/Scene.hpp>
 #include <regolith/scene/SceneDescription.hpp>
 #include <regolith/store/Generate.hpp>

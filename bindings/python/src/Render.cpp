@@ -1,8 +1,8 @@
 // Headless rendering into a numpy image (clod::renderImage).
 #include <regolith/clod/EffectList.hpp>
 #include <regolith/clod/Render.hpp>
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Pager.hpp>
 
@@ -56,7 +56,7 @@ double numberParameter(const py::handle& v, const std::string& where) {
 /// later by clod::effectsOf()), and the TrackLayer that draws tracks.
 struct PyEffects {
   clod::EffectRequest request;
-  std::shared_ptr<clod::TrackLayer> tracks;
+  std::shared_ptr<rover::TrackLayer> tracks;
   clod::EffectOptionNames spelling = clod::kPythonEffectOptions;
 };
 
@@ -114,7 +114,7 @@ void addParameters(PyEffects& out, const std::string& name, const py::dict& para
 /// TrackLayer. `tracks` is the tracks= keyword: without effects it declares tracks alone.
 PyEffects parseEffects(const py::object& effects,
                        const std::optional<std::array<double, 2>>& heightRange,
-                       std::shared_ptr<clod::TrackLayer> tracks) {
+                       std::shared_ptr<rover::TrackLayer> tracks) {
   PyEffects out;
   const auto& sp = clod::kPythonEffectOptions;
   if (effects.is_none()) {
@@ -132,12 +132,12 @@ PyEffects parseEffects(const py::object& effects,
       if (py::isinstance<py::bool_>(v) && !v.cast<bool>()) continue;  // False: not declared
       clod::addEffectName(out.request, name, kOp, sp);
       if (v.is_none() || py::isinstance<py::bool_>(v)) continue;
-      if (name == "tracks" && py::isinstance<clod::TrackLayer>(v)) {
+      if (name == "tracks" && py::isinstance<rover::TrackLayer>(v)) {
         if (tracks)
           throw InvalidArgument(
               std::string(kOp) +
               ": give the TrackLayer as tracks= or as effects['tracks'], not both");
-        tracks = v.cast<std::shared_ptr<clod::TrackLayer>>();
+        tracks = v.cast<std::shared_ptr<rover::TrackLayer>>();
         continue;
       }
       if (!py::isinstance<py::dict>(v))
@@ -212,7 +212,7 @@ py::array_t<std::uint8_t> render(const Terrain& t, const std::array<double, 3>& 
                                  std::optional<double> heading, std::optional<double> pitch,
                                  double fov, int width, int height, double near, int clipmapSize,
                                  const std::array<float, 4>& background,
-                                 std::shared_ptr<clod::TrackLayer> tracks,
+                                 std::shared_ptr<rover::TrackLayer> tracks,
                                  const py::object& effects,
                                  const std::optional<std::array<double, 2>>& heightRange,
                                  bool legend) {
@@ -298,7 +298,7 @@ void bindRender(py::class_<DemTerrain, std::shared_ptr<DemTerrain>>& dem,
            const std::optional<std::array<double, 3>>& lookAt, std::optional<double> heading,
            std::optional<double> pitch, double fov, int width, int height, double near,
            int clipmapSize, const std::array<float, 4>& background,
-           std::shared_ptr<clod::TrackLayer> tracks, const py::object& effects,
+           std::shared_ptr<rover::TrackLayer> tracks, const py::object& effects,
            const std::optional<std::array<double, 2>>& heightRange, bool legend) {
           return render(t, position, lookAt, heading, pitch, fov, width, height, near, clipmapSize,
                         background, std::move(tracks), effects, heightRange, legend);

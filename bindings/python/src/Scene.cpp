@@ -1,9 +1,9 @@
 // The paper's example scene from Python: the scene graph (poses only) and headless renders
 // of the Mars/Victoria scene with data (regolith::demo) into numpy images.
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/demo/PaperScene.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 
 #include "Common.hpp"
 
@@ -71,14 +71,14 @@ demo::MarsVictoriaOptions sceneOptions(const std::optional<std::filesystem::path
 }
 
 /// The wheels of one rover step as contacts: a (wheels, 2 or more) array of grid x, y.
-std::vector<clod::WheelContact> contactsOf(const DoubleArray& wheels, double width, double depth,
-                                           const char* op) {
+std::vector<rover::WheelImprint> contactsOf(const DoubleArray& wheels, double width, double depth,
+                                            const char* op) {
   if (wheels.ndim() != 2 || wheels.shape(1) < 2 || wheels.shape(0) < 1) {
     throw InvalidArgument(std::string(op) + ": wheels has shape " + shapeOf(wheels) +
                           ", expected (wheels, 2 or more): grid x, y of each wheel");
   }
   const auto a = wheels.unchecked<2>();
-  std::vector<clod::WheelContact> c(static_cast<std::size_t>(a.shape(0)));
+  std::vector<rover::WheelImprint> c(static_cast<std::size_t>(a.shape(0)));
   for (py::ssize_t w = 0; w < a.shape(0); ++w)
     c[static_cast<std::size_t>(w)] = {{a(w, 0), a(w, 1)}, width, depth};
   return c;
@@ -86,9 +86,9 @@ std::vector<clod::WheelContact> contactsOf(const DoubleArray& wheels, double wid
 
 /// render_scene()'s tracks: a TrackLayer as it is, or wheel contacts (steps, 6, 2 or more)
 /// pressed step by step into a new layer.
-std::shared_ptr<clod::TrackLayer> trackLayerOf(const py::object& tracks) {
-  if (py::isinstance<clod::TrackLayer>(tracks))
-    return tracks.cast<std::shared_ptr<clod::TrackLayer>>();
+std::shared_ptr<rover::TrackLayer> trackLayerOf(const py::object& tracks) {
+  if (py::isinstance<rover::TrackLayer>(tracks))
+    return tracks.cast<std::shared_ptr<rover::TrackLayer>>();
   const auto notContacts = [&] {
     return InvalidArgument("regolith.render_scene(): tracks is a " +
                            std::string(py::str(py::type::of(tracks).attr("__name__"))) +
@@ -108,9 +108,9 @@ std::shared_ptr<clod::TrackLayer> trackLayerOf(const py::object& tracks) {
                           ", expected (steps, 6, 2 or more): wheel x, y per step, or a TrackLayer");
   }
   const auto a = arr.unchecked<3>();
-  using Ruts = clod::RoverRuts;
-  auto layer = std::make_shared<clod::TrackLayer>(Ruts::kTexelMetres);
-  std::array<clod::WheelContact, 6> step;
+  using Ruts = rover::RoverRuts;
+  auto layer = std::make_shared<rover::TrackLayer>(Ruts::kTexelMetres);
+  std::array<rover::WheelImprint, 6> step;
   for (py::ssize_t i = 0; i < a.shape(0); ++i) {
     for (py::ssize_t w = 0; w < 6; ++w)
       step[static_cast<std::size_t>(w)] = {
@@ -123,28 +123,28 @@ std::shared_ptr<clod::TrackLayer> trackLayerOf(const py::object& tracks) {
 }  // namespace
 
 void bindScene(py::module_& m) {
-  py::class_<clod::TrackLayer, std::shared_ptr<clod::TrackLayer>>(
+  py::class_<rover::TrackLayer, std::shared_ptr<rover::TrackLayer>>(
       m, "TrackLayer",
-      "Wheel tracks a traverse leaves (clod::TrackLayer): a sparse rut-depth field in a DEM's "
+      "Wheel tracks a traverse leaves (rover::TrackLayer): a sparse rut-depth field in a DEM's "
       "grid frame (metres), pressed step by step and drawn by render_scene(tracks=...) and "
       "Dem.render(tracks=...) as ruts. Thread-safe.")
-      .def(py::init<double>(), py::arg("texel_metres") = clod::RoverRuts::kTexelMetres,
+      .def(py::init<double>(), py::arg("texel_metres") = rover::RoverRuts::kTexelMetres,
            "texel_metres: the field's resolution (> 0).")
       .def(
           "step",
-          [](clod::TrackLayer& l, const DoubleArray& wheels, double width, double depth) {
+          [](rover::TrackLayer& l, const DoubleArray& wheels, double width, double depth) {
             const auto c = contactsOf(wheels, width, depth, "regolith.TrackLayer.step()");
             l.step(c);
           },
-          py::arg("wheels"), py::arg("width") = clod::RoverRuts::kWheelWidthMetres,
-          py::arg("depth") = clod::RoverRuts::kDepthMetres,
+          py::arg("wheels"), py::arg("width") = rover::RoverRuts::kWheelWidthMetres,
+          py::arg("depth") = rover::RoverRuts::kDepthMetres,
           "Presses one rover step: wheels is (wheels, 2 or more), each wheel's grid x, y (e.g. a "
           "run_traverse callback's state['wheels']); each wheel's rut runs from its previous "
           "contact to this one, depth·cos²(π·d/width) across, the deeper rut winning where they "
           "overlap.")
       .def(
           "depth_at",
-          [](const clod::TrackLayer& l, const DoubleArray& xs, const DoubleArray& ys) {
+          [](const rover::TrackLayer& l, const DoubleArray& xs, const DoubleArray& ys) {
             if (xs.size() != ys.size())
               throw InvalidArgument("regolith.TrackLayer.depth_at(): x has " +
                                     std::to_string(xs.size()) + " values and y " +
@@ -159,10 +159,10 @@ void bindScene(py::module_& m) {
           py::arg("x"), py::arg("y"),
           "Rut depth (metres, ≥ 0) at grid points, bilinear between texel centres; the shape "
           "of x.")
-      .def_property_readonly("texel_metres", &clod::TrackLayer::texelMetres)
-      .def_property_readonly("tiles", &clod::TrackLayer::tiles,
+      .def_property_readonly("texel_metres", &rover::TrackLayer::texelMetres)
+      .def_property_readonly("tiles", &rover::TrackLayer::tiles,
                              "Tiles of 512² texels allocated so far.")
-      .def("clear", &clod::TrackLayer::clear, "Forgets every track.");
+      .def("clear", &rover::TrackLayer::clear, "Forgets every track.");
 
   py::class_<PyScene, std::shared_ptr<PyScene>>(
       m, "SceneGraph",

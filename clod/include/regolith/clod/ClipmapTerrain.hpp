@@ -46,7 +46,7 @@ struct ClipmapOptions {
   /// construction (each is compiled into the program); their parameters may change through
   /// setOptions(). None: the bare pipeline.
   Effects effects;
-  /// Tracks: GPU window of the TrackLayer around the focus, texels per side (256..8192).
+  /// Tracks: GPU window of the rover::TrackLayer around the focus, texels per side (256..8192).
   int trackWindow = 2048;
   /// Compile in the cut-out test, so that DEMs drawn over this planet can win where they
   /// have data (SceneRenderer::addCutOut() rebuilds the planet's terrain with it). Inert until

@@ -13,10 +13,13 @@
 #include <string>
 #include <vector>
 
+namespace regolith::rover {
+class TrackLayer;
+}  // namespace regolith::rover
+
 namespace regolith::clod {
 
 class HeightPyramid;
-class TrackLayer;
 
 /// Colour-coded height: the terrain is coloured by its height through a fixed ramp
 /// (heightColour()) from `minHeight` (first stop) to `maxHeight` (last stop), metres.
@@ -67,8 +70,9 @@ struct DrapedTexture {
 struct Effects {
   /// Albedo texture: replaces ClipmapOptions::albedo (the default constant colour).
   std::optional<DrapedTexture> albedo;
-  /// Wheel tracks, stamped by a traverse; shared with whoever stamps them.
-  std::shared_ptr<TrackLayer> tracks;
+  /// Wheel tracks, stamped by a traverse on the CPU (rover/TrackLayer.hpp); shared with
+  /// whoever stamps them. ClipmapTerrain uploads the window around the focus.
+  std::shared_ptr<rover::TrackLayer> tracks;
   std::optional<StructuredNoise> noise;
   std::optional<HeightColours> heightColours;
   std::optional<LatLonLines> latLon;

@@ -7,11 +7,11 @@
 #include <regolith/clod/Camera.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/compose/ComposedSurface.hpp>
 #include <regolith/farfield/FarField.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/gl/RenderTarget.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 #include <regolith/rover/Traverse.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
 #include <regolith/topo/Body.hpp>
@@ -61,7 +61,7 @@ farfield::FarFieldMode drawFarField(farfield::FarField& farField, const scenegra
                                     const gl::RenderTarget& target);
 
 /// A traverse over `dem` that presses the six wheels into `tracks` every
-/// clod::RoverRuts::kSpacingMetres of travel (tracks may be null: nothing is pressed).
+/// rover::RoverRuts::kSpacingMetres of travel (tracks may be null: nothing is pressed).
 /// Returns where the rover stopped (grid x, y, heading in radians clockwise from +y). Throws
 /// as rover::runTraverse().
 struct TraverseEnd {
@@ -70,6 +70,6 @@ struct TraverseEnd {
   std::size_t imprints = 0;
 };
 TraverseEnd driveAndPress(const topo::TopoDem& dem, const rover::TraverseOptions& options,
-                          clod::TrackLayer* tracks, const rover::StepCallback& onStep = {});
+                          rover::TrackLayer* tracks, const rover::StepCallback& onStep = {});
 
 }  // namespace regolith::scene

@@ -1,8 +1,8 @@
 #pragma once
 /// \file
 /// Wheel tracks a traverse leaves on the terrain: a rut-depth field in the terrain's grid
-/// frame, stamped on the CPU each rover step and drawn by ClipmapTerrain as perturbed
-/// normals (docs/overlays.md).
+/// frame, stamped on the CPU each rover step (no GL). clod::ClipmapTerrain draws it as
+/// perturbed normals (docs/overlays.md).
 
 #include <glm/vec2.hpp>
 
@@ -14,7 +14,7 @@
 #include <unordered_map>
 #include <vector>
 
-namespace regolith::clod {
+namespace regolith::rover {
 
 /// The ruts the project's rover presses (the main demo, the traverse examples, Python's
 /// defaults): a 0.40 m wide wheel, 3 cm deep at its centre, into a layer of 5 cm texels,
@@ -26,9 +26,10 @@ struct RoverRuts {
   static constexpr double kSpacingMetres = 0.05;
 };
 
-/// One wheel's contact with the ground, in the terrain's grid frame (x east, y north,
-/// metres: a plane DEM or a DEM placed on a planet).
-struct WheelContact {
+/// One wheel's imprint on the ground, in the terrain's grid frame (x east, y north,
+/// metres: a plane DEM or a DEM placed on a planet). Not WheelContact (Rover.hpp), which is
+/// what the terrain answers under a wheel.
+struct WheelImprint {
   glm::dvec2 gridXY{0.0};
   double wheelWidthMetres = 0.4;
   double depthMetres = 0.02;
@@ -58,7 +59,7 @@ class TrackLayer {
   void stampSegment(glm::dvec2 from, glm::dvec2 to, double wheelWidthMetres, double depthMetres);
   /// A rover step: each wheel's path from its previous contact to this one (the previous
   /// contacts of the same wheel index, kept per layer; the first step stamps discs).
-  void step(std::span<const WheelContact> wheels);
+  void step(std::span<const WheelImprint> wheels);
 
   [[nodiscard]] double texelMetres() const noexcept { return texel_; }
   /// Rut depth (metres, ≥ 0) at a grid point, bilinear between texel centres. Throws
@@ -98,4 +99,4 @@ class TrackLayer {
   std::uint64_t version_ = 0;
 };
 
-}  // namespace regolith::clod
+}  // namespace regolith::rover

@@ -1,5 +1,5 @@
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 
 #include <glm/geometric.hpp>
 
@@ -9,7 +9,7 @@
 #include <numbers>
 #include <string>
 
-namespace regolith::clod {
+namespace regolith::rover {
 
 namespace {
 
@@ -60,7 +60,7 @@ void TrackLayer::stampSegment(glm::dvec2 from, glm::dvec2 to, double wheelWidthM
   press(from, to, wheelWidthMetres, depthMetres);
 }
 
-void TrackLayer::step(std::span<const WheelContact> wheels) {
+void TrackLayer::step(std::span<const WheelImprint> wheels) {
   for (const auto& w : wheels) check("step", w.gridXY, w.wheelWidthMetres, w.depthMetres);
   const std::lock_guard lock(mutex_);
   if (last_.size() != wheels.size()) last_.clear();
@@ -194,4 +194,4 @@ void TrackLayer::clear() {
   history_.clear();  // dirtySince() of any older version: everything
 }
 
-}  // namespace regolith::clod
+}  // namespace regolith::rover

@@ -1,14 +1,15 @@
-#include <regolith/clod/TrackLayer.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <numbers>
 #include <vector>
 
-namespace regolith::clod {
+namespace regolith::rover {
 namespace {
 
 TEST(TrackLayerTest, AContactPressesACosineSquaredRutOfTheWheelsWidth) {
@@ -36,7 +37,7 @@ TEST(TrackLayerTest, StepsPressContinuousRutsThatPersistAlongTheWholeTraverse) {
   // Six wheels driving 300 m east in 0.5 m steps: ruts everywhere along it, however far
   // the rover has gone since.
   for (int s = 0; s <= 600; ++s) {
-    std::vector<WheelContact> wheels;
+    std::vector<WheelImprint> wheels;
     for (double y : {-0.6, 0.6})
       for (double dx : {-0.5, 0.0, 0.5}) wheels.push_back({{0.5 * s + dx, y}, 0.3, 0.02});
     layer.step(wheels);
@@ -58,7 +59,7 @@ TEST(TrackLayerTest, StepsPressContinuousRutsThatPersistAlongTheWholeTraverse) {
   EXPECT_LT(r[2] - r[0], 20);
   EXPECT_EQ(layer.dirtySince(layer.version()), (std::array<std::int64_t, 4>{0, 0, 0, 0}));
   // read() sees what depthAt() sees.
-  std::vector<float> window(40 * 40);
+  std::vector<float> window(std::size_t{40} * 40);
   layer.read(50000 - 20, 50000 - 20, 40, 40, window);
   EXPECT_FLOAT_EQ(window[20 * 40 + 20], layer.texel(50000, 50000));
   EXPECT_GT(window[20 * 40 + 20], 0.0F);
@@ -89,4 +90,4 @@ TEST(TrackLayerTest, BadContactsAreRejectedWithTheirValue) {
 }
 
 }  // namespace
-}  // namespace regolith::clod
+}  // namespace regolith::rover
