@@ -320,9 +320,12 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
         }));
   };
   const auto collectProbes = [](Terrain& planet) {
-    for (auto& probe : planet.probes)
-      for (const auto& [cell, h] : probe.get()) planet.underDems.emplace(cell, h);
+    // Taken out first: if a read failed (its error is rethrown here), the next frame asks
+    // again for what is still missing.
+    auto probes = std::move(planet.probes);
     planet.probes.clear();
+    for (auto& probe : probes)
+      for (const auto& [cell, h] : probe.get()) planet.underDems.emplace(cell, h);
   };
   if (skirts_)
     for (auto& [key, planet] : terrains_) {
