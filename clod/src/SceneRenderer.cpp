@@ -1,8 +1,11 @@
+#include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/CutOutGeometry.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Executor.hpp>
 #include <regolith/gl/GlError.hpp>
+#include <regolith/gl/GlObjects.hpp>
+#include <regolith/gl/Program.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 
 #include "CutOutShader.hpp"
@@ -171,7 +174,8 @@ struct SceneRenderer::Mesh {
 };
 
 SceneRenderer::SceneRenderer()
-    : meshProgram_("scene mesh", gl::ShaderSources{kMeshVertex, "", kMeshFragment}) {}
+    : meshProgram_(std::make_unique<gl::Program>(
+          "scene mesh", gl::ShaderSources{kMeshVertex, "", kMeshFragment})) {}
 
 SceneRenderer::~SceneRenderer() = default;
 
@@ -372,7 +376,7 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
   // DEM border skirts: below both the DEM's border and the planet under it, reaching inward
   // past the coarsest DEM level's edge (a coarse level's border sits up to half a cell inside
   // the finest level's). skirtDrop() (CutOutGeometry.hpp) says how deep and how far in.
-  meshProgram_.use();
+  meshProgram_->use();
   for (const scenegraph::RenderItem& item : list.items) {
     const auto it = terrains_.find(item.drawable);
     if (!skirts_ || it == terrains_.end() || !it->second->skirt) continue;
@@ -408,29 +412,29 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
     const SkirtDrop drop =
         skirtDrop(t.skirt->border, under, t.pyramid->level(coarsest).grid.spacingX(),
                   t.pyramid->level(t.maskLevel).grid.spacingX(), t.maskLevel > 0);
-    meshProgram_.set("uViewProj", cam.viewProjection());
-    meshProgram_.set("uAnchorRel", glm::vec3(t.skirt->anchor - cam.position));
-    meshProgram_.set("uFloor", static_cast<float>(drop.floor - t.skirt->anchor.z));
-    meshProgram_.set("uFlange", glm::vec2(0.0F));
-    meshProgram_.set("uSkirtIn", static_cast<float>(drop.inward));
-    meshProgram_.set("uLitNormal", glm::vec3(0.0F, 0.0F, 1.0F));
-    meshProgram_.set("uLight", lightIn(item.inFocus, view.lightInFocus));
-    meshProgram_.set("uAlbedo", t.options.albedo);
-    meshProgram_.set("uAmbient", t.options.ambient);
+    meshProgram_->set("uViewProj", cam.viewProjection());
+    meshProgram_->set("uAnchorRel", glm::vec3(t.skirt->anchor - cam.position));
+    meshProgram_->set("uFloor", static_cast<float>(drop.floor - t.skirt->anchor.z));
+    meshProgram_->set("uFlange", glm::vec2(0.0F));
+    meshProgram_->set("uSkirtIn", static_cast<float>(drop.inward));
+    meshProgram_->set("uLitNormal", glm::vec3(0.0F, 0.0F, 1.0F));
+    meshProgram_->set("uLight", lightIn(item.inFocus, view.lightInFocus));
+    meshProgram_->set("uAlbedo", t.options.albedo);
+    meshProgram_->set("uAmbient", t.options.ambient);
     glBindVertexArray(t.skirt->vao.id());
     // Twice: straight down (closes the wall between the border and a planet below or above
     // it, seen from outside), then down and inward (covers the band a coarser DEM level
     // leaves inside the finest level's border, seen from above).
-    meshProgram_.set("uSkirtIn", 0.0F);
+    meshProgram_->set("uSkirtIn", 0.0F);
     glDrawArrays(GL_TRIANGLES, 0, t.skirt->count);
-    meshProgram_.set("uSkirtIn", static_cast<float>(drop.inward));
+    meshProgram_->set("uSkirtIn", static_cast<float>(drop.inward));
     glDrawArrays(GL_TRIANGLES, 0, t.skirt->count);
     frame.vertices += 2 * static_cast<std::size_t>(t.skirt->count);
     if (drop.flange.y > 0.0) {
       // A pit: a flange from the border rising outward under the planet.
-      meshProgram_.set("uFlange", glm::vec2(drop.flange));
+      meshProgram_->set("uFlange", glm::vec2(drop.flange));
       glDrawArrays(GL_TRIANGLES, 0, t.skirt->count);
-      meshProgram_.set("uFlange", glm::vec2(0.0F));
+      meshProgram_->set("uFlange", glm::vec2(0.0F));
       frame.vertices += static_cast<std::size_t>(t.skirt->count);
     }
   }
@@ -441,15 +445,15 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
     if (it == meshes_.end()) continue;
     const Mesh& m = *it->second;
     const Camera cam = cameraInItem(item.cameraInItem(), view);
-    meshProgram_.set("uViewProj", cam.viewProjection());
-    meshProgram_.set("uAnchorRel", glm::vec3(-cam.position));
-    meshProgram_.set("uFloor", 0.0F);
-    meshProgram_.set("uSkirtIn", 0.0F);
-    meshProgram_.set("uFlange", glm::vec2(0.0F));
-    meshProgram_.set("uLitNormal", glm::vec3(0.0F));
-    meshProgram_.set("uLight", lightIn(item.inFocus, view.lightInFocus));
-    meshProgram_.set("uAlbedo", m.albedo);
-    meshProgram_.set("uAmbient", 0.25F);
+    meshProgram_->set("uViewProj", cam.viewProjection());
+    meshProgram_->set("uAnchorRel", glm::vec3(-cam.position));
+    meshProgram_->set("uFloor", 0.0F);
+    meshProgram_->set("uSkirtIn", 0.0F);
+    meshProgram_->set("uFlange", glm::vec2(0.0F));
+    meshProgram_->set("uLitNormal", glm::vec3(0.0F));
+    meshProgram_->set("uLight", lightIn(item.inFocus, view.lightInFocus));
+    meshProgram_->set("uAlbedo", m.albedo);
+    meshProgram_->set("uAmbient", 0.25F);
     glBindVertexArray(m.vao.id());
     glDrawArrays(GL_TRIANGLES, 0, m.count);
     frame.vertices += static_cast<std::size_t>(m.count);
