@@ -1,4 +1,5 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/core/Assert.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/gl/GlError.hpp>
 
@@ -32,7 +33,7 @@ gl::ShaderSources ClipmapTerrain::bareSources() {
 gl::ShaderSources ClipmapTerrain::programSourcesFor(const ClipmapOptions& options, bool planet) {
   gl::ShaderSources s = composeClipmapSources(options.effects, planet);
   // Scene graph: the cut-out test (CutOutShader.hpp) only where a DEM may win over this
-  // terrain; inert until SceneRenderer sets its uniforms.
+  // terrain; inert until setCutOuts() names a DEM.
   if (options.cutOuts) s.fragment = shaders::withCutOuts(s.fragment);
   return s;
 }
@@ -380,6 +381,7 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
   program_.set("uAlbedo", options_.albedo);
   program_.set("uAmbient", options_.ambient);
   if (effects_) setEffectUniforms(camera, frame);
+  if (options_.cutOuts) setCutOutUniforms(camera);
   glBindVertexArray(vao_.id());
   glDisable(GL_CULL_FACE);
   for (std::size_t k = first; k < first + count; ++k) {
@@ -424,6 +426,44 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
   glBindVertexArray(0);
   gl::checkGl("ClipmapTerrain::draw()");
   return frame;
+}
+
+void ClipmapTerrain::setCutOuts(std::span<const ClipmapCutOut> cutOuts,
+                                const glm::ivec2& viewportOrigin) {
+  REGOLITH_ASSERT(
+      options_.cutOuts || cutOuts.empty(),
+      "ClipmapTerrain::setCutOuts(): the terrain has no cut-out test (options.cutOuts)");
+  REGOLITH_ASSERT(cutOuts.size() <= static_cast<std::size_t>(shaders::kMaxCutOuts),
+                  "ClipmapTerrain::setCutOuts(): more cut-outs than the shader holds");
+  REGOLITH_ASSERT(std::all_of(cutOuts.begin(), cutOuts.end(),
+                              [](const ClipmapCutOut& c) { return c.mask != nullptr; }),
+                  "ClipmapTerrain::setCutOuts(): a cut-out without its mask");
+  cutOuts_.assign(cutOuts.begin(), cutOuts.end());
+  cutViewportOrigin_ = viewportOrigin;
+}
+
+// The cut-out test's uniforms (CutOutShader.hpp): per DEM the eye → cell map and its mask on
+// texture units kCutOutFirstUnit + i, the count, the viewport and the projection.
+void ClipmapTerrain::setCutOutUniforms(const Camera& camera) const {
+  static constexpr std::array<const char*, 4> kEyeToCell{"uCutEyeToCell[0]", "uCutEyeToCell[1]",
+                                                         "uCutEyeToCell[2]", "uCutEyeToCell[3]"};
+  static constexpr std::array<const char*, 4> kCellOfCamera{
+      "uCutCellOfCamera[0]", "uCutCellOfCamera[1]", "uCutCellOfCamera[2]", "uCutCellOfCamera[3]"};
+  static_assert(kEyeToCell.size() == static_cast<std::size_t>(shaders::kMaxCutOuts));
+  for (std::size_t i = 0; i < cutOuts_.size(); ++i) {
+    const ClipmapCutOut& c = cutOuts_[i];
+    program_.set(kEyeToCell.at(i), glm::mat3(c.transform.eyeToCell));
+    program_.set(kCellOfCamera.at(i), glm::vec3(c.transform.cellOfCamera));
+    glBindTextureUnit(static_cast<GLuint>(shaders::kCutOutFirstUnit) + static_cast<GLuint>(i),
+                      c.mask->id());
+  }
+  program_.set("uCutCount", static_cast<int>(cutOuts_.size()));
+  program_.set(
+      "uCutViewport",
+      glm::vec4(static_cast<float>(cutViewportOrigin_.x), static_cast<float>(cutViewportOrigin_.y),
+                static_cast<float>(camera.width), static_cast<float>(camera.height)));
+  program_.set("uCutProj", glm::vec3(cutOutProjection(camera.near, camera.fovYDegrees, camera.width,
+                                                      camera.height)));
 }
 
 }  // namespace regolith::clod

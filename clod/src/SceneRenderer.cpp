@@ -1,6 +1,11 @@
+#include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/clod/CutOutGeometry.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Executor.hpp>
 #include <regolith/gl/GlError.hpp>
+#include <regolith/gl/GlObjects.hpp>
+#include <regolith/gl/Program.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 
 #include "CutOutShader.hpp"
@@ -12,11 +17,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdint>
-#include <limits>
-#include <numbers>
+#include <future>
+#include <map>
 #include <string>
-#include <tuple>
+#include <utility>
 #include <vector>
 
 namespace regolith::clod {
@@ -60,13 +64,6 @@ void main() {
   color = vec4(uAlbedo * (uAmbient + (1.0 - uAmbient) * d), 1.0);
 }
 )";
-
-struct SkirtVertex {
-  glm::vec3 position;
-  glm::vec3 normal;
-  float bottom;
-  glm::vec3 flange{0.0F};  // pit flanges: outward direction, mitred at corners (sum of normals)
-};
 
 void setupVao(const gl::VertexArray& vao, const gl::Buffer& buffer, GLsizei stride) {
   glVertexArrayVertexBuffer(vao.id(), 0, buffer.id(), 0, stride);
@@ -149,6 +146,7 @@ struct SceneRenderer::Skirt {
   gl::VertexArray vao;
   GLsizei count = 0;
   glm::dvec3 anchor{0.0};  // grid frame
+  BorderSkirt border;      // its heights (the vertices are on the GPU)
 };
 
 struct SceneRenderer::Terrain {
@@ -159,9 +157,13 @@ struct SceneRenderer::Terrain {
   // DEMs that cut a planet: the finest level's cell mask and border skirt.
   std::unique_ptr<gl::Texture> mask;
   std::unique_ptr<Skirt> skirt;
-  float edgeLow = 0.0F, edgeHigh = 0.0F;  // border heights (grid frame h)
-  float lowest = 0.0F;                    // lowest sample
-  std::size_t maskLevel = 0;              // the pyramid level the mask and skirts come from
+  std::size_t maskLevel = 0;  // the pyramid level the mask and skirts come from
+  // Planets that DEMs cut: their samples under the DEMs' origins (planetCellUnder(), every
+  // level drawn), which the skirts' depth needs. Read on the executor (the clipmap's, else a
+  // pool of one thread made for it) when a DEM is first seen at a place, never in draw().
+  std::map<PlanetCell, float> underDems;
+  std::vector<std::future<std::vector<std::pair<PlanetCell, float>>>> probes;
+  std::shared_ptr<core::Executor> probeExecutor;
 };
 
 struct SceneRenderer::Mesh {
@@ -172,7 +174,8 @@ struct SceneRenderer::Mesh {
 };
 
 SceneRenderer::SceneRenderer()
-    : meshProgram_("scene mesh", gl::ShaderSources{kMeshVertex, "", kMeshFragment}) {}
+    : meshProgram_(std::make_unique<gl::Program>(
+          "scene mesh", gl::ShaderSources{kMeshVertex, "", kMeshFragment})) {}
 
 SceneRenderer::~SceneRenderer() = default;
 
@@ -234,22 +237,17 @@ void SceneRenderer::addCutOut(int planet, int dem) {
   }
   if (t.mask) return;  // already cuts another planet
 
-  // The finest level's samples, its cell mask (a cell has data if its four corners do) and
-  // the skirt: one quad along every cell side between a cell with data and one without.
-  // The finest pyramid level at most kMaxMaskSide a side (a paged DEM may be far larger than
-  // memory; its level 0 is then represented by a coarser one, and the inward skirt widens to
-  // that level's cell).
-  constexpr std::size_t kMaxMaskSide = 4096;
-  std::size_t m = 0;
-  while (m + 1 < t.pyramid->levelCount() &&
-         std::max(t.pyramid->level(m).grid.rows(), t.pyramid->level(m).grid.cols()) > kMaxMaskSide)
-    ++m;
+  // The finest level's samples, its cell mask and the skirt (CutOutGeometry.hpp), read and
+  // built here, once: draw() reads nothing. The finest pyramid level at most
+  // kMaxCutOutMaskSide a side (a paged DEM may be far larger than memory; its level 0 is then
+  // represented by a coarser one, and the inward skirt widens to that level's cell).
+  const std::size_t m = cutOutMaskLevel(*t.pyramid);
   t.maskLevel = m;
   const auto& level = t.pyramid->level(m);
   const topo::TopoGrid& g = level.grid;
-  if (std::max(g.rows(), g.cols()) > kMaxMaskSide)
+  if (std::max(g.rows(), g.cols()) > kMaxCutOutMaskSide)
     throw InvalidArgument("SceneRenderer::addCutOut(): DEM " + std::to_string(dem) +
-                          " has no pyramid level of at most " + std::to_string(kMaxMaskSide) +
+                          " has no pyramid level of at most " + std::to_string(kMaxCutOutMaskSide) +
                           " samples a side for its cell mask");
   const std::size_t rows = g.rows(), cols = g.cols();
   if (rows < 2 || cols < 2)
@@ -257,105 +255,27 @@ void SceneRenderer::addCutOut(int planet, int dem) {
                           " has fewer than 2×2 samples");
   std::vector<float> h(rows * cols);
   level.source->readWindow(0, 0, rows, cols, h);
-  for (float& v : h)
-    if (g.isNodata(v)) v = std::numeric_limits<float>::quiet_NaN();
-  const std::size_t cr = rows - 1, cc = cols - 1;
-  std::vector<std::uint8_t> cell(cr * cc, 0);
-  const auto at = [&](std::size_t r, std::size_t c) { return h[r * cols + c]; };
-  for (std::size_t r = 0; r < cr; ++r)
-    for (std::size_t c = 0; c < cc; ++c)
-      cell[r * cc + c] = !std::isnan(at(r, c)) && !std::isnan(at(r, c + 1)) &&
-                                 !std::isnan(at(r + 1, c)) && !std::isnan(at(r + 1, c + 1))
-                             ? 255
-                             : 0;
+  const CellMask cells = cellMask(g, h);
   t.mask = std::make_unique<gl::Texture>();
-  glTextureStorage2D(t.mask->id(), 1, GL_R8, static_cast<GLsizei>(cc), static_cast<GLsizei>(cr));
+  glTextureStorage2D(t.mask->id(), 1, GL_R8, static_cast<GLsizei>(cells.cols),
+                     static_cast<GLsizei>(cells.rows));
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTextureSubImage2D(t.mask->id(), 0, 0, 0, static_cast<GLsizei>(cc), static_cast<GLsizei>(cr),
-                      GL_RED, GL_UNSIGNED_BYTE, cell.data());
+  glTextureSubImage2D(t.mask->id(), 0, 0, 0, static_cast<GLsizei>(cells.cols),
+                      static_cast<GLsizei>(cells.rows), GL_RED, GL_UNSIGNED_BYTE,
+                      cells.cells.data());
   glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
 
-  const auto has = [&](long long r, long long c) {
-    return r >= 0 && c >= 0 && r < static_cast<long long>(cr) && c < static_cast<long long>(cc) &&
-           cell[static_cast<std::size_t>(r) * cc + static_cast<std::size_t>(c)] != 0;
-  };
+  BorderSkirt border = borderSkirt(g, h, cells);
   auto skirt = std::make_unique<Skirt>();
-  skirt->anchor = {g.x0() + 0.5 * static_cast<double>(cc) * g.spacingX(),
-                   g.y0() - 0.5 * static_cast<double>(cr) * g.spacingY(), 0.0};
-  std::vector<SkirtVertex> verts;
-  float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
-  const auto point = [&](std::size_t r, std::size_t c) {
-    const float v = at(r, c);
-    lo = std::min(lo, v);
-    hi = std::max(hi, v);
-    const glm::dvec2 xy = g.sampleCentre(static_cast<double>(r), static_cast<double>(c));
-    return glm::vec3(glm::dvec3(xy.x, xy.y, static_cast<double>(v)) - skirt->anchor);
-  };
-  // Border sides between sample points ka and kb (row·cols + col), outward normal n; the
-  // flange direction at a point sums the normals of the sides meeting there (a mitre).
-  struct Side {
-    std::size_t ka, kb;
-    glm::vec3 n;
-  };
-  std::vector<Side> sides;
-  std::map<std::size_t, glm::vec3> mitre;
-  const auto side = [&](std::size_t ra, std::size_t ca, std::size_t rb, std::size_t cb,
-                        glm::vec3 n) {
-    sides.push_back({ra * cols + ca, rb * cols + cb, n});
-    mitre[ra * cols + ca] += n;
-    mitre[rb * cols + cb] += n;
-  };
-  for (long long r = 0; r < static_cast<long long>(cr); ++r)
-    for (long long c = 0; c < static_cast<long long>(cc); ++c) {
-      if (!has(r, c)) continue;
-      const auto ur = static_cast<std::size_t>(r), uc = static_cast<std::size_t>(c);
-      if (!has(r - 1, c)) side(ur, uc, ur, uc + 1, {0, 1, 0});           // north
-      if (!has(r + 1, c)) side(ur + 1, uc, ur + 1, uc + 1, {0, -1, 0});  // south
-      if (!has(r, c - 1)) side(ur, uc, ur + 1, uc, {-1, 0, 0});          // west
-      if (!has(r, c + 1)) side(ur, uc + 1, ur + 1, uc + 1, {1, 0, 0});   // east
-    }
-  for (const Side& sd : sides) {
-    const glm::vec3 a = point(sd.ka / cols, sd.ka % cols), b = point(sd.kb / cols, sd.kb % cols);
-    const glm::vec3 fa = mitre[sd.ka], fb = mitre[sd.kb];
-    for (const auto& [q, bottom, f] : {std::tuple{a, 0.0F, fa},
-                                       {b, 0.0F, fb},
-                                       {b, 1.0F, fb},
-                                       {a, 0.0F, fa},
-                                       {b, 1.0F, fb},
-                                       {a, 1.0F, fa}})
-      verts.push_back({q, sd.n, bottom, f});
-  }
-  t.edgeLow = lo;
-  t.edgeHigh = hi;
-  // The floor: a rectangle under every cell with data, at the skirts' bottom. Whatever small
-  // crack a DEM's own clipmap levels leave (where a level's border meets the grid's edge
-  // its skirt is cut), the view through it ends on the floor, not on the planet's far side.
-  t.lowest = std::numeric_limits<float>::max();
-  double fx0 = std::numeric_limits<double>::max(), fx1 = -fx0, fy0 = fx0, fy1 = -fx0;
-  for (std::size_t r = 0; r < cr; ++r)
-    for (std::size_t c = 0; c < cc; ++c) {
-      if (cell[r * cc + c] == 0) continue;
-      for (std::size_t k = 0; k < 4; ++k) {
-        const std::size_t rr = r + k / 2, ccol = c + k % 2;
-        t.lowest = std::min(t.lowest, at(rr, ccol));
-        const glm::dvec2 xy = g.sampleCentre(static_cast<double>(rr), static_cast<double>(ccol));
-        fx0 = std::min(fx0, xy.x), fx1 = std::max(fx1, xy.x);
-        fy0 = std::min(fy0, xy.y), fy1 = std::max(fy1, xy.y);
-      }
-    }
-  if (!verts.empty()) {
-    const auto corner = [&](double x, double y) {
-      return glm::vec3(glm::dvec3(x, y, 0.0) - skirt->anchor);
-    };
-    for (const glm::vec3& q : {corner(fx0, fy0), corner(fx1, fy0), corner(fx1, fy1),
-                               corner(fx0, fy0), corner(fx1, fy1), corner(fx0, fy1)})
-      verts.push_back({q, glm::vec3(0.0F), 1.0F, glm::vec3(0.0F)});
-  }
+  skirt->anchor = border.anchor;
+  static_assert(sizeof(SkirtVertex) == 10 * sizeof(float), "setupVao() reads 10 floats a vertex");
   glNamedBufferStorage(skirt->buffer.id(),
-                       static_cast<GLsizeiptr>(verts.size() * sizeof(SkirtVertex)), verts.data(),
-                       0);
+                       static_cast<GLsizeiptr>(border.vertices.size() * sizeof(SkirtVertex)),
+                       border.vertices.data(), 0);
   setupVao(skirt->vao, skirt->buffer, sizeof(SkirtVertex));
-  skirt->count = static_cast<GLsizei>(verts.size());
+  skirt->count = static_cast<GLsizei>(border.vertices.size());
+  border.vertices = {};  // on the GPU now; the heights are what draw() needs
+  skirt->border = std::move(border);
   t.skirt = std::move(skirt);
   gl::checkGl("SceneRenderer::addCutOut()");
 }
@@ -375,8 +295,50 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
   SceneFrame frame;
   glViewport(view.x, view.y, view.width, view.height);
   gl::useReversedZ();
-  const double f = 1.0 / std::tan(0.5 * view.fovYDegrees * std::numbers::pi / 180.0);
-  const double aspect = static_cast<double>(view.width) / view.height;
+
+  // The skirts' depth needs each planet's sample under each DEM that cuts it. Those reads
+  // run on an executor, never here: started now for a DEM seen at a new place (so they
+  // overlap the terrains' draws), collected by the skirt pass below. A DEM that stays where
+  // it is reads nothing again.
+  const auto demOrigin = [](const scenegraph::RenderItem& planet,
+                            const scenegraph::RenderItem& dem) {
+    return (planet.inFocus.inverse() * dem.inFocus).translation;  // planet frame
+  };
+  const auto startProbe = [](Terrain& planet, const glm::dvec3& origin) {
+    std::vector<PlanetCell> missing;
+    for (std::size_t k = 0; k < planet.clipmap->levelCount(); ++k) {
+      const PlanetCell c = planetCellUnder(*planet.pyramid, k, origin);
+      if (planet.underDems.count(c) == 0) missing.push_back(c);
+    }
+    if (missing.empty()) return;
+    if (!planet.probeExecutor)
+      planet.probeExecutor =
+          planet.options.executor ? planet.options.executor : std::make_shared<core::ThreadPool>(1);
+    planet.probes.push_back(core::submitTask(
+        *planet.probeExecutor, [pyramid = planet.pyramid, cells = std::move(missing)] {
+          std::vector<std::pair<PlanetCell, float>> out;
+          out.reserve(cells.size());
+          for (const PlanetCell& c : cells)
+            out.emplace_back(c, pyramid->level(c.level).source->sample(c.row, c.col));
+          return out;
+        }));
+  };
+  const auto collectProbes = [](Terrain& planet) {
+    // Taken out first: if a read failed (its error is rethrown here), the next frame asks
+    // again for what is still missing.
+    auto probes = std::move(planet.probes);
+    planet.probes.clear();
+    for (auto& probe : probes)
+      for (const auto& [cell, h] : probe.get()) planet.underDems.emplace(cell, h);
+  };
+  if (skirts_)
+    for (auto& [key, planet] : terrains_) {
+      const scenegraph::RenderItem* pi = list.findDrawable(key);
+      if (pi == nullptr) continue;
+      for (const int dem : planet->cutBy)
+        if (const scenegraph::RenderItem* di = list.findDrawable(dem); di != nullptr)
+          startProbe(*planet, demOrigin(*pi, *di));
+    }
 
   for (const scenegraph::RenderItem& item : list.items) {
     const auto it = terrains_.find(item.drawable);
@@ -392,39 +354,20 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
     t.clipmap->setOptions(opts);
 
     // Cut-outs: for every DEM over this planet that is in the list, eye → DEM mask cell.
-    const gl::Program& prog = t.clipmap->program();
-    int cuts = 0;
-    for (const int dem : t.cutBy) {
-      const scenegraph::RenderItem* d = list.findDrawable(dem);
-      if (d == nullptr) continue;
-      const Terrain& dt = *terrains_.at(dem);
-      const auto& g = dt.pyramid->level(dt.maskLevel).grid;
-      // DEM grid frame ← planet frame, composed through the focus in double.
-      const scenegraph::Pose planetToDem = d->inFocus.inverse() * item.inFocus;
-      const glm::dmat3 eyeToWorld = glm::transpose(cam.rotation());
-      const glm::dmat3 eyeToGrid = planetToDem.matrix() * eyeToWorld;
-      const glm::dvec3 camInGrid = planetToDem.apply(cam.position);
-      glm::dmat3 s(1.0);
-      s[0][0] = 1.0 / g.spacingX();
-      s[1][1] = -1.0 / g.spacingY();
-      const glm::dvec3 cellOfCamera =
-          s * camInGrid + glm::dvec3(-g.x0() / g.spacingX(), g.y0() / g.spacingY(), 0.0);
-      static constexpr std::array<const char*, 4> kEyeToCell{
-          "uCutEyeToCell[0]", "uCutEyeToCell[1]", "uCutEyeToCell[2]", "uCutEyeToCell[3]"};
-      static constexpr std::array<const char*, 4> kCellOfCamera{
-          "uCutCellOfCamera[0]", "uCutCellOfCamera[1]", "uCutCellOfCamera[2]",
-          "uCutCellOfCamera[3]"};
-      const auto slot = static_cast<std::size_t>(cuts);
-      prog.set(kEyeToCell.at(slot), glm::mat3(s * eyeToGrid));
-      prog.set(kCellOfCamera.at(slot), glm::vec3(cellOfCamera));
-      glBindTextureUnit(static_cast<GLuint>(shaders::kCutOutFirstUnit + cuts), dt.mask->id());
-      ++cuts;
+    if (t.options.cutOuts) {
+      std::vector<ClipmapCutOut> cuts;
+      for (const int dem : t.cutBy) {
+        const scenegraph::RenderItem* d = list.findDrawable(dem);
+        if (d == nullptr) continue;
+        const Terrain& dt = *terrains_.at(dem);
+        // DEM grid frame ← planet frame, composed through the focus in double.
+        const scenegraph::Pose planetToDem = d->inFocus.inverse() * item.inFocus;
+        cuts.push_back(
+            {dt.mask.get(), cutOutTransform(planetToDem, glm::transpose(cam.rotation()),
+                                            cam.position, dt.pyramid->level(dt.maskLevel).grid)});
+      }
+      t.clipmap->setCutOuts(cuts, {view.x, view.y});
     }
-    prog.set("uCutCount", cuts);
-    prog.set("uCutViewport",
-             glm::vec4(static_cast<float>(view.x), static_cast<float>(view.y),
-                       static_cast<float>(view.width), static_cast<float>(view.height)));
-    prog.set("uCutProj", glm::vec3(glm::dvec3(view.near, aspect / f, 1.0 / f)));
     const ClipmapFrame cf = t.clipmap->draw(cam);
     frame.vertices += cf.vertices;
     ++frame.terrainsDrawn;
@@ -432,81 +375,66 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
 
   // DEM border skirts: below both the DEM's border and the planet under it, reaching inward
   // past the coarsest DEM level's edge (a coarse level's border sits up to half a cell inside
-  // the finest level's).
-  meshProgram_.use();
+  // the finest level's). skirtDrop() (CutOutGeometry.hpp) says how deep and how far in.
+  meshProgram_->use();
   for (const scenegraph::RenderItem& item : list.items) {
     const auto it = terrains_.find(item.drawable);
     if (!skirts_ || it == terrains_.end() || !it->second->skirt) continue;
     Terrain& t = *it->second;
-    double gap = 0.0, sag = 0.0, above = 0.0;
-    for (const auto& [key, planet] : terrains_) {
+    std::vector<PlanetUnderDem> under;
+    for (auto& [key, planet] : terrains_) {
       if (std::find(planet->cutBy.begin(), planet->cutBy.end(), item.drawable) ==
           planet->cutBy.end())
         continue;
       const scenegraph::RenderItem* pi = list.findDrawable(key);
       if (pi == nullptr) continue;
-      // How far the planet's surface can be from the DEM border: the planet's relief over
-      // the cell under the DEM and the sag of a chord across its coarsest cell drawn.
+      // The planet level drawn finest for this camera: its sample under the DEM's origin.
       const Camera pc = cameraInItem(pi->cameraInItem(), view);
       const auto [first, count] = planet->clipmap->activeLevels(pc);
       const std::size_t k = count == 0 ? planet->clipmap->levelCount() - 1 : first;
-      const auto& pg = planet->pyramid->level(k).grid;
-      const double r = planet->pyramid->body()->polarRadius();
-      const double cell = 2.0 * pg.spacingY() * std::numbers::pi / 180.0 * r;
-      sag = std::max(sag, cell * cell / (8.0 * r));
-      const glm::dvec3 demOrigin = (pi->inFocus.inverse() * item.inFocus).translation;
-      const glm::dvec2 ll = planet->pyramid->gridPoint(demOrigin);
-      const glm::dvec2 idx = pg.fractionalIndex(ll.x, ll.y);
-      const auto rr = static_cast<std::size_t>(
-          std::clamp(std::floor(idx.y), 0.0, static_cast<double>(pg.rows() - 1)));
-      const auto ccol = static_cast<std::size_t>(
-          std::clamp(std::floor(idx.x), 0.0, static_cast<double>(pg.cols() - 1)));
-      const double ph = static_cast<double>(planet->pyramid->level(k).source->sample(rr, ccol));
-      const double demH = planet->pyramid->body()->toGeodetic(demOrigin).height;
-      gap = std::max({gap, std::abs(demH + static_cast<double>(t.edgeLow) - ph),
-                      std::abs(demH + static_cast<double>(t.edgeHigh) - ph)});
-      // How far the planet's chords surely lie above the border's highest point (a DEM set
-      // lower than the planet: a pit whose walls rise from the border to the planet).
-      // (The chord across one cell sags at most c²/8R below its samples.)
-      above = std::max(
-          above, ph - 0.25 * cell * cell / (8.0 * r) - demH - static_cast<double>(t.edgeHigh));
+      const glm::dvec3 origin = demOrigin(*pi, item);
+      const PlanetCell cell = planetCellUnder(*planet->pyramid, k, origin);
+      if (planet->underDems.count(cell) == 0) collectProbes(*planet);
+      if (planet->underDems.count(cell) == 0) {  // not started above (cannot happen)
+        startProbe(*planet, origin);
+        collectProbes(*planet);
+      }
+      PlanetUnderDem u;
+      u.planetHeight = static_cast<double>(planet->underDems.at(cell));
+      u.demHeight = planet->pyramid->body()->toGeodetic(origin).height;
+      u.spacingDegrees = planet->pyramid->level(k).grid.spacingY();
+      u.radius = planet->pyramid->body()->polarRadius();
+      under.push_back(u);
     }
     const Camera cam = cameraInItem(item.cameraInItem(), view);
     const auto [first, count] = t.clipmap->activeLevels(cam);
     const std::size_t coarsest = count == 0 ? t.clipmap->levelCount() - 1 : first + count - 1;
-    // Inward: past the coarsest drawn level's inset, and past a coarse mask's cells.
-    const double maskCell = t.pyramid->level(t.maskLevel).grid.spacingX();
-    const double inward = std::max(t.pyramid->level(coarsest).grid.spacingX(),
-                                   t.maskLevel > 0 ? 2.0 * maskCell : maskCell);
-    // The bottom: below the lowest sample and below the planet anywhere along the border.
-    const double floor =
-        std::min(static_cast<double>(t.lowest), static_cast<double>(t.edgeLow) - gap - sag) -
-        inward - 1.0;
-    meshProgram_.set("uViewProj", cam.viewProjection());
-    meshProgram_.set("uAnchorRel", glm::vec3(t.skirt->anchor - cam.position));
-    meshProgram_.set("uFloor", static_cast<float>(floor - t.skirt->anchor.z));
-    meshProgram_.set("uFlange", glm::vec2(0.0F));
-    meshProgram_.set("uSkirtIn", static_cast<float>(inward));
-    meshProgram_.set("uLitNormal", glm::vec3(0.0F, 0.0F, 1.0F));
-    meshProgram_.set("uLight", lightIn(item.inFocus, view.lightInFocus));
-    meshProgram_.set("uAlbedo", t.options.albedo);
-    meshProgram_.set("uAmbient", t.options.ambient);
+    const SkirtDrop drop =
+        skirtDrop(t.skirt->border, under, t.pyramid->level(coarsest).grid.spacingX(),
+                  t.pyramid->level(t.maskLevel).grid.spacingX(), t.maskLevel > 0);
+    meshProgram_->set("uViewProj", cam.viewProjection());
+    meshProgram_->set("uAnchorRel", glm::vec3(t.skirt->anchor - cam.position));
+    meshProgram_->set("uFloor", static_cast<float>(drop.floor - t.skirt->anchor.z));
+    meshProgram_->set("uFlange", glm::vec2(0.0F));
+    meshProgram_->set("uSkirtIn", static_cast<float>(drop.inward));
+    meshProgram_->set("uLitNormal", glm::vec3(0.0F, 0.0F, 1.0F));
+    meshProgram_->set("uLight", lightIn(item.inFocus, view.lightInFocus));
+    meshProgram_->set("uAlbedo", t.options.albedo);
+    meshProgram_->set("uAmbient", t.options.ambient);
     glBindVertexArray(t.skirt->vao.id());
     // Twice: straight down (closes the wall between the border and a planet below or above
     // it, seen from outside), then down and inward (covers the band a coarser DEM level
     // leaves inside the finest level's border, seen from above).
-    meshProgram_.set("uSkirtIn", 0.0F);
+    meshProgram_->set("uSkirtIn", 0.0F);
     glDrawArrays(GL_TRIANGLES, 0, t.skirt->count);
-    meshProgram_.set("uSkirtIn", static_cast<float>(inward));
+    meshProgram_->set("uSkirtIn", static_cast<float>(drop.inward));
     glDrawArrays(GL_TRIANGLES, 0, t.skirt->count);
     frame.vertices += 2 * static_cast<std::size_t>(t.skirt->count);
-    if (above > 0.0) {
-      // A pit: a flange from the border rising outward under the planet (slope 1:4) to the
-      // planet's lowest chord height there, so a view into the pit meets a wall.
-      meshProgram_.set("uFlange", glm::vec2(static_cast<float>(std::max(4.0 * above, inward)),
-                                            static_cast<float>(above)));
+    if (drop.flange.y > 0.0) {
+      // A pit: a flange from the border rising outward under the planet.
+      meshProgram_->set("uFlange", glm::vec2(drop.flange));
       glDrawArrays(GL_TRIANGLES, 0, t.skirt->count);
-      meshProgram_.set("uFlange", glm::vec2(0.0F));
+      meshProgram_->set("uFlange", glm::vec2(0.0F));
       frame.vertices += static_cast<std::size_t>(t.skirt->count);
     }
   }
@@ -517,15 +445,15 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
     if (it == meshes_.end()) continue;
     const Mesh& m = *it->second;
     const Camera cam = cameraInItem(item.cameraInItem(), view);
-    meshProgram_.set("uViewProj", cam.viewProjection());
-    meshProgram_.set("uAnchorRel", glm::vec3(-cam.position));
-    meshProgram_.set("uFloor", 0.0F);
-    meshProgram_.set("uSkirtIn", 0.0F);
-    meshProgram_.set("uFlange", glm::vec2(0.0F));
-    meshProgram_.set("uLitNormal", glm::vec3(0.0F));
-    meshProgram_.set("uLight", lightIn(item.inFocus, view.lightInFocus));
-    meshProgram_.set("uAlbedo", m.albedo);
-    meshProgram_.set("uAmbient", 0.25F);
+    meshProgram_->set("uViewProj", cam.viewProjection());
+    meshProgram_->set("uAnchorRel", glm::vec3(-cam.position));
+    meshProgram_->set("uFloor", 0.0F);
+    meshProgram_->set("uSkirtIn", 0.0F);
+    meshProgram_->set("uFlange", glm::vec2(0.0F));
+    meshProgram_->set("uLitNormal", glm::vec3(0.0F));
+    meshProgram_->set("uLight", lightIn(item.inFocus, view.lightInFocus));
+    meshProgram_->set("uAlbedo", m.albedo);
+    meshProgram_->set("uAmbient", 0.25F);
     glBindVertexArray(m.vao.id());
     glDrawArrays(GL_TRIANGLES, 0, m.count);
     frame.vertices += static_cast<std::size_t>(m.count);

@@ -1,6 +1,7 @@
 // clod::SceneRenderer drawing the paper's scene (demo::MarsVictoriaScene): the DEM wins over
 // the planet with no gap at the border, sits at its geodetic place and height, two DEMs on
 // one planet, several cameras, and a focus switch that changes nothing on screen.
+#include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/demo/MarsVictoria.hpp>

@@ -3,16 +3,18 @@
 /// Geometry-clipmap terrain over a plane (DEM) or a spheroid (planet).
 
 #include <regolith/clod/Camera.hpp>
-#include <regolith/clod/Effects.hpp>
+#include <regolith/clod/ClipmapOptions.hpp>
+#include <regolith/clod/CutOutGeometry.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
-#include <regolith/core/Executor.hpp>
 #include <regolith/gl/GlObjects.hpp>
 #include <regolith/gl/Program.hpp>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include <cstddef>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -20,44 +22,12 @@ namespace regolith::clod {
 
 class ClipmapLevel;
 
-/// Settings of a ClipmapTerrain.
-struct ClipmapOptions {
-  /// Vertices per level side (odd, 15 ≤ size ≤ 2047).
-  int size = 255;
-  /// Levels used (0: every pyramid level). Level k reads pyramid level k.
-  std::size_t levels = 0;
-  /// A level draws only while its cells, at their nearest to the camera, span at least
-  /// this many pixels; finer levels switch off and the next one draws its centre.
-  double minCellPixels = 0.5;
-  glm::vec3 lightDirection{0.4F, -0.3F, 0.866F};  ///< towards the light, scene frame
-  glm::vec3 albedo{0.78F, 0.66F, 0.55F};
-  float ambient = 0.2F;
-  /// Background loading (requestFocus): after each level's window, the loader also reads
-  /// a ring this many cells wide around it, so a paged source has the patches the next
-  /// moves need in its cache (the lazy-load window is the clipmap plus this margin).
-  int prefetchMargin = 32;
-  /// Where a coarser level overlaps a finer one, push the coarser surface's depth back by
-  /// this fraction so the finer (more exact) surface wins the depth test there: fewer
-  /// patches of coarse terrain showing through near level borders at grazing angles, but
-  /// the depth buffer no longer holds the exact geometry in those bands (off by default;
-  /// the viewer uses 0.02).
-  float overlapDepthPush = 0.0F;
-  /// Effects the scene declares (docs/overlays.md). Which ones are declared is fixed at
-  /// construction (each is compiled into the program); their parameters may change through
-  /// setOptions(). None: the bare pipeline.
-  Effects effects;
-  /// Tracks: GPU window of the rover::TrackLayer around the focus, texels per side (256..8192).
-  int trackWindow = 2048;
-  /// Compile in the cut-out test, so that DEMs drawn over this planet can win where they
-  /// have data (SceneRenderer::addCutOut() rebuilds the planet's terrain with it). Inert until
-  /// SceneRenderer sets its uniforms; fixed at construction like the effects.
-  bool cutOuts = false;
-  /// Tracks: relative darkening of the albedo inside a rut (compacted soil).
-  float trackDarkening = 0.15F;
-  /// Where background reads run (requestFocus(): the levels' windows, one at a time,
-  /// coarsest first; the draped textures' windows). Null: one-thread core::ThreadPools made
-  /// at the first background read. Shared, so it outlives the terrain's last read.
-  std::shared_ptr<core::Executor> executor;
+/// A DEM that wins over a planet terrain where it has data (SceneRenderer::addCutOut): its
+/// cell mask (an R8 texture, one texel per cell of CellMask, r > 0.5 with data) and this
+/// frame's map from eye coordinates to those cells (cutOutTransform()).
+struct ClipmapCutOut {
+  const gl::Texture* mask = nullptr;  ///< not null; must outlive the draw() calls that use it
+  CutOutTransform transform;
 };
 
 /// What one draw() did.
@@ -142,9 +112,14 @@ class ClipmapTerrain {
   [[nodiscard]] int holeHalfWidth() const noexcept { return hole_; }
   /// The pyramid drawn.
   [[nodiscard]] const HeightPyramid& pyramid() const noexcept { return *pyramid_; }
-  /// The GL program: to inspect its active uniforms; SceneRenderer sets the cut-out
-  /// uniforms on it, which keep their values across draw() calls.
+  /// The GL program: to inspect its active uniforms.
   [[nodiscard]] const gl::Program& program() const noexcept { return program_; }
+
+  /// The DEMs that win over this terrain in the following draw() calls (at most 4; empty:
+  /// none), drawn into a viewport whose lower-left corner is `viewportOrigin` (pixels in the
+  /// bound framebuffer; the viewport's size and the projection come from draw()'s camera).
+  /// Only for a terrain built with options().cutOuts (an assertion), as is the count.
+  void setCutOuts(std::span<const ClipmapCutOut> cutOuts, const glm::ivec2& viewportOrigin);
 
   /// The sources the program was built from: the bare clipmap shaders plus one snippet per
   /// declared effect (identical to bareSources() when none is declared).
@@ -182,6 +157,7 @@ class ClipmapTerrain {
   [[nodiscard]] bool effectsLoading() const noexcept;
   void setEffectUniforms(const Camera& camera, ClipmapFrame& frame) const;
   void setLevelUniforms(std::size_t level) const;
+  void setCutOutUniforms(const Camera& camera) const;
 
   std::shared_ptr<const HeightPyramid> pyramid_;
   ClipmapOptions options_;
@@ -196,6 +172,8 @@ class ClipmapTerrain {
   std::unique_ptr<Loader> loader_;
   std::unique_ptr<EffectState> effects_;  // null without effects
   glm::dvec2 gridOrigin_{0.0};
+  std::vector<ClipmapCutOut> cutOuts_;  // setCutOuts(): applied by draw()
+  glm::ivec2 cutViewportOrigin_{0};
 };
 
 }  // namespace regolith::clod

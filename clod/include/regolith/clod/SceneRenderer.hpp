@@ -4,10 +4,8 @@
 /// frame, with DEMs that win over the planet they sit on.
 
 #include <regolith/clod/Camera.hpp>
-#include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/clod/ClipmapOptions.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
-#include <regolith/gl/GlObjects.hpp>
-#include <regolith/gl/Program.hpp>
 #include <regolith/scenegraph/RenderList.hpp>
 
 #include <glm/vec3.hpp>
@@ -18,7 +16,13 @@
 #include <memory>
 #include <vector>
 
+namespace regolith::gl {
+class Program;
+}  // namespace regolith::gl
+
 namespace regolith::clod {
+
+class ClipmapTerrain;  // <regolith/clod/ClipmapTerrain.hpp>: this header needs no GL header
 
 /// A mesh vertex in its item's frame (metres, float: meshes are small, e.g. a rover).
 struct MeshVertex {
@@ -107,7 +111,7 @@ class SceneRenderer {
   struct Skirt;
   std::map<int, std::unique_ptr<Terrain>> terrains_;
   std::map<int, std::unique_ptr<Mesh>> meshes_;
-  gl::Program meshProgram_;
+  std::unique_ptr<gl::Program> meshProgram_;
   bool skirts_ = true;
 };
 
