@@ -24,19 +24,24 @@
 //
 // Run: build/bench/farfield_bench --benchmark_min_time=5x
 #include <regolith/clod/Camera.hpp>
+#include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/farfield/PgmMath.hpp>
 #include <regolith/farfield/PgmRenderer.hpp>
 #include <regolith/gl/Gl.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
+#include <regolith/gl/Image.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Body.hpp>
+#include <regolith/topo/TopoGrid.hpp>
 
 #include <benchmark/benchmark.h>
 #include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <numbers>
@@ -154,6 +159,49 @@ void pgmFrame(benchmark::State& state, const std::string& name, int grid, int sc
   }
   glFinish();
   const std::vector<double> err = screenErrors(v.camera, target.readDepth(), l);
+  // The mesh's triangles as the rasteriser sees them (the grid read back and projected in
+  // double): how many face the eye with a vertex on the screen, and their summed screen
+  // area against the pixels drawn (overdraw, before the depth test).
+  {
+    const std::vector<glm::vec4> pos = pgm.readGridPositions();
+    const glm::dmat4 vp = v.camera.viewProjection();
+    std::vector<glm::dvec3> win(pos.size());
+    for (std::size_t i = 0; i < pos.size(); ++i) {
+      const glm::dvec4 c = vp * glm::dvec4(glm::dvec3(pos[i]), 1.0);
+      win[i] = c.w > 0.0 ? glm::dvec3((c.x / c.w * 0.5 + 0.5) * screen,
+                                      (c.y / c.w * 0.5 + 0.5) * screen, 1.0)
+                         : glm::dvec3(0.0);
+    }
+    double front = 0.0, area = 0.0;
+    const auto tri = [&](std::size_t i0, std::size_t i1, std::size_t i2) {
+      const glm::dvec3 &a = win[i0], &b = win[i1], &c = win[i2];
+      if (a.z == 0.0 || b.z == 0.0 || c.z == 0.0) return;
+      const auto on = [&](const glm::dvec3& p) {
+        return p.x >= 0 && p.y >= 0 && p.x <= screen && p.y <= screen;
+      };
+      if (!on(a) && !on(b) && !on(c)) return;
+      const double s2 = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+      if (s2 <= 0.0) return;  // clockwise or degenerate: culled
+      front += 1.0;
+      area += 0.5 * s2;
+    };
+    const auto gw = static_cast<std::size_t>(grid);
+    for (std::size_t j = 0; j + 1 < gw; ++j) {
+      for (std::size_t i = 0; i + 1 < gw; ++i) {
+        const std::size_t p00 = j * gw + i, p10 = p00 + 1, p01 = p00 + gw, p11 = p01 + 1;
+        tri(p00, p10, p01);  // the strip's winding: (j+1,i), (j,i), (j+1,i+1), ...
+        tri(p10, p11, p01);
+      }
+    }
+    const gl::DepthImage depth = target.readDepth();
+    double drawn = 0.0;
+    for (int y = 0; y < screen; ++y) {
+      for (int x = 0; x < screen; ++x) drawn += depth.at(x, y) > 0.0F ? 1.0 : 0.0;
+    }
+    state.counters["front_triangles_on_screen"] = front;
+    state.counters["front_area_per_drawn_pixel"] = drawn > 0.0 ? area / drawn : 0.0;
+    state.counters["drawn_pixels"] = drawn;
+  }
   double gridMs = 0.0, meshMs = 0.0, reduceMs = 0.0;
   for (auto _ : state) {
     target.clear({0.0F, 0.0F, 0.0F, 1.0F});
@@ -238,6 +286,123 @@ void sampling(benchmark::State& state, const std::string& name) {
   state.counters["plain_grid_miss_fraction"] = plainMiss / total;
 }
 
+// ---- PGM against the clipmap-only planet at equal screen-space error ----------------------
+
+/// The clipmap-only planet: a global latitude/longitude pyramid of the same relief, at the
+/// resolution of the PGM layers (4096 × 2048, 5.2 km on Mars), every level.
+std::shared_ptr<const clod::HeightPyramid> planetPyramid() {
+  static const std::shared_ptr<const clod::HeightPyramid> p = [] {
+    constexpr std::size_t cols = 4096, rows = 2048;
+    const double step = 360.0 / cols;
+    const topo::TopoGrid grid(rows, cols, -180.0 + 0.5 * step, 90.0 - 0.5 * step, step, step);
+    auto samples =
+        topo::InMemorySamples::fromFunction(rows, cols, [&](std::size_t r, std::size_t c) {
+          const glm::dvec2 xy = grid.sampleCentre(static_cast<double>(r), static_cast<double>(c));
+          return static_cast<float>(relief(xy.y, xy.x, 0.0));
+        });
+    return std::make_shared<const clod::HeightPyramid>(clod::HeightPyramid::fromSamples(
+        grid, samples, clod::SurfaceKind::Planet, mars(), topo::LatitudeType::Planetodetic));
+  }();
+  return p;
+}
+
+/// What a drawn frame shows against the true surface: the relief function itself, evaluated
+/// in double (not either renderer's data), on every other pixel.
+struct TruthError {
+  std::vector<double> px;  ///< screen-space error of each drawn pixel on the body, sorted
+  int holes = 0;           ///< pixels whose ray meets the body's lowest sphere, left empty
+  int body = 0;            ///< pixels whose ray meets the body's lowest sphere
+};
+
+TruthError truthError(const clod::Camera& cam, const gl::DepthImage& depth) {
+  TruthError e;
+  const double minR = mars().polarRadius() - 8000.0;  // below the relief's lowest point
+  for (int y = 0; y < cam.height; y += 2) {
+    for (int x = 0; x < cam.width; x += 2) {
+      const glm::dvec3 r = cam.ray(x + 0.5, y + 0.5);
+      const double bq = glm::dot(cam.position, r);
+      const double cq = glm::dot(cam.position, cam.position) - minR * minR;
+      const bool meets = bq < 0.0 && bq * bq - cq > 0.0;
+      e.body += meets ? 1 : 0;
+      const float z = depth.at(x, y);
+      if (!(z > 0.0F)) {
+        e.holes += meets ? 1 : 0;
+        continue;
+      }
+      const double t = cam.viewDistance(z) / glm::dot(r, cam.forward());
+      const topo::Geodetic g = mars().toGeodetic(cam.position + t * r);
+      e.px.push_back(std::abs(g.height - relief(g.latDeg, g.lonDeg, 0.0)) / t * cam.focalPixels());
+    }
+  }
+  std::sort(e.px.begin(), e.px.end());
+  return e;
+}
+
+void savePngIfAsked(const std::string& name, const gl::RenderTarget& target) {
+  const char* dir = std::getenv("REGOLITH_BENCH_PNG_DIR");
+  if (dir != nullptr && *dir != '\0')
+    gl::writePng(std::string(dir) + "/" + name + ".png", target.readColor());
+}
+
+void setCompareCounters(benchmark::State& state, const TruthError& e) {
+  state.counters["error_px_median"] = quantile(e.px, 0.5);
+  state.counters["error_px_p99"] = quantile(e.px, 0.99);
+  state.counters["error_px_max"] = e.px.empty() ? 0.0 : e.px.back();
+  state.counters["holes_fraction"] = e.body > 0 ? static_cast<double>(e.holes) / e.body : 0.0;
+}
+
+/// One PGM frame (FarField's way: grid, mesh, Lagged reduction) against the truth.
+void comparePgm(benchmark::State& state, const std::string& name, int grid, int screen) {
+  View v = view(name, screen);
+  farfield::PgmOptions o;
+  o.gridWidth = o.gridHeight = grid;
+  farfield::PgmRenderer pgm(layers(4096), o);
+  gl::RenderTarget target(screen, screen);
+  const glm::dvec3 sun = glm::normalize(glm::dvec3(1.0, 0.5, 0.6));
+  for (int i = 0; i < 3; ++i) {
+    target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+    pgm.draw(target, v.camera, sun);
+  }
+  glFinish();
+  setCompareCounters(state, truthError(v.camera, target.readDepth()));
+  savePngIfAsked("compare_" + name + "_pgm_" + std::to_string(grid), target);
+  for (auto _ : state) {
+    target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+    pgm.draw(target, v.camera, sun);
+    glFinish();
+  }
+  state.counters["grid_points"] = static_cast<double>(grid) * grid;
+}
+
+/// One frame of the clipmap-only planet (every level of the global pyramid, focused below
+/// the eye) against the truth.
+void compareClipmap(benchmark::State& state, const std::string& name, int size, int screen) {
+  View v = view(name, screen);
+  clod::ClipmapOptions co;
+  co.size = size;
+  co.lightDirection = glm::vec3(glm::normalize(glm::dvec3(1.0, 0.5, 0.6)));
+  clod::ClipmapTerrain clipmap(planetPyramid(), co);
+  const topo::Geodetic below = mars().toGeodetic(v.camera.position);
+  clipmap.setFocus(mars().toBodyFixed({below.latDeg, below.lonDeg, 0.0}));
+  clipmap.finishLoading();
+  gl::RenderTarget target(screen, screen);
+  clod::ClipmapFrame f;
+  for (int i = 0; i < 3; ++i) {
+    target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+    f = clipmap.draw(v.camera);
+  }
+  glFinish();
+  setCompareCounters(state, truthError(v.camera, target.readDepth()));
+  savePngIfAsked("compare_" + name + "_clipmap_" + std::to_string(size), target);
+  for (auto _ : state) {
+    target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+    clipmap.draw(v.camera);
+    glFinish();
+  }
+  state.counters["levels_drawn"] = static_cast<double>(f.levelsDrawn);
+  state.counters["vertices"] = static_cast<double>(f.vertices);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -279,6 +444,26 @@ int main(int argc, char** argv) {
     benchmark::RegisterBenchmark((std::string("sampling/") + name).c_str(),
                                  [name](benchmark::State& s) { sampling(s, name); })
         ->Unit(benchmark::kMicrosecond);
+  }
+  for (const char* name : {"global", "low"}) {
+    for (const int grid : {64, 128, 256, 512}) {
+      const std::string label =
+          std::string("compare/") + name + "/pgm/grid:" + std::to_string(grid) + "/screen:1024";
+      benchmark::RegisterBenchmark(label.c_str(),
+                                   [=](benchmark::State& s) { comparePgm(s, name, grid, 1024); })
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()
+          ->MinWarmUpTime(0.0);
+    }
+    for (const int size : {63, 127, 255, 511}) {
+      const std::string label =
+          std::string("compare/") + name + "/clipmap/size:" + std::to_string(size) + "/screen:1024";
+      benchmark::RegisterBenchmark(
+          label.c_str(), [=](benchmark::State& s) { compareClipmap(s, name, size, 1024); })
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()
+          ->MinWarmUpTime(0.0);
+    }
   }
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();

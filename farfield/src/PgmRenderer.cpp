@@ -221,6 +221,8 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
   if (radiusWidth_ != target.width() || radiusHeight_ != target.height()) {
     radius_ = gl::Texture();
     glTextureStorage2D(radius_.id(), 1, GL_R32F, target.width(), target.height());
+    glTextureParameteri(radius_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(radius_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     drawnDepth_ = gl::Texture();
     glTextureStorage2D(drawnDepth_.id(), 1, GL_DEPTH_COMPONENT32F, target.width(), target.height());
     radiusWidth_ = target.width();
@@ -287,12 +289,12 @@ void PgmRenderer::reduce(const gl::RenderTarget& target, PgmFrame& frame) {
   const auto slot = static_cast<std::size_t>(frameIndex_);
   const std::uint32_t init = 0xFFFFFFFFU;
   glNamedBufferSubData(minBuffers_[slot].id(), 0, sizeof init, &init);
-  glBindImageTexture(0, radius_.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_R32F);
+  glBindTextureUnit(3, radius_.id());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, minBuffers_[slot].id());
-  glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+  glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
   reduce_.use();
-  glDispatchCompute(static_cast<GLuint>((target.width() + 15) / 16),
-                    static_cast<GLuint>((target.height() + 15) / 16), 1);
+  glDispatchCompute(static_cast<GLuint>((target.width() + 63) / 64),
+                    static_cast<GLuint>((target.height() + 63) / 64), 1);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
 
   const auto take = [&](std::size_t s) {
