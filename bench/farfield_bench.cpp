@@ -12,6 +12,17 @@
 //       pixel's point, over its distance, times the focal length), measured once per case.
 //   cull/<view>/on|off   the same frame (grid 256, screen 1024) with and without culling the
 //       mesh's folded, clockwise triangles (PgmOptions::cullFolds), side by side.
+//   thin/<view>/grid:256/screen:<S>/cell:<C>   the same frame with PgmOptions::minCellPixels
+//       = C (0: the full grid): the grid is halved while its cells span fewer than C pixels.
+//       Counters: grid_drawn (the side of the grid drawn), cell_px (the full grid's largest
+//       cell on the screen).
+//   compare/<view>/pgm/grid:<G>, compare/<view>/clipmap/size:<N>   PGM (layers 4096 wide)
+//       against the clipmap-only planet (a global 4096 × 2048 pyramid of the same relief,
+//       every level, focused below the eye) for the same view on a 1024² screen. Counters:
+//       the screen-space error against the relief function itself, in double, on every
+//       other pixel (error_px_median, _p99, _max: the height error of the pixel's point over
+//       its distance, times the focal length) and holes_fraction (pixels whose ray meets the
+//       lowest sphere left empty). PNGs into $REGOLITH_BENCH_PNG_DIR if set.
 //   readback/<mode>   the primary sphere's minimum-radius reduction: none (Fixed), read at
 //       once (Stall), or a frame later through a fence (Lagged); global view, grid 512,
 //       screen 1024.
@@ -143,13 +154,14 @@ double quantile(const std::vector<double>& v, double q) {
 }
 
 void pgmFrame(benchmark::State& state, const std::string& name, int grid, int screen,
-              bool cullFolds = true) {
+              bool cullFolds = true, double minCellPixels = 0.0) {
   const View v = view(name, screen);
   const farfield::HeightLayers& l = layers(v.layerWidth);
   farfield::PgmOptions o;
   o.gridWidth = o.gridHeight = grid;
   o.timePasses = true;
   o.cullFolds = cullFolds;
+  o.minCellPixels = minCellPixels;
   farfield::PgmRenderer pgm(l, o);
   gl::RenderTarget target(screen, screen);
   const glm::dvec3 sun = glm::normalize(glm::dvec3(1.0, 0.5, 0.6));
@@ -207,6 +219,8 @@ void pgmFrame(benchmark::State& state, const std::string& name, int grid, int sc
     target.clear({0.0F, 0.0F, 0.0F, 1.0F});
     const farfield::PgmFrame f = pgm.draw(target, v.camera, sun);
     glFinish();
+    state.counters["grid_drawn"] = f.gridWidth;
+    state.counters["cell_px"] = f.cellPixels;
     gridMs += f.gridMs;
     meshMs += f.meshMs;
     reduceMs += f.reduceMs;
@@ -432,6 +446,20 @@ int main(int argc, char** argv) {
           ->MinWarmUpTime(0.0);
     }
   }
+  for (const char* name : {"global", "low"}) {
+    for (const int screen : {256, 512, 1024}) {
+      for (const double cell : {0.0, 1.0, 2.0, 4.0}) {
+        const std::string label = std::string("thin/") + name +
+                                  "/grid:256/screen:" + std::to_string(screen) +
+                                  "/cell:" + std::to_string(static_cast<int>(cell));
+        benchmark::RegisterBenchmark(
+            label.c_str(), [=](benchmark::State& s) { pgmFrame(s, name, 256, screen, true, cell); })
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->MinWarmUpTime(0.0);
+      }
+    }
+  }
   for (const auto& [label, mode] :
        {std::pair{"readback/fixed", farfield::PrimaryReadback::Fixed},
         std::pair{"readback/stall", farfield::PrimaryReadback::Stall},
@@ -455,7 +483,7 @@ int main(int argc, char** argv) {
           ->UseRealTime()
           ->MinWarmUpTime(0.0);
     }
-    for (const int size : {63, 127, 255, 511}) {
+    for (const int size : {63, 127, 255}) {
       const std::string label =
           std::string("compare/") + name + "/clipmap/size:" + std::to_string(size) + "/screen:1024";
       benchmark::RegisterBenchmark(
