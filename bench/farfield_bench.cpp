@@ -238,6 +238,7 @@ void readback(benchmark::State& state, farfield::PrimaryReadback mode) {
   const View v = view("global", 1024);
   farfield::PgmOptions o;
   o.gridWidth = o.gridHeight = 512;
+  o.minCellPixels = 0.0;
   o.readback = mode;
   farfield::PgmRenderer pgm(layers(v.layerWidth), o);
   gl::RenderTarget target(1024, 1024);
@@ -370,6 +371,7 @@ void comparePgm(benchmark::State& state, const std::string& name, int grid, int 
   View v = view(name, screen);
   farfield::PgmOptions o;
   o.gridWidth = o.gridHeight = grid;
+  o.minCellPixels = 0.0;  // the grid as given
   farfield::PgmRenderer pgm(layers(4096), o);
   gl::RenderTarget target(screen, screen);
   const glm::dvec3 sun = glm::normalize(glm::dvec3(1.0, 0.5, 0.6));

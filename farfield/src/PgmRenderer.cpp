@@ -310,9 +310,14 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
 
 int PgmRenderer::gridStride(const clod::Camera& camera, PgmFrame& frame) const {
   if (options_.minCellPixels <= 0.0) return 1;
-  // A grid point lies on its eye ray (before the height displaces it), so the angle between
-  // neighbouring rays, times the focal length, is the cell's size on the screen. The largest
-  // over a 9 × 9 sample of the grid's cells whose ray is in view.
+  // A grid point lies on its eye ray before the height displaces it, so the angle between
+  // neighbouring rays, times the focal length, is the cell's size on the screen, as long as
+  // the displacement is small against the distance: only while the whole relief subtends
+  // under 0.05 rad from the eye (never from below a mountain top, where heights move points
+  // across the screen). The largest over a 9 × 9 sample of the grid's cells whose ray is in
+  // view.
+  const double d = glm::length(camera.position);
+  if (d - maxRadius_ <= 20.0 * (maxRadius_ - minRadius_)) return 1;
   const SamplingCamera& sc = frame.sampling;
   const double du = 1.0 / (options_.gridWidth - 1), dv = 1.0 / (options_.gridHeight - 1);
   const double f = camera.focalPixels();

@@ -53,13 +53,14 @@ struct PgmOptions {
   /// on screen and are hidden by the surface in front. Off draws them too, for the test that
   /// shows culling changes no pixel and for the benchmark of what it saves.
   bool cullFolds = true;
-  /// A smaller grid when the body covers few pixels: the grid's side is halved (n → (n − 1)/2
-  /// + 1, over the same sampling frustum, down to 8 points) while its cells, at their
-  /// largest on the screen, span fewer than this many pixels. On llvmpipe the mesh pass costs about
-  /// one fragment-shader run per 4 × 4 pixel block each triangle touches, so cells of a few pixels
-  /// cost several times their area (docs/far-field.md, "The mesh pass"). 0 (the default): always
-  /// the full grid.
-  double minCellPixels = 0.0;
+  /// A smaller grid when the body covers few pixels: the grid's side is halved
+  /// (n → (n − 1)/2 + 1, over the same sampling frustum, down to 8 points) while its cells,
+  /// at their largest on the screen, span fewer than this many pixels. On llvmpipe the mesh
+  /// pass costs about one fragment-shader run per 4 × 4 pixel block each triangle touches,
+  /// so small cells cost several times their area and sub-pixel cells many times
+  /// (docs/far-field.md, "The mesh pass"). The default, 1, thins only a grid whose cells
+  /// are all under a pixel; 0: always the full grid.
+  double minCellPixels = 1.0;
   /// FarField only: draw the impostor instead of PGM while the body's relief (the largest
   /// |height| of the layers), seen from the eye at the nearest distance the body can have,
   /// spans at most this many pixels: the impostor's ellipsoid is then within that screen
