@@ -23,6 +23,9 @@
 //       other pixel (error_px_median, _p99, _max: the height error of the pixel's point over
 //       its distance, times the focal length) and holes_fraction (pixels whose ray meets the
 //       lowest sphere left empty). PNGs into $REGOLITH_BENCH_PNG_DIR if set.
+//   reduction/tree|columns/screen:<S>   the minimum-radius reduction alone on an S × S
+//       buffer: the first shader (a 16 × 16 tree of 8 barriers) against PgmRenderer's (one
+//       barrier per 64 × 64 tile), side by side; each checks its minimum.
 //   readback/<mode>   the primary sphere's minimum-radius reduction: none (Fixed), read at
 //       once (Stall), or a frame later through a fence (Lagged); global view, grid 512,
 //       screen 1024.
@@ -41,8 +44,10 @@
 #include <regolith/farfield/PgmMath.hpp>
 #include <regolith/farfield/PgmRenderer.hpp>
 #include <regolith/gl/Gl.hpp>
+#include <regolith/gl/GlObjects.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
 #include <regolith/gl/Image.hpp>
+#include <regolith/gl/Program.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Body.hpp>
 #include <regolith/topo/TopoGrid.hpp>
@@ -52,7 +57,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <map>
 #include <memory>
 #include <numbers>
@@ -419,6 +426,109 @@ void compareClipmap(benchmark::State& state, const std::string& name, int size, 
   state.counters["vertices"] = static_cast<double>(f.vertices);
 }
 
+// ---- The radius reduction alone: the first shader (a tree of barriers) against the one in
+// PgmRenderer (one barrier per 64 × 64 tile), on the same 1024² R32F buffer ----------------
+
+// The first version, as it was in farfield/src/PgmShaders.hpp (the "before").
+constexpr const char* kReduceTree = R"(#version 450 core
+layout(local_size_x = 16, local_size_y = 16) in;
+layout(binding = 0, r32f) uniform readonly image2D uRadius;
+layout(std430, binding = 1) buffer Result { uint minBits; };
+shared float tile[256];
+uint orderedBits(float f) {
+  uint u = floatBitsToUint(f);
+  return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
+}
+void main() {
+  ivec2 size = imageSize(uRadius);
+  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  float v = 3.0e38;
+  if (p.x < size.x && p.y < size.y) v = imageLoad(uRadius, p).r;
+  uint i = gl_LocalInvocationIndex;
+  tile[i] = v;
+  barrier();
+  for (uint stride = 128u; stride > 0u; stride >>= 1u) {
+    if (i < stride) tile[i] = min(tile[i], tile[i + stride]);
+    barrier();
+  }
+  if (i == 0u) atomicMin(minBits, orderedBits(tile[0]));
+}
+)";
+
+// The current one (a copy of PgmShaders.hpp's kReduceCompute).
+constexpr const char* kReduceColumns = R"(#version 450 core
+layout(local_size_x = 64) in;
+layout(binding = 3) uniform sampler2D uRadius;
+layout(std430, binding = 1) buffer Result { uint minBits; };
+shared float part[64];
+uint orderedBits(float f) {
+  uint u = floatBitsToUint(f);
+  return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
+}
+void main() {
+  ivec2 size = textureSize(uRadius, 0);
+  int x = int(gl_GlobalInvocationID.x);
+  int y0 = int(gl_WorkGroupID.y) * 64;
+  float v = 3.0e38;
+  if (x < size.x) {
+    int y1 = min(y0 + 64, size.y);
+    for (int y = y0; y < y1; ++y) v = min(v, texelFetch(uRadius, ivec2(x, y), 0).r);
+  }
+  part[gl_LocalInvocationIndex] = v;
+  barrier();
+  if (gl_LocalInvocationIndex == 0u) {
+    float m = part[0];
+    for (uint i = 1u; i < 64u; ++i) m = min(m, part[i]);
+    atomicMin(minBits, orderedBits(m));
+  }
+}
+)";
+
+void reduction(benchmark::State& state, bool tree, int screen) {
+  const gl::Program program = gl::Program::compute(tree ? "reduce (tree)" : "reduce (columns)",
+                                                   tree ? kReduceTree : kReduceColumns);
+  gl::Texture radius;
+  glTextureStorage2D(radius.id(), 1, GL_R32F, screen, screen);
+  glTextureParameteri(radius.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTextureParameteri(radius.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  std::vector<float> values(static_cast<std::size_t>(screen) * static_cast<std::size_t>(screen));
+  std::uint32_t seed = 12345U;
+  float expected = 3.0e38F;
+  for (float& v : values) {
+    seed = seed * 1664525U + 1013904223U;
+    v = static_cast<float>(seed >> 8) * 1.0e-3F - 5000.0F;
+    expected = std::min(expected, v);
+  }
+  glTextureSubImage2D(radius.id(), 0, 0, 0, screen, screen, GL_RED, GL_FLOAT, values.data());
+  gl::Buffer result;
+  const std::uint32_t init = 0xFFFFFFFFU;
+  glNamedBufferStorage(result.id(), sizeof init, &init, GL_DYNAMIC_STORAGE_BIT);
+  const auto run = [&] {
+    glNamedBufferSubData(result.id(), 0, sizeof init, &init);
+    if (tree) {
+      glBindImageTexture(0, radius.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_R32F);
+    } else {
+      glBindTextureUnit(3, radius.id());
+    }
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, result.id());
+    program.use();
+    const int tile = tree ? 16 : 64;
+    glDispatchCompute(static_cast<GLuint>((screen + tile - 1) / tile),
+                      static_cast<GLuint>((screen + tile - 1) / tile), 1);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    std::uint32_t bits = 0;
+    glGetNamedBufferSubData(result.id(), 0, sizeof bits, &bits);  // waits for the dispatch
+    return bits;
+  };
+  const std::uint32_t bits = run();
+  const std::uint32_t raw = (bits & 0x80000000U) != 0U ? (bits & 0x7FFFFFFFU) : ~bits;
+  float got = 0.0F;
+  std::memcpy(&got, &raw, sizeof got);
+  if (got != expected) state.SkipWithError("the reduction's minimum is wrong");
+  for (auto _ : state) benchmark::DoNotOptimize(run());
+  state.counters["pixels"] = static_cast<double>(values.size());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -493,6 +603,16 @@ int main(int argc, char** argv) {
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime()
           ->MinWarmUpTime(0.0);
+    }
+  }
+  for (const int screen : {256, 1024}) {
+    for (const bool tree : {true, false}) {
+      const std::string label = std::string("reduction/") + (tree ? "tree" : "columns") +
+                                "/screen:" + std::to_string(screen);
+      benchmark::RegisterBenchmark(label.c_str(),
+                                   [=](benchmark::State& s) { reduction(s, tree, screen); })
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime();
     }
   }
   benchmark::Initialize(&argc, argv);
