@@ -112,8 +112,8 @@ const farfield::HeightLayers& layers(int width) {
 }
 
 struct View {
-  const char* name;
-  int layerWidth;
+  const char* name = "";
+  int layerWidth = 0;
   clod::Camera camera;
 };
 
@@ -576,7 +576,8 @@ int main(int argc, char** argv) {
        {std::pair{"readback/fixed", farfield::PrimaryReadback::Fixed},
         std::pair{"readback/stall", farfield::PrimaryReadback::Stall},
         std::pair{"readback/lagged", farfield::PrimaryReadback::Lagged}}) {
-    benchmark::RegisterBenchmark(label, [mode](benchmark::State& s) { readback(s, mode); })
+    const farfield::PrimaryReadback m = mode;  // a structured binding cannot be captured
+    benchmark::RegisterBenchmark(label, [m](benchmark::State& s) { readback(s, m); })
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime();
   }

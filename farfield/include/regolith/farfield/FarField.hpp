@@ -22,7 +22,9 @@ enum class FarFieldMode { Pgm, Impostor, None };
 /// What one FarField::draw() did.
 struct FarFieldFrame {
   FarFieldMode mode = FarFieldMode::None;
-  PgmFrame pgm;      ///< the PGM frame (mode Pgm; spheres are filled in for Impostor too)
+  /// The PGM frame (mode Pgm; for Impostor its spheres are filled in, unless the impostor
+  /// was chosen by impostorReliefPixels and PGM did not run).
+  PgmFrame pgm;
   GlobeFrame globe;  ///< the impostor's frame (mode Impostor)
   /// The body's relief (largest |height|) seen at the nearest distance the body can have,
   /// in pixels: the bound on the impostor's screen error (PgmOptions::impostorReliefPixels).
