@@ -572,6 +572,16 @@ int main(int argc, char** argv) {
       }
     }
   }
+  // The scene's grid (512², scene/SceneParts.cpp) on a viewer-sized screen, whole planet.
+  for (const double cell : {0.0, 1.0, 2.0}) {
+    const std::string label =
+        "thin/global/grid:512/screen:720/cell:" + std::to_string(static_cast<int>(cell));
+    benchmark::RegisterBenchmark(
+        label.c_str(), [=](benchmark::State& s) { pgmFrame(s, "global", 512, 720, true, cell); })
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime()
+        ->MinWarmUpTime(0.0);
+  }
   for (const auto& [label, mode] :
        {std::pair{"readback/fixed", farfield::PrimaryReadback::Fixed},
         std::pair{"readback/stall", farfield::PrimaryReadback::Stall},
