@@ -3,10 +3,12 @@
 #include <regolith/gl/Image.hpp>
 
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <utility>
 
 namespace regolith::farfield {
@@ -66,10 +68,19 @@ FarField::~FarField() = default;
 FarFieldFrame FarField::draw(const gl::RenderTarget& target, const clod::Camera& camera,
                              const glm::dvec3& sun, bool keepDrawn) {
   FarFieldFrame frame;
-  frame.pgm = pgm_.draw(target, camera, sun, keepDrawn);
-  if (frame.pgm.drawn) {
-    frame.mode = FarFieldMode::Pgm;
-    return frame;
+  // The impostor is the bare ellipsoid: its screen error is at most the relief over the
+  // distance, seen from the nearest point the body can have (d - r_max; the limb is farther).
+  const double d = glm::length(camera.position);
+  const double relief = std::max(std::abs(layers_->minHeight()), std::abs(layers_->maxHeight()));
+  frame.reliefPixels = d > pgm_.maxRadius() ? relief / (d - pgm_.maxRadius()) * camera.focalPixels()
+                                            : std::numeric_limits<double>::infinity();
+  const double limit = pgm_.options().impostorReliefPixels;
+  if (!(limit > 0.0 && frame.reliefPixels <= limit)) {
+    frame.pgm = pgm_.draw(target, camera, sun, keepDrawn);
+    if (frame.pgm.drawn) {
+      frame.mode = FarFieldMode::Pgm;
+      return frame;
+    }
   }
   // Too far for PGM: the impostor.
   if (keepDrawn) {

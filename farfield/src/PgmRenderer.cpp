@@ -60,6 +60,23 @@ float decodeOrdered(std::uint32_t u) {
 
 glm::vec3 f3(const glm::dvec3& v) { return glm::vec3(v); }
 
+/// One triangle strip per pair of rows of a w × h grid, joined by the fixed restart index,
+/// into `buffer`; returns the index count.
+GLsizei uploadStrips(const gl::Buffer& buffer, int w, int h) {
+  std::vector<std::uint32_t> idx;
+  idx.reserve(static_cast<std::size_t>(h - 1) * (2 * static_cast<std::size_t>(w) + 1));
+  for (int j = 0; j + 1 < h; ++j) {
+    for (int i = 0; i < w; ++i) {
+      idx.push_back(static_cast<std::uint32_t>((j + 1) * w + i));
+      idx.push_back(static_cast<std::uint32_t>(j * w + i));
+    }
+    idx.push_back(0xFFFFFFFFU);
+  }
+  glNamedBufferStorage(buffer.id(), static_cast<GLsizeiptr>(idx.size() * sizeof(std::uint32_t)),
+                       idx.data(), 0);
+  return static_cast<GLsizei>(idx.size());
+}
+
 }  // namespace
 
 PgmRenderer::PgmRenderer(const HeightLayers& layers, PgmOptions options)
@@ -77,6 +94,8 @@ PgmRenderer::PgmRenderer(const HeightLayers& layers, PgmOptions options)
   requireRange("gridHeight", options.gridHeight, 8, 4096);
   requireRange("zeta", options.zeta, 0.05, 1.0);
   requireRange("primaryMargin", options.primaryMargin, 0.0, 1.0);
+  requireRange("minCellPixels", options.minCellPixels, 0.0, 1.0e6);
+  requireRange("impostorReliefPixels", options.impostorReliefPixels, 0.0, 1.0e6);
   minRadius_ = b_ + minHeight_;
   maxRadius_ = a_ + maxHeight_;
   primary_ = minRadius_;
@@ -96,20 +115,7 @@ PgmRenderer::PgmRenderer(const HeightLayers& layers, PgmOptions options)
     throw gl::GlError(std::string(kOp) + ": the grid framebuffer is incomplete");
   }
 
-  // One triangle strip per pair of grid rows, joined by the fixed restart index.
-  std::vector<std::uint32_t> idx;
-  idx.reserve(static_cast<std::size_t>(h - 1) * (2 * static_cast<std::size_t>(w) + 1));
-  for (int j = 0; j + 1 < h; ++j) {
-    for (int i = 0; i < w; ++i) {
-      idx.push_back(static_cast<std::uint32_t>((j + 1) * w + i));
-      idx.push_back(static_cast<std::uint32_t>(j * w + i));
-    }
-    idx.push_back(0xFFFFFFFFU);
-  }
-  indexCount_ = static_cast<GLsizei>(idx.size());
-  glNamedBufferStorage(indices_.id(), static_cast<GLsizeiptr>(idx.size() * sizeof(std::uint32_t)),
-                       idx.data(), 0);
-  glVertexArrayElementBuffer(vao_.id(), indices_.id());
+  indexCount_ = uploadStrips(indices_, w, h);
   for (gl::Buffer& b : minBuffers_) {
     const std::uint32_t init = 0xFFFFFFFFU;
     glNamedBufferStorage(b.id(), sizeof init, &init, GL_DYNAMIC_STORAGE_BIT);
@@ -132,8 +138,6 @@ void PgmRenderer::setFrameUniforms(const clod::Camera& camera, const ReferenceSp
   glm::dvec3 anyPerp =
       glm::cross(nadir, std::abs(nadir.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0));
   anyPerp = glm::normalize(anyPerp);
-  g.set("uGrid",
-        glm::vec2(static_cast<float>(options_.gridWidth), static_cast<float>(options_.gridHeight)));
   g.set("uFwd", f3(sc.forward));
   g.set("uRight", f3(sc.rightAxis));
   g.set("uUp", f3(sc.up));
@@ -168,7 +172,6 @@ void PgmRenderer::setFrameUniforms(const clod::Camera& camera, const ReferenceSp
   const gl::Program& m = mesh_;
   m.set("uPos", 0);
   m.set("uNrm", 1);
-  m.set("uGridWidth", options_.gridWidth);
   m.set("uViewProj", camera.viewProjection());
   m.set("uSun", f3(glm::normalize(sun)));
   m.set("uLow", options_.low);
@@ -203,9 +206,30 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
   frame.sampling = samplingCamera(view, -camera.position / d, frame.spheres.tauTop);
   setFrameUniforms(camera, frame.spheres, frame.sampling, sun);
 
+  // The grid drawn: the full grid, or every stride-th point (minCellPixels).
+  const int stride = gridStride(camera, frame);
+  const int gw = (options_.gridWidth - 1) / stride + 1, gh = (options_.gridHeight - 1) / stride + 1;
+  frame.gridWidth = gw;
+  frame.gridHeight = gh;
+  GLuint indexBuffer = indices_.id();
+  GLsizei indexCount = indexCount_;
+  if (stride > 1) {
+    if (thinWidth_ != gw || thinHeight_ != gh) {
+      thinIndices_ = gl::Buffer();
+      thinIndexCount_ = uploadStrips(thinIndices_, gw, gh);
+      thinWidth_ = gw;
+      thinHeight_ = gh;
+    }
+    indexBuffer = thinIndices_.id();
+    indexCount = thinIndexCount_;
+  }
+  glVertexArrayElementBuffer(vao_.id(), indexBuffer);
+  grid_.set("uGrid", glm::vec2(static_cast<float>(gw), static_cast<float>(gh)));
+  mesh_.set("uGridWidth", gw);
+
   // 1. The grid pass.
   glBindFramebuffer(GL_FRAMEBUFFER, gridFbo_.id());
-  glViewport(0, 0, options_.gridWidth, options_.gridHeight);
+  glViewport(0, 0, gw, gh);
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_BLEND);
   glBindTextureUnit(0, equirect_.id());
@@ -221,6 +245,8 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
   if (radiusWidth_ != target.width() || radiusHeight_ != target.height()) {
     radius_ = gl::Texture();
     glTextureStorage2D(radius_.id(), 1, GL_R32F, target.width(), target.height());
+    glTextureParameteri(radius_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(radius_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     drawnDepth_ = gl::Texture();
     glTextureStorage2D(drawnDepth_.id(), 1, GL_DEPTH_COMPONENT32F, target.width(), target.height());
     radiusWidth_ = target.width();
@@ -257,7 +283,7 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
   mesh_.use();
   glBindVertexArray(vao_.id());
   if (options_.timePasses) glBeginQuery(GL_TIME_ELAPSED, timers_[1]);
-  glDrawElements(GL_TRIANGLE_STRIP, indexCount_, GL_UNSIGNED_INT, nullptr);
+  glDrawElements(GL_TRIANGLE_STRIP, indexCount, GL_UNSIGNED_INT, nullptr);
   if (options_.timePasses) glEndQuery(GL_TIME_ELAPSED);
   glDisable(GL_PRIMITIVE_RESTART_FIXED_INDEX);
   glDisable(GL_CULL_FACE);
@@ -282,17 +308,54 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
   return frame;
 }
 
+int PgmRenderer::gridStride(const clod::Camera& camera, PgmFrame& frame) const {
+  if (options_.minCellPixels <= 0.0) return 1;
+  // A grid point lies on its eye ray before the height displaces it, so the angle between
+  // neighbouring rays, times the focal length, is the cell's size on the screen, as long as
+  // the displacement is small against the distance: only while the whole relief subtends
+  // under 0.05 rad from the eye (never from below a mountain top, where heights move points
+  // across the screen). The largest over a 9 × 9 sample of the grid's cells whose ray is in
+  // view.
+  const double d = glm::length(camera.position);
+  if (d - maxRadius_ <= 20.0 * (maxRadius_ - minRadius_)) return 1;
+  const SamplingCamera& sc = frame.sampling;
+  const double du = 1.0 / (options_.gridWidth - 1), dv = 1.0 / (options_.gridHeight - 1);
+  const double f = camera.focalPixels();
+  double largest = 0.0;
+  for (int b = 0; b <= 8; ++b) {
+    for (int a = 0; a <= 8; ++a) {
+      const double u = std::min(a / 8.0, 1.0 - du), v = std::min(b / 8.0, 1.0 - dv);
+      const glm::dvec3 r = sc.ray(u, v);
+      const glm::dvec3 q = camera.project(camera.position + r);
+      if (q.z <= 0.0 || q.x < 0.0 || q.y < 0.0 || q.x > camera.width || q.y > camera.height) {
+        continue;
+      }
+      largest = std::max({largest, glm::length(sc.ray(u + du, v) - r) * f,
+                          glm::length(sc.ray(u, v + dv) - r) * f});
+    }
+  }
+  frame.cellPixels = largest;
+  if (largest <= 0.0) return 1;  // no sampled cell in view: keep the grid
+  int stride = 1;
+  while (largest * stride < options_.minCellPixels &&
+         (options_.gridWidth - 1) / (2 * stride) + 1 >= 8 &&
+         (options_.gridHeight - 1) / (2 * stride) + 1 >= 8) {
+    stride *= 2;
+  }
+  return stride;
+}
+
 void PgmRenderer::reduce(const gl::RenderTarget& target, PgmFrame& frame) {
   if (options_.readback == PrimaryReadback::Fixed) return;
   const auto slot = static_cast<std::size_t>(frameIndex_);
   const std::uint32_t init = 0xFFFFFFFFU;
   glNamedBufferSubData(minBuffers_[slot].id(), 0, sizeof init, &init);
-  glBindImageTexture(0, radius_.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_R32F);
+  glBindTextureUnit(3, radius_.id());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, minBuffers_[slot].id());
-  glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+  glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
   reduce_.use();
-  glDispatchCompute(static_cast<GLuint>((target.width() + 15) / 16),
-                    static_cast<GLuint>((target.height() + 15) / 16), 1);
+  glDispatchCompute(static_cast<GLuint>((target.width() + 63) / 64),
+                    static_cast<GLuint>((target.height() + 63) / 64), 1);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
 
   const auto take = [&](std::size_t s) {

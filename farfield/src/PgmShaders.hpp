@@ -144,30 +144,37 @@ void main() {
 }
 )";
 
-/// Minimum of the radius buffer: a workgroup minimum in shared memory, then one atomicMin
-/// per group on the float's order-preserving bits.
+/// Minimum of the radius buffer. Each invocation takes the minimum of a column of 64
+/// pixels; a workgroup of 64 invocations (a 64 × 64 tile) meets once at a barrier, and its
+/// first invocation does one atomicMin on the float's order-preserving bits. One barrier per
+/// tile instead of a log-step tree of barriers: on llvmpipe, whose compute invocations run as
+/// coroutines on the CPU, each barrier is a switch of every invocation, and the tree made
+/// the reduction cost as much as the mesh pass (docs/far-field.md, "The reduction").
 inline constexpr const char* kReduceCompute = R"(#version 450 core
-layout(local_size_x = 16, local_size_y = 16) in;
-layout(binding = 0, r32f) uniform readonly image2D uRadius;
+layout(local_size_x = 64) in;
+layout(binding = 3) uniform sampler2D uRadius;
 layout(std430, binding = 1) buffer Result { uint minBits; };
-shared float tile[256];
+shared float part[64];
 uint orderedBits(float f) {
   uint u = floatBitsToUint(f);
   return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
 }
 void main() {
-  ivec2 size = imageSize(uRadius);
-  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  ivec2 size = textureSize(uRadius, 0);
+  int x = int(gl_GlobalInvocationID.x);
+  int y0 = int(gl_WorkGroupID.y) * 64;
   float v = 3.0e38;
-  if (p.x < size.x && p.y < size.y) v = imageLoad(uRadius, p).r;
-  uint i = gl_LocalInvocationIndex;
-  tile[i] = v;
-  barrier();
-  for (uint stride = 128u; stride > 0u; stride >>= 1u) {
-    if (i < stride) tile[i] = min(tile[i], tile[i + stride]);
-    barrier();
+  if (x < size.x) {
+    int y1 = min(y0 + 64, size.y);
+    for (int y = y0; y < y1; ++y) v = min(v, texelFetch(uRadius, ivec2(x, y), 0).r);
   }
-  if (i == 0u) atomicMin(minBits, orderedBits(tile[0]));
+  part[gl_LocalInvocationIndex] = v;
+  barrier();
+  if (gl_LocalInvocationIndex == 0u) {
+    float m = part[0];
+    for (uint i = 1u; i < 64u; ++i) m = min(m, part[i]);
+    atomicMin(minBits, orderedBits(m));
+  }
 }
 )";
 

@@ -485,6 +485,7 @@ TEST(PgmRendererGL, MinimumVisibleRadiusIsReadBackStalledOrAFrameLater) {
   {
     PgmOptions options;
     options.readback = PrimaryReadback::Stall;
+    options.minCellPixels = 0.0;  // the full grid's sampling of the crater floor
     PgmRenderer pgm(layers, options);
     target.clear({0.0F, 0.0F, 0.0F, 1.0F});
     const PgmFrame f = pgm.draw(target, cam, {1.0, 0.0, 0.0});
@@ -507,6 +508,7 @@ TEST(PgmRendererGL, MinimumVisibleRadiusIsReadBackStalledOrAFrameLater) {
   }
   PgmOptions options;
   options.readback = PrimaryReadback::Lagged;
+  options.minCellPixels = 0.0;  // the same grid as the stalled read
   PgmRenderer pgm(layers, options);
   double lagged = std::numeric_limits<double>::quiet_NaN();
   int frames = 0;

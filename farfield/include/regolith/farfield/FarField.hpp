@@ -22,12 +22,18 @@ enum class FarFieldMode { Pgm, Impostor, None };
 /// What one FarField::draw() did.
 struct FarFieldFrame {
   FarFieldMode mode = FarFieldMode::None;
-  PgmFrame pgm;      ///< the PGM frame (mode Pgm; spheres are filled in for Impostor too)
+  /// The PGM frame (mode Pgm; for Impostor its spheres are filled in, unless the impostor
+  /// was chosen by impostorReliefPixels and PGM did not run).
+  PgmFrame pgm;
   GlobeFrame globe;  ///< the impostor's frame (mode Impostor)
+  /// The body's relief (largest |height|) seen at the nearest distance the body can have,
+  /// in pixels: the bound on the impostor's screen error (PgmOptions::impostorReliefPixels).
+  double reliefPixels = 0.0;
 };
 
 /// A body's far field: draws it by PGM while the view has a secondary sphere (r_s > 0) and
-/// hands over to the ray-cast impostor beyond, filling in around what the target already
+/// hands over to the ray-cast impostor beyond (or sooner, once the relief spans at most
+/// PgmOptions::impostorReliefPixels), filling in around what the target already
 /// shows (the near-field clipmaps drawn first). The camera is body-fixed (the body's centre
 /// at the origin). Needs a current GL 4.5 context; belongs to its thread.
 ///

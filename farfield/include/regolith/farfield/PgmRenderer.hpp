@@ -53,6 +53,19 @@ struct PgmOptions {
   /// on screen and are hidden by the surface in front. Off draws them too, for the test that
   /// shows culling changes no pixel and for the benchmark of what it saves.
   bool cullFolds = true;
+  /// A smaller grid when the body covers few pixels: the grid's side is halved
+  /// (n → (n − 1)/2 + 1, over the same sampling frustum, down to 8 points) while its cells,
+  /// at their largest on the screen, span fewer than this many pixels. On llvmpipe the mesh
+  /// pass costs about one fragment-shader run per 4 × 4 pixel block each triangle touches,
+  /// so small cells cost several times their area and sub-pixel cells many times
+  /// (docs/far-field.md, "The mesh pass"). The default, 1, thins only a grid whose cells
+  /// are all under a pixel; 0: always the full grid.
+  double minCellPixels = 1.0;
+  /// FarField only: draw the impostor instead of PGM while the body's relief (the largest
+  /// |height| of the layers), seen from the eye at the nearest distance the body can have,
+  /// spans at most this many pixels: the impostor's ellipsoid is then within that screen
+  /// error of the terrain. 0 (the default): PGM until r_s ≤ 0.
+  double impostorReliefPixels = 0.0;
 };
 
 /// What one draw() did.
@@ -68,6 +81,11 @@ struct PgmFrame {
   /// GPU time of the grid pass (the PGM step proper: rays, spheres, heights), the mesh pass
   /// and the reduction, in milliseconds (PgmOptions::timePasses; else 0).
   double gridMs = 0.0, meshMs = 0.0, reduceMs = 0.0;
+  /// The grid drawn: the options' size, or smaller under PgmOptions::minCellPixels.
+  int gridWidth = 0, gridHeight = 0;
+  /// The grid's largest cell on the screen (pixels) at the options' size (0 unless
+  /// minCellPixels is set).
+  double cellPixels = 0.0;
 };
 
 /// Draws a body's surface by PGM into a render target:
@@ -123,6 +141,8 @@ class PgmRenderer {
   void setFrameUniforms(const clod::Camera& camera, const ReferenceSpheres& s,
                         const SamplingCamera& sc, const glm::dvec3& sun) const;
   void reduce(const gl::RenderTarget& target, PgmFrame& frame);
+  /// The grid stride (1, 2, 4, …) for PgmOptions::minCellPixels; sets frame.cellPixels.
+  int gridStride(const clod::Camera& camera, PgmFrame& frame) const;
 
   PgmOptions options_;
   LayerOptions layerOptions_;
@@ -138,6 +158,9 @@ class PgmRenderer {
   gl::Framebuffer gridFbo_;
   gl::Buffer indices_;
   GLsizei indexCount_ = 0;
+  gl::Buffer thinIndices_{0};  ///< the strips of the thinned grid (minCellPixels)
+  GLsizei thinIndexCount_ = 0;
+  int thinWidth_ = 0, thinHeight_ = 0;
   gl::Texture radius_{0};
   gl::Texture drawnDepth_{0};  ///< copy of the target's depth for keepDrawn
   int radiusWidth_ = 0, radiusHeight_ = 0;
