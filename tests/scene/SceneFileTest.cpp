@@ -8,6 +8,7 @@
 
 #include "support/StoreScratch.hpp"
 
+#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -272,6 +273,66 @@ TEST(Scene, TraverseStopsAtItsEndAndPressesTracks) {
   EXPECT_NEAR(p.y, -280.0, 0.02);
   EXPECT_NEAR(p.w, 0.0, 1e-6);  // heading north
   EXPECT_GT(s.terrainOptions("victoria").effects.tracks->tiles(), 0U);
+}
+
+TEST(Scene, GivenTracksAreDrawnAndPressedIntoAndCheckedByName) {
+  // A caller's layer (its own traverse pressed it) is the one the DEM draws, and the scene's
+  // traverses press into it too.
+  auto mine = std::make_shared<clod::TrackLayer>(0.05);
+  SceneOptions o;
+  o.tracks["victoria"] = mine;
+  const Scene plain(parse(baseScene()), o);
+  EXPECT_EQ(plain.terrainOptions("victoria").effects.tracks, mine);
+  EXPECT_EQ(mine->tiles(), 0U);
+  json j = baseScene();
+  j["objects"][0].erase("pose");
+  j["objects"][0]["traverse"] = {{"waypoints", {{-100, -300}, {-100, -280}}}, {"step", 0.01}};
+  const Scene driven(parse(j), o);
+  EXPECT_EQ(driven.terrainOptions("victoria").effects.tracks, mine);
+  EXPECT_GT(mine->tiles(), 0U);
+  const auto errorOfBuild = [](const json& scene, const SceneOptions& options) {
+    try {
+      const Scene s(parse(scene), options);
+    } catch (const InvalidArgument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  SceneOptions unknown;
+  unknown.tracks["gale"] = mine;
+  EXPECT_EQ(errorOfBuild(baseScene(), unknown),
+            "Scene: SceneOptions::tracks: 'gale' is not a DEM of the scene");
+  json untracked = baseScene();
+  untracked["dems"][0]["effects"].erase("tracks");
+  EXPECT_EQ(errorOfBuild(untracked, o),
+            "Scene: /dems/0/effects/tracks: not declared, but SceneOptions::tracks gives a layer "
+            "for 'victoria'");
+  SceneOptions null;
+  null.tracks["victoria"] = nullptr;
+  EXPECT_EQ(errorOfBuild(baseScene(), null),
+            "Scene: /dems/0/effects/tracks: SceneOptions::tracks gives a null layer");
+}
+
+TEST(Scene, TerrainsGiveTheDemsPlacementAndTheComposedSurface) {
+  json j = baseScene();
+  const Scene plain(parse(j));
+  for (const SceneTerrain& t : plain.terrains()) {
+    EXPECT_EQ(t.composed, nullptr) << t.name;
+    if (t.name != "victoria") continue;
+    EXPECT_EQ(t.origin.latDeg, -2.05);
+    EXPECT_EQ(t.origin.lonDeg, -5.5);
+    EXPECT_EQ(t.headingDeg, 0.0);
+    // "surface": the planet's height there, which the DEM's frame sits at.
+    const scenegraph::Pose p =
+        plain.graph().relative(plain.graph().at("mars"), plain.graph().at("victoria"));
+    EXPECT_NEAR(glm::length(p.translation - plain.terrain("mars").body()->toBodyFixed(t.origin)),
+                0.0, 1e-6);
+  }
+  j["bodies"][0]["composeDems"] = true;
+  j["bodies"][0]["farField"] = false;  // resampling the composed surface for it takes minutes
+  const Scene composed(parse(j));
+  EXPECT_NE(composed.terrains().front().composed, nullptr);
+  EXPECT_EQ(composed.terrains().front().composed->snapshot().size(), 2U);  // mars, victoria
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
 // Scenes rendered: pixels checked against the scene's geometry (the height colour of the DEM
 // under the camera, the sky above it), and the demo's scene, written as a file and read back,
 // drawing the demo's pixels.
+#include <regolith/clod/Camera.hpp>
 #include <regolith/clod/Effects.hpp>
+#include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/scene/Scene.hpp>
 #include <regolith/scene/SceneDescription.hpp>
@@ -136,6 +138,31 @@ TEST(SceneGL, DemoSceneFileDrawsTheDemosPixels) {
     largest = std::max(largest, diff);
   }
   EXPECT_EQ(differing, 0) << "largest difference " << largest;
+
+  // renderSceneView() and the file now share one code path (the demo scene is its
+  // description), so the comparison above guards the file's round trip only. The pixels
+  // themselves against the view's geometry: the rover (grey, drawn in its own colour) where
+  // its body projects through the camera (clod::Camera in double), the DEM (greener than the
+  // planet, kDemAlbedo) around it, and sky above the horizon of this low view.
+  const Scene built(d);
+  const glm::dvec4 rover = built.objectPose("rover");
+  EXPECT_NEAR(rover.x, view.roverX, 1e-9);
+  EXPECT_NEAR(rover.y, view.roverY, 1e-9);
+  EXPECT_EQ(rover.z, built.demHeight("victoria", view.roverX, view.roverY));
+  clod::SceneView sv;
+  sv.width = view.width;
+  sv.height = view.height;
+  sv.fovYDegrees = view.fovYDegrees;
+  sv.near = view.near;
+  const clod::Camera camera = clod::cameraInItem(view.camera, sv);
+  const glm::dvec3 body = camera.project({rover.x, rover.y, rover.z + 0.8});
+  const auto* r = drawn.pixel(static_cast<int>(body.x), static_cast<int>(body.y));
+  EXPECT_NEAR(r[0], r[1], 12) << body.x << ", " << body.y;
+  EXPECT_NEAR(r[1], r[2], 12) << body.x << ", " << body.y;
+  const glm::dvec3 ground = camera.project({at.x, at.y, built.demHeight("victoria", at.x, at.y)});
+  const auto* g = drawn.pixel(static_cast<int>(ground.x), static_cast<int>(ground.y));
+  EXPECT_GT(g[1], g[0]) << "the DEM is greener than the planet";
+  EXPECT_TRUE(drawn.is(view.width / 2, 1, 5, 5, 10)) << "sky at the top";
 }
 
 }  // namespace
