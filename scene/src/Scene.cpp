@@ -17,6 +17,7 @@
 #include <EGL/egl.h>
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -170,9 +171,27 @@ struct Scene::Impl {
   std::optional<clod::DrapedTexture> draped(const std::optional<DrapedSource>& s,
                                             const std::string& ptr) {
     if (!s) return std::nullopt;
-    if (s->data.store.empty()) fail(ptr + "/data", "a generator, expected a store grid");
     clod::DrapedTexture t;
-    t.channels.push_back(fromStore(s->data).pyramid);
+    if (s->data.store.empty()) {
+      // A generator's heights mapped onto [0, 1] over `range` (readScene() requires it),
+      // on the generator's own grid, its pyramid by 2×2 means of the mapped values.
+      if (!s->range) fail(ptr + "/range", "missing, expected [min, max] for a generator");
+      const Grid g = generated(s->data, 0.0);
+      const double lo = (*s->range)[0], span = (*s->range)[1] - lo;
+      const std::size_t rows = g.samples->rows(), cols = g.samples->cols();
+      std::vector<float> values(rows * cols);
+      for (std::size_t r = 0; r < rows; ++r)
+        for (std::size_t c = 0; c < cols; ++c)
+          values[r * cols + c] = static_cast<float>(
+              std::clamp((static_cast<double>(g.samples->sample(r, c)) - lo) / span, 0.0, 1.0));
+      t.channels.push_back(
+          std::make_shared<const clod::HeightPyramid>(clod::HeightPyramid::fromSamples(
+              store::topoGridOf(g.info),
+              std::make_shared<topo::InMemorySamples>(rows, cols, std::move(values)),
+              g.pyramid->kind(), g.pyramid->body(), g.info.latitudeType)));
+    } else {
+      t.channels.push_back(fromStore(s->data).pyramid);
+    }
     t.window = s->window;
     t.opacity = static_cast<float>(s->opacity);
     return t;

@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <string>
@@ -72,6 +73,44 @@ TEST(SceneGL, HeightColoursUnderTheCameraAreTheDemsHeight) {
           << "channel " << k << " at (" << p.x << ", " << p.y << "), height " << h;
     }
   }
+}
+
+TEST(SceneGL, AlbedoFromAGeneratorDarkensWhereItsHeightsAreLow) {
+  test::glContext();
+  // The green DEM's albedo from the same generator as its heights, mapped over the crater's
+  // depth: straight down from 400 m at the crater floor (low: dark) and at the plains beyond
+  // the rim (high: bright), with the light the same. Oracle: the mapped value the CPU
+  // computes from the DEM's own heights (origin height 0 for the texture, the surface for
+  // the DEM: the same relief, shifted).
+  SceneDescription d = parseScene(kScene, "gl.json", "/nowhere");
+  DrapedSource a;
+  a.data = d.dems[0].heights;
+  a.range = std::array<double, 2>{-60.0, 10.0};
+  d.dems[0].look.effects.albedo = a;
+  const auto shoot = [&](glm::dvec2 p) {
+    SceneDescription v = d;
+    Camera c;
+    c.name = "view";
+    c.frame = "victoria";
+    c.eye = {p.x, p.y, 400.0};
+    c.lookAt = {p.x, p.y, 0.0};
+    c.up = {0.0, 1.0, 0.0};
+    c.width = 160;
+    c.height = 120;
+    c.near = 1.0;
+    v.cameras.push_back(c);
+    const Scene s(v);
+    const gl::RgbaImage image = s.render("view");
+    test::savePng("scene_generated_albedo_" + std::to_string(static_cast<int>(p.y)), image);
+    return std::array<int, 3>{image.pixel(80, 60)[0], image.pixel(80, 60)[1],
+                              image.pixel(80, 60)[2]};
+  };
+  const std::array<int, 3> floor = shoot({0.0, 0.0}), plains = shoot({0.0, -560.0});
+  const Scene plain(withCamera("victoria", {0.0, 0.0, 400.0}, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}));
+  const double origin = plain.demHeight("victoria", 0.0, 0.0) -
+                        plain.demHeight("victoria", 0.0, -560.0);  // floor below the plains
+  ASSERT_LT(origin, -20.0) << "the floor lies below the plains";
+  for (std::size_t k = 0; k < 3; ++k) EXPECT_LT(floor[k] + 20, plains[k]) << "channel " << k;
 }
 
 TEST(SceneGL, DemAlbedoBelowAndSkyAbove) {
