@@ -124,7 +124,8 @@ struct FlyoverSummary {
   int impostorFrames = 0;
 };
 
-/// Renders the fly-over headless: the camera starts far enough out to see Mars whole and
+/// Builds the demo scene (buildScene(options.scene) with the rover at options.rover) and
+/// renders the fly-over over it headless: the camera starts far enough out to see Mars whole and
 /// descends on a smooth logarithmic path to a few metres from the rover on Victoria's rim,
 /// the focus switching from Mars to Victoria on the way. Writes frame_NNNN.png files (and
 /// multiview.png) into outputDir, creating it. Creates an EGL context if none is current.
@@ -153,9 +154,10 @@ struct SceneViewOptions {
   double fovYDegrees = 45.0, near = 0.05;
 };
 
-/// Renders one view headless (an EGL context is made if none is current), focus on
-/// Victoria. Throws InvalidArgument for an empty image, a camera pose, near plane or rover
-/// that is not finite, or a field of view outside (0, 180) degrees; GlError without GL.
+/// Renders one view of the demo scene (buildScene(options.scene) with the rover there)
+/// headless (an EGL context is made if none is current), focus on Victoria. Throws InvalidArgument
+/// for an empty image, a camera pose, near plane or rover that is not finite, or a field of view
+/// outside (0, 180) degrees; GlError without GL.
 gl::RgbaImage renderSceneView(const SceneViewOptions& options);
 
 /// The fly-over camera's pose in the Victoria DEM frame at t ∈ [0, 1] for a rover at `rover`,
