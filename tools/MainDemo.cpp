@@ -6,6 +6,7 @@
 #include <regolith/gl/Image.hpp>
 #include <regolith/rover/TrackLayer.hpp>
 #include <regolith/rover/Traverse.hpp>
+#include <regolith/scene/Scene.hpp>
 #include <regolith/scene/SceneDescription.hpp>
 #include <regolith/scene/SceneParts.hpp>
 #include <regolith/store/Generate.hpp>
@@ -266,53 +267,35 @@ TraverseRun runTraverse(const MainDemoOptions& o, const fs::path& victoria, std:
 struct RoverViews {
   fs::path mast, chase;
   std::size_t imprints = 0, trackTiles = 0;
-  std::vector<scene::Camera> cameras;  // as scene.json records them
 };
 
-/// Renders the scene with the tracks the traverse left from the rover's mast (looking back
-/// along its tracks) and from a chase camera ahead of the rover (looking back at it).
-RoverViews renderRoverViews(const MainDemoOptions& o, const demo::MarsVictoriaOptions& scene,
-                            const TraverseRun& trav, std::ostream& out) {
-  RoverViews v;
-  v.imprints = trav.imprints;
-  v.trackTiles = trav.tracks->tiles();
-
-  demo::SceneViewOptions view;
-  view.scene = scene;
-  view.scene.victoriaEffects.tracks = trav.tracks;
-  view.roverX = trav.last.x;
-  view.roverY = trav.last.y;
-  view.roverHeadingDeg = trav.last.heading * 180.0 / M_PI;
-  view.width = o.width;
-  view.height = o.height;
+/// The cameras of the rover views, as scene.json records them: from the rover's mast
+/// (looking back along its tracks) and a chase camera ahead of the rover (looking back at it),
+/// where the traverse stopped.
+std::vector<scene::Camera> roverCameras(const MainDemoOptions& o, const TraverseRun& trav) {
   const glm::dvec3 p{trav.last.x, trav.last.y, trav.last.height};
   const glm::dvec3 fwd{std::sin(trav.last.heading), std::cos(trav.last.heading), 0.0};
   const glm::dvec3 up{0.0, 0.0, 1.0};
-  const auto render = [&](const std::string& name, const glm::dvec3& eye, const glm::dvec3& target,
-                          const fs::path& png) {
-    view.camera = scenegraph::Pose::lookAt(eye, target, up);
-    gl::writePng(png.string(), demo::renderSceneView(view));
-    out << "  " << png.string() << std::endl;
-    scene::Camera c;  // the same view, for scene.json
+  std::vector<scene::Camera> cameras;
+  const auto add = [&](const std::string& name, const glm::dvec3& eye, const glm::dvec3& target,
+                       double near) {
+    scene::Camera c;
     c.name = name;
     c.frame = "victoria";
     c.eye = {eye.x, eye.y, eye.z};
     c.lookAt = {target.x, target.y, target.z};
     c.up = {up.x, up.y, up.z};
-    c.fovY = view.fovYDegrees;
-    c.near = view.near;
-    c.width = view.width;
-    c.height = view.height;
-    v.cameras.push_back(c);
+    c.fovY = 45.0;
+    c.near = near;
+    c.width = o.width;
+    c.height = o.height;
+    cameras.push_back(c);
   };
   // Mast: 2.1 m up, looking back along the tracks and down at the ground 15 m behind.
-  v.mast = o.outDir / "rover_view.png";
-  render("mast", p + 2.1 * up + 0.4 * fwd, p - 15.0 * fwd, v.mast);
+  add("mast", p + 2.1 * up + 0.4 * fwd, p - 15.0 * fwd, 0.05);
   // Chase: 9 m ahead and 3.5 m up, looking back at the rover.
-  view.near = 0.1;
-  v.chase = o.outDir / "rover_chase.png";
-  render("chase", p + 9.0 * fwd + 3.5 * up, p - 4.0 * fwd + 0.5 * up, v.chase);
-  return v;
+  add("chase", p + 9.0 * fwd + 3.5 * up, p - 4.0 * fwd + 0.5 * up, 0.1);
+  return cameras;
 }
 
 }  // namespace
@@ -341,44 +324,56 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
 
   out << "[3/5] Fly-over from orbit down to the rover on the crater rim (" << o.frames
       << " frames, " << o.width << "x" << o.height << ")" << std::endl;
+  // The demo scene as data (docs/scene-format.md): Mars and Victoria from the stores, one
+  // composed surface (docs/composition.md) with the polar caps and the strip, the rover where
+  // the traverse of rover::defaultVictoriaPath() stops (the scene replays it and presses its
+  // tracks), and the rover views' cameras. Every image below is drawn from the scene::Scene
+  // built from this description, and it is written as scene.json.
+  demo::MarsVictoriaOptions demoScene;
+  demoScene.marsStore = data.mars;
+  demoScene.victoriaStore = data.victoria;
+  demoScene.clipmapSize = 127;
+  // Mars and the DEMs blend over the DEMs' feathers: drawn in the planet's colour, the DEM's
+  // border is invisible.
+  demoScene.composition = true;
+  demoScene.demAlbedo = demo::kPlanetAlbedo;
+  demoScene.extraDatasets = {{data.northCap, "north_cap", 60000.0, 0.0},
+                             {data.southCap, "south_cap", 60000.0, 0.0},
+                             {data.strip, "strip", 0.0, 8.0}};
+  scene::SceneDescription sceneFile =
+      demo::sceneDescription(demoScene, {0.0, 0.0, 0.0, rover::defaultVictoriaPath()});
+  sceneFile.cameras = roverCameras(o, trav);
+  scene::Scene demoBuilt(sceneFile);
+
   demo::FlyoverOptions fly;
   fly.outputDir = o.outDir / "flyover";
   fly.frames = static_cast<int>(o.frames);
   fly.width = o.width;
   fly.height = o.height;
-  fly.scene.marsStore = data.mars;
-  fly.scene.victoriaStore = data.victoria;
-  fly.scene.clipmapSize = 127;
-  fly.scene.demAlbedo = glm::vec3{0.86F, 0.60F, 0.46F};  // a lighter tone of the planet's
-  // The fly-over ends where the traverse stopped, with the tracks it left.
-  fly.rover = glm::dvec3{trav.last.x, trav.last.y, trav.last.heading * 180.0 / M_PI};
-  fly.scene.victoriaEffects.tracks = trav.tracks;
-  // One composed surface (docs/composition.md): Mars and the DEMs blend over the DEMs'
-  // feathers, and the flight starts beyond the north pole and passes over it.
-  fly.scene.composition = true;
+  // The flight starts beyond the north pole and passes over it, and ends where the traverse
+  // stopped, with the tracks it left.
   fly.overPole = true;
-  // The DEM blends into the planet over its feather: drawn in the planet's colour, its border
-  // is invisible (the lighter tone above marks it without composition).
-  fly.scene.demAlbedo = demo::MarsVictoriaScene::kPlanetAlbedo;
-  fly.scene.extraDatasets = {{data.northCap, "north_cap", 60000.0, 0.0},
-                             {data.southCap, "south_cap", 60000.0, 0.0},
-                             {data.strip, "strip", 0.0, 8.0}};
   fly.progress = [&out, every = std::max<std::size_t>(1, o.frames / 6)](int done, int all,
                                                                         const fs::path& path) {
     if (static_cast<std::size_t>(done) % every == 0 || done == all)
       out << "  frame " << done << "/" << all << ": " << path.string() << std::endl;
   };
-  const demo::FlyoverSummary flyover = demo::renderFlyover(fly);
+  const demo::FlyoverSummary flyover = demo::renderFlyover(demoBuilt, fly);
 
   out << "[4/5] The rover's view back along its tracks, and a chase view" << std::endl;
   const auto t4 = Clock::now();
-  const RoverViews views = renderRoverViews(o, fly.scene, trav, out);
+  RoverViews views;
+  views.imprints = trav.imprints;
+  views.trackTiles = trav.tracks->tiles();
+  views.mast = o.outDir / "rover_view.png";
+  views.chase = o.outDir / "rover_chase.png";
+  for (const auto& [camera, png] : {std::pair{"mast", views.mast}, {"chase", views.chase}}) {
+    gl::writePng(png.string(), demoBuilt.render(camera));
+    out << "  " << png.string() << std::endl;
+  }
   const double viewSeconds = secondsSince(t4);
-  // The scene of the rover views as a file (docs/scene-format.md): `regolith render
-  // OUT/scene.json --camera mast` draws rover_view.png again, replaying the traverse.
-  scene::SceneDescription sceneFile =
-      demo::sceneDescription(fly.scene, {0.0, 0.0, 0.0, rover::defaultVictoriaPath()});
-  sceneFile.cameras = views.cameras;
+  // The scene of these images as a file: `regolith render OUT/scene.json --camera mast`
+  // draws rover_view.png again, replaying the traverse.
   const fs::path scenePath = o.outDir / "scene.json";
   // Stores inside the output folder are named relative to it, so the folder can move.
   const fs::path outAbs = fs::absolute(o.outDir).lexically_normal();

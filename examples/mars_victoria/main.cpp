@@ -5,6 +5,7 @@
 //   mars_victoria [--out DIR] [--frames N] [--width W] [--height H] [--jitter]
 #include <regolith/core/Error.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/demo/PaperScene.hpp>
 #include <regolith/scenegraph/Jitter.hpp>
 
 #include <algorithm>

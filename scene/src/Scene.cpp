@@ -17,6 +17,7 @@
 #include <EGL/egl.h>
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -48,6 +49,7 @@ struct Grid {
 
 struct Scene::Impl {
   SceneDescription d;
+  SceneOptions options;
   std::shared_ptr<store::PatchCache> cache;
   std::map<std::string, std::shared_ptr<const store::Pager>> pagers;  // by resolved path
   scenegraph::SceneGraph graph{"root"};
@@ -59,7 +61,10 @@ struct Scene::Impl {
     std::shared_ptr<const clod::HeightPyramid> pyramid;
     clod::ClipmapOptions options;
     bool planet = false;
-    std::shared_ptr<const farfield::HeightLayers> farField;  // planets with a far field
+    std::shared_ptr<const farfield::HeightLayers> farField;    // planets with a far field
+    std::shared_ptr<const compose::ComposedSurface> composed;  // planets composed
+    topo::Geodetic origin{};                                   // DEMs: the tangent plane's
+    double heading = 0.0;
     glm::vec3 albedo{0.0F};
     std::string body;                  // DEMs: the body they sit on
     std::optional<topo::TopoDem> dem;  // DEMs: for traverses
@@ -166,9 +171,27 @@ struct Scene::Impl {
   std::optional<clod::DrapedTexture> draped(const std::optional<DrapedSource>& s,
                                             const std::string& ptr) {
     if (!s) return std::nullopt;
-    if (s->data.store.empty()) fail(ptr + "/data", "a generator, expected a store grid");
     clod::DrapedTexture t;
-    t.channels.push_back(fromStore(s->data).pyramid);
+    if (s->data.store.empty()) {
+      // A generator's heights mapped onto [0, 1] over `range` (readScene() requires it),
+      // on the generator's own grid, its pyramid by 2×2 means of the mapped values.
+      if (!s->range) fail(ptr + "/range", "missing, expected [min, max] for a generator");
+      const Grid g = generated(s->data, 0.0);
+      const double lo = (*s->range)[0], span = (*s->range)[1] - lo;
+      const std::size_t rows = g.samples->rows(), cols = g.samples->cols();
+      std::vector<float> values(rows * cols);
+      for (std::size_t r = 0; r < rows; ++r)
+        for (std::size_t c = 0; c < cols; ++c)
+          values[r * cols + c] = static_cast<float>(
+              std::clamp((static_cast<double>(g.samples->sample(r, c)) - lo) / span, 0.0, 1.0));
+      t.channels.push_back(
+          std::make_shared<const clod::HeightPyramid>(clod::HeightPyramid::fromSamples(
+              store::topoGridOf(g.info),
+              std::make_shared<topo::InMemorySamples>(rows, cols, std::move(values)),
+              g.pyramid->kind(), g.pyramid->body(), g.info.latitudeType)));
+    } else {
+      t.channels.push_back(fromStore(s->data).pyramid);
+    }
     t.window = s->window;
     t.opacity = static_cast<float>(s->opacity);
     return t;
@@ -289,6 +312,7 @@ struct Scene::Impl {
         }
       }
       composed = std::make_shared<const compose::ComposedSurface>(catalogue->snapshot());
+      t.composed = composed;
       t.pyramid = std::make_shared<const clod::HeightPyramid>(compose::composedPlanetPyramid(
           composed, planet->level(0).grid, planet->latitudeType(), planet->levelCount()));
       for (auto& [dem, own] : dems) {
@@ -340,6 +364,15 @@ struct Scene::Impl {
     t.options.levels = 0;
     t.options.albedo = t.albedo;
     t.options.effects = effects(dm.look.effects, ptr + "/effects");
+    if (const auto given = options.tracks.find(dm.name); given != options.tracks.end()) {
+      if (!dm.look.effects.tracks)
+        fail(ptr + "/effects/tracks",
+             "not declared, but SceneOptions::tracks gives a layer for '" + dm.name + "'");
+      if (!given->second) fail(ptr + "/effects/tracks", "SceneOptions::tracks gives a null layer");
+      t.options.effects.tracks = given->second;
+    }
+    t.origin = origin;
+    t.heading = heading;
     const topo::Placement placement(topo::LocalTangentPlane(body, origin, heading));
     t.dem.emplace(store::topoGridOf(g.info), placement, g.samples);
     t.key = static_cast<int>(terrains.size());
@@ -379,6 +412,13 @@ struct Scene::Impl {
   }
 
   void build() {
+    for (const auto& [name, layer] : options.tracks) {
+      bool found = false;
+      for (const Dem& dm : d.dems) found = found || dm.name == name;
+      if (!found)
+        throw InvalidArgument("Scene: SceneOptions::tracks: '" + name +
+                              "' is not a DEM of the scene");
+    }
     for (std::size_t i = 0; i < d.bodies.size(); ++i) buildBody(i);
     for (std::size_t i = 0; i < d.dems.size(); ++i) buildDem(i);
     for (std::size_t i = 0; i < d.bodies.size(); ++i) composeBody(i);
@@ -413,6 +453,7 @@ struct Scene::Impl {
 Scene::Scene(SceneDescription description, const SceneOptions& options)
     : impl_(std::make_unique<Impl>()) {
   impl_->d = std::move(description);
+  impl_->options = options;
   impl_->cache = std::make_shared<store::PatchCache>(options.cacheBytes);
   impl_->build();
 }
@@ -445,7 +486,8 @@ scenegraph::SceneGraph& Scene::graph() noexcept { return impl_->graph; }
 std::vector<SceneTerrain> Scene::terrains() const {
   std::vector<SceneTerrain> out;
   for (const Impl::Terrain& t : impl_->terrains) {
-    out.push_back({t.name, t.planet, t.body, t.key, t.node, t.pyramid, t.options, t.farField});
+    out.push_back({t.name, t.planet, t.body, t.key, t.node, t.pyramid, t.options, t.farField,
+                   t.composed, t.origin, t.heading});
   }
   return out;
 }
@@ -499,39 +541,48 @@ gl::RgbaImage Scene::render(const std::string& camera) const {
     throw InvalidArgument("Scene::render(): no camera named '" + camera +
                           "', expected one of: " + (s.d.cameras.empty() ? "none" : names.str()));
   }
+  clod::SceneView view;
+  view.fovYDegrees = c->fovY;
+  view.near = c->near;
+  view.width = c->width;
+  view.height = c->height;
+  if (c->viewport) {
+    view.x = (*c->viewport)[0];
+    view.y = (*c->viewport)[1];
+    view.width = (*c->viewport)[2];
+    view.height = (*c->viewport)[3];
+  }
+  return render(s.cameras.at(camera), s.graph.at(focusOf(camera)), view, c->width, c->height);
+}
+
+void Scene::registerWith(clod::SceneRenderer& renderer) const {
+  const Impl& s = *impl_;
+  for (const Impl::Terrain& t : s.terrains) renderer.addTerrain(t.key, t.pyramid, t.options);
+  for (const Impl::Terrain& t : s.terrains) {
+    if (t.planet) continue;
+    for (const Impl::Terrain& b : s.terrains)
+      if (b.name == t.body) renderer.addCutOut(b.key, t.key);
+  }
+  for (const Impl::Thing& o : s.objects) renderer.addMesh(o.key, clod::roverMesh(), o.colour);
+}
+
+gl::RgbaImage Scene::render(scenegraph::NodeId camera, scenegraph::NodeId focus,
+                            clod::SceneView view, int width, int height) const {
+  const Impl& s = *impl_;
   std::unique_ptr<gl::HeadlessContext> context;
   if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<gl::HeadlessContext>();
   gl::RgbaImage image;
   {
-    const scenegraph::NodeId focus = s.graph.at(focusOf(camera));
-    const scenegraph::NodeId cam = s.cameras.at(camera);
     clod::SceneRenderer renderer;
-    for (const Impl::Terrain& t : s.terrains) renderer.addTerrain(t.key, t.pyramid, t.options);
-    for (const Impl::Terrain& t : s.terrains) {
-      if (t.planet) continue;
-      for (const Impl::Terrain& b : s.terrains)
-        if (b.name == t.body) renderer.addCutOut(b.key, t.key);
-    }
-    for (const Impl::Thing& o : s.objects) renderer.addMesh(o.key, clod::roverMesh(), o.colour);
-    gl::RenderTarget target(c->width, c->height);
-    clod::SceneView view;
-    view.fovYDegrees = c->fovY;
-    view.near = c->near;
-    view.width = c->width;
-    view.height = c->height;
-    if (c->viewport) {
-      view.x = (*c->viewport)[0];
-      view.y = (*c->viewport)[1];
-      view.width = (*c->viewport)[2];
-      view.height = (*c->viewport)[3];
-    }
+    registerWith(renderer);
+    gl::RenderTarget target(width, height);
     view.lightInFocus = s.graph.relative(focus, s.lightFrame).applyVector(s.lightDirection);
     target.clear({0.02F, 0.02F, 0.04F, 1.0F});
-    renderer.draw(s.graph.renderList(focus, cam), view);
+    renderer.draw(s.graph.renderList(focus, camera), view);
     for (const Impl::Terrain& t : s.terrains) {
       if (!t.farField) continue;
       const auto farField = planetFarField(t.farField, t.albedo);
-      (void)drawFarField(*farField, s.graph, t.node, cam, focus, view, target);
+      (void)drawFarField(*farField, s.graph, t.node, camera, focus, view, target);
     }
     image = target.readColor();
   }  // GL objects go before the context

@@ -244,14 +244,40 @@ class Reader {
     return s;
   }
 
-  DrapedSource draped(const json& j, const std::string& ptr) const {
-    object(j, ptr, {"data", "window", "opacity"});
+  DrapedSource draped(const json& j, const std::string& ptr, bool dem) const {
+    object(j, ptr, {"data", "window", "opacity", "range"});
     DrapedSource d;
     const json* data = member(j, "data");
     if (!data) fail(ptr + "/data", "missing, expected a dataset ({\"store\", \"grid\"})");
+    const json* range = member(j, "range");
+    const bool store = data->is_object() && data->contains("store");
+    if (store && range)  // before the store is looked for: the key is wrong either way
+      fail(ptr + "/range",
+           "given for a store's data, expected it only with a generator (a store's values are "
+           "drawn as they are, in [0, 1])");
     d.data = source(*data, ptr + "/data");
     d.window = static_cast<int>(integer(j, ptr, "window", 512, 64, 4096));
     d.opacity = number(j, ptr, "opacity", 1.0, kUnit);
+    if (d.data.generate.empty()) {
+      if (range)
+        fail(ptr + "/range",
+             "given for a store's data, expected it only with a generator (a store's values are "
+             "drawn as they are, in [0, 1])");
+      return d;
+    }
+    // A generator's grid must be the terrain's kind of grid: the texture is draped in the
+    // terrain's grid frame.
+    const char* own = dem ? "victoria" : "mars-planet";
+    if (d.data.generate != own)
+      fail(ptr + "/data/generate", "\"" + d.data.generate + "\" is not draped over a " +
+                                       (dem ? "DEM" : "body") + ", expected " + own);
+    if (!range)
+      fail(ptr + "/range",
+           "missing, expected [min, max]: the generator's heights (metres) that become 0 and 1");
+    d.range = numbers<2>(*range, ptr + "/range");
+    if (!((*d.range)[1] > (*d.range)[0]))
+      fail(ptr + "/range/1",
+           core::number((*d.range)[1]) + " is not > min (" + core::number((*d.range)[0]) + ")");
     return d;
   }
 
@@ -293,8 +319,8 @@ class Reader {
       c.albedoVariation = number(*n, p, "albedoVariation", 0.15, kUnit);
       e.noise = c;
     }
-    if (const json* a = member(j, "albedo")) e.albedo = draped(*a, ptr + "/albedo");
-    if (const json* o = member(j, "overlay")) e.overlay = draped(*o, ptr + "/overlay");
+    if (const json* a = member(j, "albedo")) e.albedo = draped(*a, ptr + "/albedo", dem);
+    if (const json* o = member(j, "overlay")) e.overlay = draped(*o, ptr + "/overlay", dem);
     return e;
   }
 
@@ -582,7 +608,9 @@ json sourceJson(const DataSource& s, const fs::path& from, const fs::path& to) {
 }
 
 json drapedJson(const DrapedSource& d, const fs::path& from, const fs::path& to) {
-  return {{"data", sourceJson(d.data, from, to)}, {"window", d.window}, {"opacity", d.opacity}};
+  json j = {{"data", sourceJson(d.data, from, to)}, {"window", d.window}, {"opacity", d.opacity}};
+  if (d.range) j["range"] = *d.range;
+  return j;
 }
 
 json effectsJson(const EffectsDescription& e, bool dem, const fs::path& from, const fs::path& to) {

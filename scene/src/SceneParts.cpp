@@ -1,11 +1,12 @@
+#include <regolith/rover/TrackPresser.hpp>
 #include <regolith/scene/SceneParts.hpp>
 #include <regolith/topo/Projection.hpp>
 
 #include <glm/geometric.hpp>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
+#include <optional>
 
 namespace regolith::scene {
 
@@ -94,18 +95,10 @@ farfield::FarFieldMode drawFarField(farfield::FarField& farField, const scenegra
 TraverseEnd driveAndPress(const topo::TopoDem& dem, const rover::TraverseOptions& options,
                           rover::TrackLayer* tracks, const rover::StepCallback& onStep) {
   TraverseEnd end;
-  double nextStamp = 0.0;
-  std::array<rover::WheelImprint, rover::kWheels> imprint;
+  std::optional<rover::TrackPresser> presser;  // one imprint of all six wheels every 5 cm
+  if (tracks) presser.emplace(*tracks);
   end.result = rover::runTraverse(dem, options, [&](const rover::StepState& s) {
-    if (tracks && s.distance >= nextStamp) {  // one imprint of all six wheels every 5 cm
-      for (std::size_t w = 0; w < rover::kWheels; ++w)
-        imprint[w] = rover::WheelImprint{{s.wheels[w].x, s.wheels[w].y},
-                                         rover::RoverRuts::kWheelWidthMetres,
-                                         rover::RoverRuts::kDepthMetres};
-      tracks->step(imprint);
-      ++end.imprints;
-      nextStamp = s.distance + rover::RoverRuts::kSpacingMetres;
-    }
+    if (presser && presser->press(s)) ++end.imprints;
     end.last = s.chassis;
     return onStep ? onStep(s) : true;
   });

@@ -1,9 +1,11 @@
-// demo::MarsVictoriaScene and demo::renderFlyover(): the fly-over writes readable PNGs
-// from Mars whole down to the rover, switching the focus on the way.
+// The demo scene (demo::sceneDescription() built by scene::Scene, demo::buildScene()) and
+// demo::renderFlyover(): the fly-over writes readable PNGs from Mars whole down to the rover,
+// switching the focus on the way.
 #include <regolith/core/Error.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/gl/Image.hpp>
 #include <regolith/rover/TrackLayer.hpp>
+#include <regolith/scene/Scene.hpp>
 #include <regolith/store/Generate.hpp>
 
 #include "gl/GlContext.hpp"
@@ -187,7 +189,13 @@ TEST(MarsVictoriaGLTest, SceneFromStoresEqualsTheGeneratedScene) {
   // generates them in memory.
   test::glContext();
   const MarsVictoriaOptions mem = small();
-  const MarsVictoriaScene generated(mem);
+  const scene::Scene generated = buildScene(mem);
+  const auto originOf = [](const scene::Scene& s) {
+    for (const scene::SceneTerrain& t : s.terrains())
+      if (t.name == "victoria") return t.origin;
+    ADD_FAILURE() << "no DEM victoria";
+    return topo::Geodetic{};
+  };
   const auto dir = std::filesystem::path(::testing::TempDir()) / "regolith_scene_stores";
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
@@ -202,23 +210,26 @@ TEST(MarsVictoriaGLTest, SceneFromStoresEqualsTheGeneratedScene) {
   vo.size = mem.demSize;
   vo.spacing = mem.demSpacing;
   vo.seed = mem.seed;
-  vo.originHeight = generated.layout().victoriaOrigin.height;
+  vo.originHeight = originOf(generated).height;
   vo.write.levels = 6;
   store::VictoriaGenerator(vo).write(dir / "victoria.h5");
 
   MarsVictoriaOptions fromStores = mem;
   fromStores.marsStore = dir / "mars.h5";
   fromStores.victoriaStore = dir / "victoria.h5";
-  const MarsVictoriaScene paged(fromStores);
-  const topo::Geodetic a = generated.layout().victoriaOrigin, b = paged.layout().victoriaOrigin;
+  const scene::Scene paged = buildScene(fromStores);
+  const topo::Geodetic a = originOf(generated), b = originOf(paged);
   EXPECT_NEAR(a.latDeg, b.latDeg, 1e-12);
   EXPECT_NEAR(a.lonDeg, b.lonDeg, 1e-12);
   EXPECT_EQ(a.height, b.height);
-  EXPECT_EQ(generated.layout().mars.equatorialRadius(), paged.layout().mars.equatorialRadius());
-  EXPECT_EQ(generated.layout().mars.polarRadius(), paged.layout().mars.polarRadius());
+  const topo::Body& ga = *generated.terrain("mars").body();
+  const topo::Body& pa = *paged.terrain("mars").body();
+  EXPECT_EQ(ga.equatorialRadius(), pa.equatorialRadius());
+  EXPECT_EQ(ga.polarRadius(), pa.polarRadius());
   for (const glm::dvec2 p :
        {glm::dvec2{0.0, 0.0}, glm::dvec2{-395.5, 12.25}, glm::dvec2{300, -410}})
-    EXPECT_EQ(generated.demHeight(p.x, p.y), paged.demHeight(p.x, p.y)) << p.x << ", " << p.y;
+    EXPECT_EQ(generated.demHeight("victoria", p.x, p.y), paged.demHeight("victoria", p.x, p.y))
+        << p.x << ", " << p.y;
 
   FlyoverOptions o;
   o.frames = 4;
@@ -245,19 +256,38 @@ TEST(MarsVictoriaGLTest, SceneFromStoresEqualsTheGeneratedScene) {
   swapped.marsStore = dir / "victoria.h5";
   swapped.marsGrid = swapped.victoriaGrid;
   try {
-    const MarsVictoriaScene s(swapped);
+    const scene::Scene s = buildScene(swapped);
     ADD_FAILURE() << "no exception";
   } catch (const InvalidArgument& e) {
-    const std::string m = e.what();
-    EXPECT_NE(m.find("victoria.h5 grid '" + swapped.victoriaGrid + "' is not a planet grid"),
-              std::string::npos)
-        << m;
+    EXPECT_EQ(std::string(e.what()), "Scene: /bodies/0/heights/0: grid '" + swapped.victoriaGrid +
+                                         "' is not a planet grid");
   }
   std::filesystem::remove_all(dir);
 
   MarsVictoriaOptions half = mem;
   half.marsStore = dir / "mars.h5";
-  EXPECT_THROW(MarsVictoriaScene{half}, InvalidArgument);
+  EXPECT_THROW((void)buildScene(half), InvalidArgument);
+}
+
+TEST(MarsVictoriaGLTest, FlyoverOverABuiltSceneNeedsTheDemoNames) {
+  // A scene without the rover: refused before anything is drawn, naming what is missing.
+  scene::SceneDescription d = sceneDescription(small());
+  d.objects.clear();
+  scene::Scene s(d);
+  FlyoverOptions o;
+  o.frames = 2;
+  o.outputDir = std::filesystem::path(::testing::TempDir()) / "regolith_flyover_names";
+  try {
+    (void)renderFlyover(s, o);
+    ADD_FAILURE() << "no exception";
+  } catch (const InvalidArgument& e) {
+    EXPECT_EQ(
+        std::string(e.what()),
+        "renderFlyover(): the scene's object 'rover' is missing, expected the demo scene's body "
+        "\"mars\", DEM \"victoria\" and object \"rover\" (demo::sceneDescription())");
+  }
+  EXPECT_THROW((void)addPaperCameras(s), InvalidArgument);
+  EXPECT_FALSE(std::filesystem::exists(o.outputDir));
 }
 
 TEST(MarsVictoriaGLTest, RejectsBadOptions) {

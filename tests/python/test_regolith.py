@@ -588,7 +588,7 @@ def test_render_scene_draws_the_dem_close_up_and_mars_from_afar():
     near = regolith.render_scene(eye=(0.0, -300.0, 400.0), look_at=(0.0, 0.0, 0.0), **SMALL_SCENE)
     assert near.shape == (90, 160, 4) and near.dtype == np.uint8
     assert (near[..., 3] == 255).all()
-    # The DEM is drawn greener than the planet (MarsVictoriaScene::kDemAlbedo vs kPlanetAlbedo).
+    # The DEM is drawn greener than the planet (demo::kDemAlbedo vs kPlanetAlbedo).
     r, g = near[35:55, 70:90, 0].astype(int), near[35:55, 70:90, 1].astype(int)
     assert (g > r).mean() > 0.9
     # 15,000 km up the site's vertical, looking at Mars's centre: a reddish disc in the middle

@@ -1,5 +1,6 @@
 // The scene file: every class of error word for word, round trips, relative paths, and what
 // a built scene declares.
+#include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/rover/TrackLayer.hpp>
 #include <regolith/scene/Scene.hpp>
@@ -8,9 +9,12 @@
 
 #include "support/StoreScratch.hpp"
 
+#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <array>
 #include <fstream>
 #include <string>
 
@@ -272,6 +276,144 @@ TEST(Scene, TraverseStopsAtItsEndAndPressesTracks) {
   EXPECT_NEAR(p.y, -280.0, 0.02);
   EXPECT_NEAR(p.w, 0.0, 1e-6);  // heading north
   EXPECT_GT(s.terrainOptions("victoria").effects.tracks->tiles(), 0U);
+}
+
+TEST(SceneFile, DrapedDataFromAGeneratorNeedsItsRangeAndItsTerrainsKind) {
+  const json victoria = {{"generate", "victoria"}, {"size", 201}, {"spacing", 4}, {"seed", 3}};
+  json j = baseScene();
+  j["dems"][0]["effects"]["albedo"] = {{"data", victoria}};
+  EXPECT_EQ(errorOf(j),
+            "t.json: /dems/0/effects/albedo/range: missing, expected [min, max]: the generator's "
+            "heights (metres) that become 0 and 1");
+  j["dems"][0]["effects"]["albedo"]["range"] = {10, 10};
+  EXPECT_EQ(errorOf(j), "t.json: /dems/0/effects/albedo/range/1: 10 is not > min (10)");
+  j["dems"][0]["effects"]["albedo"]["range"] = {-80, "high"};
+  EXPECT_EQ(errorOf(j), "t.json: /dems/0/effects/albedo/range/1: expected a number, got a string");
+  j["dems"][0]["effects"]["albedo"] = {{"data", {{"generate", "mars-planet"}, {"rows", 90}}},
+                                       {"range", {-8000, 20000}}};
+  EXPECT_EQ(errorOf(j),
+            "t.json: /dems/0/effects/albedo/data/generate: \"mars-planet\" is not draped over a "
+            "DEM, expected victoria");
+  j = baseScene();
+  j["bodies"][0]["effects"] = {{"overlay", {{"data", victoria}, {"range", {0, 1}}}}};
+  EXPECT_EQ(errorOf(j),
+            "t.json: /bodies/0/effects/overlay/data/generate: \"victoria\" is not draped over a "
+            "body, expected mars-planet");
+  j = baseScene();
+  j["dems"][0]["effects"]["overlay"] = {{"data", {{"store", "x.h5"}, {"grid", "x"}}},
+                                        {"range", {0, 1}}};
+  EXPECT_EQ(errorOf(j),
+            "t.json: /dems/0/effects/overlay/range: given for a store's data, expected it only "
+            "with a generator (a store's values are drawn as they are, in [0, 1])");
+  // Valid: written and read back with its range.
+  j = baseScene();
+  j["dems"][0]["effects"]["albedo"] = {{"data", victoria}, {"range", {-80, 20}}};
+  j["bodies"][0]["effects"] = {{"overlay",
+                                {{"data", {{"generate", "mars-planet"}, {"rows", 90}}},
+                                 {"range", {-8000, 20000}},
+                                 {"opacity", 0.5}}}};
+  const SceneDescription d = parse(j);
+  ASSERT_TRUE(d.dems[0].look.effects.albedo.has_value());
+  EXPECT_EQ(d.dems[0].look.effects.albedo->range, (std::array<double, 2>{-80.0, 20.0}));
+  const SceneDescription again = parseScene(sceneJson(d, "/nowhere"), "t.json", "/nowhere");
+  EXPECT_EQ(again, d);
+}
+
+TEST(Scene, DrapedDataFromAGeneratorIsItsHeightsMappedOverTheRange) {
+  // Oracle: store::VictoriaGenerator run here with the same options (origin height 0), and
+  // the linear map with its clamp written out.
+  json j = baseScene();
+  j["dems"][0]["effects"]["albedo"] = {
+      {"data", {{"generate", "victoria"}, {"size", 201}, {"spacing", 4}, {"seed", 5}}},
+      {"range", {-60, 15}},
+      {"window", 128}};
+  const Scene s(parse(j));
+  const auto& albedo = s.terrainOptions("victoria").effects.albedo;
+  ASSERT_TRUE(albedo.has_value());
+  ASSERT_EQ(albedo->channels.size(), 1U);
+  EXPECT_EQ(albedo->window, 128);
+  const clod::HeightPyramid& p = *albedo->channels[0];
+  EXPECT_EQ(p.kind(), clod::SurfaceKind::Plane);
+  store::VictoriaOptions vo;
+  vo.size = 201;
+  vo.spacing = 4.0;
+  vo.seed = 5;
+  vo.originHeight = 0.0;
+  const auto truth = store::VictoriaGenerator(vo).samples();
+  const auto& level0 = p.level(0);
+  ASSERT_EQ(level0.grid.rows(), 201U);
+  ASSERT_EQ(level0.grid.cols(), 201U);
+  EXPECT_EQ(level0.grid.spacingX(), 4.0);
+  std::size_t clamped = 0, inside = 0;
+  for (std::size_t r = 0; r < 201; r += 5) {
+    for (std::size_t c = 0; c < 201; c += 5) {
+      const double h = truth->sample(r, c);
+      const double v = std::min(1.0, std::max(0.0, (h + 60.0) / 75.0));
+      EXPECT_NEAR(level0.source->sample(r, c), v, 1e-6) << r << ", " << c;
+      (v == 0.0 || v == 1.0 ? clamped : inside) += 1;
+    }
+  }
+  EXPECT_GT(inside, 100U);  // the range spans the crater's heights
+}
+
+TEST(Scene, GivenTracksAreDrawnAndPressedIntoAndCheckedByName) {
+  // A caller's layer (its own traverse pressed it) is the one the DEM draws, and the scene's
+  // traverses press into it too.
+  auto mine = std::make_shared<rover::TrackLayer>(0.05);
+  SceneOptions o;
+  o.tracks["victoria"] = mine;
+  const Scene plain(parse(baseScene()), o);
+  EXPECT_EQ(plain.terrainOptions("victoria").effects.tracks, mine);
+  EXPECT_EQ(mine->tiles(), 0U);
+  json j = baseScene();
+  j["objects"][0].erase("pose");
+  j["objects"][0]["traverse"] = {{"waypoints", {{-100, -300}, {-100, -280}}}, {"step", 0.01}};
+  const Scene driven(parse(j), o);
+  EXPECT_EQ(driven.terrainOptions("victoria").effects.tracks, mine);
+  EXPECT_GT(mine->tiles(), 0U);
+  const auto errorOfBuild = [](const json& scene, const SceneOptions& options) {
+    try {
+      const Scene s(parse(scene), options);
+    } catch (const InvalidArgument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  SceneOptions unknown;
+  unknown.tracks["gale"] = mine;
+  EXPECT_EQ(errorOfBuild(baseScene(), unknown),
+            "Scene: SceneOptions::tracks: 'gale' is not a DEM of the scene");
+  json untracked = baseScene();
+  untracked["dems"][0]["effects"].erase("tracks");
+  EXPECT_EQ(errorOfBuild(untracked, o),
+            "Scene: /dems/0/effects/tracks: not declared, but SceneOptions::tracks gives a layer "
+            "for 'victoria'");
+  SceneOptions null;
+  null.tracks["victoria"] = nullptr;
+  EXPECT_EQ(errorOfBuild(baseScene(), null),
+            "Scene: /dems/0/effects/tracks: SceneOptions::tracks gives a null layer");
+}
+
+TEST(Scene, TerrainsGiveTheDemsPlacementAndTheComposedSurface) {
+  json j = baseScene();
+  const Scene plain(parse(j));
+  for (const SceneTerrain& t : plain.terrains()) {
+    EXPECT_EQ(t.composed, nullptr) << t.name;
+    if (t.name != "victoria") continue;
+    EXPECT_EQ(t.origin.latDeg, -2.05);
+    EXPECT_EQ(t.origin.lonDeg, -5.5);
+    EXPECT_EQ(t.headingDeg, 0.0);
+    // "surface": the planet's height there, which the DEM's frame sits at.
+    const scenegraph::Pose p =
+        plain.graph().relative(plain.graph().at("mars"), plain.graph().at("victoria"));
+    EXPECT_NEAR(glm::length(p.translation - plain.terrain("mars").body()->toBodyFixed(t.origin)),
+                0.0, 1e-6);
+  }
+  j["bodies"][0]["composeDems"] = true;
+  j["bodies"][0]["farField"] = false;  // resampling the composed surface for it takes minutes
+  const Scene composed(parse(j));
+  EXPECT_NE(composed.terrains().front().composed, nullptr);
+  EXPECT_EQ(composed.terrains().front().composed->snapshot().size(), 2U);  // mars, victoria
 }
 
 }  // namespace

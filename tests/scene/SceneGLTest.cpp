@@ -1,7 +1,9 @@
 // Scenes rendered: pixels checked against the scene's geometry (the height colour of the DEM
 // under the camera, the sky above it), and the demo's scene, written as a file and read back,
 // drawing the demo's pixels.
+#include <regolith/clod/Camera.hpp>
 #include <regolith/clod/Effects.hpp>
+#include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/scene/Scene.hpp>
 #include <regolith/scene/SceneDescription.hpp>
@@ -13,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <string>
@@ -70,6 +73,44 @@ TEST(SceneGL, HeightColoursUnderTheCameraAreTheDemsHeight) {
           << "channel " << k << " at (" << p.x << ", " << p.y << "), height " << h;
     }
   }
+}
+
+TEST(SceneGL, AlbedoFromAGeneratorDarkensWhereItsHeightsAreLow) {
+  test::glContext();
+  // The green DEM's albedo from the same generator as its heights, mapped over the crater's
+  // depth: straight down from 400 m at the crater floor (low: dark) and at the plains beyond
+  // the rim (high: bright), with the light the same. Oracle: the mapped value the CPU
+  // computes from the DEM's own heights (origin height 0 for the texture, the surface for
+  // the DEM: the same relief, shifted).
+  SceneDescription d = parseScene(kScene, "gl.json", "/nowhere");
+  DrapedSource a;
+  a.data = d.dems[0].heights;
+  a.range = std::array<double, 2>{-60.0, 10.0};
+  d.dems[0].look.effects.albedo = a;
+  const auto shoot = [&](glm::dvec2 p) {
+    SceneDescription v = d;
+    Camera c;
+    c.name = "view";
+    c.frame = "victoria";
+    c.eye = {p.x, p.y, 400.0};
+    c.lookAt = {p.x, p.y, 0.0};
+    c.up = {0.0, 1.0, 0.0};
+    c.width = 160;
+    c.height = 120;
+    c.near = 1.0;
+    v.cameras.push_back(c);
+    const Scene s(v);
+    const gl::RgbaImage image = s.render("view");
+    test::savePng("scene_generated_albedo_" + std::to_string(static_cast<int>(p.y)), image);
+    return std::array<int, 3>{image.pixel(80, 60)[0], image.pixel(80, 60)[1],
+                              image.pixel(80, 60)[2]};
+  };
+  const std::array<int, 3> floor = shoot({0.0, 0.0}), plains = shoot({0.0, -560.0});
+  const Scene plain(withCamera("victoria", {0.0, 0.0, 400.0}, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}));
+  const double origin = plain.demHeight("victoria", 0.0, 0.0) -
+                        plain.demHeight("victoria", 0.0, -560.0);  // floor below the plains
+  ASSERT_LT(origin, -20.0) << "the floor lies below the plains";
+  for (std::size_t k = 0; k < 3; ++k) EXPECT_LT(floor[k] + 20, plains[k]) << "channel " << k;
 }
 
 TEST(SceneGL, DemAlbedoBelowAndSkyAbove) {
@@ -136,6 +177,31 @@ TEST(SceneGL, DemoSceneFileDrawsTheDemosPixels) {
     largest = std::max(largest, diff);
   }
   EXPECT_EQ(differing, 0) << "largest difference " << largest;
+
+  // renderSceneView() and the file now share one code path (the demo scene is its
+  // description), so the comparison above guards the file's round trip only. The pixels
+  // themselves against the view's geometry: the rover (grey, drawn in its own colour) where
+  // its body projects through the camera (clod::Camera in double), the DEM (greener than the
+  // planet, kDemAlbedo) around it, and sky above the horizon of this low view.
+  const Scene built(d);
+  const glm::dvec4 rover = built.objectPose("rover");
+  EXPECT_NEAR(rover.x, view.roverX, 1e-9);
+  EXPECT_NEAR(rover.y, view.roverY, 1e-9);
+  EXPECT_EQ(rover.z, built.demHeight("victoria", view.roverX, view.roverY));
+  clod::SceneView sv;
+  sv.width = view.width;
+  sv.height = view.height;
+  sv.fovYDegrees = view.fovYDegrees;
+  sv.near = view.near;
+  const clod::Camera camera = clod::cameraInItem(view.camera, sv);
+  const glm::dvec3 body = camera.project({rover.x, rover.y, rover.z + 0.8});
+  const auto* r = drawn.pixel(static_cast<int>(body.x), static_cast<int>(body.y));
+  EXPECT_NEAR(r[0], r[1], 12) << body.x << ", " << body.y;
+  EXPECT_NEAR(r[1], r[2], 12) << body.x << ", " << body.y;
+  const glm::dvec3 ground = camera.project({at.x, at.y, built.demHeight("victoria", at.x, at.y)});
+  const auto* g = drawn.pixel(static_cast<int>(ground.x), static_cast<int>(ground.y));
+  EXPECT_GT(g[1], g[0]) << "the DEM is greener than the planet";
+  EXPECT_TRUE(drawn.is(view.width / 2, 1, 5, 5, 10)) << "sky at the top";
 }
 
 }  // namespace

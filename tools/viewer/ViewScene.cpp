@@ -1,7 +1,6 @@
 #include "ViewScene.hpp"
 
 #include <regolith/demo/MarsVictoria.hpp>
-#include <regolith/demo/PaperScene.hpp>
 #include <regolith/scene/Scene.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
@@ -137,77 +136,14 @@ ViewScene storeScene(const std::string& path, const std::string& grid, std::size
   return v;
 }
 
-ViewScene demoScene() {
-  auto scene = std::make_shared<demo::MarsVictoriaScene>();
-  const demo::PaperSceneNodes& n = scene->nodes();
-  ViewScene v;
-  v.title = "Mars/Victoria demo scene";
-  v.graph = std::shared_ptr<scenegraph::SceneGraph>(scene, &scene->graph());
-  // As MarsVictoriaScene::registerWith(), with the effects each terrain declares.
-  clod::ClipmapOptions planet;
-  planet.size = 127;
-  planet.levels = scene->planetClipmapLevels();
-  planet.albedo = demo::MarsVictoriaScene::kPlanetAlbedo;
-  const auto layers = scene->farFieldLayers();
-  planet.effects.heightColours = clod::HeightColours{static_cast<float>(layers->minHeight()),
-                                                     static_cast<float>(layers->maxHeight()), true};
-  planet.effects.latLon = clod::LatLonLines{};
-  clod::ClipmapOptions dem = planet;
-  dem.levels = 0;
-  dem.albedo = demo::MarsVictoriaScene::kDemAlbedo;
-  dem.effects = {};
-  std::vector<int> cuts{demo::kDrawVictoria};
-  if (scene->secondDem()) cuts.push_back(demo::kDrawSecondDem);
-  v.terrains.push_back({"mars", n.mars, demo::kDrawMars, scene->mars(), planet, cuts, layers, 0});
-  clod::ClipmapOptions victoria = dem;
-  victoria.effects = declaredEffects(*scene->victoria(), true);
-  victoria.effects.noise = clod::StructuredNoise{0.3, 8.0, 4, 0.15F, std::nullopt};
-  v.terrains.push_back(
-      {"victoria", n.victoria, demo::kDrawVictoria, scene->victoria(), victoria, {}, nullptr, 1});
-  if (scene->secondDem()) {
-    v.terrains.push_back(
-        {"second_dem", n.secondDem, demo::kDrawSecondDem, scene->secondDem(), dem, {}, nullptr, 1});
-  }
-  v.meshes.push_back({demo::kDrawRover, clod::roverMesh(), {0.85F, 0.85F, 0.8F}});
-  const double radius = scene->mars()->body()->equatorialRadius();
-  const auto& vg = scene->victoria()->level(0).grid;
-  const double extent = std::max(vg.east() - vg.west(), vg.north() - vg.south());
-  v.objects.push_back({"mars", n.mars, scene->mars(), 2.0 * radius});
-  v.objects.push_back({"victoria", n.victoria, scene->victoria(), extent});
-  if (scene->secondDem()) {
-    const auto& sg = scene->secondDem()->level(0).grid;
-    v.objects.push_back({"second_dem", n.secondDem, scene->secondDem(), sg.east() - sg.west()});
-  }
-  v.objects.push_back({"rover", n.rover, nullptr, 4.0});
-  v.cameras.push_back({"orbit", n.orbitCamera, 45.0, 100.0});
-  v.cameras.push_back({"mast", n.mastCamera, 45.0, 0.05});
-  v.cameras.push_back({"chase", n.chaseCamera, 45.0, 0.05});
-  // Left: Mars whole, Victoria's side towards the camera. Right: Victoria from above at 35°.
-  const topo::Geodetic site = scene->layout().victoriaOrigin;
-  OpeningView whole;
-  whole.object = 0;
-  whole.target = scene->mars()->position(site.lonDeg, site.latDeg, 0.0);
-  whole.elevationDeg = 75.0;
-  whole.distance = 3.2 * radius;
-  OpeningView crater;
-  crater.object = 1;
-  crater.target = {0.0, 0.0, scene->demHeight(0.0, 0.0)};
-  crater.headingDeg = 20.0;
-  crater.elevationDeg = 35.0;
-  crater.distance = 1.2 * extent;
-  v.openings = {whole, crater};
-  v.bodyGrid = scene->mars();
-  v.bodyNode = n.mars;
-  v.keepAlive = scene;
-  return v;
-}
+namespace {
 
-ViewScene sceneFileScene(const std::string& path, std::size_t cacheBytes) {
-  scene::SceneOptions options;
-  options.cacheBytes = cacheBytes;
-  auto built = std::make_shared<scene::Scene>(scene::Scene::load(path, options));
+/// A built scene as the viewer shows it: its bodies (with their far fields) and DEMs with
+/// the effects each declares, its objects and cameras; opens on the first body whole and, if
+/// there is a DEM, split with the first DEM from above at 35°.
+ViewScene fromScene(const std::shared_ptr<scene::Scene>& built, const std::string& title) {
   ViewScene v;
-  v.title = path;
+  v.title = title;
   v.graph = std::shared_ptr<scenegraph::SceneGraph>(built, &built->graph());
   const std::vector<scene::SceneTerrain> terrains = built->terrains();
   const scene::SceneTerrain* firstBody = nullptr;
@@ -274,10 +210,51 @@ ViewScene sceneFileScene(const std::string& path, std::size_t cacheBytes) {
     crater.distance = 1.2 * std::max(g.east() - g.west(), g.north() - g.south());
     v.openings.push_back(crater);
   }
-  if (v.openings.empty()) throw InvalidArgument("view: " + path + ": the scene has no body or DEM");
+  if (v.openings.empty())
+    throw InvalidArgument("view: " + title + ": the scene has no body or DEM");
   v.cache = built->cache();
   v.keepAlive = built;
   return v;
+}
+
+}  // namespace
+
+ViewScene demoScene() {
+  // The demo scene as data (demo::sceneDescription(): generated Mars, the Victoria-like DEM
+  // and a second DEM, the rover), with what the viewer shows on top: lat/lon lines on Mars
+  // and structured noise on Victoria.
+  scene::SceneDescription d = demo::sceneDescription({});
+  d.bodies.front().look.effects.latLon = scene::EffectsDescription::LatLon{};
+  for (scene::Dem& dem : d.dems) {
+    if (dem.name == "victoria")
+      dem.look.effects.noise = scene::EffectsDescription::Noise{0.3, 8.0, 4, 0.15};
+  }
+  auto built = std::make_shared<scene::Scene>(std::move(d));
+  const demo::DemoCameras cameras = demo::addPaperCameras(*built);
+  ViewScene v = fromScene(built, "Mars/Victoria demo scene");
+  // Height colours over each terrain's height range (known once the data is built): Mars's
+  // from its far-field layers, Victoria's from its grid (with lat/lon lines, as a bare store).
+  for (ViewTerrain& t : v.terrains) {
+    if (t.farField) {
+      t.options.effects.heightColours =
+          clod::HeightColours{static_cast<float>(t.farField->minHeight()),
+                              static_cast<float>(t.farField->maxHeight()), true};
+    } else if (t.name == "victoria") {
+      const clod::Effects e = declaredEffects(*t.pyramid, true);
+      t.options.effects.heightColours = e.heightColours;
+      t.options.effects.latLon = e.latLon;
+    }
+  }
+  v.cameras = {{"orbit", cameras.orbit, 45.0, 100.0},
+               {"mast", cameras.mast, 45.0, 0.05},
+               {"chase", cameras.chase, 45.0, 0.05}};
+  return v;
+}
+
+ViewScene sceneFileScene(const std::string& path, std::size_t cacheBytes) {
+  scene::SceneOptions options;
+  options.cacheBytes = cacheBytes;
+  return fromScene(std::make_shared<scene::Scene>(scene::Scene::load(path, options)), path);
 }
 
 }  // namespace regolith::tools::viewer

@@ -98,8 +98,9 @@ struct ViewScene {
 ViewScene storeScene(const std::string& path, const std::string& grid, std::size_t cacheBytes,
                      int clipmapSize);
 
-/// The Mars/Victoria demo scene (demo::MarsVictoriaScene, generated): Mars with its far
-/// field, the Victoria-like DEM and a second DEM, the rover and its cameras. Opens split:
+/// The Mars/Victoria demo scene (demo::sceneDescription() with generated data, built by
+/// scene::Scene): Mars with its far field, the Victoria-like DEM and a second DEM, the rover
+/// and the paper layout's cameras (demo::addPaperCameras()). Opens split:
 /// Mars whole on the left, Victoria from above at 35° on the right.
 ViewScene demoScene();
 

@@ -1,17 +1,17 @@
 #pragma once
 /// \file
-/// The paper's example scene with data (generated Mars, Victoria-like DEMs, a rover, Earth),
-/// ready to render, and the headless fly-over from orbit down to the rover.
+/// The paper's example scene with data (generated or stored Mars, Victoria-like DEMs, a
+/// rover) as a scene description (docs/scene-format.md) built by scene::Scene, and the
+/// headless fly-over from orbit down to the rover.
 
 #include <regolith/clod/Effects.hpp>
-#include <regolith/clod/HeightPyramid.hpp>
-#include <regolith/clod/SceneRenderer.hpp>
-#include <regolith/compose/ComposedSurface.hpp>
-#include <regolith/demo/PaperScene.hpp>
-#include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/gl/Image.hpp>
+#include <regolith/scene/Scene.hpp>
 #include <regolith/scene/SceneDescription.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -47,7 +47,7 @@ struct MarsVictoriaOptions {
   std::filesystem::path marsStore, victoriaStore;
   std::string marsGrid = "mars", victoriaGrid = "victoria";
   std::size_t cacheBytes = std::size_t{256} << 20;
-  /// The DEMs' albedo; unset: MarsVictoriaScene::kDemAlbedo (greener than the planet, so
+  /// The DEMs' albedo; unset: kDemAlbedo (greener than the planet, so
   /// tests can tell the two apart).
   std::optional<glm::vec3> demAlbedo;
   /// Effects declared on the Victoria DEM (e.g. the wheel tracks of a traverse); none by
@@ -78,69 +78,10 @@ struct MarsVictoriaOptions {
   bool farField = true;
 };
 
-/// The scene: graph (demo::buildPaperScene), data and what each drawable key draws. Building
-/// it needs no GL; registerWith() does. The DEMs' origin heights are those of the planet's surface
-/// (bilinear in its finest level) at their sites, so the plains meet the planet.
-class MarsVictoriaScene {
- public:
-  /// Throws InvalidArgument for bad sizes (from the generators).
-  explicit MarsVictoriaScene(const MarsVictoriaOptions& options = {});
-
-  [[nodiscard]] scenegraph::SceneGraph& graph() noexcept { return graph_; }
-  [[nodiscard]] const scenegraph::SceneGraph& graph() const noexcept { return graph_; }
-  [[nodiscard]] const demo::PaperSceneNodes& nodes() const noexcept { return nodes_; }
-  [[nodiscard]] const demo::PaperSceneLayout& layout() const noexcept { return layout_; }
-  [[nodiscard]] const std::shared_ptr<const clod::HeightPyramid>& mars() const { return mars_; }
-  [[nodiscard]] const std::shared_ptr<const clod::HeightPyramid>& victoria() const {
-    return victoria_;
-  }
-  [[nodiscard]] const std::shared_ptr<const clod::HeightPyramid>& secondDem() const {
-    return second_;
-  }
-  /// Height of the Victoria DEM at (x, y) in its frame (bilinear in its finest level), m.
-  [[nodiscard]] double demHeight(double x, double y) const;
-  /// Puts the rover at (x, y) on the Victoria DEM (on the surface) with a heading.
-  void placeRover(double x, double y, double headingDeg);
-
-  /// Albedos: the DEMs are drawn greener than the planet so tests can tell them apart.
-  static constexpr glm::vec3 kPlanetAlbedo{0.80F, 0.52F, 0.38F};
-  static constexpr glm::vec3 kDemAlbedo{0.55F, 0.75F, 0.45F};
-
-  /// The composed surface every terrain draws (null unless options.composition).
-  [[nodiscard]] const std::shared_ptr<const compose::ComposedSurface>& composed() const noexcept {
-    return composed_;
-  }
-  /// How many datasets of the composition a camera sees (its frustum against each
-  /// dataset's bounds, Snapshot::visible()): `camera` is the camera node, with the vertical
-  /// field of view and aspect ratio of its image. 0 without composition.
-  [[nodiscard]] std::size_t datasetsSeen(scenegraph::NodeId camera, double fovYDegrees,
-                                         double aspect, double near) const;
-
-  /// Mars's heights for the far field: the composed surface (options.composition) or the
-  /// planet grid, resampled into farfield::HeightLayers (global 2048 × 1024 and 512² caps).
-  [[nodiscard]] std::shared_ptr<const farfield::HeightLayers> farFieldLayers() const;
-  /// The number of planet clipmap levels registerWith() draws (0: all).
-  [[nodiscard]] std::size_t planetClipmapLevels() const;
-
-  /// Registers every drawable of the scene with a renderer (terrains, cut-outs, rover).
-  void registerWith(clod::SceneRenderer& renderer) const;
-  /// A light direction in `focus`'s frame: morning sun over Victoria (35° up, from the east).
-  [[nodiscard]] glm::dvec3 lightInFocus(scenegraph::NodeId focus) const;
-
- private:
-  void fromStores(const MarsVictoriaOptions& options);
-  void compose();  // options_.composition: replaces the pyramids by composed ones
-  void finish();   // Earth, the graph, the rover
-
-  MarsVictoriaOptions options_;
-  scenegraph::SceneGraph graph_{"sun"};
-  demo::PaperSceneLayout layout_;
-  demo::PaperSceneNodes nodes_;
-  std::shared_ptr<const clod::HeightPyramid> mars_, victoria_, second_, earth_;
-  std::shared_ptr<void> pager_;  // keeps the stores' pager alive while the scene draws them
-  std::shared_ptr<const compose::ComposedSurface> composed_;
-  std::shared_ptr<void> extraPager_;  // the extra datasets' pagers
-};
+/// The albedos of the demo's terrains: the DEMs are drawn greener than the planet so tests
+/// can tell them apart.
+inline constexpr glm::vec3 kPlanetAlbedo{0.80F, 0.52F, 0.38F};
+inline constexpr glm::vec3 kDemAlbedo{0.55F, 0.75F, 0.45F};
 
 /// What the fly-over renders and where.
 struct FlyoverOptions {
@@ -168,8 +109,8 @@ struct FlyoverSummary {
   double renderSeconds = 0.0;  ///< drawing and reading back frames only
   /// The frame where the focus switched from Mars to Victoria (-1: never).
   int focusSwitchFrame = -1;
-  /// With composition: how many datasets each frame's camera saw (MarsVictoriaScene::
-  /// datasetsSeen()), one entry per frame.
+  /// With composition: how many datasets each frame's camera saw (its frustum against each
+  /// dataset's bounds, compose::Snapshot::visible()), one entry per frame.
   std::vector<std::size_t> datasetsPerFrame;
   /// The frame where the camera passed closest to the north pole (overPole), and its
   /// latitude there (degrees; -1 and NaN without overPole).
@@ -183,7 +124,8 @@ struct FlyoverSummary {
   int impostorFrames = 0;
 };
 
-/// Renders the fly-over headless: the camera starts far enough out to see Mars whole and
+/// Builds the demo scene (buildScene(options.scene) with the rover at options.rover) and
+/// renders the fly-over over it headless: the camera starts far enough out to see Mars whole and
 /// descends on a smooth logarithmic path to a few metres from the rover on Victoria's rim,
 /// the focus switching from Mars to Victoria on the way. Writes frame_NNNN.png files (and
 /// multiview.png) into outputDir, creating it. Creates an EGL context if none is current.
@@ -191,6 +133,13 @@ struct FlyoverSummary {
 /// written over one of the scene's stores (core::refuseOverwritingInput()); GlError without
 /// GL, regolith::Error if a PNG cannot be written.
 FlyoverSummary renderFlyover(const FlyoverOptions& options);
+
+/// The same fly-over over a scene already built (e.g. from the file `regolith demo` writes):
+/// options.scene and options.rover are not used; the scene must hold a body "mars", a DEM
+/// "victoria" on it and an object "rover" on that DEM (InvalidArgument naming what is
+/// missing). Adds its cameras to the scene's graph ("flyover_camera", and for the multi-view
+/// those of addPaperCameras()), so a scene flies over once.
+FlyoverSummary renderFlyover(scene::Scene& scene, const FlyoverOptions& options);
 
 /// One view of the scene, for a single image.
 struct SceneViewOptions {
@@ -205,15 +154,29 @@ struct SceneViewOptions {
   double fovYDegrees = 45.0, near = 0.05;
 };
 
-/// Renders one view headless (an EGL context is made if none is current), focus on
-/// Victoria. Throws InvalidArgument for an empty image, a camera pose, near plane or rover
-/// that is not finite, or a field of view outside (0, 180) degrees; GlError without GL.
+/// Renders one view of the demo scene (buildScene(options.scene) with the rover there)
+/// headless (an EGL context is made if none is current), focus on Victoria. Throws InvalidArgument
+/// for an empty image, a camera pose, near plane or rover that is not finite, or a field of view
+/// outside (0, 180) degrees; GlError without GL.
 gl::RgbaImage renderSceneView(const SceneViewOptions& options);
 
 /// The fly-over camera's pose in the Victoria DEM frame at t ∈ [0, 1] for a rover at `rover`,
 /// descending from `startDistance` metres (at t = 0) to 6 m (at t = 1).
 [[nodiscard]] scenegraph::Pose flyoverCamera(double t, const glm::dvec3& rover,
                                              double startDistance = 8.0e6);
+
+/// The paper layout's cameras (demo/PaperScene.hpp) in a built demo scene.
+struct DemoCameras {
+  scenegraph::NodeId orbit = 0, mast = 0, chase = 0;
+};
+
+/// Adds the paper layout's cameras to a built demo scene's graph: "orbit_camera" 20 km above
+/// Victoria's origin looking straight down, north up (child of "mars"); the rover's
+/// "mast_camera", 2.1 m up just ahead of the mast head of clod::roverMesh(), looking 15° down
+/// ahead; and "chase_camera" 8 m behind and 3 m above the rover (children of "rover").
+/// InvalidArgument if the scene lacks the body "mars", the DEM "victoria" or the object
+/// "rover", or already has nodes of those names.
+DemoCameras addPaperCameras(scene::Scene& scene);
 
 /// Where the scene file's rover stands: at a pose on the Victoria DEM, or where a traverse of
 /// these waypoints (grid frame) stops, its tracks pressed into the DEM.
@@ -224,13 +187,22 @@ struct SceneRover {
 
 /// The Mars/Victoria scene of `options` as a scene description (docs/scene-format.md), no
 /// cameras (the caller adds its views; their frame "victoria" is the Victoria DEM's, as
-/// renderSceneView()'s camera): Mars from its generator or store (with the extra datasets and
-/// the DEMs composed into it under options.composition), the Victoria DEM and the second DEM,
-/// the rover, and the morning light of lightInFocus(). Scene (scene/Scene.hpp) draws it as
-/// renderSceneView() does, except Earth (a sub-pixel dot from Mars, left out). Store paths
-/// are written as given (relative ones resolve against the current folder). Effects other than
-/// tracks in options.victoriaEffects are not carried over (InvalidArgument).
+/// renderSceneView()'s camera): Mars ("mars") from its generator or store (with the extra
+/// datasets and the DEMs composed into it under options.composition), the Victoria DEM
+/// ("victoria") and the second DEM ("second_dem"), the rover ("rover"), and the morning light
+/// over Victoria (35° up, from the east). This description is the demo scene: every demo
+/// render (the fly-over, renderSceneView(), `regolith demo`'s rover views) draws the
+/// scene::Scene built from it. Earth of the paper's layout is left out (a sub-pixel dot from
+/// Mars). Store paths are written as given (relative ones resolve against the current
+/// folder). Effects other than tracks in options.victoriaEffects are not carried over
+/// (InvalidArgument).
 [[nodiscard]] scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
                                                        const SceneRover& rover = {});
+
+/// scene::Scene(sceneDescription(options, rover)) with the scene's patch cache of
+/// options.cacheBytes and options.victoriaEffects.tracks (a layer the caller pressed) drawn on
+/// the Victoria DEM. Throws as sceneDescription() and scene::Scene() do.
+[[nodiscard]] scene::Scene buildScene(const MarsVictoriaOptions& options,
+                                      const SceneRover& rover = {});
 
 }  // namespace regolith::demo

@@ -5,16 +5,21 @@
 
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/clod/SceneRenderer.hpp>
+#include <regolith/rover/TrackLayer.hpp>
+#include <regolith/compose/ComposedSurface.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/gl/Image.hpp>
 #include <regolith/scene/SceneDescription.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
 #include <regolith/store/PatchCache.hpp>
+#include <regolith/topo/Body.hpp>
 
 #include <glm/vec3.hpp>
 
 #include <cstddef>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,6 +37,13 @@ struct SceneTerrain {
   clod::ClipmapOptions options;  ///< the look and the declared effects
   /// Bodies drawn beyond their clipmap by the far field (null: none).
   std::shared_ptr<const farfield::HeightLayers> farField;
+  /// Bodies: the composed surface of their datasets (null unless several heights datasets
+  /// or `composeDems`).
+  std::shared_ptr<const compose::ComposedSurface> composed;
+  /// DEMs: the planetodetic origin of their tangent plane (height included) and its heading
+  /// (degrees clockwise from north).
+  topo::Geodetic origin{};
+  double headingDeg = 0.0;
 };
 
 /// An object (a rover) as render() draws it.
@@ -45,6 +57,11 @@ struct SceneObject {
 struct SceneOptions {
   /// Budget of the patch cache every store of the scene is paged through.
   std::size_t cacheBytes = std::size_t{256} << 20;
+  /// Wheel tracks a caller already pressed (its own traverse, e.g. `regolith demo`'s), by
+  /// DEM name: a DEM that declares `tracks` draws this layer instead of a new, empty one
+  /// (and the traverses of the scene's objects on it press into it too). InvalidArgument
+  /// when the scene is built if the name is no DEM of the scene or the DEM declares no tracks.
+  std::map<std::string, std::shared_ptr<rover::TrackLayer>> tracks;
 };
 
 /// A built scene. Building needs no GL; render() does (and makes an EGL context if none is
@@ -94,6 +111,16 @@ class Scene {
   /// the far field of each body that has one. Throws InvalidArgument for an unknown camera
   /// (listing the scene's cameras); GlError without GL.
   [[nodiscard]] gl::RgbaImage render(const std::string& camera) const;
+  /// Renders any camera node of graph() (e.g. one a front end added) with `focus` as the
+  /// render list's origin, into a `width` × `height` image cleared to the background, as
+  /// render() does: `view` gives the intrinsics and viewport; its light is replaced by the
+  /// scene's light in `focus`'s frame. Needs a current GL context or makes one.
+  [[nodiscard]] gl::RgbaImage render(scenegraph::NodeId camera, scenegraph::NodeId focus,
+                                     clod::SceneView view, int width, int height) const;
+  /// Registers what render() draws with a renderer a caller keeps across frames (the
+  /// fly-over): every terrain with its options, the cut-outs of the DEMs in their bodies,
+  /// and the objects' meshes. The far field is not registered (terrains() gives its layers).
+  void registerWith(clod::SceneRenderer& renderer) const;
 
  private:
   struct Impl;

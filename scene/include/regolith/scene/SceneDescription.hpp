@@ -49,11 +49,16 @@ struct DataSource {
   bool operator==(const DataSource&) const = default;
 };
 
-/// A texture draped over a terrain (albedo or overlay): one grey grid, values in [0, 1].
+/// A texture draped over a terrain (albedo or overlay): one grey grid, values in [0, 1]. The
+/// grid is a store's, or a generator's run in memory on the terrain's own kind of grid
+/// ("mars-planet" over a body, "victoria" over a DEM): a generator gives heights in metres,
+/// which `range` maps linearly onto [0, 1] (min → 0, max → 1, clamped).
 struct DrapedSource {
   DataSource data;
   int window = 512;      ///< texels per side of each texture clipmap level, 64..4096
   double opacity = 1.0;  ///< overlays: blend factor in [0, 1]
+  /// Generators only (required there): the values that become 0 and 1, min < max.
+  std::optional<std::array<double, 2>> range;
 
   bool operator==(const DrapedSource&) const = default;
 };
