@@ -6,10 +6,10 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/SceneRenderer.hpp>
-#include <regolith/rover/TrackLayer.hpp>
 #include <regolith/compose/ComposedSurface.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/gl/Image.hpp>
+#include <regolith/rover/TrackLayer.hpp>
 #include <regolith/scene/SceneDescription.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
 #include <regolith/store/PatchCache.hpp>
