@@ -52,6 +52,8 @@
 #include <regolith/topo/Body.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
+#include "PgmShaders.hpp"
+
 #include <benchmark/benchmark.h>
 #include <glm/geometric.hpp>
 
@@ -455,38 +457,10 @@ void main() {
 }
 )";
 
-// The current one (a copy of PgmShaders.hpp's kReduceCompute).
-constexpr const char* kReduceColumns = R"(#version 450 core
-layout(local_size_x = 64) in;
-layout(binding = 3) uniform sampler2D uRadius;
-layout(std430, binding = 1) buffer Result { uint minBits; };
-shared float part[64];
-uint orderedBits(float f) {
-  uint u = floatBitsToUint(f);
-  return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
-}
-void main() {
-  ivec2 size = textureSize(uRadius, 0);
-  int x = int(gl_GlobalInvocationID.x);
-  int y0 = int(gl_WorkGroupID.y) * 64;
-  float v = 3.0e38;
-  if (x < size.x) {
-    int y1 = min(y0 + 64, size.y);
-    for (int y = y0; y < y1; ++y) v = min(v, texelFetch(uRadius, ivec2(x, y), 0).r);
-  }
-  part[gl_LocalInvocationIndex] = v;
-  barrier();
-  if (gl_LocalInvocationIndex == 0u) {
-    float m = part[0];
-    for (uint i = 1u; i < 64u; ++i) m = min(m, part[i]);
-    atomicMin(minBits, orderedBits(m));
-  }
-}
-)";
-
 void reduction(benchmark::State& state, bool tree, int screen) {
-  const gl::Program program = gl::Program::compute(tree ? "reduce (tree)" : "reduce (columns)",
-                                                   tree ? kReduceTree : kReduceColumns);
+  const gl::Program program =
+      gl::Program::compute(tree ? "reduce (tree)" : "reduce (columns)",
+                           tree ? kReduceTree : farfield::shaders::kReduceCompute);
   gl::Texture radius;
   glTextureStorage2D(radius.id(), 1, GL_R32F, screen, screen);
   glTextureParameteri(radius.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
