@@ -6,6 +6,8 @@
 // edges, in the half-pixel border, outside the grid and next to holes.
 #include <regolith/topo/TopoDem.hpp>
 
+#include "support/TestSources.hpp"
+
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
@@ -20,6 +22,8 @@
 
 using namespace regolith;
 using namespace regolith::topo;
+using regolith::test::BlockSource;
+using regolith::test::SampleOnlySource;
 
 namespace {
 
@@ -59,41 +63,6 @@ std::vector<float> samplesOf(const Case& k, const Quadratic& q) {
   }
   return s;
 }
-
-// Only sample(): every query takes the generic kernel.
-class SampleOnlySource final : public SampleSource {
- public:
-  SampleOnlySource(std::size_t rows, std::size_t cols, std::vector<float> data)
-      : rows_(rows), cols_(cols), data_(std::move(data)) {}
-  std::size_t rows() const noexcept override { return rows_; }
-  std::size_t cols() const noexcept override { return cols_; }
-  float sample(std::size_t r, std::size_t c) const override { return data_.at(r * cols_ + c); }
-
- private:
-  std::size_t rows_, cols_;
-  std::vector<float> data_;
-};
-
-// Blocks of 7 × 5 samples, as a pager hands out patches: cells straddle block edges on rows
-// 6, 13, … and columns 4, 9, ….
-class BlockSource final : public SampleSource {
- public:
-  BlockSource(std::size_t rows, std::size_t cols, std::vector<float> data)
-      : rows_(rows), cols_(cols), data_(std::make_shared<std::vector<float>>(std::move(data))) {}
-  std::size_t rows() const noexcept override { return rows_; }
-  std::size_t cols() const noexcept override { return cols_; }
-  float sample(std::size_t r, std::size_t c) const override { return (*data_)[r * cols_ + c]; }
-  bool block(std::size_t r, std::size_t c, SampleBlock& out) const override {
-    const std::size_t r0 = r / 7 * 7, c0 = c / 5 * 5;
-    out = {data_->data() + r0 * cols_ + c0,      r0,    c0,   std::min<std::size_t>(7, rows_ - r0),
-           std::min<std::size_t>(5, cols_ - c0), cols_, data_};
-    return true;
-  }
-
- private:
-  std::size_t rows_, cols_;
-  std::shared_ptr<std::vector<float>> data_;
-};
 
 // The expected answer at one point, or nothing for the value where the rules leave the
 // reference out (a normal that falls back to nearest-sample differences).

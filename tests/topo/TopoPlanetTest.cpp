@@ -2,12 +2,16 @@
 #include <regolith/core/Error.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
 
+#include "support/TestSources.hpp"
+
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <random>
+#include <vector>
 
 using namespace regolith;
 using namespace regolith::topo;
@@ -202,4 +206,105 @@ TEST(TopoPlanet, RejectsGridsBeyondThePolesOrWiderThan360Degrees) {
   EXPECT_THROW(TopoPlanet(TopoGrid(2, 2, 0.0, 0.0, 200.0, 1.0), Body::moon(),
                           LatitudeType::Planetocentric, s),
                InvalidArgument);
+}
+
+namespace {
+bool sameBits(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
+bool sameBits(const glm::dvec3& a, const glm::dvec3& b) {
+  return sameBits(a.x, b.x) && sameBits(a.y, b.y) && sameBits(a.z, b.z);
+}
+}  // namespace
+
+TEST(TopoPlanet, BilinearFastPathsGiveTheGenericKernelsBits) {
+  // One global 2°-grid with a nodata hole, read three ways: resident (the resident fast
+  // path), in 7 × 5 blocks (the thread's-block fast path of paged sources) and sample by
+  // sample (the generic kernel only). Heights, normals in both frames and both statuses must
+  // agree bit for bit at random points, on sample lines, next to the hole, across the ±180°
+  // seam's cell and in the polar caps, for heights alone and for surfaces, one by one and in
+  // batches; the interior points also match a bilinear reference computed here in double.
+  const double d = 2.0;
+  const std::size_t rows = 90, cols = 180;
+  const TopoGrid g(rows, cols, -180.0 + d / 2, 90.0 - d / 2, d, d, -9999.0);
+  std::vector<float> s(rows * cols);
+  for (std::size_t r = 0; r < rows; ++r) {
+    for (std::size_t c = 0; c < cols; ++c) {
+      const glm::dvec2 p = g.sampleCentre(double(r), double(c));
+      s[r * cols + c] = float(field(p.y, p.x));
+    }
+  }
+  s[40 * cols + 100] = -9999.0F;  // a hole at lat 9°, lon 21°
+  const Body body = Body::marsSphere();
+  const auto lt = LatitudeType::Planetocentric;
+  const TopoPlanet resident(g, body, lt, std::make_shared<InMemorySamples>(rows, cols, s));
+  const TopoPlanet blocks(g, body, lt, std::make_shared<test::BlockSource>(rows, cols, s));
+  const TopoPlanet generic(g, body, lt, std::make_shared<test::SampleOnlySource>(rows, cols, s));
+
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> lat(-90.0, 90.0), lon(-180.0, 180.0), u01(0.0, 1.0);
+  std::vector<LatLon> pts;
+  for (int i = 0; i < 3000; ++i) pts.push_back({lat(rng), lon(rng)});
+  for (int i = 0; i < 200; ++i) {
+    pts.push_back({-89.0 + 2.0 * std::floor(u01(rng) * 90.0), lon(rng)});    // on sample rows
+    pts.push_back({lat(rng), -179.0 + 2.0 * std::floor(u01(rng) * 180.0)});  // columns
+    pts.push_back({6.0 + 6.0 * u01(rng), 18.0 + 6.0 * u01(rng)});            // the hole
+    pts.push_back({lat(rng), 178.5 + 3.0 * u01(rng)});                       // the seam
+    pts.push_back({88.5 + 1.5 * u01(rng), lon(rng)});                        // north cap
+  }
+  int interior = 0;
+  for (const LatLon& p : pts) {
+    const HeightSample gh = generic.height(p);
+    for (const TopoPlanet* t : {&resident, &blocks}) {
+      const HeightSample h = t->height(p);
+      ASSERT_EQ(h.status, gh.status) << p.latDeg << ", " << p.lonDeg;
+      ASSERT_TRUE(sameBits(h.height, gh.height)) << p.latDeg << ", " << p.lonDeg;
+      for (const NormalFrame f : {NormalFrame::Grid, NormalFrame::BodyFixed}) {
+        const SurfaceSample a = t->surface(p, Interpolation::Bilinear, f);
+        const SurfaceSample b = generic.surface(p, Interpolation::Bilinear, f);
+        ASSERT_EQ(a.status, b.status);
+        ASSERT_EQ(a.normalStatus, b.normalStatus);
+        ASSERT_TRUE(sameBits(a.height, b.height)) << p.latDeg << ", " << p.lonDeg;
+        ASSERT_TRUE(sameBits(a.normal, b.normal)) << p.latDeg << ", " << p.lonDeg;
+      }
+    }
+    // The reference, between sample centres away from the seam and the caps.
+    const double v = (g.y0() - p.latDeg) / d, u = (p.lonDeg - g.x0()) / d;
+    if (u < 0.0 || v < 0.0 || u >= double(cols - 1) || v >= double(rows - 1)) continue;
+    const auto c = std::size_t(u), r = std::size_t(v);
+    const double tu = u - double(c), tv = v - double(r);
+    const double q[4] = {s[r * cols + c], s[r * cols + c + 1], s[(r + 1) * cols + c],
+                         s[(r + 1) * cols + c + 1]};
+    // A hole counts where its weight is not 0 (docs/queries.md: a point on a sample line
+    // does not see the hole beside it).
+    const double w[4] = {(1 - tu) * (1 - tv), tu * (1 - tv), (1 - tu) * tv, tu * tv};
+    bool hole = false;
+    double ref = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      if (w[k] == 0.0) continue;
+      hole = hole || q[k] == -9999.0;
+      ref += w[k] * q[k];
+    }
+    if (hole) {
+      EXPECT_EQ(gh.status, QueryStatus::Nodata) << p.latDeg << ", " << p.lonDeg;
+      continue;
+    }
+    EXPECT_NEAR(resident.height(p).height, ref, 1e-9 * (1.0 + std::abs(ref)));
+    ++interior;
+  }
+  EXPECT_GT(interior, 2000);
+  // Batches take the same paths.
+  std::vector<double> la, lo;
+  for (const LatLon& p : pts) {
+    la.push_back(p.latDeg);
+    lo.push_back(p.lonDeg);
+  }
+  std::vector<double> h1(pts.size()), h2(pts.size());
+  std::vector<glm::dvec3> n1(pts.size()), n2(pts.size());
+  std::vector<QueryStatus> s1(pts.size()), s2(pts.size());
+  resident.surfaces(la, lo, h1, n1, s1, Interpolation::Bilinear, NormalFrame::Grid, {});
+  generic.surfaces(la, lo, h2, n2, s2, Interpolation::Bilinear, NormalFrame::Grid, {});
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    ASSERT_EQ(s1[i], s2[i]);
+    ASSERT_TRUE(sameBits(h1[i], h2[i]));
+    ASSERT_TRUE(sameBits(n1[i], n2[i]));
+  }
 }

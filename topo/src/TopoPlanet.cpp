@@ -1,5 +1,6 @@
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
+#include <regolith/topo/TopoDem.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
 
 #include "Kernels.hpp"
@@ -79,6 +80,9 @@ TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
   northPoleV_ = (grid_.y0() - 90.0) / grid_.spacingY();
   southPoleV_ = (grid_.y0() + 90.0) / grid_.spacingY();
   slack_ = grid_.edgeSlack();
+  resident_ = samples_->contiguous();
+  table_ = samples_->blockIndex();
+  sourceId_ = samples_->id();
   if (northCap_ || grid_.y0() >= 90.0) {
     northPole_ = rowMeans != nullptr ? rowMeans->first : rowMean(*samples_, grid_, 0);
   }
@@ -181,6 +185,36 @@ SurfaceSample TopoPlanet::surface(const LatLon& ll, Interpolation interp, Normal
   return surfaceImpl(ll, interp, frame, true);
 }
 
+bool TopoPlanet::bilinearFast(double u, double v, bool grad, detail::KernelResult& k) const {
+  detail::ResidentBilinear f;
+  f.rows = static_cast<long>(grid_.rows());
+  f.cols = static_cast<long>(grid_.cols());
+  if (f.rows < 2 || f.cols < 2) return false;
+  f.data = resident_;
+  // Strict bounds: the seam's cell (the last column of a global grid, whose right-hand
+  // samples are column 0) and the last row go through the generic kernel.
+  f.uMax = static_cast<double>(grid_.cols()) - 1.0;
+  f.vMax = static_cast<double>(grid_.rows()) - 1.0;
+  f.nodata = detail::nodataOrNan(grid_);
+  f.hasNodata = grid_.nodata().has_value() && !std::isnan(*grid_.nodata());
+  f.snapU = 2.0 * slack_.x;
+  f.snapV = 2.0 * slack_.y;
+  detail::CellValue cv;
+  bool ok = false;
+  if (resident_ != nullptr) {
+    ok = grad ? f.evalResident<true>(u, v, cv) : f.evalResident<false>(u, v, cv);
+  } else {
+    ok = grad ? detail::pagedBilinear<true>(f, table_, sourceId_, u, v, cv)
+              : detail::pagedBilinear<false>(f, table_, sourceId_, u, v, cv);
+  }
+  if (!ok) return false;
+  k.h = cv.h;
+  k.dhdu = cv.dhdu;
+  k.dhdv = cv.dhdv;
+  k.status = k.gradStatus = QueryStatus::Ok;
+  return true;
+}
+
 SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp, NormalFrame frame,
                                       bool wantNormal) const {
   // Longitudes beyond a turn are reduced exactly first (wrapLongitude180), so that 1e308 is
@@ -191,6 +225,13 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp,
   const Located L = locate(ll);
   if (!L.inside) return s;
   const double nd = detail::nodataOrNan(grid_);
+  // Bilinear between the caps, in a cell that is not the seam's: the DEM's fast path (the
+  // resident samples, or the thread's block and the lock-free block table of a paged source)
+  // on the cell locate() chose. Same samples, same arithmetic (detail::bilinearPatch), so the
+  // same bits as the generic kernel below, which answers whatever the fast path declines.
+  detail::KernelResult k;
+  const bool fast =
+      interp == Interpolation::Bilinear && L.cap == 0 && bilinearFast(L.u, L.v, wantNormal, k);
   auto eval = [&](auto grad) {
     constexpr bool G = decltype(grad)::value;
     return planetAccessor<G>(
@@ -201,12 +242,13 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp,
   // kernel's gradient at the cap's edge even for a height.
   const bool hermiteCap = L.cap != 0 && interp != Interpolation::Nearest;
   const bool analytic = (wantNormal && L.cap == 0) || hermiteCap;
-  const detail::KernelResult k =
-      analytic ? planetAccessor<true>(grid_, *samples_, global_, northCap_, southCap_, L.u, L.v,
-                                      [&](const auto& acc) {
-                                        return detail::evaluateSurface(interp, acc, L.u, L.v, nd);
-                                      })
-               : eval(std::false_type{});
+  if (!fast) {
+    k = analytic ? planetAccessor<true>(grid_, *samples_, global_, northCap_, southCap_, L.u, L.v,
+                                        [&](const auto& acc) {
+                                          return detail::evaluateSurface(interp, acc, L.u, L.v, nd);
+                                        })
+                 : eval(std::false_type{});
+  }
   s.status = k.status;
   s.normalStatus = k.status;
   if (k.status != QueryStatus::Ok) return s;

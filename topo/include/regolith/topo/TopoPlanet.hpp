@@ -6,6 +6,7 @@
 #include <regolith/topo/Query.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
+#include <cstdint>
 #include <memory>
 #include <span>
 
@@ -30,6 +31,11 @@ inline constexpr double kPoleOverhangPixels = 0.01;
 /// |lat| > 90 and NaN/inf throw InvalidArgument.
 ///
 /// Thread-safety: as TopoDem.
+class BlockIndex;
+namespace detail {
+struct KernelResult;
+}
+
 class TopoPlanet {
  public:
   /// Throws InvalidArgument if samples is null or mis-sized, or the grid's pixel extent
@@ -96,6 +102,9 @@ class TopoPlanet {
   [[nodiscard]] SurfaceSample surfaceImpl(const LatLon& ll, Interpolation interp, NormalFrame frame,
                                           bool wantNormal) const;
   [[nodiscard]] glm::dvec3 capNormalEnu(const LatLon& ll, Interpolation interp, double h) const;
+  /// The bilinear fast path at grid indices (u, v) (height, and gradient when grad): true and
+  /// k filled, or false where the generic kernel must answer (TopoPlanet.cpp).
+  [[nodiscard]] bool bilinearFast(double u, double v, bool grad, detail::KernelResult& k) const;
 
   TopoGrid grid_;
   Body body_;
@@ -108,6 +117,11 @@ class TopoPlanet {
   double southPoleV_ = 0.0;
   glm::dvec2 slack_{0.0};  // grid_.edgeSlack()
   double northPole_, southPole_;
+  // The bilinear fast path (TopoPlanet.cpp, bilinearFast): the samples when resident, else
+  // the paged source's block table and unique id, as the source gives them; cached.
+  const float* resident_ = nullptr;
+  const BlockIndex* table_ = nullptr;
+  std::uint64_t sourceId_ = 0;
 };
 
 }  // namespace regolith::topo
