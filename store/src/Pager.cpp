@@ -6,8 +6,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
+#include <exception>
 #include <limits>
+#include <map>
+#include <mutex>
 #include <string>
+#include <utility>
 
 namespace regolith::store {
 namespace {
@@ -17,6 +22,172 @@ std::uint32_t nextGridId() {
   static std::atomic<std::uint32_t> next{1};  // ids only; no state is shared through it
   return next.fetch_add(1, std::memory_order_relaxed);
 }
+
+}  // namespace
+
+namespace detail {
+
+/// The patches of one store file that are alive anywhere in the process, by key, and the
+/// file's grid ids: what every pager of the file shares (Pager.hpp, "One store file, many
+/// pagers"). Pagers find it by the file's identity in a process-wide registry of weak
+/// references, so it lives while a pager or a source of the file does: while the file is
+/// open, so its inode cannot be reused by another file.
+///
+/// A patch is held here by a weak reference only: it stays alive while a cache or a reader
+/// holds it, and a request for it meanwhile gets the same object instead of a new read.
+/// Concurrent requests for a key that is not alive share one read, as in PatchCache.
+///
+/// Thread-safety: every member may be called concurrently.
+class FilePatches {
+ public:
+  struct Grid {
+    std::uint32_t id;
+    std::size_t rows, cols, levels, patchRows, patchCols;
+    GridKind kind;
+    friend bool operator==(const Grid&, const Grid&) = default;
+  };
+
+  /// New ids for the grids of `store`. `registered` says whether the registry names it.
+  FilePatches(const Store& store, bool registered) : id_(store.fileId()), registered_(registered) {
+    for (const std::string& name : store.gridNames()) {
+      grids_.emplace(name, shapeOf(store.grid(name), nextGridId()));
+    }
+  }
+  ~FilePatches();
+  FilePatches(const FilePatches&) = delete;
+  FilePatches& operator=(const FilePatches&) = delete;
+  FilePatches(FilePatches&&) = delete;
+  FilePatches& operator=(FilePatches&&) = delete;
+
+  /// The pagers' shared state of the file `store` has open: the live one if there is one
+  /// and its grids are those of `store`, else a new one.
+  static std::shared_ptr<FilePatches> of(const Store& store);
+
+  /// The id of a grid of the file (it must be one of its grids).
+  [[nodiscard]] std::uint32_t gridId(const std::string& name) const { return grids_.at(name).id; }
+
+  /// The patch `key`: the live one if any holder has it, else `read()`'s (whose exception
+  /// propagates, to concurrent requests for the key too).
+  template <class Read>
+  std::shared_ptr<const Patch> get(const PatchKey& key, const Read& read) {
+    std::shared_ptr<Pending> pending;
+    {
+      std::unique_lock lock(mutex_);
+      Slot& slot = slots_[key];
+      if (auto alive = slot.patch.lock()) return alive;
+      if (slot.pending) {
+        const std::shared_ptr<Pending> other = slot.pending;
+        other->done.wait(lock, [&other] { return other->finished; });
+        if (other->error) std::rethrow_exception(other->error);
+        return other->patch;
+      }
+      pending = std::make_shared<Pending>();
+      slot.pending = pending;
+    }
+    std::shared_ptr<const Patch> patch;
+    std::exception_ptr error;
+    try {
+      patch = read();
+    } catch (...) {
+      error = std::current_exception();
+    }
+    {
+      const std::lock_guard lock(mutex_);
+      const auto it = slots_.find(key);  // there: a slot with a read pending is never swept
+      it->second.pending.reset();
+      it->second.patch = patch;
+      pending->finished = true;
+      pending->patch = patch;
+      pending->error = error;
+      sweep();
+    }
+    pending->done.notify_all();
+    if (error) std::rethrow_exception(error);
+    return patch;
+  }
+
+ private:
+  struct Pending {
+    std::condition_variable done;
+    bool finished = false;  // these three are guarded by mutex_
+    std::shared_ptr<const Patch> patch;
+    std::exception_ptr error;
+  };
+  struct Slot {
+    std::weak_ptr<const Patch> patch;
+    std::shared_ptr<Pending> pending;  // a read in flight
+  };
+
+  static Grid shapeOf(const GridInfo& g, std::uint32_t id) {
+    return {id, g.rows, g.cols, g.levels, g.patchRows, g.patchCols, g.kind};
+  }
+  /// Whether `store`'s grids are this file's (false only if the file changed in place).
+  [[nodiscard]] bool describes(const Store& store) const {
+    const std::vector<std::string> names = store.gridNames();
+    if (names.size() != grids_.size()) return false;
+    return std::all_of(names.begin(), names.end(), [&](const std::string& name) {
+      const auto it = grids_.find(name);
+      return it != grids_.end() && it->second == shapeOf(store.grid(name), it->second.id);
+    });
+  }
+  /// Drops the slots of patches no longer alive, once the table has doubled since the last
+  /// sweep: amortised O(1) per read, and at most twice the live slots plus 64 kept.
+  void sweep() {
+    if (slots_.size() < sweepAt_) return;
+    std::erase_if(slots_,
+                  [](const auto& kv) { return !kv.second.pending && kv.second.patch.expired(); });
+    sweepAt_ = 2 * slots_.size() + 64;
+  }
+
+  struct Registry {
+    std::mutex mutex;
+    std::map<FileId, std::weak_ptr<FilePatches>> files;
+  };
+  static Registry& registry() {
+    static Registry r;  // made before any FilePatches, so destroyed after the last one
+    return r;
+  }
+
+  const FileId id_;
+  const bool registered_;
+  std::map<std::string, Grid, std::less<>> grids_;  // fixed after construction
+  std::mutex mutex_;
+  std::unordered_map<PatchKey, Slot, PatchKeyHash> slots_;  // guarded by mutex_
+  std::size_t sweepAt_ = 64;                                // guarded by mutex_
+};
+
+FilePatches::~FilePatches() {
+  if (!registered_) return;
+  Registry& r = registry();
+  const std::lock_guard lock(r.mutex);
+  // The entry is this one's unless a new pager of the file replaced it after this one's
+  // last reference went; that one is alive.
+  if (const auto it = r.files.find(id_); it != r.files.end() && it->second.expired()) {
+    r.files.erase(it);
+  }
+}
+
+std::shared_ptr<FilePatches> FilePatches::of(const Store& store) {
+  Registry& r = registry();
+  std::shared_ptr<FilePatches> live;  // released after the lock: its destructor takes it
+  {
+    const std::lock_guard lock(r.mutex);
+    std::weak_ptr<FilePatches>& slot = r.files[store.fileId()];
+    live = slot.lock();
+    if (!live) {
+      auto made = std::make_shared<FilePatches>(store, true);
+      slot = made;
+      return made;
+    }
+    if (live->describes(store)) return live;
+  }
+  // The file changed in place since the live one was made: share nothing with it.
+  return std::make_shared<FilePatches>(store, false);
+}
+
+}  // namespace detail
+
+namespace {
 
 // A Store as a PageSource: its windows are hyperslab reads.
 class StorePages final : public PageSource {
@@ -74,6 +245,14 @@ std::shared_ptr<const Patch> loadPatch(const PageSource& pages, const GridInfo& 
   return p;
 }
 
+// The patch `key`: through the file's shared patches when paging a store (`file`), so that
+// a patch alive anywhere in the process is not read again; else read.
+std::shared_ptr<const Patch> loadShared(detail::FilePatches* file, const PageSource& pages,
+                                        const GridInfo& info, const PatchKey& key) {
+  if (file == nullptr) return loadPatch(pages, info, key);
+  return file->get(key, [&] { return loadPatch(pages, info, key); });
+}
+
 static_assert(kMaxPatchesPerGrid <= BlockTable::kMaxBlocks,
               "every grid a store may hold has a block table");
 
@@ -82,7 +261,8 @@ static_assert(kMaxPatchesPerGrid <= BlockTable::kMaxBlocks,
 class PagedSource final : public topo::SampleSource {
  public:
   PagedSource(const GridInfo& info, std::uint32_t gridId, std::size_t level,
-              std::shared_ptr<const PageSource> pages, std::shared_ptr<PatchCache> cache)
+              std::shared_ptr<const PageSource> pages, std::shared_ptr<PatchCache> cache,
+              std::shared_ptr<detail::FilePatches> file)
       : info_(info),
         rows_(info.levelRows(level)),
         cols_(info.levelCols(level)),
@@ -92,8 +272,9 @@ class PagedSource final : public topo::SampleSource {
         level_(static_cast<std::uint32_t>(level)),
         pages_(std::move(pages)),
         cache_(std::move(cache)),
+        file_(std::move(file)),
         table_(cache_->blockTable(gridId, level_, rows_, cols_, pr_, pc_)),
-        loader_([this](const PatchKey& k) { return loadPatch(*pages_, info_, k); }) {}
+        loader_([this](const PatchKey& k) { return loadShared(file_.get(), *pages_, info_, k); }) {}
 
   std::size_t rows() const noexcept override { return rows_; }
   std::size_t cols() const noexcept override { return cols_; }
@@ -148,7 +329,8 @@ class PagedSource final : public topo::SampleSource {
   std::uint32_t gridId_, level_;
   std::shared_ptr<const PageSource> pages_;
   std::shared_ptr<PatchCache> cache_;
-  std::shared_ptr<const BlockTable> table_;  // lock-free hits on resident patches
+  std::shared_ptr<detail::FilePatches> file_;  // null unless paging a Store
+  std::shared_ptr<const BlockTable> table_;    // lock-free hits on resident patches
   PatchCache::Loader loader_;  // made once: a std::function per lookup costs more than a hit
 };
 
@@ -160,9 +342,10 @@ Pager::Pager(std::shared_ptr<const Store> store, std::shared_ptr<PatchCache> cac
     throw InvalidArgument("store::Pager(): store and cache must not be null");
   }
   pages_ = std::make_shared<StorePages>(store_);
+  file_ = detail::FilePatches::of(*store_);
   for (const std::string& name : store_->gridNames()) {
     const GridInfo& info = store_->grid(name);
-    const std::uint32_t id = nextGridId();
+    const std::uint32_t id = file_->gridId(name);
     grids_.emplace(name, GridEntry{&info, id});
     byId_.emplace(id, &info);
   }
@@ -205,7 +388,7 @@ const Pager::GridEntry& Pager::entry(std::string_view grid, std::size_t level,
 std::shared_ptr<const topo::SampleSource> Pager::source(std::string_view grid,
                                                         std::size_t level) const {
   const GridEntry& e = entry(grid, level, "store::Pager::source()");
-  return std::make_shared<PagedSource>(*e.info, e.id, level, pages_, cache_);
+  return std::make_shared<PagedSource>(*e.info, e.id, level, pages_, cache_, file_);
 }
 
 topo::TopoDem Pager::dem(std::string_view grid, std::size_t level) const {
@@ -266,7 +449,8 @@ std::shared_ptr<const Patch> Pager::patch(const PatchKey& key) const {
                           ", row " + std::to_string(key.row) + ", col " + std::to_string(key.col) +
                           ") is outside grid '" + info.name + "'");
   }
-  return cache_->get(key, [&](const PatchKey& k) { return loadPatch(*pages_, info, k); });
+  return cache_->get(key,
+                     [&](const PatchKey& k) { return loadShared(file_.get(), *pages_, info, k); });
 }
 
 }  // namespace regolith::store

@@ -649,6 +649,17 @@ void checkNotTruncated(hid_t ds, const Context& ctx) {
                   " (the end of its HDF5 allocation: truncated after it was opened?)");
 }
 
+/// The device and inode of an open file (fstat(2) of its descriptor): the file HDF5 read,
+/// even if its path has been renamed over since.
+FileId openFileId(hid_t file, const Context& ctx) {
+  void* handle = nullptr;
+  hdf5::check(H5Fget_vfd_handle(file, H5P_DEFAULT, &handle), ctx, "cannot get the file handle");
+  struct stat st {};
+  if (::fstat(*static_cast<const int*>(handle), &st) != 0)
+    fail(ctx, std::string("cannot stat the open file: ") + std::strerror(errno));
+  return {static_cast<std::uint64_t>(st.st_dev), static_cast<std::uint64_t>(st.st_ino)};
+}
+
 /// Reads rows×cols samples at (row0, col0), every `stride`-th, of one dataset of a grid with
 /// one hyperslab read, into `out` as heights (NaN where missing).
 void readDataset(const GridEntry& e, hid_t ds, const Context& ctx, const std::string& what,
@@ -711,6 +722,7 @@ struct Store::Impl {
   hdf5::File file;  // declared before the grids: closed after their datasets
   std::map<std::string, GridEntry, std::less<>> grids;
   std::array<int, 2> formatVersion{0, 0};
+  FileId fileId;  // of the file HDF5 opened, not of whatever the path names later
   mutable std::atomic<std::uint64_t> reads{0};
   mutable std::atomic<std::uint64_t> bytesRead{0};
 
@@ -771,6 +783,7 @@ Store Store::open(const std::filesystem::path& path, const OpenLimits& limits) {
   if (!impl->file.valid()) {
     failHdf5(ctx, "cannot open the HDF5 file (truncated or corrupt?)");
   }
+  impl->fileId = openFileId(impl->file.get(), ctx);
   const hdf5::Group root(
       hdf5::check(H5Gopen2(impl->file.get(), "/", H5P_DEFAULT), ctx, "cannot open '/'"));
   const std::string rootOwner = "the root group";
@@ -887,6 +900,8 @@ void Store::readWindow(std::string_view grid, std::size_t level, std::size_t row
                      impl_->reads.fetch_add(1, std::memory_order_relaxed);
                    });
 }
+
+FileId Store::fileId() const noexcept { return impl_->fileId; }
 
 ReadCounters Store::counters() const noexcept {
   return {impl_->reads.load(std::memory_order_relaxed),

@@ -18,6 +18,10 @@
 
 namespace regolith::store {
 
+namespace detail {
+class FilePatches;  // Pager.cpp: the patches of one store file alive in the process
+}  // namespace detail
+
 /// Serves the grids of one Store (or of any PageSource, such as a procedural planet) patch by
 /// patch (the JPL paper, section III.A): reading a
 /// point loads only the aligned patch (one HDF5 chunk, patchRows × patchCols samples of
@@ -28,6 +32,16 @@ namespace regolith::store {
 /// Hit counting: a query asks the cache for a patch only when the calling thread moves
 /// into a patch it does not hold already (topo keeps each thread's last patch), so a hit is
 /// "a run of queries entered this patch" rather than "one sample was read".
+///
+/// One store file, many pagers: every pager of one file (the same Store::fileId(): device
+/// and inode, whatever path, symlink or hard link opened it) shares that file's grid ids and
+/// the patches alive anywhere in the process. A patch is read from the file only when no
+/// pager, cache or reader of that file holds it, and is then one object wherever it is held.
+/// Through one cache, two pagers of a file use the same keys, so the cache holds each patch
+/// once and its budget bounds them both. Through two caches, each cache keeps its own budget
+/// and counts every patch it holds against it; a patch both hold is counted by both but takes
+/// its memory once. A file written over the path since (a new inode) is another file: pagers
+/// of it share nothing with pagers of the old one. Pagers of other PageSources share nothing.
 ///
 /// Thread-safety: all members may be called concurrently; sources and grids made here may
 /// be queried from any number of threads.
@@ -69,7 +83,8 @@ class Pager {
   /// the sources keep the store and the cache alive. Throws StoreError for an unknown grid.
   [[nodiscard]] topo::GridPyramid pyramid(std::string_view grid) const;
 
-  /// The cache key of the patch holding sample (row, col) of a level.
+  /// The cache key of the patch holding sample (row, col) of a level. Pagers of one store
+  /// file give the same keys.
   [[nodiscard]] PatchKey keyOf(std::string_view grid, std::size_t level, std::size_t row,
                                std::size_t col) const;
   /// The patch for `key`, through the cache (loading it on a miss); for prefetching.
@@ -86,6 +101,7 @@ class Pager {
   std::shared_ptr<const Store> store_;       // null unless paging a Store
   std::shared_ptr<const PageSource> pages_;  // the store's adapter, or the source given
   std::shared_ptr<PatchCache> cache_;
+  std::shared_ptr<detail::FilePatches> file_;  // null unless paging a Store
   std::unordered_map<std::string, GridEntry> grids_;
   std::unordered_map<std::uint32_t, const GridInfo*> byId_;
 };

@@ -37,6 +37,21 @@ inline constexpr int kFormatVersionMinor = 4;
 
 /// Byte counters of one Store (for cache statistics and benchmarks). A read of a tiled level 0
 /// counts one read per tile; bytes of external tiles are counted by their own Store.
+/// Which file an open store reads: its device and inode, taken from the file HDF5 opened
+/// (fstat(2)) when the store was opened. Two opens of one file, through any path, symlink or
+/// hard link, compare equal; a file written over the path since (a new inode) compares
+/// unequal. store::Pager keys the patches it shares between pagers by it.
+struct FileId {
+  std::uint64_t device = 0;
+  std::uint64_t inode = 0;
+  friend bool operator==(const FileId&, const FileId&) = default;
+  /// An order for maps (device, then inode). Not a defaulted <=>: clang-tidy 14 reads its
+  /// synthesised comparison with 0 as a null pointer constant (modernize-use-nullptr).
+  friend bool operator<(const FileId& a, const FileId& b) noexcept {
+    return a.device != b.device ? a.device < b.device : a.inode < b.inode;
+  }
+};
+
 struct ReadCounters {
   std::uint64_t reads = 0;      // hyperslab reads
   std::uint64_t bytesRead = 0;  // bytes delivered by those reads (stored sample type)
@@ -102,6 +117,8 @@ class Store {
                   std::size_t stride = 1) const;
 
   [[nodiscard]] ReadCounters counters() const noexcept;
+  /// The device and inode of the file this store has open (FileId).
+  [[nodiscard]] FileId fileId() const noexcept;
 
  private:
   struct Impl;
