@@ -1,5 +1,6 @@
 // `regolith view STORE | --demo`: the interactive viewer (docs/viewer.md) in a GLFW window.
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/Window.hpp>
 
 #include "Commands.hpp"

@@ -3,6 +3,7 @@
 #include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Executor.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
 #include <regolith/gl/GlObjects.hpp>
 #include <regolith/gl/Program.hpp>

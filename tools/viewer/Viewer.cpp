@@ -1,6 +1,7 @@
 #include "Viewer.hpp"
 
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/Image.hpp>
 
 #include <glm/geometric.hpp>
