@@ -21,6 +21,7 @@
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/compose/Catalogue.hpp>
 #include <regolith/compose/Dataset.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
 #include <regolith/gl/Image.hpp>
 #include <regolith/gl/RenderTarget.hpp>

@@ -31,6 +31,7 @@
 // With GLOBE_BENCH_PNG_DIR=<dir> each variant's frame is written there.
 #include <regolith/clod/Camera.hpp>
 #include <regolith/farfield/RayCastGlobe.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
 #include <regolith/gl/Image.hpp>
 #include <regolith/gl/Program.hpp>

@@ -1,5 +1,6 @@
 // `regolith view STORE | --demo`: the interactive viewer (docs/viewer.md) in a GLFW window.
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/Window.hpp>
 
 #include "Commands.hpp"
@@ -45,7 +46,9 @@ void runView(const Args& a) {
   gl::Window window(a.width, a.height, "regolith view: " + scene.title);
   const std::string title = scene.title;
   auto [fw, fh] = window.framebufferSize();
-  viewer::Viewer view(std::move(scene), fw, fh, std::cout);
+  // A script's screenshots and picks must not depend on how fast the terrain reads.
+  viewer::Viewer view(std::move(scene), fw, fh, std::cout,
+                      a.script.empty() ? clod::Loading::Background : clod::Loading::Wait);
   std::vector<double> frameMs;
   std::size_t step = 0;
   double last = 0.0;

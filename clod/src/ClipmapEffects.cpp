@@ -3,6 +3,7 @@
 
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
 #include <regolith/rover/TrackLayer.hpp>
 
@@ -14,7 +15,10 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <future>
+#include <memory>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -103,6 +107,7 @@ void ClipmapTerrain::initEffects() {
 void ClipmapTerrain::updateEffects(const glm::dvec3& focus, bool background) {
   gridOrigin_ = pyramid_->gridPoint(focus);
   if (!effects_) return;
+  updateGround(background);
   for (TextureClipmap* t : {effects_->albedo.get(), effects_->overlay.get()}) {
     if (t == nullptr) continue;
     if (background)
@@ -116,13 +121,20 @@ std::size_t ClipmapTerrain::pollEffects(bool wait) {
   std::size_t count = 0;
   for (TextureClipmap* t : {effects_->albedo.get(), effects_->overlay.get()})
     if (t != nullptr) count += t->poll(wait);
+  FocusGround& g = effects_->ground;
+  std::future<FocusGround>& job = effects_->groundJob;
+  if (job.valid() && (wait || job.wait_for(std::chrono::seconds(0)) == std::future_status::ready)) {
+    auto done = std::move(job);
+    g = done.get();      // rethrows a read error; the next focus asks again
+    updateGround(true);  // the focus may have moved on meanwhile
+  }
   return count;
 }
 
 bool ClipmapTerrain::effectsLoading() const noexcept {
   for (const TextureClipmap* t : {effects_->albedo.get(), effects_->overlay.get()})
     if (t != nullptr && t->loading()) return true;
-  return false;
+  return effects_->groundJob.valid();
 }
 
 std::vector<std::string> ClipmapTerrain::passes() const {
@@ -134,30 +146,41 @@ std::vector<std::string> ClipmapTerrain::passes() const {
   return out;
 }
 
-double ClipmapTerrain::latLonSpacing(const Camera& camera) const {
-  const auto& ll = options_.effects.latLon;
-  if (!ll) throw InvalidArgument("ClipmapTerrain::latLonSpacing(): lat/lon lines not declared");
-  if (ll->spacingDegrees > 0.0) return ll->spacingDegrees;
-  const topo::Body& body = *bodyOf(*pyramid_);
+FocusGround focusGround(const HeightPyramid& pyramid, glm::dvec2 o, bool read) {
+  // The coarsest level's nearest sample; 0 m off the grid or over nodata.
+  const auto& top = pyramid.level(pyramid.levelCount() - 1);
+  const glm::dvec2 f = glm::round(top.grid.fractionalIndex(o.x, o.y));
+  FocusGround g;
+  g.known = true;
+  if (!(f.x >= 0.0 && f.y >= 0.0 && f.x < static_cast<double>(top.grid.cols()) &&
+        f.y < static_cast<double>(top.grid.rows())))
+    return g;
+  g.row = static_cast<std::int64_t>(f.y);
+  g.col = static_cast<std::int64_t>(f.x);
+  if (read) {
+    const float s =
+        top.source->sample(static_cast<std::size_t>(g.row), static_cast<std::size_t>(g.col));
+    if (!std::isnan(s) && !top.grid.isNodata(s)) g.height = static_cast<double>(s);
+  }
+  return g;
+}
+
+namespace {
+
+// Degrees between lat/lon lines adapted to the camera's altitude above `groundHeight` (metres)
+// at grid point `o`.
+double adaptedSpacing(const HeightPyramid& pyramid, const LatLonLines& ll, glm::dvec2 o,
+                      double groundHeight, const Camera& camera) {
+  const topo::Body& body = *bodyOf(pyramid);
   const double r = body.equatorialRadius();
   // Altitude above the ground: the camera's height above the ellipsoid less the ground's at
-  // the focus (the coarsest level's nearest sample; 0 m off the grid or over nodata). Not
-  // |position| − r: below the equatorial radius (a DEM placed at −1.4 km) that was ≤ 0, and
-  // the lines came out a fraction of a pixel apart.
-  const auto& top = pyramid_->level(pyramid_->levelCount() - 1);
-  const glm::dvec2 f = glm::round(top.grid.fractionalIndex(gridOrigin_.x, gridOrigin_.y));
-  double groundHeight = 0.0;
-  if (f.x >= 0.0 && f.y >= 0.0 && f.x < static_cast<double>(top.grid.cols()) &&
-      f.y < static_cast<double>(top.grid.rows())) {
-    const float s =
-        top.source->sample(static_cast<std::size_t>(f.y), static_cast<std::size_t>(f.x));
-    if (!std::isnan(s) && !top.grid.isNodata(s)) groundHeight = static_cast<double>(s);
-  }
-  const glm::dvec3 ground = pyramid_->position(gridOrigin_.x, gridOrigin_.y, groundHeight);
+  // the focus (FocusGround). Not |position| − r: below the equatorial radius (a DEM placed at
+  // −1.4 km) that was ≤ 0, and the lines came out a fraction of a pixel apart.
+  const glm::dvec3 ground = pyramid.position(o.x, o.y, groundHeight);
   const double altitude =
       std::max(body.toGeodetic(camera.position).height - body.toGeodetic(ground).height, 1.0);
   const double degPerPixel = altitude / camera.focalPixels() / r * 180.0 / std::numbers::pi;
-  const double wanted = ll->minPixelSpacing * degPerPixel;
+  const double wanted = ll.minPixelSpacing * degPerPixel;
   // 90, 60, 45, 30, 20, 15, 10, 5, 2, 1, then 1-2-5 steps down.
   std::vector<double> nice{90, 60, 45, 30, 20, 15, 10, 5, 2, 1};
   // m / 10^k, not m × 0.1^k: the spacing reads 0.002 in the legend's JSON, not
@@ -168,6 +191,43 @@ double ClipmapTerrain::latLonSpacing(const Camera& camera) const {
   for (double s : nice)
     if (s >= wanted) best = s;
   return best;
+}
+
+}  // namespace
+
+double ClipmapTerrain::latLonSpacing(const Camera& camera) const {
+  const auto& ll = options_.effects.latLon;
+  if (!ll) throw InvalidArgument("ClipmapTerrain::latLonSpacing(): lat/lon lines not declared");
+  if (ll->spacingDegrees > 0.0) return ll->spacingDegrees;
+  FocusGround g = effects_->ground;
+  // Not read yet (no focus set, or its background read still running): read it here.
+  if (!focusGround(*pyramid_, gridOrigin_, false).sameSample(g))
+    g = focusGround(*pyramid_, gridOrigin_, true);
+  return adaptedSpacing(*pyramid_, *ll, gridOrigin_, g.height, camera);
+}
+
+void ClipmapTerrain::updateGround(bool background) {
+  if (!options_.effects.latLon) return;
+  EffectState& st = *effects_;
+  const FocusGround want = focusGround(*pyramid_, gridOrigin_, false);
+  if (want.sameSample(st.ground)) return;
+  if (want.row < 0) {  // off the grid: nothing to read
+    st.ground = want;
+    return;
+  }
+  if (!background) {
+    if (st.groundJob.valid()) st.groundJob.wait();  // not left to overwrite this one
+    st.groundJob = {};
+    st.ground = focusGround(*pyramid_, gridOrigin_, true);
+    return;
+  }
+  if (st.groundJob.valid()) return;  // pollEffects() asks again once it is in
+  if (!st.groundExecutor)
+    st.groundExecutor =
+        options_.executor ? options_.executor : std::make_shared<core::ThreadPool>(1);
+  st.groundJob = core::submitTask(*st.groundExecutor, [pyramid = pyramid_, o = gridOrigin_] {
+    return focusGround(*pyramid, o, true);
+  });
 }
 
 void ClipmapTerrain::setEffectUniforms(const Camera& camera, ClipmapFrame& frame) const {
@@ -266,7 +326,11 @@ void ClipmapTerrain::setEffectUniforms(const Camera& camera, ClipmapFrame& frame
   if (e.latLon) {
     const topo::Body& body = *bodyOf(*pyramid_);
     const double ratio = body.equatorialRadius() / body.polarRadius();
-    program_.set("uLatLonSpacing", static_cast<float>(latLonSpacing(camera)));
+    // The ground read when the focus was set (never read here).
+    const double spacing = e.latLon->spacingDegrees > 0.0
+                               ? e.latLon->spacingDegrees
+                               : adaptedSpacing(*pyramid_, *e.latLon, o, st.ground.height, camera);
+    program_.set("uLatLonSpacing", static_cast<float>(spacing));
     program_.set("uLatLonColour", e.latLon->colour);
     program_.set("uLatLonWidth", e.latLon->widthPixels);
     program_.set("uLatAxisRatio2",

@@ -1,5 +1,6 @@
 #include "ClipmapLevel.hpp"
 
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
 
 #include <glm/geometric.hpp>

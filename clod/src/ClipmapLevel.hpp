@@ -70,7 +70,7 @@ class ClipmapLevel {
   /// The lattice: 0 latitude/longitude (or plane) rows and columns, ±1 polar stereographic.
   [[nodiscard]] int polar() const noexcept { return polar_; }
   [[nodiscard]] const glm::dvec3& anchor() const noexcept { return anchor_; }
-  [[nodiscard]] GLuint texture() const noexcept { return texture_.id(); }
+  [[nodiscard]] gl::Id texture() const noexcept { return texture_.id(); }
   /// Scene position of the window's centre sample at height 0.
   [[nodiscard]] glm::dvec3 centre() const;
   /// Sample spacing in grid units (x, y).

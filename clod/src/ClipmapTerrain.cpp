@@ -1,6 +1,7 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/core/Assert.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
 
 #include "ClipmapEffectState.hpp"

@@ -1,5 +1,6 @@
 #include <regolith/clod/MeshRenderer.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
 
 #include "Shaders.hpp"

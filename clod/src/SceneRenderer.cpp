@@ -3,6 +3,7 @@
 #include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Executor.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
 #include <regolith/gl/GlObjects.hpp>
 #include <regolith/gl/Program.hpp>
@@ -16,6 +17,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <future>
 #include <map>
@@ -164,6 +166,41 @@ struct SceneRenderer::Terrain {
   std::map<PlanetCell, float> underDems;
   std::vector<std::future<std::vector<std::pair<PlanetCell, float>>>> probes;
   std::shared_ptr<core::Executor> probeExecutor;
+
+  // Planets: starts reading the samples under a DEM at `origin` (planet frame) that no probe
+  // read yet, one per clipmap level, on the executor.
+  void startProbe(const glm::dvec3& origin) {
+    std::vector<PlanetCell> missing;
+    for (std::size_t k = 0; k < clipmap->levelCount(); ++k) {
+      const PlanetCell c = planetCellUnder(*pyramid, k, origin);
+      if (underDems.count(c) == 0) missing.push_back(c);
+    }
+    if (missing.empty()) return;
+    if (!probeExecutor)
+      probeExecutor = options.executor ? options.executor : std::make_shared<core::ThreadPool>(1);
+    probes.push_back(
+        core::submitTask(*probeExecutor, [pyramid = pyramid, cells = std::move(missing)] {
+          std::vector<std::pair<PlanetCell, float>> out;
+          out.reserve(cells.size());
+          for (const PlanetCell& c : cells)
+            out.emplace_back(c, pyramid->level(c.level).source->sample(c.row, c.col));
+          return out;
+        }));
+  }
+  // Keeps the samples of the probes that are done (`wait`: of all, waiting for them).
+  void collectProbes(bool wait) {
+    // Taken out first: if a read failed (its error is rethrown here), the next frame asks
+    // again for what is still missing.
+    auto started = std::move(probes);
+    probes.clear();
+    for (auto& probe : started) {
+      if (!wait && probe.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+        probes.push_back(std::move(probe));
+        continue;
+      }
+      for (const auto& [cell, h] : probe.get()) underDems.emplace(cell, h);
+    }
+  }
 };
 
 struct SceneRenderer::Mesh {
@@ -285,60 +322,63 @@ const ClipmapTerrain* SceneRenderer::terrain(int drawable) const {
   return it == terrains_.end() ? nullptr : it->second->clipmap.get();
 }
 
-SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneView& view) {
+namespace {
+
+void checkView(const char* op, const SceneView& view) {
   if (view.width < 1 || view.height < 1 || !(view.near > 0.0) ||
       !(view.fovYDegrees > 0.0 && view.fovYDegrees < 180.0))
-    throw InvalidArgument("SceneRenderer::draw(): viewport " + std::to_string(view.width) + "×" +
+    throw InvalidArgument(std::string(op) + ": viewport " + std::to_string(view.width) + "×" +
                           std::to_string(view.height) + ", near " + std::to_string(view.near) +
                           " m, field of view " + std::to_string(view.fovYDegrees) +
                           "°: expected a non-empty viewport, near > 0 and fov in (0, 180)");
-  SceneFrame frame;
-  glViewport(view.x, view.y, view.width, view.height);
-  gl::useReversedZ();
+}
 
-  // The skirts' depth needs each planet's sample under each DEM that cuts it. Those reads
-  // run on an executor, never here: started now for a DEM seen at a new place (so they
-  // overlap the terrains' draws), collected by the skirt pass below. A DEM that stays where
-  // it is reads nothing again.
-  const auto demOrigin = [](const scenegraph::RenderItem& planet,
-                            const scenegraph::RenderItem& dem) {
-    return (planet.inFocus.inverse() * dem.inFocus).translation;  // planet frame
-  };
-  const auto startProbe = [](Terrain& planet, const glm::dvec3& origin) {
-    std::vector<PlanetCell> missing;
-    for (std::size_t k = 0; k < planet.clipmap->levelCount(); ++k) {
-      const PlanetCell c = planetCellUnder(*planet.pyramid, k, origin);
-      if (planet.underDems.count(c) == 0) missing.push_back(c);
-    }
-    if (missing.empty()) return;
-    if (!planet.probeExecutor)
-      planet.probeExecutor =
-          planet.options.executor ? planet.options.executor : std::make_shared<core::ThreadPool>(1);
-    planet.probes.push_back(core::submitTask(
-        *planet.probeExecutor, [pyramid = planet.pyramid, cells = std::move(missing)] {
-          std::vector<std::pair<PlanetCell, float>> out;
-          out.reserve(cells.size());
-          for (const PlanetCell& c : cells)
-            out.emplace_back(c, pyramid->level(c.level).source->sample(c.row, c.col));
-          return out;
-        }));
-  };
-  const auto collectProbes = [](Terrain& planet) {
-    // Taken out first: if a read failed (its error is rethrown here), the next frame asks
-    // again for what is still missing.
-    auto probes = std::move(planet.probes);
-    planet.probes.clear();
-    for (auto& probe : probes)
-      for (const auto& [cell, h] : probe.get()) planet.underDems.emplace(cell, h);
-  };
+// A DEM's origin in its planet's frame.
+glm::dvec3 demOrigin(const scenegraph::RenderItem& planet, const scenegraph::RenderItem& dem) {
+  return (planet.inFocus.inverse() * dem.inFocus).translation;
+}
+
+}  // namespace
+
+std::size_t SceneRenderer::prepare(const scenegraph::RenderList& list, const SceneView& view,
+                                   Loading loading) {
+  checkView("SceneRenderer::prepare()", view);
+  // Every terrain asks first, so their executors read side by side; then each uploads.
+  std::vector<ClipmapTerrain*> asked;
+  for (const scenegraph::RenderItem& item : list.items) {
+    const auto it = terrains_.find(item.drawable);
+    if (it == terrains_.end()) continue;
+    Terrain& t = *it->second;
+    const Camera cam = cameraInItem(item.cameraInItem(), view);
+    t.clipmap->requestFocus(focusFor(*t.pyramid, cam.position));
+    asked.push_back(t.clipmap.get());
+  }
+  std::size_t count = 0;
+  for (ClipmapTerrain* c : asked)
+    count += loading == Loading::Wait ? c->finishLoading() : c->update(false);
+  preparedTexels_ += count;
+
+  // The skirts' depth needs each planet's sample under each DEM that cuts it: read on the
+  // executor for a DEM seen at a new place (collected by draw()'s skirt pass). A DEM that
+  // stays where it is reads nothing again.
   if (skirts_)
     for (auto& [key, planet] : terrains_) {
       const scenegraph::RenderItem* pi = list.findDrawable(key);
       if (pi == nullptr) continue;
       for (const int dem : planet->cutBy)
         if (const scenegraph::RenderItem* di = list.findDrawable(dem); di != nullptr)
-          startProbe(*planet, demOrigin(*pi, *di));
+          planet->startProbe(demOrigin(*pi, *di));
+      if (loading == Loading::Wait) planet->collectProbes(true);
     }
+  return count;
+}
+
+SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneView& view) {
+  checkView("SceneRenderer::draw()", view);
+  SceneFrame frame;
+  frame.texelsUploaded = std::exchange(preparedTexels_, 0);
+  glViewport(view.x, view.y, view.width, view.height);
+  gl::useReversedZ();
 
   for (const scenegraph::RenderItem& item : list.items) {
     const auto it = terrains_.find(item.drawable);
@@ -348,7 +388,6 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
     }
     Terrain& t = *it->second;
     const Camera cam = cameraInItem(item.cameraInItem(), view);
-    frame.texelsUploaded += t.clipmap->setFocus(focusFor(*t.pyramid, cam.position));
     ClipmapOptions opts = t.options;
     opts.lightDirection = lightIn(item.inFocus, view.lightInFocus);
     t.clipmap->setOptions(opts);
@@ -382,6 +421,7 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
     if (!skirts_ || it == terrains_.end() || !it->second->skirt) continue;
     Terrain& t = *it->second;
     std::vector<PlanetUnderDem> under;
+    bool known = true;  // every planet's sample under this DEM has been read
     for (auto& [key, planet] : terrains_) {
       if (std::find(planet->cutBy.begin(), planet->cutBy.end(), item.drawable) ==
           planet->cutBy.end())
@@ -394,10 +434,14 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
       const std::size_t k = count == 0 ? planet->clipmap->levelCount() - 1 : first;
       const glm::dvec3 origin = demOrigin(*pi, item);
       const PlanetCell cell = planetCellUnder(*planet->pyramid, k, origin);
-      if (planet->underDems.count(cell) == 0) collectProbes(*planet);
-      if (planet->underDems.count(cell) == 0) {  // not started above (cannot happen)
-        startProbe(*planet, origin);
-        collectProbes(*planet);
+      if (planet->underDems.count(cell) == 0) planet->collectProbes(false);
+      if (planet->underDems.count(cell) == 0) {
+        // Not read yet (prepare() in the background, or not called for this list): asked
+        // for now, and this DEM's skirt waits for a later frame rather than this frame for a
+        // read.
+        planet->startProbe(origin);
+        known = false;
+        break;
       }
       PlanetUnderDem u;
       u.planetHeight = static_cast<double>(planet->underDems.at(cell));
@@ -406,6 +450,7 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
       u.radius = planet->pyramid->body()->polarRadius();
       under.push_back(u);
     }
+    if (!known) continue;
     const Camera cam = cameraInItem(item.cameraInItem(), view);
     const auto [first, count] = t.clipmap->activeLevels(cam);
     const std::size_t coarsest = count == 0 ? t.clipmap->levelCount() - 1 : first + count - 1;

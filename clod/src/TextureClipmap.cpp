@@ -1,6 +1,7 @@
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/TextureClipmap.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
 
 #include <algorithm>

@@ -341,7 +341,9 @@ FlyoverSummary renderFlyover(scene::Scene& s, const FlyoverOptions& options) {
       }
       const auto r0 = std::chrono::steady_clock::now();
       target.clear({0.02F, 0.02F, 0.04F, 1.0F});
-      renderer.draw(g.renderList(focus, cam), view);
+      const scenegraph::RenderList list = g.renderList(focus, cam);
+      renderer.prepare(list, view);
+      renderer.draw(list, view);
       if (farField) {
         // Beyond the clipmaps: the far field, in Mars's body-fixed frame, where nothing is
         // drawn yet.
@@ -370,7 +372,9 @@ FlyoverSummary renderFlyover(scene::Scene& s, const FlyoverOptions& options) {
         view.height = options.height;
         view.near = camera == orbitCamera ? 100.0 : 0.05;
         view.lightInFocus = lightIn(victoriaNode);
-        renderer.draw(g.renderList(victoriaNode, camera), view);
+        const scenegraph::RenderList list = g.renderList(victoriaNode, camera);
+        renderer.prepare(list, view);
+        renderer.draw(list, view);
       }
       const auto path = options.outputDir / "multiview.png";
       gl::writePng(path.string(), target.readColor());

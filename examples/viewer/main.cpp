@@ -16,6 +16,7 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/FocusController.hpp>
 #include <regolith/clod/Render.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/gl/Window.hpp>
 #include <regolith/store/Pager.hpp>

@@ -1,5 +1,6 @@
 #include <regolith/core/Error.hpp>
 #include <regolith/farfield/FarField.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/Image.hpp>
 
 #include <glm/common.hpp>

@@ -1,6 +1,7 @@
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
 #include <regolith/farfield/PgmRenderer.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
 
 #include "Checks.hpp"
@@ -126,8 +127,8 @@ PgmRenderer::PgmRenderer(const HeightLayers& layers, PgmOptions options)
 
 PgmRenderer::~PgmRenderer() {
   glDeleteQueries(3, timers_.data());
-  for (GLsync& f : fences_) {
-    if (f != nullptr) glDeleteSync(f);
+  for (void* f : fences_) {
+    if (f != nullptr) glDeleteSync(static_cast<GLsync>(f));
   }
 }
 
@@ -376,11 +377,12 @@ void PgmRenderer::reduce(const gl::RenderTarget& target, PgmFrame& frame) {
   // Lagged: read the other buffer if its fence has passed, and fence this one.
   const std::size_t other = 1 - slot;
   if (fences_[other] != nullptr) {
-    if (glClientWaitSync(fences_[other], 0, 0) != GL_TIMEOUT_EXPIRED) take(other);
-    glDeleteSync(fences_[other]);
+    const auto fence = static_cast<GLsync>(fences_[other]);
+    if (glClientWaitSync(fence, 0, 0) != GL_TIMEOUT_EXPIRED) take(other);
+    glDeleteSync(fence);
     fences_[other] = nullptr;
   }
-  if (fences_[slot] != nullptr) glDeleteSync(fences_[slot]);
+  if (fences_[slot] != nullptr) glDeleteSync(static_cast<GLsync>(fences_[slot]));
   fences_[slot] = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
   frameIndex_ = static_cast<int>(other);
 }

@@ -1,6 +1,7 @@
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
 #include <regolith/farfield/RayCastGlobe.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
 
 #include "GlobeShaders.hpp"

@@ -1,4 +1,11 @@
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlObjects.hpp>
+
+#include <type_traits>
+
+namespace regolith::gl {
+static_assert(std::is_same_v<Id, GLuint>, "gl::Id must be GLuint");
+}  // namespace regolith::gl
 
 namespace regolith::gl {
 

@@ -1,9 +1,11 @@
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
 #include <regolith/gl/Program.hpp>
 
 #include <glm/gtc/type_ptr.hpp>
 
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -73,7 +75,11 @@ Program::Program(std::string_view name, const ShaderSources& sources) {
   cleanup();
 }
 
-void Program::link(std::string_view name, const std::vector<GLuint>& shaders) {
+static_assert(std::is_same_v<GLint, int>, "Program::uniform() returns GLint as int");
+
+void Program::use() const noexcept { glUseProgram(id_); }
+
+void Program::link(std::string_view name, const std::vector<Id>& shaders) {
   id_ = glCreateProgram();
   for (GLuint s : shaders) glAttachShader(id_, s);
   glLinkProgram(id_);

@@ -1,4 +1,5 @@
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 

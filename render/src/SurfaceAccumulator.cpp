@@ -1,5 +1,6 @@
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
 #include <regolith/render/SurfaceAccumulator.hpp>
 #include <regolith/topo/TopoPlanet.hpp>

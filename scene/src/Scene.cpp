@@ -578,7 +578,9 @@ gl::RgbaImage Scene::render(scenegraph::NodeId camera, scenegraph::NodeId focus,
     gl::RenderTarget target(width, height);
     view.lightInFocus = s.graph.relative(focus, s.lightFrame).applyVector(s.lightDirection);
     target.clear({0.02F, 0.02F, 0.04F, 1.0F});
-    renderer.draw(s.graph.renderList(focus, camera), view);
+    const scenegraph::RenderList list = s.graph.renderList(focus, camera);
+    renderer.prepare(list, view);  // waits: the headless frame does not depend on read speed
+    renderer.draw(list, view);
     for (const Impl::Terrain& t : s.terrains) {
       if (!t.farField) continue;
       const auto farField = planetFarField(t.farField, t.albedo);

@@ -3,6 +3,7 @@
 
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/rover/TrackLayer.hpp>
 #include <regolith/topo/Placement.hpp>
 

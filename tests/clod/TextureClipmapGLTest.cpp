@@ -4,6 +4,7 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/TextureClipmap.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/PatchCache.hpp>
 #include <regolith/store/Store.hpp>

@@ -7,6 +7,7 @@
 
 #include <regolith/core/Error.hpp>
 #include <regolith/farfield/RayCastGlobe.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/Program.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Body.hpp>

@@ -151,6 +151,7 @@ class SceneGLTest : public ::testing::Test {
     view.near = near;
     view.lightInFocus = scene_->lightInFocus(focus);
     const RenderList list = scene_->graph().renderList(focus, camera);
+    renderer_->prepare(list, view);
     const clod::SceneFrame f = renderer_->draw(list, view);
     EXPECT_EQ(f.itemsUnknown, 0U);
     Shot s{target.readColor(), target.readDepth(),
@@ -347,7 +348,9 @@ TEST_F(SceneRendererGLTest, OrbitAndMastCamerasRenderTheSameSceneAsViewports) {
     view.height = 120;
     view.near = camera == n.orbitCamera ? 100.0 : 0.05;
     view.lightInFocus = scene_->lightInFocus(n.victoria);
-    renderer_->draw(scene_->graph().renderList(n.victoria, camera), view);
+    const RenderList list = scene_->graph().renderList(n.victoria, camera);
+    renderer_->prepare(list, view);
+    renderer_->draw(list, view);
   }
   const gl::RgbaImage im = target.readColor();
   test::savePng("scene_two_viewports", im);
@@ -472,6 +475,7 @@ TEST_F(SceneRendererGLTest, LargeDemCutsThePlanetThroughACoarserMask) {
   view.width = 200;
   view.height = 150;
   view.near = 1.0;
+  r.prepare(g.renderList(d, cam), view);
   r.draw(g.renderList(d, cam), view);
   const gl::RgbaImage im = target.readColor();
   test::savePng("scene_large_dem", im);
@@ -516,6 +520,7 @@ TEST_F(SceneRendererGLTest, DemWinsWhereItHasDataEvenBelowThePlanet) {
     view.width = 200;
     view.height = 150;
     view.near = 1.0;
+    r.prepare(g.renderList(d, cam), view);
     r.draw(g.renderList(d, cam), view);
     const gl::RgbaImage im = target.readColor();
     test::savePng(cut ? "scene_sunk_dem_cut" : "scene_sunk_dem_nocut", im);

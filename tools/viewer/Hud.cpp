@@ -1,5 +1,7 @@
 #include "Hud.hpp"
 
+#include <regolith/gl/Gl.hpp>
+
 #include <algorithm>
 #include <array>
 #include <cctype>

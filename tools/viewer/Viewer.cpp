@@ -1,6 +1,7 @@
 #include "Viewer.hpp"
 
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/Image.hpp>
 
 #include <glm/geometric.hpp>
@@ -59,8 +60,8 @@ std::string Pick::text() const {
   return buf;
 }
 
-Viewer::Viewer(ViewScene scene, int width, int height, std::ostream& log)
-    : scene_(std::move(scene)), log_(log) {
+Viewer::Viewer(ViewScene scene, int width, int height, std::ostream& log, clod::Loading loading)
+    : scene_(std::move(scene)), log_(log), loading_(loading) {
   if (scene_.objects.empty() || scene_.openings.empty() || !scene_.graph)
     throw InvalidArgument("view: the scene has no object to look at");
   off_.resize(scene_.terrains.size());
@@ -492,7 +493,9 @@ void Viewer::draw(int width, int height) {
     const scenegraph::NodeId focus = scene_.objects[v.state.object].node;
     const clod::SceneView view = viewOf(k);
     v.target->clear(kSpace);
-    const clod::SceneFrame frame = renderer_->draw(scene_.graph->renderList(focus, camera), view);
+    const scenegraph::RenderList list = scene_.graph->renderList(focus, camera);
+    renderer_->prepare(list, view, split_ ? clod::Loading::Wait : loading_);
+    const clod::SceneFrame frame = renderer_->draw(list, view);
     vertices_ += frame.vertices;
     for (std::size_t t = 0; t < scene_.terrains.size(); ++t) {
       farfield::FarField* farField = farFields_[t][k].get();

@@ -54,7 +54,13 @@ struct ViewportState {
 class Viewer {
  public:
   /// `log` receives one line per pick, focus switch, effect toggle and screenshot.
-  Viewer(ViewScene scene, int width, int height, std::ostream& log);
+  /// `loading`: how the terrains load (clod::SceneRenderer::prepare()). In the background (the
+  /// default) a frame never waits for a read and shows coarser levels until the finer
+  /// arrive; Wait for frames that must not depend on read speed (scripts with screenshots).
+  /// Split viewports always wait: their two cameras move each terrain's clipmap twice a
+  /// frame, and in the background neither view would settle.
+  Viewer(ViewScene scene, int width, int height, std::ostream& log,
+         clod::Loading loading = clod::Loading::Background);
   ~Viewer();
   Viewer(const Viewer&) = delete;
   Viewer& operator=(const Viewer&) = delete;
@@ -111,6 +117,7 @@ class Viewer {
   std::vector<std::pair<std::size_t, std::string>> toggles_;  // key 1..9 → (terrain, effect)
   std::vector<Viewport> viewports_;
   bool split_ = false;
+  clod::Loading loading_ = clod::Loading::Background;
   std::size_t active_ = 0;
   std::map<std::pair<std::size_t, std::size_t>, scenegraph::NodeId> cameraNodes_;
   glm::dvec3 light_{0.0, 0.0, 1.0};  // towards the sun, in lightNode_'s frame

@@ -153,6 +153,8 @@ class ClipmapTerrain {
   struct EffectState;
   void initEffects();
   void updateEffects(const glm::dvec3& focus, bool background = false);
+  /// Lat/lon lines: reads the ground under a new focus (FocusGround), now or on the executor.
+  void updateGround(bool background);
   std::size_t pollEffects(bool wait);
   [[nodiscard]] bool effectsLoading() const noexcept;
   void setEffectUniforms(const Camera& camera, ClipmapFrame& frame) const;

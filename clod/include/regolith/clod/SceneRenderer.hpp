@@ -55,11 +55,23 @@ struct SceneView {
   glm::dvec3 lightInFocus{0.4, -0.3, 0.866};
 };
 
+/// How SceneRenderer::prepare() loads the terrains' windows. Either way the reads run on the
+/// clipmaps' executors (ClipmapOptions::executor), never on the calling thread.
+enum class Loading {
+  /// Waits until every terrain of the list has its windows for the view: the frame drawn next
+  /// is the same however fast the machine reads (headless renders, tests).
+  Wait,
+  /// Asks for the windows and returns at once, uploading what has arrived since the last
+  /// call; draw() shows the levels that are resident and a coarser one where a finer has not
+  /// caught up (ClipmapTerrain::requestFocus()). For a frame loop.
+  Background,
+};
+
 /// What one draw() did.
 struct SceneFrame {
   std::size_t terrainsDrawn = 0, meshesDrawn = 0;
-  std::size_t itemsUnknown = 0;  ///< render-list items with a key nothing is registered for
-  std::size_t texelsUploaded = 0;
+  std::size_t itemsUnknown = 0;    ///< render-list items with a key nothing is registered for
+  std::size_t texelsUploaded = 0;  ///< by the prepare() calls since the previous draw()
   std::size_t vertices = 0;
 };
 
@@ -94,8 +106,19 @@ class SceneRenderer {
   /// InvalidArgument for unknown keys, wrong kinds, or a fifth DEM.
   void addCutOut(int planet, int dem);
 
+  /// Loads what draw() needs for `list` seen through `view`: moves each terrain's clipmap to
+  /// its focus (the camera's position in the terrain's frame, clamped onto a plane DEM's
+  /// grid), reads on the executors as `loading` says, uploads what has arrived, and starts
+  /// reading the planet samples under the DEMs that cut it (the border skirts' depth). Call
+  /// it before each draw() of a list whose camera or items moved. Returns the texels
+  /// uploaded. A read error of the loader (a store I/O error) is rethrown here. Throws
+  /// InvalidArgument for a view draw() would refuse.
+  std::size_t prepare(const scenegraph::RenderList& list, const SceneView& view,
+                      Loading loading = Loading::Wait);
   /// Draws `list` into the bound framebuffer within view's viewport (depth state: reversed
-  /// Z, as RenderTarget sets it). Terrain foci follow the camera (clamped onto each DEM).
+  /// Z, as RenderTarget sets it), with what prepare() left resident: draw() reads no terrain
+  /// source, moves no clipmap and waits for no read (a terrain never prepared draws nothing;
+  /// a DEM's border skirt waits for a frame in which the planet's sample under it is in).
   SceneFrame draw(const scenegraph::RenderList& list, const SceneView& view);
 
   /// Draws the DEM border skirts (default on). Off only to show what they prevent: the
@@ -113,6 +136,7 @@ class SceneRenderer {
   std::map<int, std::unique_ptr<Mesh>> meshes_;
   std::unique_ptr<gl::Program> meshProgram_;
   bool skirts_ = true;
+  std::size_t preparedTexels_ = 0;  // uploaded by prepare() since the last draw()
 };
 
 /// The clod Camera for drawing an item whose camera pose (camera → item frame) is `pose`.

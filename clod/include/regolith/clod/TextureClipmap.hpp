@@ -63,7 +63,7 @@ class TextureClipmap {
   /// True while a background read is running or waiting.
   [[nodiscard]] bool loading() const noexcept { return job_.valid() || pending_.has_value(); }
 
-  [[nodiscard]] GLuint texture() const noexcept { return texture_.id(); }
+  [[nodiscard]] gl::Id texture() const noexcept { return texture_.id(); }
   [[nodiscard]] int levels() const noexcept { return static_cast<int>(windows_.size()); }
   [[nodiscard]] int window() const noexcept { return window_; }
   /// Level-0 texel size along x, grid units.

@@ -157,17 +157,18 @@ class PgmRenderer {
   gl::Texture gridPos_, gridNrm_;
   gl::Framebuffer gridFbo_;
   gl::Buffer indices_;
-  GLsizei indexCount_ = 0;
+  int indexCount_ = 0;
   gl::Buffer thinIndices_{0};  ///< the strips of the thinned grid (minCellPixels)
-  GLsizei thinIndexCount_ = 0;
+  int thinIndexCount_ = 0;
   int thinWidth_ = 0, thinHeight_ = 0;
   gl::Texture radius_{0};
   gl::Texture drawnDepth_{0};  ///< copy of the target's depth for keepDrawn
   int radiusWidth_ = 0, radiusHeight_ = 0;
   std::array<gl::Buffer, 2> minBuffers_;
-  std::array<GLsync, 2> fences_{nullptr, nullptr};
+  // GLsync fences: opaque pointers, kept as void* so this header needs no GL header.
+  std::array<void*, 2> fences_{nullptr, nullptr};
   std::array<double, 2> primaryOf_{0.0, 0.0};
-  std::array<GLuint, 3> timers_{0, 0, 0};  ///< r_p each buffer's frame drew with
+  std::array<gl::Id, 3> timers_{0, 0, 0};  ///< r_p each buffer's frame drew with
   int frameIndex_ = 0;
 };
 

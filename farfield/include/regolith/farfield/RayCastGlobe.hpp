@@ -18,6 +18,7 @@
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -33,7 +34,7 @@ struct GlobeBody {
   /// Column 0 starts at longitude −180°, the first row uploaded (GL row 0) is the north edge
   /// (+90°), texel centres at (i + 0.5) · 360° / width. It must wrap (GL_REPEAT) in s, so
   /// that ±180° blends both edge columns; makeEquirectangularTexture() sets it up so.
-  GLuint albedoTexture = 0;
+  gl::Id albedoTexture = 0;
   glm::vec3 colour{0.8F, 0.8F, 0.8F};  ///< the albedo without a texture, or its tint
 };
 
@@ -135,7 +136,7 @@ class RayCastGlobe {
   /// none). Pixels where it is non-zero are left alone: the impostor fills in only around
   /// what is drawn (FarField's hand-off).
   GlobeFrame draw(const clod::Camera& camera, const GlobeBody& body, const glm::dvec3& sunDirection,
-                  GLuint keepDepth = 0);
+                  gl::Id keepDepth = 0);
 
  private:
   GlobeOptions options_;
@@ -144,7 +145,7 @@ class RayCastGlobe {
   gl::VertexArray vao_;
   gl::Buffer vertices_;
   gl::Buffer counters_;
-  GLsizeiptr capacity_ = 0;
+  std::ptrdiff_t capacity_ = 0;  // bytes (GLsizeiptr)
 };
 
 }  // namespace regolith::farfield

@@ -6,12 +6,18 @@
 /// destructor; moves transfer the name and leave 0 behind. A context must be current on the
 /// calling thread for construction and destruction. Not thread-safe (GL objects belong to
 /// their context's thread).
-
-#include <regolith/gl/Gl.hpp>
+///
+/// Needs no GL header (nor does Program.hpp or RenderTarget.hpp): the renderers' public
+/// headers hold GL objects without declaring GL to their users. Code that calls GL includes
+/// <regolith/gl/Gl.hpp>.
 
 #include <utility>
 
 namespace regolith::gl {
+
+/// A GL object name: Id, which the Khronos headers define as unsigned int (checked
+/// where GL is declared, in GlObjects.cpp).
+using Id = unsigned int;
 
 /// The kinds of GL object a GlObject can own.
 enum class GlKind { Buffer, VertexArray, Texture2D, Framebuffer, Renderbuffer };
@@ -23,7 +29,7 @@ class GlObject {
   /// Creates a new object (glCreateBuffers, glCreateVertexArrays, glCreateTextures(2D), ...).
   GlObject();
   /// Takes ownership of an existing name (0 for none).
-  explicit GlObject(GLuint adopted) noexcept : id_(adopted) {}
+  explicit GlObject(Id adopted) noexcept : id_(adopted) {}
   GlObject(const GlObject&) = delete;
   GlObject& operator=(const GlObject&) = delete;
   GlObject(GlObject&& o) noexcept : id_(std::exchange(o.id_, 0)) {}
@@ -37,12 +43,12 @@ class GlObject {
   ~GlObject() { reset(); }
 
   /// The GL name (0 after a move).
-  [[nodiscard]] GLuint id() const noexcept { return id_; }
+  [[nodiscard]] Id id() const noexcept { return id_; }
   /// Deletes the object now.
   void reset() noexcept;
 
  private:
-  GLuint id_ = 0;
+  Id id_ = 0;
 };
 
 using Buffer = GlObject<GlKind::Buffer>;

@@ -2,7 +2,7 @@
 /// \file
 /// A linked GLSL program.
 
-#include <regolith/gl/Gl.hpp>
+#include <regolith/gl/GlObjects.hpp>
 
 #include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
@@ -35,11 +35,11 @@ class Program {
   Program& operator=(Program&& o) noexcept;
   ~Program();
 
-  [[nodiscard]] GLuint id() const noexcept { return id_; }
-  void use() const noexcept { glUseProgram(id_); }
+  [[nodiscard]] Id id() const noexcept { return id_; }
+  void use() const noexcept;
   /// Uniform location, or -1 if the program has no active uniform of that name (the
   /// compiler may drop unused ones; setting -1 is a no-op in GL).
-  [[nodiscard]] GLint uniform(const char* name) const noexcept;
+  [[nodiscard]] int uniform(const char* name) const noexcept;
 
   void set(const char* name, float v) const noexcept;
   void set(const char* name, int v) const noexcept;
@@ -52,9 +52,9 @@ class Program {
 
  private:
   Program() = default;
-  void link(std::string_view name, const std::vector<GLuint>& shaders);
+  void link(std::string_view name, const std::vector<Id>& shaders);
 
-  GLuint id_ = 0;
+  Id id_ = 0;
 };
 
 }  // namespace regolith::gl

@@ -20,12 +20,12 @@ class RenderTarget {
 
   [[nodiscard]] int width() const noexcept { return width_; }
   [[nodiscard]] int height() const noexcept { return height_; }
-  [[nodiscard]] GLuint framebuffer() const noexcept { return fbo_.id(); }
+  [[nodiscard]] Id framebuffer() const noexcept { return fbo_.id(); }
   /// The RGBA8 colour texture (for passes that read the frame, such as screen-space
   /// composition; not while it is the bound draw target).
-  [[nodiscard]] GLuint colorTexture() const noexcept { return color_.id(); }
+  [[nodiscard]] Id colorTexture() const noexcept { return color_.id(); }
   /// The DEPTH_COMPONENT32F depth texture (reversed Z: near / view distance, 0 = nothing).
-  [[nodiscard]] GLuint depthTexture() const noexcept { return depth_.id(); }
+  [[nodiscard]] Id depthTexture() const noexcept { return depth_.id(); }
 
   /// Binds the framebuffer, sets the viewport and the reversed-Z depth state.
   void bind() const noexcept;
