@@ -422,7 +422,25 @@ scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
   mars.farField = options.farField;
   mars.look.colour = rgb(kPlanetAlbedo);
   mars.look.clipmapSize = options.clipmapSize;
+  // The paper's layout (PaperScene.hpp): heliocentric, the ecliptic the x-y plane.
+  const demo::PaperSceneLayout layout;
+  const auto array = [](const glm::dvec3& v) { return std::array<double, 3>{v.x, v.y, v.z}; };
+  mars.pose = scene::Body::Pose{array(heliocentric(layout.marsDistance, layout.marsLongitudeDeg)),
+                                layout.marsObliquityDeg, layout.marsSpinDeg};
   d.bodies.push_back(mars);
+  // Earth as the paper's scene draws it: WGS84 without relief (3° cells: a dot from Mars),
+  // blue, a small clipmap, no far field.
+  scene::Body earth;
+  earth.name = "earth";
+  const topo::Body wgs84 = topo::Body::earthWgs84();
+  earth.radii = std::array<double, 2>{wgs84.equatorialRadius(), wgs84.polarRadius()};
+  earth.pose =
+      scene::Body::Pose{array(heliocentric(layout.earthDistance, layout.earthLongitudeDeg)),
+                        layout.earthObliquityDeg, 0.0};
+  earth.look.colour = {0.3, 0.45, 0.8};
+  earth.look.clipmapSize = 31;
+  earth.farField = false;
+  d.bodies.push_back(earth);
 
   const glm::vec3 demAlbedo = options.demAlbedo.value_or(kDemAlbedo);
   scene::Dem victoria;
@@ -446,7 +464,6 @@ scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
   victoria.look.effects.tracks = fx.tracks != nullptr || !rover.traverse.empty();
   d.dems.push_back(victoria);
   if (options.secondDem) {
-    const demo::PaperSceneLayout layout;
     scene::Dem second = victoria;
     second.name = "second_dem";
     second.heights = {};

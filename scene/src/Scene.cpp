@@ -14,6 +14,8 @@
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/Projection.hpp>
 
+#include "BodyPlacement.hpp"
+
 #include <EGL/egl.h>
 #include <glm/geometric.hpp>
 
@@ -232,10 +234,41 @@ struct Scene::Impl {
     throw InvalidArgument("Scene: no body or DEM named '" + name + "'");
   }
 
+  /// A body without heights: its reference ellipsoid (the description's radii) with no
+  /// relief, on a global grid of kSmoothBodyCellDeg cells.
+  static Grid smooth(const Body& b) {
+    const auto rows = static_cast<std::size_t>(std::lround(180.0 / kSmoothBodyCellDeg));
+    const std::size_t cols = 2 * rows;
+    const double half = 0.5 * kSmoothBodyCellDeg;
+    const topo::TopoGrid g(rows, cols, -180.0 + half, 90.0 - half, kSmoothBodyCellDeg,
+                           kSmoothBodyCellDeg);
+    const topo::Body body = topo::Body::ellipsoid(b.name, (*b.radii)[0], (*b.radii)[1]);
+    Grid out;
+    out.samples =
+        std::make_shared<topo::InMemorySamples>(rows, cols, std::vector<float>(rows * cols, 0.0F));
+    out.info.name = b.name;
+    out.pyramid = std::make_shared<const clod::HeightPyramid>(
+        clod::HeightPyramid::fromSamples(g, out.samples, clod::SurfaceKind::Planet, body));
+    return out;
+  }
+
+  /// A body's frame in the root's: Body::pose (translation, then the obliquity about x, then
+  /// the spin about the pole).
+  static scenegraph::Pose bodyPose(const Body& b) {
+    scenegraph::Pose p;
+    if (!b.pose) return p;
+    p.translation = vec(b.pose->position);
+    p.rotation = glm::angleAxis(b.pose->obliquity * kDeg, glm::dvec3(1.0, 0.0, 0.0)) *
+                 glm::angleAxis(b.pose->spin * kDeg, glm::dvec3(0.0, 0.0, 1.0));
+    return p;
+  }
+
   void buildBody(std::size_t i) {
     const Body& b = d.bodies[i];
     const std::string ptr = "/bodies/" + std::to_string(i);
-    Grid planet = grid(b.heights[0]);
+    if (b.heights.empty() && !b.radii)
+      fail(ptr + "/heights", "empty and no radii, expected at least one dataset");
+    Grid planet = b.heights.empty() ? smooth(b) : grid(b.heights[0]);
     if (planet.pyramid->kind() != clod::SurfaceKind::Planet)
       fail(ptr + "/heights/0", "grid '" + planet.info.name + "' is not a planet grid");
     const topo::Body& body = *planet.pyramid->body();
@@ -256,9 +289,17 @@ struct Scene::Impl {
     t.options.albedo = t.albedo;
     t.options.effects = effects(b.look.effects, ptr + "/effects");
     t.key = static_cast<int>(terrains.size());
-    t.node =
-        graph.add(graph.root(), b.name, scenegraph::Pose{}, scenegraph::NodeKind::Terrain, t.key);
+    t.node = graph.add(graph.root(), b.name, bodyPose(b), scenegraph::NodeKind::Terrain, t.key);
     terrains.push_back(std::move(t));
+  }
+
+  /// Every body's place, now that every body's radii are known (detail::checkBodiesApart()).
+  void checkBodiesApart() const {
+    std::vector<double> radius;
+    for (const Body& b : d.bodies)
+      for (const Terrain& t : terrains)
+        if (t.planet && t.name == b.name) radius.push_back(t.pyramid->body()->equatorialRadius());
+    if (const auto e = detail::checkBodiesApart(d.bodies, radius)) fail(e->pointer, e->what);
   }
 
   /// A body with several height datasets, or whose DEMs are composed into it: one composed
@@ -420,6 +461,7 @@ struct Scene::Impl {
                               "' is not a DEM of the scene");
     }
     for (std::size_t i = 0; i < d.bodies.size(); ++i) buildBody(i);
+    checkBodiesApart();
     for (std::size_t i = 0; i < d.dems.size(); ++i) buildDem(i);
     for (std::size_t i = 0; i < d.bodies.size(); ++i) composeBody(i);
     for (std::size_t i = 0; i < d.objects.size(); ++i) buildObject(i);

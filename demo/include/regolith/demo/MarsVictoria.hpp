@@ -188,14 +188,14 @@ struct SceneRover {
 /// The Mars/Victoria scene of `options` as a scene description (docs/scene-format.md), no
 /// cameras (the caller adds its views; their frame "victoria" is the Victoria DEM's, as
 /// renderSceneView()'s camera): Mars ("mars") from its generator or store (with the extra
-/// datasets and the DEMs composed into it under options.composition), the Victoria DEM
-/// ("victoria") and the second DEM ("second_dem"), the rover ("rover"), and the morning light
-/// over Victoria (35° up, from the east). This description is the demo scene: every demo
-/// render (the fly-over, renderSceneView(), `regolith demo`'s rover views) draws the
-/// scene::Scene built from it. Earth of the paper's layout is left out (a sub-pixel dot from
-/// Mars). Store paths are written as given (relative ones resolve against the current
-/// folder). Effects other than tracks in options.victoriaEffects are not carried over
-/// (InvalidArgument).
+/// datasets and the DEMs composed into it under options.composition), Earth ("earth": WGS84
+/// without relief), both where the paper's layout puts them (PaperSceneLayout: heliocentric
+/// poses), the Victoria DEM ("victoria") and the second DEM ("second_dem"), the rover
+/// ("rover"), and the morning light over Victoria (35° up, from the east). This description is
+/// the demo scene: every demo render (the fly-over, renderSceneView(), `regolith demo`'s rover
+/// views) draws the scene::Scene built from it. Store paths are written as given (relative ones
+/// resolve against the current folder). Effects other than tracks in options.victoriaEffects are
+/// not carried over (InvalidArgument).
 [[nodiscard]] scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
                                                        const SceneRover& rover = {});
 
