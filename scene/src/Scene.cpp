@@ -81,6 +81,7 @@ struct Scene::Impl {
   };
   std::vector<Thing> objects;
   std::map<std::string, scenegraph::NodeId> cameras;
+  std::size_t traversesDriven = 0;
   scenegraph::NodeId lightFrame = 0;
   glm::dvec3 lightDirection{0.0, 0.0, 1.0};
 
@@ -434,7 +435,12 @@ struct Scene::Impl {
       x = o.pose->x;
       y = o.pose->y;
       heading = o.pose->heading;
+    } else if (const auto given = options.driven.find(o.name); given != options.driven.end()) {
+      x = given->second.x;  // driven by the caller (SceneOptions::driven)
+      y = given->second.y;
+      heading = given->second.heading * 180.0 / std::numbers::pi;
     } else {
+      ++traversesDriven;
       rover::TraverseOptions to;
       for (const auto& w : o.traverse->waypoints) to.path.emplace_back(w[0], w[1]);
       to.speed = o.traverse->speed;
@@ -459,6 +465,21 @@ struct Scene::Impl {
       if (!found)
         throw InvalidArgument("Scene: SceneOptions::tracks: '" + name +
                               "' is not a DEM of the scene");
+    }
+    for (const auto& entry : options.driven) {
+      const std::string& name = entry.first;
+      const auto it = std::find_if(d.objects.begin(), d.objects.end(),
+                                   [&](const Object& o) { return o.name == name; });
+      if (it == d.objects.end() || !it->traverse)
+        throw InvalidArgument("Scene: SceneOptions::driven: '" + name +
+                              "' is not an object of the scene with a traverse");
+      const auto dem = std::find_if(d.dems.begin(), d.dems.end(),
+                                    [&](const Dem& m) { return m.name == it->dem; });
+      if (dem != d.dems.end() && dem->look.effects.tracks && !options.tracks.count(it->dem))
+        fail("/objects/" + std::to_string(it - d.objects.begin()) + "/traverse",
+             "driven by the caller (SceneOptions::driven), but SceneOptions::tracks gives no "
+             "layer for its DEM '" +
+                 it->dem + "', which declares tracks");
     }
     for (std::size_t i = 0; i < d.bodies.size(); ++i) buildBody(i);
     checkBodiesApart();
@@ -566,6 +587,8 @@ glm::dvec3 Scene::lightIn(const std::string& frame) const {
   return impl_->graph.relative(impl_->graph.at(frame), impl_->lightFrame)
       .applyVector(impl_->lightDirection);
 }
+
+std::size_t Scene::traversesDriven() const noexcept { return impl_->traversesDriven; }
 
 std::string Scene::focusOf(const std::string& camera) const {
   const Camera* c = impl_->d.camera(camera);

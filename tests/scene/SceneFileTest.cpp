@@ -503,6 +503,73 @@ TEST(Scene, TraverseStopsAtItsEndAndPressesTracks) {
   EXPECT_GT(s.terrainOptions("victoria").effects.tracks->tiles(), 0U);
 }
 
+TEST(Scene, ATraverseTheCallerDroveIsNotDrivenAgain) {
+  json j = baseScene();
+  j["objects"][0].erase("pose");
+  j["objects"][0]["traverse"] = {{"waypoints", {{-100, -300}, {-100, -280}}}, {"step", 0.01}};
+  const SceneDescription d = parse(j);
+  // The scene drives the traverse itself: once.
+  const Scene first(d);
+  EXPECT_EQ(first.traversesDriven(), 1U);
+  const glm::dvec4 end = first.objectPose("rover");
+  const std::shared_ptr<rover::TrackLayer> pressed =
+      first.terrainOptions("victoria").effects.tracks;
+  const std::size_t tiles = pressed->tiles();
+  ASSERT_GT(tiles, 0U);
+  // A second scene given that run (its end and its tracks) drives nothing: the rover stands
+  // where the run stopped, and the layer holds the run's tracks, pressed once.
+  SceneOptions given;
+  given.tracks["victoria"] = pressed;
+  rover::ChassisPose last;
+  last.x = end.x;
+  last.y = end.y;
+  last.heading = end.w * std::numbers::pi / 180.0;
+  given.driven["rover"] = last;
+  const Scene second(d, given);
+  EXPECT_EQ(second.traversesDriven(), 0U);
+  EXPECT_EQ(second.objectPose("rover").x, end.x);
+  EXPECT_EQ(second.objectPose("rover").y, end.y);
+  EXPECT_NEAR(second.objectPose("rover").w, end.w, 1e-12);
+  EXPECT_EQ(second.terrainOptions("victoria").effects.tracks, pressed);
+  EXPECT_EQ(pressed->tiles(), tiles);
+  // Where the caller says the run stopped is where the rover stands (not where the
+  // waypoints end): nothing is driven, nothing pressed into a fresh layer.
+  given.tracks["victoria"] = std::make_shared<rover::TrackLayer>(rover::RoverRuts::kTexelMetres);
+  last.x = 12.5;
+  last.y = -300.25;
+  last.heading = 0.5;
+  given.driven["rover"] = last;
+  const Scene elsewhere(d, given);
+  EXPECT_EQ(elsewhere.traversesDriven(), 0U);
+  EXPECT_EQ(elsewhere.objectPose("rover").x, 12.5);
+  EXPECT_EQ(elsewhere.objectPose("rover").y, -300.25);
+  EXPECT_EQ(elsewhere.objectPose("rover").z, elsewhere.demHeight("victoria", 12.5, -300.25));
+  EXPECT_EQ(given.tracks["victoria"]->tiles(), 0U);
+  // Misuse named: an object without a traverse, a name that is no object, no tracks layer
+  // for a DEM that declares tracks.
+  const auto errorOfBuild = [](const SceneDescription& desc, const SceneOptions& o) {
+    try {
+      const Scene s(desc, o);
+    } catch (const InvalidArgument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  SceneOptions bad;
+  bad.driven["rover"] = last;
+  EXPECT_EQ(errorOfBuild(parse(baseScene()), bad),
+            "Scene: SceneOptions::driven: 'rover' is not an object of the scene with a traverse");
+  bad.driven.clear();
+  bad.driven["rovr"] = last;
+  EXPECT_EQ(errorOfBuild(d, bad),
+            "Scene: SceneOptions::driven: 'rovr' is not an object of the scene with a traverse");
+  bad.driven.clear();
+  bad.driven["rover"] = last;
+  EXPECT_EQ(errorOfBuild(d, bad),
+            "Scene: /objects/0/traverse: driven by the caller (SceneOptions::driven), but "
+            "SceneOptions::tracks gives no layer for its DEM 'victoria', which declares tracks");
+}
+
 TEST(SceneFile, DrapedDataFromAGeneratorNeedsItsRangeAndItsTerrainsKind) {
   const json victoria = {{"generate", "victoria"}, {"size", 201}, {"spacing", 4}, {"seed", 3}};
   json j = baseScene();
