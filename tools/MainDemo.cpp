@@ -342,7 +342,7 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
                              {data.strip, "strip", 0.0, 8.0}};
   scene::SceneDescription sceneFile =
       demo::sceneDescription(demoScene, {0.0, 0.0, 0.0, rover::defaultVictoriaPath()});
-  sceneFile.cameras = roverCameras(o, trav);
+  for (const scene::Camera& c : roverCameras(o, trav)) sceneFile.cameras.push_back(c);
   // The traverse ran once, above: the scene takes where it stopped and the tracks it
   // pressed instead of driving it again (scene.json still replays it when read alone).
   scene::SceneOptions demoOptions;

@@ -23,6 +23,7 @@
 #include <limits>
 #include <numbers>
 #include <string>
+#include <tuple>
 
 namespace regolith::scene {
 namespace {
@@ -501,6 +502,32 @@ TEST(Scene, TraverseStopsAtItsEndAndPressesTracks) {
   EXPECT_NEAR(p.y, -280.0, 0.02);
   EXPECT_NEAR(p.w, 0.0, 1e-6);  // heading north
   EXPECT_GT(s.terrainOptions("victoria").effects.tracks->tiles(), 0U);
+}
+
+TEST(Scene, TheDemoScenesCamerasAreThePapersLayouts) {
+  // The paper's cameras declared in demo::sceneDescription(), against demo::buildPaperScene()
+  // (which places them in C++ of its own): each in the frame it follows, the same pose.
+  demo::MarsVictoriaOptions o;
+  o.planetRows = 90;
+  o.demSize = 101;
+  o.secondDem = false;
+  const Scene s(demo::sceneDescription(o));
+  scenegraph::SceneGraph paper("sun");
+  const demo::PaperSceneNodes n = demo::buildPaperScene(paper);
+  const demo::DemoCameras c = demo::paperCameraNodes(s);
+  const scenegraph::SceneGraph& g = s.graph();
+  EXPECT_EQ(c.orbit, s.cameraNode("orbit_camera"));
+  for (const auto& [node, want, frame, tolerance] :
+       {std::tuple{c.orbit, paper.relative(n.victoria, n.orbitCamera), "victoria", 1e-6},
+        {c.mast, paper.relative(n.rover, n.mastCamera), "rover", 0.0},
+        {c.chase, paper.relative(n.rover, n.chaseCamera), "rover", 0.0}}) {
+    const scenegraph::Pose got = g.relative(g.at(frame), node);
+    EXPECT_LE(glm::length(got.translation - want.translation), tolerance) << frame;
+    for (const glm::dvec3& axis : {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)})
+      EXPECT_LE(glm::length(got.applyVector(axis) - want.applyVector(axis)), 1e-12) << frame;
+  }
+  EXPECT_EQ(s.description().camera("orbit_camera")->near, 100.0);
+  EXPECT_EQ(s.description().camera("mast_camera")->near, 0.05);
 }
 
 TEST(Scene, ATraverseTheCallerDroveIsNotDrivenAgain) {
