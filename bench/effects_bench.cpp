@@ -3,14 +3,21 @@
 // apply), clipmap levels of 255².
 //
 //   effects/<name>   each iteration draws one frame of the bare pipeline (ClipmapOptions{}
-//       as before effects existed) and one frame with only <name> declared, alternately,
-//       each timed on its own (draw + glFinish). Counters: bare_ms and effect_ms (means),
-//       and ratio = effect_ms / bare_ms. Alternating frames side by side keeps the ratio
-//       honest on a shared, noisy machine: drifts hit both.
+//       as before effects existed) and one frame with only <name> declared, each timed on
+//       its own (draw + glFinish), the bare one first in even iterations and second in odd
+//       ones. Counters: bare_ms and effect_ms (medians over the iterations), ratio (the
+//       median of the iterations' effect/bare ratios), ratio_q1 and ratio_q3 (their
+//       quartiles). A pair of frames side by side shares the machine's drift, the order
+//       alternates so that neither frame always follows the other (caches, the clock), and
+//       the median ignores the frames another process preempted: a mean of sums let one such
+//       frame move the noise floor (none) to 1.5 in a quick run.
 //   <name> = none: a terrain built from a scene that declares no effect (Effects{}), which
 //       is the noise floor (it builds the identical program, EffectsGLTest).
 //
-// Run: build/bench/effects_bench --benchmark_min_time=40x   (about a minute)
+// Run: build/bench/effects_bench --pairs=40   (about a minute on a quiet machine)
+//   --pairs=N fixes the number of frame pairs per case (Google Benchmark 1.7, Debian 12's,
+//   has no iteration count on its command line: its --benchmark_min_time=40x is 1.8's).
+//   Without it, --benchmark_min_time decides, and a slow frame can leave a single pair.
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/gl/Gl.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
@@ -21,8 +28,11 @@
 #include <benchmark/benchmark.h>
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <string>
 #include <vector>
@@ -117,6 +127,16 @@ Camera camera() {
   return cam;
 }
 
+/// The q-quantile of v (linear between order statistics); v is reordered.
+double quantile(std::vector<double>& v, double q) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const double at = q * static_cast<double>(v.size() - 1);
+  const auto lo = static_cast<std::size_t>(at);
+  const std::size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (at - static_cast<double>(lo)) * (v[hi] - v[lo]);
+}
+
 double frameMs(const ClipmapTerrain& terrain, const Camera& cam, const gl::RenderTarget& target) {
   const auto t0 = std::chrono::steady_clock::now();
   target.clear({0, 0, 0, 1});
@@ -137,30 +157,68 @@ void effectFrame(benchmark::State& state, const std::string& name) {
   const gl::RenderTarget target(cam.width, cam.height);
   (void)frameMs(bare, cam, target);  // first frames: shader JIT, uploads
   (void)frameMs(withEffect, cam, target);
-  double bareMs = 0.0, effectMs = 0.0;
+  std::vector<double> bareMs, effectMs, ratios;
+  bool bareFirst = true;
   for (auto _ : state) {
-    bareMs += frameMs(bare, cam, target);
-    effectMs += frameMs(withEffect, cam, target);
+    double b = 0.0, e = 0.0;
+    if (bareFirst) {
+      b = frameMs(bare, cam, target);
+      e = frameMs(withEffect, cam, target);
+    } else {
+      e = frameMs(withEffect, cam, target);
+      b = frameMs(bare, cam, target);
+    }
+    bareFirst = !bareFirst;
+    bareMs.push_back(b);
+    effectMs.push_back(e);
+    ratios.push_back(e / b);
   }
-  const auto n = static_cast<double>(state.iterations());
-  state.counters["bare_ms"] = bareMs / n;
-  state.counters["effect_ms"] = effectMs / n;
-  state.counters["ratio"] = effectMs / bareMs;
+  state.counters["bare_ms"] = quantile(bareMs, 0.5);
+  state.counters["effect_ms"] = quantile(effectMs, 0.5);
+  state.counters["ratio"] = quantile(ratios, 0.5);
+  state.counters["ratio_q1"] = quantile(ratios, 0.25);
+  state.counters["ratio_q3"] = quantile(ratios, 0.75);
 }
 
 }  // namespace
 
+/// Takes --pairs=N out of argv (Google Benchmark rejects flags it does not know): N > 0, or
+/// 0 when absent. A bad value ends the program with a message naming the flag.
+long takePairs(int& argc, char** argv) {
+  long pairs = 0;
+  int out = 1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a.rfind("--pairs=", 0) != 0) {
+      argv[out++] = argv[i];
+      continue;
+    }
+    char* end = nullptr;
+    pairs = std::strtol(a.c_str() + 8, &end, 10);
+    if (end == a.c_str() + 8 || *end != '\0' || pairs <= 0) {
+      std::fprintf(stderr, "effects_bench: --pairs=%s: expected a whole number > 0\n",
+                   a.c_str() + 8);
+      std::exit(2);
+    }
+  }
+  argc = out;
+  return pairs;
+}
+
 int main(int argc, char** argv) {
+  const long pairs = takePairs(argc, argv);
   const gl::HeadlessContext context;                             // one GL context for every case
   benchmark::AddCustomContext("gl_renderer", gl::glRenderer());  // for regolith report
   for (const char* name :
-       {"none", "albedo", "tracks", "noise", "heightColours", "latLon", "overlay"})
-    benchmark::RegisterBenchmark(
-        (std::string("effects/") + name).c_str(),
-        [n = std::string(name)](benchmark::State& s) { effectFrame(s, n); })
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime()  // llvmpipe draws on its own threads: CPU time of this one undercounts
-        ->MinWarmUpTime(0.0);
+       {"none", "albedo", "tracks", "noise", "heightColours", "latLon", "overlay"}) {
+    auto* b = benchmark::RegisterBenchmark(
+                  (std::string("effects/") + name).c_str(),
+                  [n = std::string(name)](benchmark::State& s) { effectFrame(s, n); })
+                  ->Unit(benchmark::kMillisecond)
+                  ->UseRealTime()  // llvmpipe draws on its own threads: CPU time undercounts
+                  ->MinWarmUpTime(0.0);
+    if (pairs > 0) b->Iterations(pairs);
+  }
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

@@ -6,6 +6,9 @@
 //       read over the bytes of the unique patches the wheels touched; one height() or
 //       surface() call per wheel, or (…_batch6) one heights() or surfaces() batch of the six
 //       wheels per step, as rover::traverse() queries
+//   store/rover/survey/budget_patches:N   a lawnmower survey over 4 × 4 patches (stripes 32 m
+//       apart, alternately east and west, six wheels every 0.5 m, one heights() batch per
+//       step) through a cache of N patches: what the budget buys when a traverse comes back
 //   store/rover/gdal_rasterio   the same wheel points through GDAL RasterIO (2×2 window
 //       per query, bilinear in code) on the same data as a 256×256-tiled GeoTIFF, with
 //       GDAL's block cache set to the same 8 MiB
@@ -50,7 +53,9 @@ namespace fs = std::filesystem;
 constexpr std::size_t kSize = 4096;  // samples per side, 1 m spacing
 constexpr std::size_t kPatch = 256;
 constexpr std::size_t kBudget = std::size_t{8} << 20;  // 8 MiB: the grid is 8× larger
-constexpr double kOrigin = 0.0;                        // sample (0,0) at x = 0, y = 0
+// What one full patch takes of a cache's budget: its samples and the cache's bookkeeping.
+constexpr std::size_t kPatchBytes = kPatch * kPatch * sizeof(float) + 384;
+constexpr double kOrigin = 0.0;  // sample (0,0) at x = 0, y = 0
 
 float terrain(std::size_t r, std::size_t c) {
   const double x = static_cast<double>(c), y = -static_cast<double>(r);
@@ -135,6 +140,33 @@ const Wheels& wheels() {
   return w;
 }
 
+// A survey (lawnmower) traverse over 4 × 4 patches (x and -y from 520 to 1528 m): stripes
+// 32 m apart, driven alternately east and west, the six wheels every 0.5 m. Unlike the 1 km
+// path above, which never comes back to a patch it left, a stripe re-crosses the patches of
+// the one before, so the budget decides how many patches are loaded again: about 16 when a
+// row of patches (4, plus the next row at its edge) fits, and about 4 per stripe when not.
+const Wheels& surveyWheels() {
+  static const Wheels w = [] {
+    Wheels x;
+    constexpr double lo = 520.0, hi = 1528.0, gap = 32.0, step = 0.5;
+    bool east = true;
+    for (double across = lo; across <= hi; across += gap, east = !east) {
+      for (double along = 0.0; along <= hi - lo; along += step) {
+        const double cx = east ? lo + along : hi - along, cy = -across;
+        const double hx = east ? 1.0 : -1.0;  // heading along x; across the heading is y
+        for (double a : {-1.0, 0.0, 1.0}) {
+          for (double c : {-0.9, 0.9}) {
+            x.xs.push_back(cx + a * hx);
+            x.ys.push_back(cy + c * hx);
+          }
+        }
+      }
+    }
+    return x;
+  }();
+  return w;
+}
+
 std::size_t uniquePatches(const Wheels& w) {
   std::unordered_set<std::uint64_t> seen;
   for (std::size_t i = 0; i < w.xs.size(); ++i) {
@@ -150,9 +182,8 @@ std::size_t uniquePatches(const Wheels& w) {
 
 enum class RoverQuery { Heights, Surfaces, HeightsBatch, SurfacesBatch };
 
-void roverPaged(benchmark::State& state, RoverQuery query, std::size_t budget) {
+void roverOnPath(benchmark::State& state, RoverQuery query, std::size_t budget, const Wheels& w) {
   const Data& d = data();
-  const Wheels& w = wheels();
   CacheStats last{};
   ReadCounters reads{};
   for (auto _ : state) {
@@ -193,12 +224,21 @@ void roverPaged(benchmark::State& state, RoverQuery query, std::size_t budget) {
   const double unique = static_cast<double>(uniquePatches(w));
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(w.xs.size()));
   state.counters["budget_MiB"] = static_cast<double>(budget) / (1024.0 * 1024.0);
+  state.counters["budget_patches"] = static_cast<double>(budget) / static_cast<double>(kPatchBytes);
   state.counters["patch_loads"] = static_cast<double>(last.loads);
   state.counters["evictions"] = static_cast<double>(last.evictions);
   state.counters["bytes_read_MB"] = static_cast<double>(reads.bytesRead) / 1e6;
   state.counters["unique_patches"] = unique;
   state.counters["bytes_read_over_unique"] =
       static_cast<double>(reads.bytesRead) / (unique * kPatch * kPatch * sizeof(float));
+}
+
+void roverPaged(benchmark::State& state, RoverQuery query, std::size_t budget) {
+  roverOnPath(state, query, budget, wheels());
+}
+
+void roverSurvey(benchmark::State& state, std::size_t budget) {
+  roverOnPath(state, RoverQuery::HeightsBatch, budget, surveyWheels());
 }
 
 void roverGdal(benchmark::State& state) {
@@ -499,9 +539,17 @@ int main(int argc, char** argv) {
       ->Iterations(3);
   // A budget of 4 patches (1 MiB, 64× smaller than the grid): fewer than the path touches.
   benchmark::RegisterBenchmark("store/rover/paged_heights_4_patches", roverPaged,
-                               RoverQuery::Heights, 4 * (kPatch * kPatch * sizeof(float) + 384))
+                               RoverQuery::Heights, 4 * kPatchBytes)
       ->Unit(benchmark::kMillisecond)
       ->Iterations(3);
+  // The survey traverse against the budget, in patches (docs/accuracy-vs-time.md).
+  for (const std::size_t patches : std::array<std::size_t, 7>{1, 2, 3, 4, 6, 8, 16}) {
+    benchmark::RegisterBenchmark(
+        ("store/rover/survey/budget_patches:" + std::to_string(patches)).c_str(), roverSurvey,
+        patches * kPatchBytes)
+        ->Unit(benchmark::kMillisecond)
+        ->Iterations(10);  // each about 10 ms: 3 left the speeds to the machine's noise
+  }
   benchmark::RegisterBenchmark("store/rover/gdal_rasterio", roverGdal)
       ->Unit(benchmark::kMillisecond)
       ->Iterations(1);

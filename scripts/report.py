@@ -384,8 +384,12 @@ def cache_speed(page):
     rows = run.rows("cache_policies", "cache/raw/")
     trav = [r for r in run.rows("store_bench", "store/rover/paged_heights")
             if r.get("budget_MiB") is not None]
+    # The survey traverse (comes back over its patches) against the budget; older runs have
+    # only the one-way path's two budgets.
+    survey = [r for r in run.rows("store_bench", "store/rover/survey/")
+              if r.get("budget_patches") is not None]
     title = "Cache policy and budget: time"
-    if not rows and not trav:
+    if not rows and not trav and not survey:
         return page.missing(title, "cache_policies and store_bench")
     fig, (a, b) = new_fig()
     program = "cache_policies" if rows else "store_bench"
@@ -403,7 +407,37 @@ def cache_speed(page):
     a.grid(True, which="both", alpha=0.3)
     a.legend(fontsize=8)
     cells = []
-    if trav:
+    if survey:
+        pts = sorted(survey, key=lambda r: r.get("budget_patches"))
+        xs = [r.get("budget_patches") for r in pts]
+        b.plot(xs, [r.get("items_per_second") / 1e6 for r in pts], "o-", color="tab:purple")
+        for r in pts:
+            b.annotate(f"{r.get('patch_loads'):.0f}", (r.get("budget_patches"),
+                                                       r.get("items_per_second") / 1e6),
+                       fontsize=7, xytext=(0, 8), textcoords="offset points", ha="center")
+            cells.append([name_cell(r),
+                          value_html(r.ptr + "/budget_patches", r.get("budget_patches"),
+                                     fmt="{:.0f}"),
+                          value_html(r.ptr + "/budget_MiB", r.get("budget_MiB")),
+                          value_html(r.ptr + "/items_per_second", r.get("items_per_second"), 1e-6),
+                          value_html(r.ptr + "/patch_loads", r.get("patch_loads"), fmt="{:.0f}"),
+                          value_html(r.ptr + "/unique_patches", r.get("unique_patches"),
+                                     fmt="{:.0f}")])
+        b.set_ylim(bottom=0, top=1.25 * max(r.get("items_per_second") / 1e6 for r in pts))
+        b.set(xscale="log", xlabel="pager cache budget (patches of 256², 0.25 MiB each)",
+              ylabel="traverse speed (M wheel queries/s)",
+              title="Survey traverse through the pager (LRU);\nlabels: patch loads")
+        b.set_xticks(xs, [f"{x:.0f}" for x in xs])
+        b.grid(True, which="both", alpha=0.3)
+        caption = ("Left: the cache's own time per request for each policy (cache_policies). "
+                   "Right: a rover's lawnmower survey over four by four patches of a store of "
+                   "sixty-four MiB (stripes thirty-two metres apart, six wheels every half "
+                   "metre, one batch per step), paged through caches of one to sixteen "
+                   "patches, cold start (store_bench). Once a row of patches fits, each patch "
+                   "is loaded once; below that, every stripe loads its patches again.")
+        headers = ["case", "budget (patches)", "budget (MiB)", "M wheel queries/s",
+                   "patch loads", "patches touched"]
+    elif trav:
         pts = []
         for r in trav:
             pts.append((r.get("budget_MiB"), r.get("items_per_second") / 1e6, r.get("patch_loads"),
@@ -424,14 +458,16 @@ def cache_speed(page):
               ylabel="traverse speed (M wheel queries/s)",
               title="Rover traverse through the pager (LRU)")
         b.grid(True, which="both", alpha=0.3)
+        caption = ("Left: the cache's own time per request for each policy (cache_policies). "
+                   "Right: six wheels at one kilohertz along a one-kilometre path over a store "
+                   "of sixty-four MiB paged through the pager with two budgets, cold start "
+                   "(store_bench).")
+        headers = ["case", "budget (MiB)", "M wheel queries/s", "patch loads", "MB read"]
     else:
         b.axis("off")
-    page.figure(fig, "cache_speed", title, program,
-                "Left: the cache's own time per request for each policy (cache_policies). "
-                "Right: six wheels at one kilohertz along a one-kilometre path over a store of "
-                "sixty-four MiB paged through the pager with two budgets, cold start "
-                "(store_bench).",
-                table(["case", "budget (MiB)", "M wheel queries/s", "patch loads", "MB read"], cells))
+        caption = "The cache's own time per request for each policy (cache_policies)."
+        headers = ["case"]
+    page.figure(fig, "cache_speed", title, program, caption, table(headers, cells))
 
 
 def clipmap(page):
@@ -631,20 +667,38 @@ def effects(page):
     a.set_yticks(ys, names)
     a.set(xlabel="frame time (ms)", title="Frame time, alternated with the bare frame")
     a.legend(fontsize=7)
-    b.barh(ys, [r.get("ratio") for r in rows], color="tab:purple")
+    ratio = [r.get("ratio") for r in rows]
+    # The middle half of the pairs' ratios (older runs have no quartiles: no bar).
+    q1 = [r.data.get("ratio_q1", r.get("ratio")) for r in rows]
+    q3 = [r.data.get("ratio_q3", r.get("ratio")) for r in rows]
+    b.barh(ys, ratio, color="tab:purple")
+    b.errorbar(ratio, ys, xerr=[[m - lo for m, lo in zip(ratio, q1)],
+                                [hi - m for m, hi in zip(ratio, q3)]],
+               fmt="none", ecolor="k", capsize=3, lw=0.8)
     b.axvline(1.0, color="k", lw=0.8)
     b.set_yticks(ys, names)
-    b.set(xlabel="frame time ratio, effect over bare", title="Relative cost")
+    b.set(xlabel="frame time ratio, effect over bare\n(median of pairs; bars: middle half)",
+          title="Relative cost")
     for ax in (a, b):
         ax.grid(True, axis="x", alpha=0.3)
-    fig.subplots_adjust(left=0.12, wspace=0.45)
+    fig.subplots_adjust(left=0.12, wspace=0.45, bottom=0.2)
+
+    def quartiles(r):
+        if "ratio_q1" not in r.data:
+            return "(not measured)"
+        return (value_html(r.ptr + "/ratio_q1", r.get("ratio_q1")) + " to "
+                + value_html(r.ptr + "/ratio_q3", r.get("ratio_q3")))
+
     cells = [[name_cell(r), value_html(r.ptr + "/bare_ms", r.get("bare_ms")),
               value_html(r.ptr + "/effect_ms", r.get("effect_ms")),
-              value_html(r.ptr + "/ratio", r.get("ratio"))] for r in rows]
+              value_html(r.ptr + "/ratio", r.get("ratio")), quartiles(r)] for r in rows]
     page.figure(fig, "effects", title, "effects_bench",
-                "Frames with only one scene-declared effect, alternated with frames of the bare "
-                "pipeline so that the machine's drift hits both; none is the noise floor.",
-                table(["case", "bare frame (ms)", "with effect (ms)", "ratio"], cells))
+                "Frames with only one scene-declared effect, paired with frames of the bare "
+                "pipeline (the order alternating from pair to pair) so that the machine's drift "
+                "hits both; medians, so that a preempted frame does not count; none is the "
+                "noise floor.",
+                table(["case", "bare frame (ms, median)", "with effect (ms, median)",
+                       "ratio (median of pairs)", "middle half of the ratios"], cells))
 
 
 def main():

@@ -451,11 +451,11 @@ bool Raster::allMissing(std::size_t row0, std::size_t nrows, std::size_t col0,
   return readSource(row0, col0, nrows, ncols, v) == v.size();
 }
 
-void Raster::analyse(const ImportOptions& options) {
-  GDALDatasetH ds = ds_.get();
-  Layout l;
-  l.driver = GDALGetDriverShortName(GDALGetDatasetDriver(ds));
-  const std::string& p = prefix_;
+namespace {
+
+/// Band 1 of a single-band raster of real numbers: what an elevation model is. Anything else
+/// (several bands, a palette, complex samples) is refused, naming what the file holds.
+GDALRasterBandH elevationBand(GDALDatasetH ds, const std::string& p) {
   const int bands = GDALGetRasterCount(ds);
   if (bands != 1) {
     std::string names;
@@ -468,25 +468,23 @@ void Raster::analyse(const ImportOptions& options) {
                       ", expected one elevation band" +
                       (bands >= 3 ? " (an RGB image is not a DEM)" : ""));
   }
-  band_ = GDALGetRasterBand(ds, 1);
-  const GDALColorInterp ci = GDALGetRasterColorInterpretation(band_);
-  if (ci == GCI_PaletteIndex || GDALGetRasterColorTable(band_) != nullptr) {
+  GDALRasterBandH band = GDALGetRasterBand(ds, 1);
+  const GDALColorInterp ci = GDALGetRasterColorInterpretation(band);
+  if (ci == GCI_PaletteIndex || GDALGetRasterColorTable(band) != nullptr) {
     throw ImportError(p + ": band 1 is a palette (colour-indexed) image, expected elevations");
   }
-  const GDALDataType type = GDALGetRasterDataType(band_);
+  const GDALDataType type = GDALGetRasterDataType(band);
   if (type == GDT_Unknown || GDALDataTypeIsComplex(type) != 0) {
     throw ImportError(p + ": band 1 has data type " + GDALGetDataTypeName(type) +
                       ", expected real numbers");
   }
-  GridInfo& info = l.info;
-  info.rows = static_cast<std::size_t>(GDALGetRasterYSize(ds));
-  info.cols = static_cast<std::size_t>(GDALGetRasterXSize(ds));
-  info.patchRows = options.patchRows;
-  info.patchCols = options.patchCols;
-  info.name = options.gridName.empty() ? path_.stem().string() : options.gridName;
+  return band;
+}
 
-  // Heights: unit, scale/offset, nodata, mask.
-  const std::string unit = lower(GDALGetRasterUnitType(band_));
+/// The band's heights: unit (m or km), scale and offset in metres, nodata, mask.
+void analyseHeights(GDALRasterBandH band, const ImportOptions& options, Layout& l,
+                    const std::string& p) {
+  const std::string unit = lower(GDALGetRasterUnitType(band));
   double unitFactor = 1.0;
   if (unit == "km" || unit == "kilometer" || unit == "kilometers" || unit == "kilometre" ||
       unit == "kilometres") {
@@ -496,30 +494,26 @@ void Raster::analyse(const ImportOptions& options) {
     throw ImportError(p + ": band 1 has unit '" + unit + "', expected metres (m) or km");
   }
   int ok = 0;
-  const double scale = GDALGetRasterScale(band_, &ok);
+  const double scale = GDALGetRasterScale(band, &ok);
   l.scale = (ok != 0 ? scale : 1.0) * unitFactor;
-  const double offset = GDALGetRasterOffset(band_, &ok);
+  const double offset = GDALGetRasterOffset(band, &ok);
   l.offset = (ok != 0 ? offset : 0.0) * unitFactor;
   if (!(std::isfinite(l.scale) && l.scale != 0.0 && std::isfinite(l.offset))) {
     throw ImportError(p + ": band 1 has scale " + number(l.scale) + " and offset " +
                       number(l.offset) + ", expected a finite non-zero scale and finite offset");
   }
   int hasNodata = 0;
-  const double nd = GDALGetRasterNoDataValue(band_, &hasNodata);
+  const double nd = GDALGetRasterNoDataValue(band, &hasNodata);
   if (hasNodata != 0) l.declaredNodata = nd;
   l.extraNodata = options.nodata;
-  const int maskFlags = GDALGetMaskFlags(band_);
+  const int maskFlags = GDALGetMaskFlags(band);
   l.readMask = (maskFlags & GMF_ALL_VALID) == 0 && maskFlags != GMF_NODATA;
   // The int16 void marker of SRTM-style DEMs, when the file declares no nodata at all.
   l.voidMarker = hasNodata == 0 && !l.readMask && !options.nodata;
-  // No CRS: a height map placed by the caller, or refused naming the options (HeightMap.cpp).
-  if (GDALGetSpatialRef(ds) == nullptr || options.heightMap) {
-    placeHeightMap(ds, options, l, p);
-    layout_ = std::move(l);
-    return;  // heights by definition: no look for radii
-  }
+}
 
-  // Georeferencing.
+/// The dataset's geotransform, which must be north-up: no rotation, dx > 0, dy < 0.
+std::array<double, 6> northUpGeotransform(GDALDatasetH ds, const std::string& p) {
   std::array<double, 6> gt{};
   if (GDALGetGeoTransform(ds, gt.data()) != CE_None) {
     throw ImportError(p + ": has no geotransform, expected a georeferenced raster");
@@ -532,11 +526,13 @@ void Raster::analyse(const ImportOptions& options) {
     throw ImportError(p + ": geotransform has pixel size " + number(gt[1]) + " x " + number(gt[5]) +
                       ", expected north-up (dx > 0, dy < 0)");
   }
-  OGRSpatialReferenceH srs = GDALGetSpatialRef(ds);
-  if (srs == nullptr) {
-    throw ImportError(p + ": has no coordinate reference system");
-  }
-  l.srs = srs;
+  return gt;
+}
+
+/// The body of the CRS: its radii (which must be positive), its name and the latitude type,
+/// as the label declares it, else planetocentric on a sphere and planetodetic (geodetic) on
+/// an ellipsoid.
+void analyseBody(GDALDatasetH ds, OGRSpatialReferenceH srs, GridInfo& info, const std::string& p) {
   OGRErr err = OGRERR_NONE;
   const double a = OSRGetSemiMajor(srs, &err);
   const double b = OSRGetSemiMinor(srs, &err);
@@ -546,13 +542,7 @@ void Raster::analyse(const ImportOptions& options) {
   }
   info.equatorialRadius = a;
   info.polarRadius = b;
-  l.labelPixelsPerDegree = labelPixelsPerDegree(ds);
   info.bodyName = bodyName(srs, a);
-  const char* crsName = OSRGetName(srs);
-  const std::string crs = crsName != nullptr ? crsName : "unnamed CRS";
-
-  // Latitude type: as the label declares it, else planetocentric on a sphere and
-  // planetodetic (geodetic) on an ellipsoid.
   const std::string label = lower(metadataText(ds, "json:ISIS3") + metadataText(ds, "json:PDS") +
                                   metadataText(ds, "xml:PDS4"));
   const bool detic = label.find("planetographic") != std::string::npos ||
@@ -560,86 +550,137 @@ void Raster::analyse(const ImportOptions& options) {
   const bool centric = !detic && (label.find("planetocentric") != std::string::npos || a == b);
   info.latitudeType =
       centric ? topo::LatitudeType::Planetocentric : topo::LatitudeType::Planetodetic;
+}
 
+/// A geographic CRS: a planet grid in degrees, its spacing snapped onto 360°/cols and
+/// 180°/rows when the grid spans the globe to within half a sample.
+void placeGeographic(OGRSpatialReferenceH srs, const std::array<double, 6>& gt, Layout& l) {
+  GridInfo& info = l.info;
   const double rows = static_cast<double>(info.rows), cols = static_cast<double>(info.cols);
+  const double f = OSRGetAngularUnits(srs, nullptr) * kRadToDeg;  // degrees per unit
+  const double pm = OSRGetPrimeMeridian(srs, nullptr);
+  double dx = gt[1] * f, dy = -gt[5] * f;
+  if (std::abs(cols * dx - 360.0) <= 0.5 * dx && cols * dx != 360.0) {
+    dx = 360.0 / cols;
+    l.spacingSnapped = true;
+  }
+  if (std::abs(rows * dy - 180.0) <= 0.5 * dy && rows * dy != 180.0) {
+    dy = 180.0 / rows;
+    l.spacingSnapped = true;
+  }
+  info.kind = GridKind::Planet;
+  info.spacingX = dx;
+  info.spacingY = dy;
+  info.x0 = pm + (gt[0] / gt[1] + 0.5) * dx;
+  info.y0 = (gt[3] / -gt[5] - 0.5) * dy;
+}
+
+/// A projected CRS: a DEM in the projection's map coordinates, with an analytic placement
+/// for the projections topo has (equirectangular on a sphere, polar stereographic, transverse
+/// Mercator) and one through PROJ for the others. A global equirectangular grid that is not
+/// a mosaic's tile becomes a planet grid. Sets the report's projection: "<CRS> (<method>)".
+void placeProjected(OGRSpatialReferenceH srs, const std::array<double, 6>& gt, Layout& l,
+                    const std::string& crs, bool tile, const std::string& p) {
+  GridInfo& info = l.info;
+  const double a = info.equatorialRadius, b = info.polarRadius;
+  const char* m = OSRGetAttrValue(srs, "PROJECTION", 0);
+  const std::string method = m != nullptr ? m : "unknown";
+  l.projection = crs + " (" + method + ")";
+  const double lf = OSRGetLinearUnits(srs, nullptr);  // metres per unit
+  const double dxM = gt[1] * lf, dyM = -gt[5] * lf;
+  const double fe = projParm(srs, SRS_PP_FALSE_EASTING, 0.0) * lf;
+  const double fn = projParm(srs, SRS_PP_FALSE_NORTHING, 0.0) * lf;
+  const double lon0 = projParm(srs, SRS_PP_CENTRAL_MERIDIAN, 0.0);
+  const double lat0 = projParm(srs, SRS_PP_LATITUDE_OF_ORIGIN, 0.0);
+  PlacementInfo& pl = info.placement;
+  if (method == SRS_PT_EQUIRECTANGULAR && a == b) {
+    const double latTs = projParm(srs, SRS_PP_STANDARD_PARALLEL_1, 0.0);
+    info.kind = GridKind::Dem;
+    pl.kind = PlacementInfo::Kind::Equirectangular;
+    pl.projectionRadius = a;
+    pl.latTrueScaleDeg = latTs;
+    pl.lonCentreDeg = lon0;
+    pl.latOriginDeg = lat0;
+    info.spacingX = dxM;
+    info.spacingY = dyM;
+    info.x0 = gt[0] * lf + 0.5 * dxM - fe;
+    info.y0 = gt[3] * lf - 0.5 * dyM - fn;
+    // A mosaic's tiles: the mosaic as a whole becomes a planet grid (importTiles()).
+    if (!tile) l.spacingSnapped = globalToPlanet(info, l.labelPixelsPerDegree);
+  } else if (method == SRS_PT_POLAR_STEREOGRAPHIC ||
+             ((method == SRS_PT_STEREOGRAPHIC || method == SRS_PT_OBLIQUE_STEREOGRAPHIC) &&
+              std::abs(lat0) == 90.0)) {
+    info.kind = GridKind::Dem;
+    pl.kind = PlacementInfo::Kind::PolarStereographic;
+    pl.pole = lat0 >= 0.0 ? 1 : -1;
+    if (std::abs(lat0) == 90.0) {
+      pl.scaleFactor = projParm(srs, SRS_PP_SCALE_FACTOR, 1.0);
+    } else {
+      pl.latTrueScaleDeg = lat0;  // variant B: latitude_of_origin is the true-scale latitude
+    }
+    pl.lonCentreDeg = lon0;
+    pl.falseEasting = fe;
+    pl.falseNorthing = fn;
+    info.spacingX = dxM;
+    info.spacingY = dyM;
+    info.x0 = gt[0] * lf + 0.5 * dxM;
+    info.y0 = gt[3] * lf - 0.5 * dyM;
+  } else if (method == SRS_PT_TRANSVERSE_MERCATOR) {
+    // Transverse Mercator (EPSG 9807), UTM zones north and south among them; x, y stay the
+    // file's map coordinates, false easting/northing included, as for polar stereographic.
+    info.kind = GridKind::Dem;
+    pl.kind = PlacementInfo::Kind::TransverseMercator;
+    pl.lonCentreDeg = lon0;
+    pl.latOriginDeg = lat0;
+    pl.scaleFactor = projParm(srs, SRS_PP_SCALE_FACTOR, 1.0);
+    pl.falseEasting = fe;
+    pl.falseNorthing = fn;
+    info.spacingX = dxM;
+    info.spacingY = dyM;
+    info.x0 = gt[0] * lf + 0.5 * dxM;
+    info.y0 = gt[3] * lf - 0.5 * dyM;
+  } else {
+    placeThroughProj(srs, gt, lf, info, p, l.projection);  // anything else PROJ knows
+  }
+}
+
+}  // namespace
+
+void Raster::analyse(const ImportOptions& options) {
+  GDALDatasetH ds = ds_.get();
+  const std::string& p = prefix_;
+  Layout l;
+  l.driver = GDALGetDriverShortName(GDALGetDatasetDriver(ds));
+  band_ = elevationBand(ds, p);
+  GridInfo& info = l.info;
+  info.rows = static_cast<std::size_t>(GDALGetRasterYSize(ds));
+  info.cols = static_cast<std::size_t>(GDALGetRasterXSize(ds));
+  info.patchRows = options.patchRows;
+  info.patchCols = options.patchCols;
+  info.name = options.gridName.empty() ? path_.stem().string() : options.gridName;
+  analyseHeights(band_, options, l, p);
+  // No CRS: a height map placed by the caller, or refused naming the options (HeightMap.cpp).
+  if (GDALGetSpatialRef(ds) == nullptr || options.heightMap) {
+    placeHeightMap(ds, options, l, p);
+    layout_ = std::move(l);
+    return;  // heights by definition: no look for radii
+  }
+
+  const std::array<double, 6> gt = northUpGeotransform(ds, p);
+  OGRSpatialReferenceH srs = GDALGetSpatialRef(ds);
+  if (srs == nullptr) {
+    throw ImportError(p + ": has no coordinate reference system");
+  }
+  l.srs = srs;
+  analyseBody(ds, srs, info, p);
+  l.labelPixelsPerDegree = labelPixelsPerDegree(ds);
+  const char* crsName = OSRGetName(srs);
+  const std::string crs = crsName != nullptr ? crsName : "unnamed CRS";
   if (OSRIsGeographic(srs) != 0) {
-    const double f = OSRGetAngularUnits(srs, nullptr) * kRadToDeg;  // degrees per unit
-    const double pm = OSRGetPrimeMeridian(srs, nullptr);
-    double dx = gt[1] * f, dy = -gt[5] * f;
-    if (std::abs(cols * dx - 360.0) <= 0.5 * dx && cols * dx != 360.0) {
-      dx = 360.0 / cols;
-      l.spacingSnapped = true;
-    }
-    if (std::abs(rows * dy - 180.0) <= 0.5 * dy && rows * dy != 180.0) {
-      dy = 180.0 / rows;
-      l.spacingSnapped = true;
-    }
-    info.kind = GridKind::Planet;
-    info.spacingX = dx;
-    info.spacingY = dy;
-    info.x0 = pm + (gt[0] / gt[1] + 0.5) * dx;
-    info.y0 = (gt[3] / -gt[5] - 0.5) * dy;
+    placeGeographic(srs, gt, l);
     l.projection = crs + " (geographic)";
   } else if (OSRIsProjected(srs) != 0) {
-    const char* m = OSRGetAttrValue(srs, "PROJECTION", 0);
-    const std::string method = m != nullptr ? m : "unknown";
-    l.projection = crs + " (" + method + ")";
-    const double lf = OSRGetLinearUnits(srs, nullptr);  // metres per unit
-    const double dxM = gt[1] * lf, dyM = -gt[5] * lf;
-    const double fe = projParm(srs, SRS_PP_FALSE_EASTING, 0.0) * lf;
-    const double fn = projParm(srs, SRS_PP_FALSE_NORTHING, 0.0) * lf;
-    const double lon0 = projParm(srs, SRS_PP_CENTRAL_MERIDIAN, 0.0);
-    const double lat0 = projParm(srs, SRS_PP_LATITUDE_OF_ORIGIN, 0.0);
-    PlacementInfo& pl = info.placement;
-    if (method == SRS_PT_EQUIRECTANGULAR && a == b) {
-      const double latTs = projParm(srs, SRS_PP_STANDARD_PARALLEL_1, 0.0);
-      info.kind = GridKind::Dem;
-      pl.kind = PlacementInfo::Kind::Equirectangular;
-      pl.projectionRadius = a;
-      pl.latTrueScaleDeg = latTs;
-      pl.lonCentreDeg = lon0;
-      pl.latOriginDeg = lat0;
-      info.spacingX = dxM;
-      info.spacingY = dyM;
-      info.x0 = gt[0] * lf + 0.5 * dxM - fe;
-      info.y0 = gt[3] * lf - 0.5 * dyM - fn;
-      // A mosaic's tiles: the mosaic as a whole becomes a planet grid (importTiles()).
-      if (!tile_) l.spacingSnapped = globalToPlanet(info, l.labelPixelsPerDegree);
-    } else if (method == SRS_PT_POLAR_STEREOGRAPHIC ||
-               ((method == SRS_PT_STEREOGRAPHIC || method == SRS_PT_OBLIQUE_STEREOGRAPHIC) &&
-                std::abs(lat0) == 90.0)) {
-      info.kind = GridKind::Dem;
-      pl.kind = PlacementInfo::Kind::PolarStereographic;
-      pl.pole = lat0 >= 0.0 ? 1 : -1;
-      if (std::abs(lat0) == 90.0) {
-        pl.scaleFactor = projParm(srs, SRS_PP_SCALE_FACTOR, 1.0);
-      } else {
-        pl.latTrueScaleDeg = lat0;  // variant B: latitude_of_origin is the true-scale latitude
-      }
-      pl.lonCentreDeg = lon0;
-      pl.falseEasting = fe;
-      pl.falseNorthing = fn;
-      info.spacingX = dxM;
-      info.spacingY = dyM;
-      info.x0 = gt[0] * lf + 0.5 * dxM;
-      info.y0 = gt[3] * lf - 0.5 * dyM;
-    } else if (method == SRS_PT_TRANSVERSE_MERCATOR) {
-      // Transverse Mercator (EPSG 9807), UTM zones north and south among them; x, y stay the
-      // file's map coordinates, false easting/northing included, as for polar stereographic.
-      info.kind = GridKind::Dem;
-      pl.kind = PlacementInfo::Kind::TransverseMercator;
-      pl.lonCentreDeg = lon0;
-      pl.latOriginDeg = lat0;
-      pl.scaleFactor = projParm(srs, SRS_PP_SCALE_FACTOR, 1.0);
-      pl.falseEasting = fe;
-      pl.falseNorthing = fn;
-      info.spacingX = dxM;
-      info.spacingY = dyM;
-      info.x0 = gt[0] * lf + 0.5 * dxM;
-      info.y0 = gt[3] * lf - 0.5 * dyM;
-    } else {
-      placeThroughProj(srs, gt, lf, info, p, l.projection);  // anything else PROJ knows
-    }
+    placeProjected(srs, gt, l, crs, tile_, p);
   } else {
     throw ImportError(p + ": CRS '" + crs + "' is neither geographic nor projected");
   }

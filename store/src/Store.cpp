@@ -4,6 +4,7 @@
 #include <regolith/store/Store.hpp>
 
 #include "Hdf5.hpp"
+#include "Mosaic.hpp"
 #include "StoreFormat.hpp"
 
 #include <sys/stat.h>
@@ -77,11 +78,6 @@ void chargeBudget(OpenState& state, std::uintmax_t bytes, const Context& ctx) {
                   std::to_string(state.limits.maxBytes) +
                   " bytes of files, the open's budget (store::OpenLimits::maxBytes)");
   }
-}
-
-std::string tileRange(const Tile& t) {
-  return "rows " + std::to_string(t.row0) + "-" + std::to_string(t.row0 + t.rows - 1) + ", cols " +
-         std::to_string(t.col0) + "-" + std::to_string(t.col0 + t.cols - 1);
 }
 
 std::string dims(hsize_t r, hsize_t c) { return std::to_string(r) + "x" + std::to_string(c); }
@@ -487,8 +483,9 @@ std::string readTileWhat(const std::string& owner, const Tile& t) {
 
 [[noreturn]] void failOverlap(const Context& ctx, const std::string& owner, const Tile& a,
                               const Tile& b) {
-  fail(ctx, owner + " tiles " + std::to_string(a.index) + " (" + tileRange(a) + ") and " +
-                std::to_string(b.index) + " (" + tileRange(b) + ") overlap");
+  fail(ctx, owner + " tiles " + std::to_string(a.index) + " (" + mosaic::range(mosaic::rectOf(a)) +
+                ") and " + std::to_string(b.index) + " (" + mosaic::range(mosaic::rectOf(b)) +
+                ") overlap");
 }
 
 /// Reads and checks the tiles of a tiled grid (tile_count present), and that no two overlap.
@@ -506,9 +503,7 @@ void openTiles(hid_t g, GridEntry& entry, const Context& ctx, const std::string&
   for (std::size_t i = 0; i < count; ++i) {
     Tile t = openTile(tiles.get(), i, entry, ctx, owner, storePath, state);
     for (const Tile& o : entry.tiles) {
-      const bool rowsMeet = t.row0 < o.row0 + o.rows && o.row0 < t.row0 + t.rows;
-      const bool colsMeet = t.col0 < o.col0 + o.cols && o.col0 < t.col0 + t.cols;
-      if (rowsMeet && colsMeet) failOverlap(ctx, owner, o, t);
+      if (mosaic::overlap(mosaic::rectOf(o), mosaic::rectOf(t))) failOverlap(ctx, owner, o, t);
     }
     entry.tiles.push_back(std::move(t));
   }
@@ -877,27 +872,20 @@ void Store::readWindow(std::string_view grid, std::size_t level, std::size_t row
     fail(ctx, owner + " level 0 is tiled: stride " + std::to_string(stride) +
                   " is not supported there, only 1 (coarse views read a pyramid level)");
   }
-  std::fill(out.begin(), out.end(), std::numeric_limits<float>::quiet_NaN());
-  std::vector<float> buffer;
-  for (const Tile& t : e.tiles) {
-    const std::size_t r0 = std::max(row0, t.row0), r1 = std::min(row0 + rows, t.row0 + t.rows);
-    const std::size_t c0 = std::max(col0, t.col0), c1 = std::min(col0 + cols, t.col0 + t.cols);
-    if (r0 >= r1 || c0 >= c1) continue;
-    const std::size_t nr = r1 - r0, nc = c1 - c0;
-    buffer.resize(nr * nc);
-    if (t.external) {
-      t.external->readWindow(t.externalGrid, 0, r0 - t.row0, c0 - t.col0, nr, nc, buffer);
-    } else {
-      readDataset(e, t.dataset.get(), ctx, readTileWhat(owner, t), r0 - t.row0, c0 - t.col0, nr, nc,
-                  1, buffer);
-      impl_->bytesRead.fetch_add(nr * nc * bytesPerSample, std::memory_order_relaxed);
-    }
-    impl_->reads.fetch_add(1, std::memory_order_relaxed);
-    for (std::size_t r = 0; r < nr; ++r) {
-      std::copy_n(buffer.begin() + static_cast<std::ptrdiff_t>(r * nc), nc,
-                  out.begin() + static_cast<std::ptrdiff_t>((r0 - row0 + r) * cols + (c0 - col0)));
-    }
-  }
+  mosaic::assemble(std::span<const Tile>(e.tiles), {row0, col0, rows, cols},
+                   std::numeric_limits<float>::quiet_NaN(), out.data(),
+                   [&](const Tile& t, const mosaic::Rect& part, std::vector<float>& buffer) {
+                     if (t.external) {
+                       t.external->readWindow(t.externalGrid, 0, part.row0, part.col0, part.rows,
+                                              part.cols, buffer);
+                     } else {
+                       readDataset(e, t.dataset.get(), ctx, readTileWhat(owner, t), part.row0,
+                                   part.col0, part.rows, part.cols, 1, buffer);
+                       impl_->bytesRead.fetch_add(part.rows * part.cols * bytesPerSample,
+                                                  std::memory_order_relaxed);
+                     }
+                     impl_->reads.fetch_add(1, std::memory_order_relaxed);
+                   });
 }
 
 ReadCounters Store::counters() const noexcept {

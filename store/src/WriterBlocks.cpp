@@ -3,6 +3,7 @@
 #include <regolith/core/Message.hpp>
 #include <regolith/topo/Pyramid.hpp>
 
+#include "Mosaic.hpp"
 #include "WriterParts.hpp"
 
 #include <algorithm>
@@ -50,27 +51,18 @@ void coarseBlock(const FineReader& below, const GridInfo& info, std::size_t leve
 void mosaicBlock(const Prepared& p, std::size_t r0, std::size_t c0, std::size_t nr, std::size_t nc,
                  float* out, const Context& ctx) {
   const Missing missing{p.info.nodata};
-  std::fill(out, out + nr * nc, missing.stored());
-  std::vector<float> buffer;
-  for (const PreparedTile& t : p.tiles) {
-    const std::size_t a0 = std::max(r0, t.row0), a1 = std::min(r0 + nr, t.row0 + t.rows);
-    const std::size_t b0 = std::max(c0, t.col0), b1 = std::min(c0 + nc, t.col0 + t.cols);
-    if (a0 >= a1 || b0 >= b1) continue;
-    const std::size_t tr = a1 - a0, tc = b1 - b0;
-    if (t.samples) {
-      level0Block(*t.samples, p.info, a0 - t.row0, b0 - t.col0, tr, tc, buffer, ctx);
-    } else {
-      buffer.resize(tr * tc);
-      t.external->readWindow(t.grid, 0, a0 - t.row0, b0 - t.col0, tr, tc, buffer);
-      for (float& v : buffer) {
-        if (std::isnan(v)) v = missing.stored();
-      }
-    }
-    for (std::size_t r = 0; r < tr; ++r) {
-      std::copy_n(buffer.begin() + static_cast<std::ptrdiff_t>(r * tc), tc,
-                  out + (a0 - r0 + r) * nc + (b0 - c0));
-    }
-  }
+  mosaic::assemble(
+      std::span<const PreparedTile>(p.tiles), {r0, c0, nr, nc}, missing.stored(), out,
+      [&](const PreparedTile& t, const mosaic::Rect& part, std::vector<float>& buffer) {
+        if (t.samples) {
+          level0Block(*t.samples, p.info, part.row0, part.col0, part.rows, part.cols, buffer, ctx);
+          return;
+        }
+        t.external->readWindow(t.grid, 0, part.row0, part.col0, part.rows, part.cols, buffer);
+        for (float& v : buffer) {
+          if (std::isnan(v)) v = missing.stored();
+        }
+      });
 }
 
 }  // namespace regolith::store::writer

@@ -2,6 +2,7 @@
 // creates a file (docs/store-format.md; the limits of "Size limits").
 #include <regolith/core/Message.hpp>
 
+#include "Mosaic.hpp"
 #include "WriterParts.hpp"
 
 #include <utility>
@@ -37,11 +38,6 @@ void validateOptions(const WriteOptions& o, const Context& ctx) {
 }
 
 namespace {
-
-std::string tileRange(const PreparedTile& t) {
-  return "rows " + std::to_string(t.row0) + "-" + std::to_string(t.row0 + t.rows - 1) + ", cols " +
-         std::to_string(t.col0) + "-" + std::to_string(t.col0 + t.cols - 1);
-}
 
 /// Checks tile i of a tiled grid: one source, inside the mosaic, and an external grid that
 /// opens, is plain and gives the tile's size.
@@ -96,8 +92,9 @@ PreparedTile prepareTile(const TileSource& ts, std::size_t i, const GridInfo& in
 
 [[noreturn]] void overlap(const Context& ctx, const GridInfo& info, std::size_t i,
                           const PreparedTile& a, std::size_t j, const PreparedTile& b) {
-  invalid(ctx, "grid '" + info.name + "' tiles " + std::to_string(i) + " (" + tileRange(a) +
-                   ") and " + std::to_string(j) + " (" + tileRange(b) + ") overlap");
+  invalid(ctx, "grid '" + info.name + "' tiles " + std::to_string(i) + " (" +
+                   mosaic::range(mosaic::rectOf(a)) + ") and " + std::to_string(j) + " (" +
+                   mosaic::range(mosaic::rectOf(b)) + ") overlap");
 }
 
 /// Checks the tiles of a tiled grid (prepareTile) and that no two overlap.
@@ -108,10 +105,7 @@ std::vector<PreparedTile> prepareTiles(const GridSource& src, const GridInfo& in
     PreparedTile t = prepareTile(src.tiles[i], i, info, storeDir, ctx);
     for (std::size_t j = 0; j < out.size(); ++j) {
       const PreparedTile& o = out[j];
-      if (t.row0 < o.row0 + o.rows && o.row0 < t.row0 + t.rows && t.col0 < o.col0 + o.cols &&
-          o.col0 < t.col0 + t.cols) {
-        overlap(ctx, info, j, o, i, t);
-      }
+      if (mosaic::overlap(mosaic::rectOf(o), mosaic::rectOf(t))) overlap(ctx, info, j, o, i, t);
     }
     out.push_back(std::move(t));
   }

@@ -255,6 +255,144 @@ bool scattered(std::span<const double> xs, std::span<const double> ys, ToU toU, 
   }
   return k > 1 && 2 * jumps > k - 1;
 }
+
+/// A batch's points and answers (status may be empty: not wanted).
+struct Batch {
+  std::span<const double> xs, ys;
+  std::span<double> out;
+  std::span<QueryStatus> status;
+};
+
+/// heights() on resident samples with the bilinear kernel: height()'s fast path on local
+/// copies (stores to out[] could alias the TopoDem's own members, which would then be
+/// reloaded for every point); `generic(x, y)` answers the points that path does not.
+template <class Generic>
+void residentBilinearBatch(const detail::DemIndexer m, const detail::ResidentBilinear f,
+                           const Batch& b, Generic&& generic) {
+  const std::size_t n = b.xs.size();
+  const auto xs = b.xs, ys = b.ys;
+  const auto out = b.out;
+  const auto status = b.status;
+  // Specialised on the spacing's reciprocal being exact and on whether status is wanted,
+  // so the loop body has no branches but the bounds and missing-sample tests.
+  auto loop = [&](auto recip, auto wantStatus, auto prefetch) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if constexpr (prefetch) {
+        if (i + kPrefetchAhead < n) {
+          // Random access: fetch the cell of a point a few ahead, so its memory miss
+          // overlaps this point's work.
+          const std::size_t j = i + kPrefetchAhead;
+          const double uj = recip ? (xs[j] - m.x0) * m.idx : (xs[j] - m.x0) / m.dx;
+          const double vj = recip ? (m.y0 - ys[j]) * m.idy : (m.y0 - ys[j]) / m.dy;
+          if (uj >= 0.0 && vj >= 0.0 && uj < f.uMax && vj < f.vMax) {
+            const float* p = f.data + static_cast<long>(vj) * f.cols + static_cast<long>(uj);
+            __builtin_prefetch(p);
+            __builtin_prefetch(p + f.cols);
+          }
+        }
+      }
+      const double u = recip ? (xs[i] - m.x0) * m.idx : (xs[i] - m.x0) / m.dx;
+      const double v = recip ? (m.y0 - ys[i]) * m.idy : (m.y0 - ys[i]) / m.dy;
+      double h = 0.0;
+      if (f.evalResident(u, v, h)) [[likely]] {
+        out[i] = h;
+        if constexpr (wantStatus) status[i] = QueryStatus::Ok;
+        continue;
+      }
+      const HeightSample s = generic(xs[i], ys[i]);
+      out[i] = s.height;
+      if constexpr (wantStatus) status[i] = s.status;
+    }
+  };
+  using Yes = std::true_type;
+  using No = std::false_type;
+  const auto run = [&](auto prefetch) {
+    if (m.recip) {
+      status.empty() ? loop(Yes{}, No{}, prefetch) : loop(Yes{}, Yes{}, prefetch);
+    } else {
+      status.empty() ? loop(No{}, No{}, prefetch) : loop(No{}, Yes{}, prefetch);
+    }
+  };
+  if (scattered(
+          xs, ys, [&](double x) { return m.u(x); }, [&](double y) { return m.v(y); })) {
+    run(Yes{});
+  } else {
+    run(No{});
+  }
+}
+
+/// heights() on paged samples with the bilinear kernel: height()'s inline paths (the
+/// thread's block, then the lock-free block table) on local copies, for the same reason. A
+/// variant that protected 8 blocks at once to overlap their memory misses measured no
+/// faster (docs/paging.md).
+template <class Generic>
+void pagedBilinearBatch(const detail::DemIndexer m, const detail::ResidentBilinear f,
+                        const BlockIndex* table, std::uint64_t id, const Batch& b,
+                        Generic&& generic) {
+  const std::size_t n = b.xs.size();
+  const auto xs = b.xs, ys = b.ys;
+  const auto out = b.out;
+  const auto status = b.status;
+  auto loop = [&](auto prefetch) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if constexpr (prefetch) {
+        if (i + kPrefetchAhead < n) {
+          // Random access: fetch the cell of a point a few ahead (its block's data through
+          // the table's hints), so its memory miss overlaps this point's work.
+          const std::size_t j = i + kPrefetchAhead;
+          const double uj = m.u(xs[j]), vj = m.v(ys[j]);
+          if (uj >= 0.0 && vj >= 0.0 && uj < f.uMax && vj < f.vMax)
+            table->prefetchCell(static_cast<std::size_t>(vj), static_cast<std::size_t>(uj));
+        }
+      }
+      double h = 0.0;
+      if (detail::pagedBilinear(f, table, id, m.u(xs[i]), m.v(ys[i]), h)) [[likely]] {
+        out[i] = h;
+        if (!status.empty()) status[i] = QueryStatus::Ok;
+        continue;
+      }
+      const HeightSample s = generic(xs[i], ys[i]);
+      out[i] = s.height;
+      if (!status.empty()) status[i] = s.status;
+    }
+  };
+  if (table != nullptr &&
+      scattered(
+          xs, ys, [&](double x) { return m.u(x); }, [&](double y) { return m.v(y); })) {
+    loop(std::true_type{});
+  } else {
+    loop(std::false_type{});
+  }
+}
+
+/// heights() on resident samples with any kernel, chosen once for the whole batch.
+void residentKernelBatch(const float* resident, long rows, long cols,
+                         const detail::DemIndexer& index, const detail::ResidentBilinear& fast,
+                         const glm::dvec2& slack, Interpolation interp, const Batch& b) {
+  const double nd = fast.nodata;
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  using Acc = ClampAcc<detail::MemFetch>;
+  const Acc acc{{resident, cols}, rows, cols};
+  auto run = [&](auto kernel) {
+    for (std::size_t i = 0; i < b.xs.size(); ++i) {
+      const Where w = locate(index, b.xs[i], b.ys[i], fast.uMax, fast.vMax, slack);
+      QueryStatus st = QueryStatus::OutsideGrid;
+      double h = nan;
+      if (w.inside) {
+        const KernelResult k = kernel(acc, w.u, w.v, nd);
+        st = k.status;
+        h = st == QueryStatus::Ok ? k.h : nan;
+      }
+      b.out[i] = h;
+      if (!b.status.empty()) b.status[i] = st;
+    }
+  };
+  switch (interp) {
+    case Interpolation::Nearest: run(detail::nearest<false, Acc>); break;
+    case Interpolation::Bicubic: run(detail::bicubic<false, Acc>); break;
+    case Interpolation::Bilinear: run(detail::bilinear<false, Acc>); break;
+  }
+}
 }  // namespace
 
 void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, std::span<double> out,
@@ -266,131 +404,21 @@ void TopoDem::heights(std::span<const double> xs, std::span<const double> ys, st
   if (!status.empty()) requireSameLength(n, status.size(), op, "status");
   requireFiniteArray(xs, op, "xs");
   requireFiniteArray(ys, op, "ys");
+  const Batch batch{xs, ys, out, status};
+  const auto generic = [&](double x, double y) { return heightGeneric(x, y, interp); };
   if (fast_.data != nullptr && interp == Interpolation::Bilinear) {
-    // The fast path of height() on local copies: stores to out[] could alias the TopoDem's
-    // own members, which would then be reloaded for every point.
-    const detail::DemIndexer m = index_;
-    const detail::ResidentBilinear f = fast_;
-    // Specialised on the spacing's reciprocal being exact and on whether status is wanted,
-    // so the loop body has no branches but the bounds and missing-sample tests.
-    auto loop = [&](auto recip, auto wantStatus, auto prefetch) {
-      for (std::size_t i = 0; i < n; ++i) {
-        if constexpr (prefetch) {
-          if (i + kPrefetchAhead < n) {
-            // Random access: fetch the cell of a point a few ahead, so its memory miss
-            // overlaps this point's work.
-            const std::size_t j = i + kPrefetchAhead;
-            const double uj = recip ? (xs[j] - m.x0) * m.idx : (xs[j] - m.x0) / m.dx;
-            const double vj = recip ? (m.y0 - ys[j]) * m.idy : (m.y0 - ys[j]) / m.dy;
-            if (uj >= 0.0 && vj >= 0.0 && uj < f.uMax && vj < f.vMax) {
-              const float* p = f.data + static_cast<long>(vj) * f.cols + static_cast<long>(uj);
-              __builtin_prefetch(p);
-              __builtin_prefetch(p + f.cols);
-            }
-          }
-        }
-        const double u = recip ? (xs[i] - m.x0) * m.idx : (xs[i] - m.x0) / m.dx;
-        const double v = recip ? (m.y0 - ys[i]) * m.idy : (m.y0 - ys[i]) / m.dy;
-        double h = 0.0;
-        if (f.evalResident(u, v, h)) [[likely]] {
-          out[i] = h;
-          if constexpr (wantStatus) status[i] = QueryStatus::Ok;
-          continue;
-        }
-        const HeightSample s = heightGeneric(xs[i], ys[i], interp);
-        out[i] = s.height;
-        if constexpr (wantStatus) status[i] = s.status;
-      }
-    };
-    using Yes = std::true_type;
-    using No = std::false_type;
-    const auto run = [&](auto prefetch) {
-      if (m.recip) {
-        status.empty() ? loop(Yes{}, No{}, prefetch) : loop(Yes{}, Yes{}, prefetch);
-      } else {
-        status.empty() ? loop(No{}, No{}, prefetch) : loop(No{}, Yes{}, prefetch);
-      }
-    };
-    if (scattered(
-            xs, ys, [&](double x) { return m.u(x); }, [&](double y) { return m.v(y); })) {
-      run(Yes{});
-    } else {
-      run(No{});
-    }
-    return;
-  }
-  if (resident_ == nullptr && interp == Interpolation::Bilinear) {
-    // Paged: height()'s inline paths (the thread's block, then the lock-free block table) on
-    // local copies, since stores to out[] could alias the members. A variant that protected
-    // 8 blocks at once to overlap their memory misses measured no faster (docs/paging.md).
-    const detail::DemIndexer m = index_;
-    const detail::ResidentBilinear f = fast_;
-    const BlockIndex* table = table_;
-    const std::uint64_t id = sourceId_;
-    auto loop = [&](auto prefetch) {
-      for (std::size_t i = 0; i < n; ++i) {
-        if constexpr (prefetch) {
-          if (i + kPrefetchAhead < n) {
-            // Random access: fetch the cell of a point a few ahead (its block's data through
-            // the table's hints), so its memory miss overlaps this point's work.
-            const std::size_t j = i + kPrefetchAhead;
-            const double uj = m.u(xs[j]), vj = m.v(ys[j]);
-            if (uj >= 0.0 && vj >= 0.0 && uj < f.uMax && vj < f.vMax)
-              table->prefetchCell(static_cast<std::size_t>(vj), static_cast<std::size_t>(uj));
-          }
-        }
-        double h = 0.0;
-        if (detail::pagedBilinear(f, table, id, m.u(xs[i]), m.v(ys[i]), h)) [[likely]] {
-          out[i] = h;
-          if (!status.empty()) status[i] = QueryStatus::Ok;
-          continue;
-        }
-        const HeightSample s = heightGeneric(xs[i], ys[i], interp);
-        out[i] = s.height;
-        if (!status.empty()) status[i] = s.status;
-      }
-    };
-    if (table != nullptr &&
-        scattered(
-            xs, ys, [&](double x) { return m.u(x); }, [&](double y) { return m.v(y); })) {
-      loop(std::true_type{});
-    } else {
-      loop(std::false_type{});
-    }
-    return;
-  }
-  if (resident_ == nullptr) {  // paged, other kernels: per point, reusing the thread's block
+    residentBilinearBatch(index_, fast_, batch, generic);
+  } else if (resident_ == nullptr && interp == Interpolation::Bilinear) {
+    pagedBilinearBatch(index_, fast_, table_, sourceId_, batch, generic);
+  } else if (resident_ == nullptr) {  // paged, other kernels: per point, reusing the thread's block
     for (std::size_t i = 0; i < n; ++i) {
-      const HeightSample s = heightGeneric(xs[i], ys[i], interp);
+      const HeightSample s = generic(xs[i], ys[i]);
       out[i] = s.height;
       if (!status.empty()) status[i] = s.status;
     }
-    return;
-  }
-  const double nd = fast_.nodata;
-  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-  const long rows = static_cast<long>(grid_.rows()), cols = static_cast<long>(grid_.cols());
-  const ClampAcc<detail::MemFetch> acc{{resident_, cols}, rows, cols};
-  // The kernel is chosen once for the whole batch.
-  auto run = [&](auto kernel) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const Where w = locate(index_, xs[i], ys[i], fast_.uMax, fast_.vMax, slack_);
-      QueryStatus st = QueryStatus::OutsideGrid;
-      double h = nan;
-      if (w.inside) {
-        const KernelResult k = kernel(acc, w.u, w.v, nd);
-        st = k.status;
-        h = st == QueryStatus::Ok ? k.h : nan;
-      }
-      out[i] = h;
-      if (!status.empty()) status[i] = st;
-    }
-  };
-  using Acc = ClampAcc<detail::MemFetch>;
-  switch (interp) {
-    case Interpolation::Nearest: run(detail::nearest<false, Acc>); break;
-    case Interpolation::Bicubic: run(detail::bicubic<false, Acc>); break;
-    case Interpolation::Bilinear: run(detail::bilinear<false, Acc>); break;
+  } else {
+    residentKernelBatch(resident_, static_cast<long>(grid_.rows()), static_cast<long>(grid_.cols()),
+                        index_, fast_, slack_, interp, batch);
   }
 }
 
