@@ -326,9 +326,9 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
       << " frames, " << o.width << "x" << o.height << ")" << std::endl;
   // The demo scene as data (docs/scene-format.md): Mars and Victoria from the stores, one
   // composed surface (docs/composition.md) with the polar caps and the strip, the rover where
-  // the traverse of rover::defaultVictoriaPath() stops (the scene replays it and presses its
-  // tracks), and the rover views' cameras. Every image below is drawn from the scene::Scene
-  // built from this description, and it is written as scene.json.
+  // the traverse of rover::defaultVictoriaPath() stops (scene.json replays it; this scene
+  // takes the run above and its tracks), and the rover views' cameras. Every image below is drawn
+  // from the scene::Scene built from this description, and it is written as scene.json.
   demo::MarsVictoriaOptions demoScene;
   demoScene.marsStore = data.mars;
   demoScene.victoriaStore = data.victoria;
@@ -342,8 +342,13 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
                              {data.strip, "strip", 0.0, 8.0}};
   scene::SceneDescription sceneFile =
       demo::sceneDescription(demoScene, {0.0, 0.0, 0.0, rover::defaultVictoriaPath()});
-  sceneFile.cameras = roverCameras(o, trav);
-  scene::Scene demoBuilt(sceneFile);
+  for (const scene::Camera& c : roverCameras(o, trav)) sceneFile.cameras.push_back(c);
+  // The traverse ran once, above: the scene takes where it stopped and the tracks it
+  // pressed instead of driving it again (scene.json still replays it when read alone).
+  scene::SceneOptions demoOptions;
+  demoOptions.tracks["victoria"] = trav.tracks;
+  demoOptions.driven["rover"] = trav.last;
+  scene::Scene demoBuilt(sceneFile, demoOptions);
 
   demo::FlyoverOptions fly;
   fly.outputDir = o.outDir / "flyover";
@@ -412,6 +417,9 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
       << trav.budgetBytes / 1024 << " KiB\n";
   out << "  chassis: largest tilt " << std::setprecision(1) << r.maxTilt * 180.0 / M_PI
       << "°, largest contact residual " << std::setprecision(3) << r.maxResidual << " m\n";
+  out << "  driven once: every image shows this run's end and tracks (traverses the scene drove "
+         "again: "
+      << demoBuilt.traversesDriven() << ")\n";
   out << "Fly-over: " << flyover.files.size() << " images in " << (o.outDir / "flyover").string()
       << " (" << std::setprecision(1) << flyover.renderSeconds << " s drawing, " << flyover.seconds
       << " s in all; " << std::setprecision(0) << flyover.startDistance / 1e3 << " km to "

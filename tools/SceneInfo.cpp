@@ -1,4 +1,5 @@
 // `regolith info scene.json`: what a scene file declares.
+#include <regolith/core/Message.hpp>
 #include <regolith/scene/SceneDescription.hpp>
 #include <regolith/store/Store.hpp>
 
@@ -40,6 +41,12 @@ void printSceneInfo(const std::filesystem::path& path, bool json, std::ostream& 
     out << "  body " << b.name << (b.farField ? " (far field)" : "")
         << ", effects: " << effects(b.look.effects) << "\n";
     for (const scene::DataSource& d : b.heights) out << "    heights: " << source(d) << "\n";
+    if (b.heights.empty()) out << "    heights: none (its ellipsoid, without relief)\n";
+    if (b.pose) {
+      out << "    at [" << core::number(b.pose->position[0]) << ", "
+          << core::number(b.pose->position[1]) << ", " << core::number(b.pose->position[2])
+          << "] m in the root frame\n";
+    }
   }
   for (const scene::Dem& d : s.dems) {
     out << "  DEM " << d.name << " on " << d.body << ": " << source(d.heights)

@@ -86,7 +86,7 @@ scenegraph::Pose flyoverCamera(double t, const glm::dvec3& rover, double startDi
 
 namespace {
 
-/// What renderFlyover(scene) and addPaperCameras() need and the scene lacks: InvalidArgument.
+/// What renderFlyover(scene) needs and the scene lacks: InvalidArgument.
 [[noreturn]] void missing(const char* op, const std::string& name, const char* what) {
   throw InvalidArgument(core::format({op,
                                       {},
@@ -156,37 +156,45 @@ void checkFlyover(const FlyoverOptions& options) {
 
 }  // namespace
 
-DemoCameras addPaperCameras(scene::Scene& s) {
-  scenegraph::SceneGraph& g = s.graph();
-  const char* op = "demo::addPaperCameras()";
-  const scenegraph::NodeId marsNode = needNode(op, s, "mars", "body"),
-                           roverNode = needNode(op, s, "rover", "object");
-  const scene::SceneTerrain* mars = nullptr;
-  const scene::SceneTerrain* victoria = nullptr;
-  const std::vector<scene::SceneTerrain> terrains = s.terrains();
-  for (const scene::SceneTerrain& t : terrains) {
-    if (t.name == "mars" && t.planet) mars = &t;
-    if (t.name == "victoria" && !t.planet) victoria = &t;
-  }
-  if (mars == nullptr) missing(op, "mars", "body");
-  if (victoria == nullptr) missing(op, "victoria", "DEM");
-  // As demo::buildPaperScene() places them.
-  const topo::LocalTangentPlane site(*mars->pyramid->body(), victoria->origin, 0.0);
-  DemoCameras c;
-  c.orbit = g.add(marsNode, "orbit_camera",
-                  scenegraph::Pose::lookAt(site.toBodyFixed({0.0, 0.0, 20e3}),
-                                           site.originBodyFixed(), site.yAxis()),
-                  scenegraph::NodeKind::Camera);
-  c.mast =
-      g.add(roverNode, "mast_camera",
-            scenegraph::Pose::lookAt(
-                {0.85, 0.0, 2.1}, {0.85 + std::cos(15.0 * kDeg), 0.0, 2.1 - std::sin(15.0 * kDeg)},
-                {0.0, 0.0, 1.0}),
-            scenegraph::NodeKind::Camera);
-  c.chase = g.add(roverNode, "chase_camera",
-                  scenegraph::Pose::lookAt({-8.0, 0.0, 3.0}, {0.0, 0.0, 0.5}, {0.0, 0.0, 1.0}),
-                  scenegraph::NodeKind::Camera);
-  return c;
+std::vector<scene::Camera> paperCameras() {
+  // As demo::buildPaperScene() places them (the orbit camera there in Mars's frame, from the
+  // same tangent plane).
+  const auto camera = [](const char* name, const char* frame, const glm::dvec3& eye,
+                         const glm::dvec3& at, const glm::dvec3& up, double near) {
+    scene::Camera c;
+    c.name = name;
+    c.frame = frame;
+    c.eye = {eye.x, eye.y, eye.z};
+    c.lookAt = {at.x, at.y, at.z};
+    c.up = {up.x, up.y, up.z};
+    c.fovY = 45.0;
+    c.near = near;
+    c.width = 960;
+    c.height = 540;
+    return c;
+  };
+  const glm::dvec3 mastEye{0.85, 0.0, 2.1};
+  return {
+      camera("orbit_camera", "victoria", {0.0, 0.0, 20e3}, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, 100.0),
+      camera("mast_camera", "rover", mastEye,
+             mastEye + glm::dvec3(std::cos(15.0 * kDeg), 0.0, -std::sin(15.0 * kDeg)),
+             {0.0, 0.0, 1.0}, 0.05),
+      camera("chase_camera", "rover", {-8.0, 0.0, 3.0}, {0.0, 0.0, 0.5}, {0.0, 0.0, 1.0}, 0.05)};
+}
+
+DemoCameras paperCameraNodes(const scene::Scene& s) {
+  const auto node = [&](const std::string& name) {
+    if (s.description().camera(name) == nullptr) {
+      throw InvalidArgument(core::format({"demo::paperCameraNodes()",
+                                          {},
+                                          "the scene's camera '" + name + "'",
+                                          "missing",
+                                          "the paper's cameras (demo::paperCameras(), declared "
+                                          "by demo::sceneDescription())"}));
+    }
+    return s.cameraNode(name);
+  };
+  return {node("orbit_camera"), node("mast_camera"), node("chase_camera")};
 }
 
 scene::Scene buildScene(const MarsVictoriaOptions& options, const SceneRover& rover) {
@@ -270,7 +278,7 @@ FlyoverSummary renderFlyover(scene::Scene& s, const FlyoverOptions& options) {
     const scenegraph::NodeId cam = g.add(victoriaNode, "flyover_camera", flyoverCamera(0.0, rover),
                                          scenegraph::NodeKind::Camera);
     const topo::Body& body = *mars->pyramid->body();
-    const DemoCameras paper = addPaperCameras(s);
+    const DemoCameras paper = paperCameraNodes(s);
     const scenegraph::NodeId orbitCamera = paper.orbit, mastCamera = paper.mast;
     clod::SceneRenderer renderer;
     s.registerWith(renderer);
@@ -426,7 +434,25 @@ scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
   mars.farField = options.farField;
   mars.look.colour = rgb(kPlanetAlbedo);
   mars.look.clipmapSize = options.clipmapSize;
+  // The paper's layout (PaperScene.hpp): heliocentric, the ecliptic the x-y plane.
+  const demo::PaperSceneLayout layout;
+  const auto array = [](const glm::dvec3& v) { return std::array<double, 3>{v.x, v.y, v.z}; };
+  mars.pose = scene::Body::Pose{array(heliocentric(layout.marsDistance, layout.marsLongitudeDeg)),
+                                layout.marsObliquityDeg, layout.marsSpinDeg};
   d.bodies.push_back(mars);
+  // Earth as the paper's scene draws it: WGS84 without relief (3° cells: a dot from Mars),
+  // blue, a small clipmap, no far field.
+  scene::Body earth;
+  earth.name = "earth";
+  const topo::Body wgs84 = topo::Body::earthWgs84();
+  earth.radii = std::array<double, 2>{wgs84.equatorialRadius(), wgs84.polarRadius()};
+  earth.pose =
+      scene::Body::Pose{array(heliocentric(layout.earthDistance, layout.earthLongitudeDeg)),
+                        layout.earthObliquityDeg, 0.0};
+  earth.look.colour = {0.3, 0.45, 0.8};
+  earth.look.clipmapSize = 31;
+  earth.farField = false;
+  d.bodies.push_back(earth);
 
   const glm::vec3 demAlbedo = options.demAlbedo.value_or(kDemAlbedo);
   scene::Dem victoria;
@@ -450,7 +476,6 @@ scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
   victoria.look.effects.tracks = fx.tracks != nullptr || !rover.traverse.empty();
   d.dems.push_back(victoria);
   if (options.secondDem) {
-    const demo::PaperSceneLayout layout;
     scene::Dem second = victoria;
     second.name = "second_dem";
     second.heights = {};
@@ -475,6 +500,7 @@ scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
     r.traverse = t;
   }
   d.objects.push_back(r);
+  d.cameras = paperCameras();
   // lightInFocus(): morning sun over Victoria, 35° up from the east (x east, y north, z up).
   d.light.frame = "victoria";
   d.light.direction = std::array<double, 3>{std::cos(35.0 * kDeg), -0.3, std::sin(35.0 * kDeg)};

@@ -25,6 +25,10 @@ Pose rotationAbout(const glm::dvec3& axis, double degrees) {
 
 }  // namespace
 
+glm::dvec3 heliocentric(double distance, double longitudeDeg) {
+  return distance * glm::dvec3(std::cos(longitudeDeg * kDeg), std::sin(longitudeDeg * kDeg), 0.0);
+}
+
 PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layout) {
   if (graph.size() != 1)
     throw InvalidArgument("buildPaperScene(): the graph has " + std::to_string(graph.size()) +
@@ -34,12 +38,11 @@ PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layou
   // Heliocentric frame: the ecliptic is the x-y plane.
   const auto orbitPose = [](double distance, double longitudeDeg) {
     Pose p;
-    p.translation =
-        distance * glm::dvec3(std::cos(longitudeDeg * kDeg), std::sin(longitudeDeg * kDeg), 0.0);
+    p.translation = heliocentric(distance, longitudeDeg);
     return p;
   };
   Pose earth = orbitPose(layout.earthDistance, layout.earthLongitudeDeg) *
-               rotationAbout({1.0, 0.0, 0.0}, 23.44);
+               rotationAbout({1.0, 0.0, 0.0}, layout.earthObliquityDeg);
   n.earth = graph.add(n.sun, "earth", earth, NodeKind::Terrain, kDrawEarth);
   // Mars body-fixed frame: tilted by the obliquity, turned by its spin angle.
   const Pose mars = orbitPose(layout.marsDistance, layout.marsLongitudeDeg) *

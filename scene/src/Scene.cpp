@@ -14,6 +14,8 @@
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/Projection.hpp>
 
+#include "BodyPlacement.hpp"
+
 #include <EGL/egl.h>
 #include <glm/geometric.hpp>
 
@@ -79,6 +81,7 @@ struct Scene::Impl {
   };
   std::vector<Thing> objects;
   std::map<std::string, scenegraph::NodeId> cameras;
+  std::size_t traversesDriven = 0;
   scenegraph::NodeId lightFrame = 0;
   glm::dvec3 lightDirection{0.0, 0.0, 1.0};
 
@@ -232,10 +235,41 @@ struct Scene::Impl {
     throw InvalidArgument("Scene: no body or DEM named '" + name + "'");
   }
 
+  /// A body without heights: its reference ellipsoid (the description's radii) with no
+  /// relief, on a global grid of kSmoothBodyCellDeg cells.
+  static Grid smooth(const Body& b) {
+    const auto rows = static_cast<std::size_t>(std::lround(180.0 / kSmoothBodyCellDeg));
+    const std::size_t cols = 2 * rows;
+    const double half = 0.5 * kSmoothBodyCellDeg;
+    const topo::TopoGrid g(rows, cols, -180.0 + half, 90.0 - half, kSmoothBodyCellDeg,
+                           kSmoothBodyCellDeg);
+    const topo::Body body = topo::Body::ellipsoid(b.name, (*b.radii)[0], (*b.radii)[1]);
+    Grid out;
+    out.samples =
+        std::make_shared<topo::InMemorySamples>(rows, cols, std::vector<float>(rows * cols, 0.0F));
+    out.info.name = b.name;
+    out.pyramid = std::make_shared<const clod::HeightPyramid>(
+        clod::HeightPyramid::fromSamples(g, out.samples, clod::SurfaceKind::Planet, body));
+    return out;
+  }
+
+  /// A body's frame in the root's: Body::pose (translation, then the obliquity about x, then
+  /// the spin about the pole).
+  static scenegraph::Pose bodyPose(const Body& b) {
+    scenegraph::Pose p;
+    if (!b.pose) return p;
+    p.translation = vec(b.pose->position);
+    p.rotation = glm::angleAxis(b.pose->obliquity * kDeg, glm::dvec3(1.0, 0.0, 0.0)) *
+                 glm::angleAxis(b.pose->spin * kDeg, glm::dvec3(0.0, 0.0, 1.0));
+    return p;
+  }
+
   void buildBody(std::size_t i) {
     const Body& b = d.bodies[i];
     const std::string ptr = "/bodies/" + std::to_string(i);
-    Grid planet = grid(b.heights[0]);
+    if (b.heights.empty() && !b.radii)
+      fail(ptr + "/heights", "empty and no radii, expected at least one dataset");
+    Grid planet = b.heights.empty() ? smooth(b) : grid(b.heights[0]);
     if (planet.pyramid->kind() != clod::SurfaceKind::Planet)
       fail(ptr + "/heights/0", "grid '" + planet.info.name + "' is not a planet grid");
     const topo::Body& body = *planet.pyramid->body();
@@ -256,9 +290,17 @@ struct Scene::Impl {
     t.options.albedo = t.albedo;
     t.options.effects = effects(b.look.effects, ptr + "/effects");
     t.key = static_cast<int>(terrains.size());
-    t.node =
-        graph.add(graph.root(), b.name, scenegraph::Pose{}, scenegraph::NodeKind::Terrain, t.key);
+    t.node = graph.add(graph.root(), b.name, bodyPose(b), scenegraph::NodeKind::Terrain, t.key);
     terrains.push_back(std::move(t));
+  }
+
+  /// Every body's place, now that every body's radii are known (detail::checkBodiesApart()).
+  void checkBodiesApart() const {
+    std::vector<double> radius;
+    for (const Body& b : d.bodies)
+      for (const Terrain& t : terrains)
+        if (t.planet && t.name == b.name) radius.push_back(t.pyramid->body()->equatorialRadius());
+    if (const auto e = detail::checkBodiesApart(d.bodies, radius)) fail(e->pointer, e->what);
   }
 
   /// A body with several height datasets, or whose DEMs are composed into it: one composed
@@ -393,7 +435,12 @@ struct Scene::Impl {
       x = o.pose->x;
       y = o.pose->y;
       heading = o.pose->heading;
+    } else if (const auto given = options.driven.find(o.name); given != options.driven.end()) {
+      x = given->second.x;  // driven by the caller (SceneOptions::driven)
+      y = given->second.y;
+      heading = given->second.heading * 180.0 / std::numbers::pi;
     } else {
+      ++traversesDriven;
       rover::TraverseOptions to;
       for (const auto& w : o.traverse->waypoints) to.path.emplace_back(w[0], w[1]);
       to.speed = o.traverse->speed;
@@ -419,7 +466,23 @@ struct Scene::Impl {
         throw InvalidArgument("Scene: SceneOptions::tracks: '" + name +
                               "' is not a DEM of the scene");
     }
+    for (const auto& entry : options.driven) {
+      const std::string& name = entry.first;
+      const auto it = std::find_if(d.objects.begin(), d.objects.end(),
+                                   [&](const Object& o) { return o.name == name; });
+      if (it == d.objects.end() || !it->traverse)
+        throw InvalidArgument("Scene: SceneOptions::driven: '" + name +
+                              "' is not an object of the scene with a traverse");
+      const auto dem = std::find_if(d.dems.begin(), d.dems.end(),
+                                    [&](const Dem& m) { return m.name == it->dem; });
+      if (dem != d.dems.end() && dem->look.effects.tracks && !options.tracks.count(it->dem))
+        fail("/objects/" + std::to_string(it - d.objects.begin()) + "/traverse",
+             "driven by the caller (SceneOptions::driven), but SceneOptions::tracks gives no "
+             "layer for its DEM '" +
+                 it->dem + "', which declares tracks");
+    }
     for (std::size_t i = 0; i < d.bodies.size(); ++i) buildBody(i);
+    checkBodiesApart();
     for (std::size_t i = 0; i < d.dems.size(); ++i) buildDem(i);
     for (std::size_t i = 0; i < d.bodies.size(); ++i) composeBody(i);
     for (std::size_t i = 0; i < d.objects.size(); ++i) buildObject(i);
@@ -524,6 +587,8 @@ glm::dvec3 Scene::lightIn(const std::string& frame) const {
   return impl_->graph.relative(impl_->graph.at(frame), impl_->lightFrame)
       .applyVector(impl_->lightDirection);
 }
+
+std::size_t Scene::traversesDriven() const noexcept { return impl_->traversesDriven; }
 
 std::string Scene::focusOf(const std::string& camera) const {
   const Camera* c = impl_->d.camera(camera);

@@ -5,6 +5,8 @@
 #include <regolith/core/Message.hpp>
 #include <regolith/scene/SceneDescription.hpp>
 
+#include "BodyPlacement.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -344,16 +346,23 @@ class Reader {
       const std::string p = "/bodies/" + std::to_string(i);
       const json& b = bodies[i];
       object(b, p,
-             {"name", "radii", "heights", "colour", "clipmapSize", "effects", "farField",
+             {"name", "radii", "heights", "pose", "colour", "clipmapSize", "effects", "farField",
               "composeDems"});
       Body body;
       body.name = string(b, p, "name", true);
       if (const json* r = member(b, "radii")) body.radii = numbers<2>(*r, p + "/radii", kPositive);
-      const json& heights = array(b, p, "heights", true);
-      if (heights.empty()) fail(p + "/heights", "empty, expected at least one dataset");
+      if (!body.radii && !member(b, "heights"))
+        fail(p + "/heights",
+             "missing, expected an array of datasets (or \"radii\": a body without relief)");
+      const json& heights = array(b, p, "heights", false);
+      if (heights.empty() && member(b, "heights"))
+        fail(p + "/heights",
+             "empty, expected at least one dataset (leave it out, with \"radii\", for a body "
+             "without relief)");
       for (std::size_t k = 0; k < heights.size(); ++k)
         body.heights.push_back(source(heights[k], p + "/heights/" + std::to_string(k)));
-      if (!body.heights[0].generate.empty() && body.heights[0].generate != "mars-planet")
+      if (!body.heights.empty() && !body.heights[0].generate.empty() &&
+          body.heights[0].generate != "mars-planet")
         fail(p + "/heights/0/generate",
              "\"" + body.heights[0].generate + "\" is not a global grid, expected mars-planet");
       for (std::size_t k = 1; k < body.heights.size(); ++k) {
@@ -361,6 +370,17 @@ class Reader {
           fail(p + "/heights/" + std::to_string(k) + "/generate",
                "\"" + body.heights[k].generate +
                    "\" cannot refine a body, expected mars-cap or mars-strip (DEMs go in /dems)");
+      }
+      if (const json* pose = member(b, "pose")) {
+        const std::string q = p + "/pose";
+        object(*pose, q, {"position", "obliquity", "spin"});
+        if (!member(*pose, "position"))
+          fail(q + "/position", "missing, expected [x, y, z] in metres");
+        Body::Pose bp;
+        bp.position = numbers<3>(*pose, q, "position", bp.position);
+        bp.obliquity = number(*pose, q, "obliquity", 0.0, {-180.0, 180.0});
+        bp.spin = number(*pose, q, "spin", 0.0, {-360.0, 360.0});
+        body.pose = bp;
       }
       look(b, p, body.look, false);
       body.farField = boolean(b, p, "farField", true);
@@ -501,6 +521,11 @@ class Reader {
       }
     }
     references(s);
+    // Bodies apart: those whose radii the file gives (Scene checks the rest when built).
+    std::vector<double> radius;
+    for (const Body& b : s.bodies)
+      radius.push_back(b.radii ? (*b.radii)[0] : std::numeric_limits<double>::quiet_NaN());
+    if (const auto e = detail::checkBodiesApart(s.bodies, radius)) fail(e->pointer, e->what);
     return s;
   }
 
@@ -644,8 +669,13 @@ json toJson(const SceneDescription& s, const fs::path& to) {
     json j;
     j["name"] = b.name;
     if (b.radii) j["radii"] = *b.radii;
-    j["heights"] = json::array();
-    for (const DataSource& d : b.heights) j["heights"].push_back(sourceJson(d, from, to));
+    if (!b.heights.empty() || !b.radii) {  // none, with radii: a body without relief
+      j["heights"] = json::array();
+      for (const DataSource& d : b.heights) j["heights"].push_back(sourceJson(d, from, to));
+    }
+    if (b.pose)
+      j["pose"] = {
+          {"position", b.pose->position}, {"obliquity", b.pose->obliquity}, {"spin", b.pose->spin}};
     j["colour"] = b.look.colour;
     j["clipmapSize"] = b.look.clipmapSize;
     j["effects"] = effectsJson(b.look.effects, false, from, to);
@@ -755,6 +785,12 @@ std::string sceneJson(const SceneDescription& scene, const fs::path& folder) {
 }
 
 void writeScene(const SceneDescription& scene, const fs::path& path) {
+  // What JSON cannot carry (a NaN position would be written as null) is named first.
+  std::vector<double> radius;
+  for (const Body& b : scene.bodies)
+    radius.push_back(b.radii ? (*b.radii)[0] : std::numeric_limits<double>::quiet_NaN());
+  if (const auto e = detail::checkBodiesApart(scene.bodies, radius))
+    throw InvalidArgument(path.string() + ": " + e->pointer + ": " + e->what);
   const std::string text = sceneJson(scene, path.parent_path());
   // What is written must read back: the same checks as readScene (stores may not exist yet).
   (void)parse(text, path.string(), path.parent_path(), false);
@@ -785,6 +821,7 @@ std::string sceneInfoJson(const SceneDescription& s) {
   for (const Body& b : s.bodies) {
     json j{{"name", b.name}, {"farField", b.farField}, {"effects", declared(b.look.effects)}};
     if (b.radii) j["radii"] = *b.radii;
+    if (b.pose) j["position"] = b.pose->position;
     j["datasets"] = json::array();
     for (const DataSource& d : b.heights) {
       json dj = dataset(d);

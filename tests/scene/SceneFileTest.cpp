@@ -2,10 +2,13 @@
 // a built scene declares.
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/demo/PaperScene.hpp>
 #include <regolith/rover/TrackLayer.hpp>
 #include <regolith/scene/Scene.hpp>
 #include <regolith/scene/SceneDescription.hpp>
 #include <regolith/store/Generate.hpp>
+#include <regolith/topo/Body.hpp>
 
 #include "support/StoreScratch.hpp"
 
@@ -15,8 +18,12 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <fstream>
+#include <limits>
+#include <numbers>
 #include <string>
+#include <tuple>
 
 namespace regolith::scene {
 namespace {
@@ -214,6 +221,225 @@ TEST(SceneFile, RoundTripAndRelativePaths) {
   EXPECT_FALSE(std::filesystem::exists(dir / "bad.json"));
 }
 
+/// baseScene() with Earth: WGS84 radii, no heights (a body without relief), placed 1.5e11 m
+/// from the root's origin and tilted by 23.44°.
+json withEarth() {
+  json j = baseScene();
+  j["bodies"].push_back(
+      {{"name", "earth"},
+       {"radii", {6378137.0, 6356752.314245179}},
+       {"pose", {{"position", {1.0e11, -1.1e11, 2.5e9}}, {"obliquity", 23.44}, {"spin", 40}}},
+       {"colour", {0.3, 0.45, 0.8}},
+       {"clipmapSize", 31},
+       {"farField", false}});
+  return j;
+}
+
+TEST(SceneFile, ABodysPoseAndABodyWithoutReliefAreReadAsWritten) {
+  // Read: the values of the hand-written file.
+  const SceneDescription s = parse(withEarth());
+  ASSERT_EQ(s.bodies.size(), 2U);
+  EXPECT_FALSE(s.bodies[0].pose);  // mars: the root's frame
+  const Body& earth = s.bodies[1];
+  EXPECT_TRUE(earth.heights.empty());
+  EXPECT_EQ(earth.radii, (std::array<double, 2>{6378137.0, 6356752.314245179}));
+  ASSERT_TRUE(earth.pose);
+  EXPECT_EQ(earth.pose->position, (std::array<double, 3>{1.0e11, -1.1e11, 2.5e9}));
+  EXPECT_EQ(earth.pose->obliquity, 23.44);
+  EXPECT_EQ(earth.pose->spin, 40.0);
+  EXPECT_FALSE(earth.farField);
+  // Spin defaults to 0, obliquity too.
+  json j = withEarth();
+  j["bodies"][1]["pose"] = {{"position", {1.0e11, 0, 0}}};
+  const SceneDescription t = parse(j);
+  EXPECT_EQ(t.bodies[1].pose->obliquity, 0.0);
+  EXPECT_EQ(t.bodies[1].pose->spin, 0.0);
+
+  // Written: the keys of the JSON the writer gives, read with nlohmann alone.
+  const json w = json::parse(sceneJson(s, "/nowhere"));
+  EXPECT_FALSE(w["bodies"][0].contains("pose"));
+  EXPECT_FALSE(w["bodies"][1].contains("heights"));
+  EXPECT_EQ(w["bodies"][1]["pose"]["position"], json({1.0e11, -1.1e11, 2.5e9}));
+  EXPECT_EQ(w["bodies"][1]["pose"]["obliquity"], 23.44);
+  EXPECT_EQ(w["bodies"][1]["pose"]["spin"], 40.0);
+  EXPECT_EQ(w["bodies"][1]["radii"], json({6378137.0, 6356752.314245179}));
+
+  // Round trip through a file: write → read gives the same description.
+  const auto file = test::scratchFile("scene", "earth.json");
+  writeScene(s, file);
+  SceneDescription back = readScene(file);
+  EXPECT_EQ(back.folder, file.parent_path());
+  back.folder = s.folder;
+  EXPECT_EQ(back, s);
+  // And the writer refuses what JSON cannot carry, naming the key.
+  SceneDescription bad = s;
+  bad.bodies[1].pose->position[2] = std::numeric_limits<double>::quiet_NaN();
+  const auto badFile = test::scratchFile("scene", "earth_nan.json");
+  try {
+    writeScene(bad, badFile);
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              badFile.string() +
+                  ": /bodies/1/pose/position: [1e+11, -1.1e+11, nan] is not finite, expected "
+                  "metres");
+  }
+  EXPECT_FALSE(std::filesystem::exists(badFile));
+}
+
+TEST(SceneFile, BadBodyPosesAndBodiesWithoutHeightsAreNamed) {
+  json j = withEarth();
+  j["bodies"][1]["pose"].erase("position");
+  EXPECT_EQ(errorOf(j), "t.json: /bodies/1/pose/position: missing, expected [x, y, z] in metres");
+  j = withEarth();
+  j["bodies"][1]["pose"]["position"] = {1.0e11, "far"};
+  EXPECT_EQ(errorOf(j),
+            "t.json: /bodies/1/pose/position: expected an array of 3 numbers, got an array of 2");
+  j = withEarth();
+  j["bodies"][1]["pose"]["position"][1] = "far";
+  EXPECT_EQ(errorOf(j), "t.json: /bodies/1/pose/position/1: expected a number, got a string");
+  j = withEarth();
+  j["bodies"][1]["pose"]["obliquity"] = 200;
+  EXPECT_EQ(errorOf(j), "t.json: /bodies/1/pose/obliquity: 200 is not in [-180, 180]");
+  j = withEarth();
+  j["bodies"][1]["pose"]["tilt"] = 3;
+  EXPECT_EQ(errorOf(j),
+            "t.json: /bodies/1/pose/tilt: unknown key, expected one of: position, obliquity, spin");
+  // A position too large for a double is refused as the file is read.
+  std::string text = withEarth().dump();
+  text.replace(text.find("100000000000.0"), 14, "1e999");
+  try {
+    (void)parseScene(text, "t.json", "/nowhere");
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("t.json: not JSON (", 0), 0U) << e.what();
+  }
+  // No heights: only with radii (the reference ellipsoid); an empty list is a mistake.
+  j = withEarth();
+  j["bodies"][1].erase("radii");
+  EXPECT_EQ(errorOf(j),
+            "t.json: /bodies/1/heights: missing, expected an array of datasets (or \"radii\": a "
+            "body without relief)");
+  j = withEarth();
+  j["bodies"][1]["heights"] = json::array();
+  EXPECT_EQ(errorOf(j),
+            "t.json: /bodies/1/heights: empty, expected at least one dataset (leave it out, with "
+            "\"radii\", for a body without relief)");
+  // Inside another body: the reader sees it when both radii are given...
+  j = withEarth();
+  j["bodies"][0]["radii"] = {3396190.0, 3376200.0};
+  j["bodies"][1]["pose"]["position"] = {0.0, 9.0e6, 0.0};
+  EXPECT_EQ(errorOf(j),
+            "t.json: /bodies/1/pose/position: [0, 9e+06, 0] puts \"earth\" 9e+06 m from the "
+            "centre of \"mars\" (/bodies/0), inside it: expected at least 9774327 m (the sum of "
+            "their equatorial radii)");
+  // ...and just apart is fine.
+  j["bodies"][1]["pose"]["position"] = {0.0, 9774327.0, 0.0};
+  EXPECT_EQ(errorOf(j), "no error");
+  // A body left at the root's origin, where another already is.
+  j["bodies"][1].erase("pose");
+  EXPECT_EQ(errorOf(j),
+            "t.json: /bodies/1/pose: missing (the root's origin) puts \"earth\" 0 m from the "
+            "centre of \"mars\" (/bodies/0), inside it: expected at least 9774327 m (the sum of "
+            "their equatorial radii)");
+}
+
+TEST(Scene, ABodyInsideAnotherIsRefusedWhenBuilt) {
+  // Mars's radii come from its generator: only building knows them.
+  json j = withEarth();
+  j["bodies"][1]["pose"]["position"] = {0.0, 0.0, 9.0e6};
+  const SceneDescription d = parse(j);
+  try {
+    const Scene s(d);
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(),
+                 "Scene: /bodies/1/pose/position: [0, 0, 9e+06] puts \"earth\" 9e+06 m from "
+                 "the centre of \"mars\" (/bodies/0), inside it: expected at least 9774327 m "
+                 "(the sum of their equatorial radii)");
+  }
+}
+
+TEST(Scene, ABodysPoseIsItsFrameInTheRootsAndABodyWithoutReliefIsItsEllipsoid) {
+  const Scene s(parse(withEarth()));
+  const scenegraph::SceneGraph& g = s.graph();
+  const scenegraph::Pose earth = g.inRoot(g.at("earth"));
+  EXPECT_EQ(earth.translation, glm::dvec3(1.0e11, -1.1e11, 2.5e9));
+  // The pole tilted by the obliquity about the root's x axis, then the prime meridian turned
+  // by the spin about the pole: worked by hand with the rotation matrices Rx(23.44°) Rz(40°).
+  constexpr double kDeg = std::numbers::pi / 180.0;
+  const double ob = 23.44 * kDeg, sp = 40.0 * kDeg;
+  const glm::dvec3 pole = earth.applyVector({0.0, 0.0, 1.0});
+  const glm::dvec3 meridian = earth.applyVector({1.0, 0.0, 0.0});
+  EXPECT_NEAR(glm::length(pole - glm::dvec3(0.0, -std::sin(ob), std::cos(ob))), 0.0, 1e-15);
+  EXPECT_NEAR(glm::length(meridian - glm::dvec3(std::cos(sp), std::sin(sp) * std::cos(ob),
+                                                std::sin(sp) * std::sin(ob))),
+              0.0, 1e-15);
+  // Mars has no pose: the root's frame.
+  EXPECT_EQ(g.inRoot(g.at("mars")).translation, glm::dvec3(0.0));
+  // Earth without relief: the WGS84 radii given, every height 0 on 3° cells.
+  const clod::HeightPyramid& p = s.terrain("earth");
+  ASSERT_TRUE(p.body());
+  EXPECT_EQ(p.body()->equatorialRadius(), 6378137.0);
+  EXPECT_EQ(p.body()->polarRadius(), 6356752.314245179);
+  EXPECT_NEAR(p.body()->flattening(), topo::Body::earthWgs84().flattening(), 1e-15);
+  const auto& level = p.level(0);
+  EXPECT_EQ(level.grid.rows(), 60U);
+  EXPECT_EQ(level.grid.cols(), 120U);
+  EXPECT_EQ(level.grid.spacingX(), 3.0);
+  for (std::size_t r = 0; r < 60; r += 7)
+    for (std::size_t c = 0; c < 120; c += 11) EXPECT_EQ(level.source->sample(r, c), 0.0F);
+  EXPECT_EQ(s.terrainOptions("earth").size, 31);
+  EXPECT_EQ(s.terrains()[1].farField, nullptr);
+  // A DEM on a placed body keeps its place on the body: the body's pose does not enter.
+  json j = baseScene();
+  j["bodies"][0]["pose"] = {
+      {"position", {2.0e11, 1.0e11, 0.0}}, {"obliquity", 25.19}, {"spin", 120}};
+  const Scene placed(parse(j)), unplaced(parse(baseScene()));
+  const scenegraph::Pose a =
+      placed.graph().relative(placed.graph().at("mars"), placed.graph().at("rover"));
+  const scenegraph::Pose b =
+      unplaced.graph().relative(unplaced.graph().at("mars"), unplaced.graph().at("rover"));
+  EXPECT_EQ(a.translation, b.translation);
+  EXPECT_EQ(a.rotation, b.rotation);
+}
+
+TEST(Scene, TheDemoSceneDeclaresEarthWhereThePapersLayoutPutsIt) {
+  // demo::sceneDescription() against demo::buildPaperScene(), the paper's layout written as
+  // a scene graph by other code: Earth and Mars where the layout puts them.
+  demo::MarsVictoriaOptions o;
+  o.planetRows = 90;
+  o.demSize = 101;
+  o.secondDem = false;
+  const SceneDescription d = demo::sceneDescription(o);
+  ASSERT_EQ(d.bodies.size(), 2U);
+  EXPECT_EQ(d.bodies[0].name, "mars");  // first: the viewer and the fly-over's planet
+  EXPECT_EQ(d.bodies[1].name, "earth");
+  EXPECT_TRUE(d.bodies[1].heights.empty());
+  EXPECT_EQ(d.bodies[1].look.colour, (std::array<double, 3>{0.3, 0.45, 0.8}));
+  const Scene s(d);
+  scenegraph::SceneGraph paper("sun");
+  const demo::PaperSceneNodes n = demo::buildPaperScene(paper);
+  const scenegraph::SceneGraph& g = s.graph();
+  for (const auto& [name, node] : {std::pair{"mars", n.mars}, {"earth", n.earth}}) {
+    const scenegraph::Pose want = paper.inRoot(node), got = g.inRoot(g.at(name));
+    EXPECT_EQ(got.translation, want.translation) << name;
+    EXPECT_NEAR(glm::length(got.applyVector({0.0, 0.0, 1.0}) - want.applyVector({0.0, 0.0, 1.0})),
+                0.0, 1e-15)
+        << name;
+    EXPECT_NEAR(glm::length(got.applyVector({1.0, 0.0, 0.0}) - want.applyVector({1.0, 0.0, 0.0})),
+                0.0, 1e-15)
+        << name;
+  }
+  // Earth seen from Mars, through the root: ~1.0e11 m away, as in the paper's graph.
+  const glm::dvec3 fromMars = g.relative(g.at("mars"), g.at("earth")).translation;
+  const glm::dvec3 paperFromMars = paper.relative(n.mars, n.earth).translation;
+  EXPECT_NEAR(glm::length(fromMars - paperFromMars), 0.0, 1e-3);
+  EXPECT_GT(glm::length(fromMars), 1.0e11);
+  EXPECT_EQ(s.terrain("earth").body()->equatorialRadius(),
+            topo::Body::earthWgs84().equatorialRadius());
+}
+
 TEST(Scene, BuildsOnlyWhatIsDeclared) {
   const Scene s(parse(baseScene()));
   EXPECT_EQ(s.terrainOptions("victoria").effects.declared(),
@@ -276,6 +502,99 @@ TEST(Scene, TraverseStopsAtItsEndAndPressesTracks) {
   EXPECT_NEAR(p.y, -280.0, 0.02);
   EXPECT_NEAR(p.w, 0.0, 1e-6);  // heading north
   EXPECT_GT(s.terrainOptions("victoria").effects.tracks->tiles(), 0U);
+}
+
+TEST(Scene, TheDemoScenesCamerasAreThePapersLayouts) {
+  // The paper's cameras declared in demo::sceneDescription(), against demo::buildPaperScene()
+  // (which places them in C++ of its own): each in the frame it follows, the same pose.
+  demo::MarsVictoriaOptions o;
+  o.planetRows = 90;
+  o.demSize = 101;
+  o.secondDem = false;
+  const Scene s(demo::sceneDescription(o));
+  scenegraph::SceneGraph paper("sun");
+  const demo::PaperSceneNodes n = demo::buildPaperScene(paper);
+  const demo::DemoCameras c = demo::paperCameraNodes(s);
+  const scenegraph::SceneGraph& g = s.graph();
+  EXPECT_EQ(c.orbit, s.cameraNode("orbit_camera"));
+  for (const auto& [node, want, frame, tolerance] :
+       {std::tuple{c.orbit, paper.relative(n.victoria, n.orbitCamera), "victoria", 1e-6},
+        {c.mast, paper.relative(n.rover, n.mastCamera), "rover", 0.0},
+        {c.chase, paper.relative(n.rover, n.chaseCamera), "rover", 0.0}}) {
+    const scenegraph::Pose got = g.relative(g.at(frame), node);
+    EXPECT_LE(glm::length(got.translation - want.translation), tolerance) << frame;
+    for (const glm::dvec3& axis : {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)})
+      EXPECT_LE(glm::length(got.applyVector(axis) - want.applyVector(axis)), 1e-12) << frame;
+  }
+  EXPECT_EQ(s.description().camera("orbit_camera")->near, 100.0);
+  EXPECT_EQ(s.description().camera("mast_camera")->near, 0.05);
+}
+
+TEST(Scene, ATraverseTheCallerDroveIsNotDrivenAgain) {
+  json j = baseScene();
+  j["objects"][0].erase("pose");
+  j["objects"][0]["traverse"] = {{"waypoints", {{-100, -300}, {-100, -280}}}, {"step", 0.01}};
+  const SceneDescription d = parse(j);
+  // The scene drives the traverse itself: once.
+  const Scene first(d);
+  EXPECT_EQ(first.traversesDriven(), 1U);
+  const glm::dvec4 end = first.objectPose("rover");
+  const std::shared_ptr<rover::TrackLayer> pressed =
+      first.terrainOptions("victoria").effects.tracks;
+  const std::size_t tiles = pressed->tiles();
+  ASSERT_GT(tiles, 0U);
+  // A second scene given that run (its end and its tracks) drives nothing: the rover stands
+  // where the run stopped, and the layer holds the run's tracks, pressed once.
+  SceneOptions given;
+  given.tracks["victoria"] = pressed;
+  rover::ChassisPose last;
+  last.x = end.x;
+  last.y = end.y;
+  last.heading = end.w * std::numbers::pi / 180.0;
+  given.driven["rover"] = last;
+  const Scene second(d, given);
+  EXPECT_EQ(second.traversesDriven(), 0U);
+  EXPECT_EQ(second.objectPose("rover").x, end.x);
+  EXPECT_EQ(second.objectPose("rover").y, end.y);
+  EXPECT_NEAR(second.objectPose("rover").w, end.w, 1e-12);
+  EXPECT_EQ(second.terrainOptions("victoria").effects.tracks, pressed);
+  EXPECT_EQ(pressed->tiles(), tiles);
+  // Where the caller says the run stopped is where the rover stands (not where the
+  // waypoints end): nothing is driven, nothing pressed into a fresh layer.
+  given.tracks["victoria"] = std::make_shared<rover::TrackLayer>(rover::RoverRuts::kTexelMetres);
+  last.x = 12.5;
+  last.y = -300.25;
+  last.heading = 0.5;
+  given.driven["rover"] = last;
+  const Scene elsewhere(d, given);
+  EXPECT_EQ(elsewhere.traversesDriven(), 0U);
+  EXPECT_EQ(elsewhere.objectPose("rover").x, 12.5);
+  EXPECT_EQ(elsewhere.objectPose("rover").y, -300.25);
+  EXPECT_EQ(elsewhere.objectPose("rover").z, elsewhere.demHeight("victoria", 12.5, -300.25));
+  EXPECT_EQ(given.tracks["victoria"]->tiles(), 0U);
+  // Misuse named: an object without a traverse, a name that is no object, no tracks layer
+  // for a DEM that declares tracks.
+  const auto errorOfBuild = [](const SceneDescription& desc, const SceneOptions& o) {
+    try {
+      const Scene s(desc, o);
+    } catch (const InvalidArgument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  SceneOptions bad;
+  bad.driven["rover"] = last;
+  EXPECT_EQ(errorOfBuild(parse(baseScene()), bad),
+            "Scene: SceneOptions::driven: 'rover' is not an object of the scene with a traverse");
+  bad.driven.clear();
+  bad.driven["rovr"] = last;
+  EXPECT_EQ(errorOfBuild(d, bad),
+            "Scene: SceneOptions::driven: 'rovr' is not an object of the scene with a traverse");
+  bad.driven.clear();
+  bad.driven["rover"] = last;
+  EXPECT_EQ(errorOfBuild(d, bad),
+            "Scene: /objects/0/traverse: driven by the caller (SceneOptions::driven), but "
+            "SceneOptions::tracks gives no layer for its DEM 'victoria', which declares tracks");
 }
 
 TEST(SceneFile, DrapedDataFromAGeneratorNeedsItsRangeAndItsTerrainsKind) {

@@ -18,6 +18,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <numbers>
 #include <string>
 
 namespace regolith::scene {
@@ -202,6 +203,51 @@ TEST(SceneGL, DemoSceneFileDrawsTheDemosPixels) {
   const auto* g = drawn.pixel(static_cast<int>(ground.x), static_cast<int>(ground.y));
   EXPECT_GT(g[1], g[0]) << "the DEM is greener than the planet";
   EXPECT_TRUE(drawn.is(view.width / 2, 1, 5, 5, 10)) << "sky at the top";
+}
+
+TEST(SceneGL, TheDemosEarthIsDrawnWhereThePapersLayoutPutsIt) {
+  test::glContext();
+  // Earth's centre in Mars's body-fixed frame, worked by hand from the paper's layout
+  // (demo/PaperScene.hpp): both heliocentric, Mars tilted by 25.19° about x, spun 120°.
+  constexpr double kDeg = std::numbers::pi / 180.0;
+  const glm::dvec3 earthSun =
+      1.496e11 * glm::dvec3(std::cos(75.0 * kDeg), std::sin(75.0 * kDeg), 0.0);
+  const glm::dvec3 marsSun =
+      2.279e11 * glm::dvec3(std::cos(30.0 * kDeg), std::sin(30.0 * kDeg), 0.0);
+  const glm::dvec3 d = earthSun - marsSun;
+  const double ob = 25.19 * kDeg, sp = 120.0 * kDeg;
+  // Rz(spin)ᵀ Rx(obliquity)ᵀ d.
+  const glm::dvec3 tilted{d.x, std::cos(ob) * d.y + std::sin(ob) * d.z,
+                          -std::sin(ob) * d.y + std::cos(ob) * d.z};
+  const glm::dvec3 earth{std::cos(sp) * tilted.x + std::sin(sp) * tilted.y,
+                         -std::sin(sp) * tilted.x + std::cos(sp) * tilted.y, tilted.z};
+  // From 4 Earth radii on Mars's side, looking at Earth's centre: a disc of asin(1/4) =
+  // 14.5° around the image centre (37 pixels of this 160 × 120 view), blue, and black sky
+  // beyond it.
+  demo::MarsVictoriaOptions o;
+  o.planetRows = 90;
+  o.demSize = 101;
+  o.secondDem = false;
+  SceneDescription s = demo::sceneDescription(o);
+  Camera c;
+  c.name = "earthward";
+  c.frame = "mars";
+  c.focus = "earth";
+  const glm::dvec3 eye = earth - 4.0 * 6378137.0 * glm::normalize(earth);
+  c.eye = {eye.x, eye.y, eye.z};
+  c.lookAt = {earth.x, earth.y, earth.z};
+  c.width = 160;
+  c.height = 120;
+  c.near = 1000.0;
+  s.cameras.push_back(c);
+  const gl::RgbaImage image = Scene(s).render("earthward");
+  test::savePng("scene_demo_earth", image);
+  for (const auto& [x, y] : {std::pair{80, 60}, {80 + 30, 60}, {80 - 30, 60}, {80, 60 + 30}}) {
+    const auto* p = image.pixel(x, y);
+    EXPECT_GT(p[2], p[0] + 8) << "Earth's blue at " << x << ", " << y;
+  }
+  for (const auto& [x, y] : {std::pair{80 + 45, 60}, {80 - 45, 60}, {80, 60 - 45}, {3, 3}})
+    EXPECT_TRUE(image.is(x, y, 5, 5, 10)) << "sky at " << x << ", " << y;
 }
 
 }  // namespace

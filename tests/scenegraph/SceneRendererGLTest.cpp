@@ -33,8 +33,9 @@ using demo::MarsVictoriaOptions;
 constexpr int kDrawMars = 0;  // scene::Scene's keys: the bodies first, in their order
 
 /// The demo scene as scene::Scene builds it from its description (demo::buildScene()), with
-/// the paper layout's cameras (demo::addPaperCameras()) and, for the focus switch, a frame
-/// Earth's distance away (the scene file has no Earth): what this test needs of it.
+/// the paper layout's cameras (demo::paperCameras()) and, for the focus switch, a frame
+/// Earth's distance away (a node of its own, apart from the scene's Earth): what this test
+/// needs of it.
 class PaperScene {
  public:
   struct Nodes {
@@ -53,7 +54,7 @@ class PaperScene {
     n_.victoria = g.at("victoria");
     n_.secondDem = g.at("second_dem");
     n_.rover = g.at("rover");
-    const demo::DemoCameras c = demo::addPaperCameras(scene_);
+    const demo::DemoCameras c = demo::paperCameraNodes(scene_);
     n_.orbitCamera = c.orbit;
     n_.mastCamera = c.mast;
     n_.chaseCamera = c.chase;

@@ -154,9 +154,14 @@ def test_demo_writes_the_scene_it_drew(tmp_path):
     """`regolith demo` writes out/scene.json; its cameras render the demo's rover views again,
     byte for byte (stores, composition, the replayed traverse and its tracks included)."""
     out = tmp_path / "demo"
-    run("demo", "--quick", "--frames", 2, "--width", 160, "--height", 96, "--out", out)
+    p = run("demo", "--quick", "--frames", 2, "--width", 160, "--height", 96, "--out", out)
+    # The traverse runs once: the scene takes the demo's run (SceneOptions::driven) instead of
+    # driving it again; `regolith render` below replays it from the file alone, and its
+    # pixels equal the demo's byte for byte, so the run the scene took is the file's traverse.
+    assert "(traverses the scene drove again: 0)" in p.stdout
     scene = json.loads((out / "scene.json").read_text())
-    assert [c["name"] for c in scene["cameras"]] == ["mast", "chase"]
+    assert [c["name"] for c in scene["cameras"]] == ["orbit_camera", "mast_camera", "chase_camera",
+                                                     "mast", "chase"]
     assert scene["bodies"][0]["heights"][0]["store"] == "data/mars.h5"  # relative to the file
     assert scene["dems"][0]["effects"]["tracks"] is True
     for camera, png in (("mast", "rover_view.png"), ("chase", "rover_chase.png")):

@@ -230,7 +230,7 @@ ViewScene demoScene() {
       dem.look.effects.noise = scene::EffectsDescription::Noise{0.3, 8.0, 4, 0.15};
   }
   auto built = std::make_shared<scene::Scene>(std::move(d));
-  const demo::DemoCameras cameras = demo::addPaperCameras(*built);
+  const demo::DemoCameras cameras = demo::paperCameraNodes(*built);
   ViewScene v = fromScene(built, "Mars/Victoria demo scene");
   // Height colours over each terrain's height range (known once the data is built): Mars's
   // from its far-field layers, Victoria's from its grid (with lat/lon lines, as a bare store).

@@ -100,7 +100,7 @@ ViewScene storeScene(const std::string& path, const std::string& grid, std::size
 
 /// The Mars/Victoria demo scene (demo::sceneDescription() with generated data, built by
 /// scene::Scene): Mars with its far field, the Victoria-like DEM and a second DEM, the rover
-/// and the paper layout's cameras (demo::addPaperCameras()). Opens split:
+/// and the paper layout's cameras (demo::paperCameras()). Opens split:
 /// Mars whole on the left, Victoria from above at 35° on the right.
 ViewScene demoScene();
 

@@ -136,9 +136,9 @@ FlyoverSummary renderFlyover(const FlyoverOptions& options);
 
 /// The same fly-over over a scene already built (e.g. from the file `regolith demo` writes):
 /// options.scene and options.rover are not used; the scene must hold a body "mars", a DEM
-/// "victoria" on it and an object "rover" on that DEM (InvalidArgument naming what is
-/// missing). Adds its cameras to the scene's graph ("flyover_camera", and for the multi-view
-/// those of addPaperCameras()), so a scene flies over once.
+/// "victoria" on it and an object "rover" on that DEM, and for the multi-view the cameras of
+/// paperCameras() (InvalidArgument naming what is missing). Adds its camera
+/// ("flyover_camera") to the scene's graph, so a scene flies over once.
 FlyoverSummary renderFlyover(scene::Scene& scene, const FlyoverOptions& options);
 
 /// One view of the scene, for a single image.
@@ -165,18 +165,22 @@ gl::RgbaImage renderSceneView(const SceneViewOptions& options);
 [[nodiscard]] scenegraph::Pose flyoverCamera(double t, const glm::dvec3& rover,
                                              double startDistance = 8.0e6);
 
-/// The paper layout's cameras (demo/PaperScene.hpp) in a built demo scene.
+/// The paper layout's cameras (demo/PaperScene.hpp) as scene-file cameras, which
+/// sceneDescription() declares: "orbit_camera" 20 km above Victoria's origin looking straight
+/// down, north up (in the frame of the DEM "victoria", heading 0; near plane 100 m); the
+/// rover's "mast_camera", 2.1 m up just ahead of the mast head of clod::roverMesh(), looking
+/// 15° down ahead; and "chase_camera" 8 m behind and 3 m above the rover (in the frame of the
+/// object "rover"; near plane 0.05 m). Each 960 × 540, 45° vertical field of view.
+[[nodiscard]] std::vector<scene::Camera> paperCameras();
+
+/// The paper layout's camera nodes in a built demo scene.
 struct DemoCameras {
   scenegraph::NodeId orbit = 0, mast = 0, chase = 0;
 };
 
-/// Adds the paper layout's cameras to a built demo scene's graph: "orbit_camera" 20 km above
-/// Victoria's origin looking straight down, north up (child of "mars"); the rover's
-/// "mast_camera", 2.1 m up just ahead of the mast head of clod::roverMesh(), looking 15° down
-/// ahead; and "chase_camera" 8 m behind and 3 m above the rover (children of "rover").
-/// InvalidArgument if the scene lacks the body "mars", the DEM "victoria" or the object
-/// "rover", or already has nodes of those names.
-DemoCameras addPaperCameras(scene::Scene& scene);
+/// The nodes of the paper layout's cameras (paperCameras()) in a built demo scene.
+/// InvalidArgument naming the first camera the scene does not declare.
+[[nodiscard]] DemoCameras paperCameraNodes(const scene::Scene& scene);
 
 /// Where the scene file's rover stands: at a pose on the Victoria DEM, or where a traverse of
 /// these waypoints (grid frame) stops, its tracks pressed into the DEM.
@@ -185,17 +189,17 @@ struct SceneRover {
   std::vector<glm::dvec2> traverse;  ///< non-empty: replay this traverse instead
 };
 
-/// The Mars/Victoria scene of `options` as a scene description (docs/scene-format.md), no
-/// cameras (the caller adds its views; their frame "victoria" is the Victoria DEM's, as
-/// renderSceneView()'s camera): Mars ("mars") from its generator or store (with the extra
-/// datasets and the DEMs composed into it under options.composition), the Victoria DEM
-/// ("victoria") and the second DEM ("second_dem"), the rover ("rover"), and the morning light
-/// over Victoria (35° up, from the east). This description is the demo scene: every demo
-/// render (the fly-over, renderSceneView(), `regolith demo`'s rover views) draws the
-/// scene::Scene built from it. Earth of the paper's layout is left out (a sub-pixel dot from
-/// Mars). Store paths are written as given (relative ones resolve against the current
-/// folder). Effects other than tracks in options.victoriaEffects are not carried over
-/// (InvalidArgument).
+/// The Mars/Victoria scene of `options` as a scene description (docs/scene-format.md), with
+/// the paper's cameras (paperCameras(); the caller adds its views, their frame "victoria" the
+/// Victoria DEM's, as renderSceneView()'s camera): Mars ("mars") from its generator or store (with
+/// the extra datasets and the DEMs composed into it under options.composition), Earth ("earth":
+/// WGS84 without relief), both where the paper's layout puts them (PaperSceneLayout: heliocentric
+/// poses), the Victoria DEM ("victoria") and the second DEM ("second_dem"), the rover
+/// ("rover"), and the morning light over Victoria (35° up, from the east). This description is
+/// the demo scene: every demo render (the fly-over, renderSceneView(), `regolith demo`'s rover
+/// views) draws the scene::Scene built from it. Store paths are written as given (relative ones
+/// resolve against the current folder). Effects other than tracks in options.victoriaEffects are
+/// not carried over (InvalidArgument).
 [[nodiscard]] scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
                                                        const SceneRover& rover = {});
 

@@ -30,6 +30,7 @@ struct PaperSceneLayout {
   double marsDistance = 2.279e11, marsLongitudeDeg = 30.0;
   double earthDistance = 1.496e11, earthLongitudeDeg = 75.0;
   double marsSpinDeg = 120.0, marsObliquityDeg = 25.19;
+  double earthObliquityDeg = 23.44;
   /// The Victoria DEM: a local tangent plane at this planetodetic origin (the plane's x east,
   /// y north at heading 0, z up). Default: the site store::VictoriaGenerator uses.
   topo::Geodetic victoriaOrigin{-2.05, -5.5, -1400.0};
@@ -50,6 +51,10 @@ struct PaperSceneNodes {
   /// camera behind the rover.
   scenegraph::NodeId orbitCamera = 0, mastCamera = 0, chaseCamera = 0;
 };
+
+/// Where a planet is in the heliocentric frame: `distance` metres from the Sun at ecliptic
+/// longitude `longitudeDeg` (the ecliptic is the x-y plane).
+[[nodiscard]] glm::dvec3 heliocentric(double distance, double longitudeDeg);
 
 /// Builds the scene into an empty graph (whose root is taken as the Sun): Sun → Earth,
 /// Sun → Mars → Victoria → rover (→ mast and chase cameras), Mars → orbit camera,

@@ -9,6 +9,7 @@
 #include <regolith/compose/ComposedSurface.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/gl/Image.hpp>
+#include <regolith/rover/Rover.hpp>
 #include <regolith/rover/TrackLayer.hpp>
 #include <regolith/scene/SceneDescription.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
@@ -62,6 +63,15 @@ struct SceneOptions {
   /// (and the traverses of the scene's objects on it press into it too). InvalidArgument
   /// when the scene is built if the name is no DEM of the scene or the DEM declares no tracks.
   std::map<std::string, std::shared_ptr<rover::TrackLayer>> tracks;
+  /// Traverses a caller already drove, by object name (`regolith demo` drives its rover's
+  /// itself, through a patch cache of its own budget, and reports on it): the object stands
+  /// where that run stopped (its last chassis pose: x, y, heading) and the scene does not
+  /// drive the traverse again, so one run serves both. The run's wheel tracks come through
+  /// `tracks`. The caller vouches that the run drove the object's traverse (its waypoints,
+  /// speed and step) over the DEM's heights. InvalidArgument when the scene is built if the
+  /// name is no object with a traverse, or if its DEM declares tracks and `tracks` gives that
+  /// DEM no layer.
+  std::map<std::string, rover::ChassisPose> driven;
 };
 
 /// A built scene. Building needs no GL; render() does (and makes an EGL context if none is
@@ -102,6 +112,8 @@ class Scene {
   /// Where an object stands, in its DEM's frame (x, y, height on the surface), and its
   /// heading (degrees clockwise from +y).
   [[nodiscard]] glm::dvec4 objectPose(const std::string& object) const;
+  /// How many traverses building the scene drove (those not given by SceneOptions::driven).
+  [[nodiscard]] std::size_t traversesDriven() const noexcept;
   /// The direction towards the light in the frame of node `frame` (unit).
   [[nodiscard]] glm::dvec3 lightIn(const std::string& frame) const;
   /// The render list's focus for a camera (its `focus`, or its frame's terrain).

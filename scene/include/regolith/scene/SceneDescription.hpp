@@ -108,13 +108,27 @@ struct TerrainLook {
 };
 
 /// A body (a planet): its radii (or its first heights store's), its height datasets (several
-/// are composed through compose::Catalogue, the first being the global grid), and how it is
-/// drawn. Planets are drawn by clipmaps near the camera and by the far field beyond.
+/// are composed through compose::Catalogue, the first being the global grid), where it is,
+/// and how it is drawn. Planets are drawn by clipmaps near the camera and by the far field
+/// beyond.
 struct Body {
   std::string name;
   /// Equatorial and polar radius, metres; unset: the body of the first heights dataset.
   std::optional<std::array<double, 2>> radii;
-  std::vector<DataSource> heights;  ///< at least one; the first is a global planet grid
+  /// The global planet grid first, then the datasets that refine it. Empty (with `radii`):
+  /// the reference ellipsoid without relief, on a grid of 3° cells (kSmoothBodyCellDeg).
+  std::vector<DataSource> heights;
+  /// Where the body is in the scene's root frame (e.g. heliocentric, the ecliptic its x-y
+  /// plane): its centre `position` (metres) and its body-fixed frame turned by `obliquity`
+  /// about the root's x axis, then by `spin` about its own pole (degrees). Unset: the root's
+  /// frame itself (position 0, no rotation).
+  struct Pose {
+    std::array<double, 3> position{0.0, 0.0, 0.0};
+    double obliquity = 0.0;  ///< degrees in [-180, 180]
+    double spin = 0.0;       ///< degrees in [-360, 360]
+    bool operator==(const Pose&) const = default;
+  };
+  std::optional<Pose> pose;
   TerrainLook look;
   bool farField = true;
   /// Compose the body's DEMs into its surface too (each with its heights' featherMetres):
@@ -214,11 +228,16 @@ struct SceneDescription {
 /// The current scene format version.
 inline constexpr int kSceneVersion = 1;
 
+/// The grid cell of a body without heights (its reference ellipsoid, no relief): 3° in
+/// latitude and longitude, 60 × 120 samples.
+inline constexpr double kSmoothBodyCellDeg = 3.0;
+
 /// Reads and checks a scene file. Throws InvalidArgument naming the file, the JSON pointer of
 /// the key and the expectation (`scene.json: /cameras/1/fovY: 190 is not in (0, 180)`) for
 /// bad JSON, unknown keys (listing the allowed ones), wrong types, numbers out of range or
-/// not finite, duplicate names, references to names that do not exist and stores that do
-/// not exist; IoError if the file cannot be read.
+/// not finite, duplicate names, references to names that do not exist, stores that do not
+/// exist and bodies placed inside one another (for bodies whose radii the file gives; Scene
+/// checks the rest when it is built); IoError if the file cannot be read.
 [[nodiscard]] SceneDescription readScene(const std::filesystem::path& path);
 /// Parses scene JSON text; `file` names it in messages and `folder` resolves its paths.
 [[nodiscard]] SceneDescription parseScene(const std::string& text, const std::string& file,
