@@ -139,6 +139,26 @@ std::size_t patchBytes() {
 
 std::uint64_t reads(const Opened& o) { return o.store->counters().reads; }
 
+/// The heights at (xs, ys) from 8 threads, the even ones querying a and the odd ones b, each
+/// in its own order (the same points): one vector of answers per thread.
+std::vector<std::vector<double>> heightsFromEightThreads(const TopoDem& a, const TopoDem& b,
+                                                         const std::vector<double>& xs,
+                                                         const std::vector<double>& ys) {
+  std::vector<std::vector<double>> got(8, std::vector<double>(xs.size()));
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < 8; ++t) {
+    threads.emplace_back([&, t] {
+      const TopoDem& dem = t % 2 == 0 ? a : b;
+      for (std::size_t i = 0; i < xs.size(); ++i) {
+        const std::size_t j = (i + 377 * t) % xs.size();
+        got[t][j] = dem.height(xs[j], ys[j]).height;
+      }
+    });
+  }
+  for (auto& th : threads) th.join();
+  return got;
+}
+
 }  // namespace
 
 TEST(PagerSharing, StoreFileIdIsTheFilesThroughSymlinksAndHardLinks) {
@@ -239,19 +259,9 @@ TEST(PagerSharing, EightThreadsOnTwoPagersOfOneFileReadEachPatchOnceWithinBudget
     want[i] = mem.height(xs[i], ys[i]).height;
     edge[i] = acrossPatchEdge(xs[i], ys[i]);
   }
-  std::vector<std::vector<double>> got(8, std::vector<double>(xs.size()));
-  std::vector<std::thread> threads;
-  for (std::size_t t = 0; t < 8; ++t) {
-    threads.emplace_back([&, t] {
-      const TopoDem& dem = t % 2 == 0 ? da : db;
-      for (std::size_t i = 0; i < xs.size(); ++i) {
-        const std::size_t j = (i + 377 * t) % xs.size();  // different orders, same points
-        got[t][j] = dem.height(xs[j], ys[j]).height;
-      }
-    });
+  for (const std::vector<double>& got : heightsFromEightThreads(da, db, xs, ys)) {
+    expectSame(got, want, edge);
   }
-  for (auto& th : threads) th.join();
-  for (std::size_t t = 0; t < 8; ++t) expectSame(got[t], want, edge);
 
   std::uint64_t held = 0;  // patches resident in either cache
   for (std::size_t pr = 0; pr < kPatchRows; ++pr) {
@@ -288,19 +298,9 @@ TEST(PagerSharing, EightThreadsOnTwoPagersOfOneFileUnderEvictionGetTheInMemoryAn
     want[i] = mem.height(xs[i], ys[i]).height;
     edge[i] = acrossPatchEdge(xs[i], ys[i]);
   }
-  std::vector<std::vector<double>> got(8, std::vector<double>(xs.size()));
-  std::vector<std::thread> threads;
-  for (std::size_t t = 0; t < 8; ++t) {
-    threads.emplace_back([&, t] {
-      const TopoDem& dem = t % 2 == 0 ? da : db;
-      for (std::size_t i = 0; i < xs.size(); ++i) {
-        const std::size_t j = (i + 377 * t) % xs.size();
-        got[t][j] = dem.height(xs[j], ys[j]).height;
-      }
-    });
+  for (const std::vector<double>& got : heightsFromEightThreads(da, db, xs, ys)) {
+    expectSame(got, want, edge);
   }
-  for (auto& th : threads) th.join();
-  for (std::size_t t = 0; t < 8; ++t) expectSame(got[t], want, edge);
   for (const Opened* o : {&a, &b}) {
     const CacheStats s = o->cache->stats();
     EXPECT_GT(s.evictions, 0u);

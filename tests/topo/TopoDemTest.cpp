@@ -3,6 +3,8 @@
 #include <regolith/core/Error.hpp>
 #include <regolith/topo/TopoDem.hpp>
 
+#include "support/TestSources.hpp"
+
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
@@ -32,46 +34,6 @@ TopoDem demOf(std::size_t rows, std::size_t cols, const std::function<float(doub
   });
   return {g, marsPlane(), s};
 }
-
-// A source that is not one contiguous array: exercises the generic (paged) query path.
-class FunctionSource final : public SampleSource {
- public:
-  FunctionSource(std::size_t rows, std::size_t cols, std::vector<float> data)
-      : rows_(rows), cols_(cols), data_(std::move(data)) {}
-  std::size_t rows() const noexcept override { return rows_; }
-  std::size_t cols() const noexcept override { return cols_; }
-  float sample(std::size_t r, std::size_t c) const override { return data_.at(r * cols_ + c); }
-
- private:
-  std::size_t rows_, cols_;
-  std::vector<float> data_;
-};
-
-// A source that hands out blocks of 7 × 5 samples, as a pager hands out patches: queries
-// read inside a block directly and straddle block edges sample by sample.
-class BlockSource final : public SampleSource {
- public:
-  BlockSource(std::size_t rows, std::size_t cols, std::vector<float> data)
-      : rows_(rows), cols_(cols), data_(std::make_shared<std::vector<float>>(std::move(data))) {}
-  std::size_t rows() const noexcept override { return rows_; }
-  std::size_t cols() const noexcept override { return cols_; }
-  float sample(std::size_t r, std::size_t c) const override {
-    ++sampleCalls;
-    return (*data_)[r * cols_ + c];
-  }
-  bool block(std::size_t r, std::size_t c, SampleBlock& out) const override {
-    ++blockCalls;
-    const std::size_t r0 = r / 7 * 7, c0 = c / 5 * 5;
-    out = {data_->data() + r0 * cols_ + c0,      r0,    c0,   std::min<std::size_t>(7, rows_ - r0),
-           std::min<std::size_t>(5, cols_ - c0), cols_, data_};
-    return true;
-  }
-  mutable std::size_t sampleCalls = 0, blockCalls = 0;
-
- private:
-  std::size_t rows_, cols_;
-  std::shared_ptr<std::vector<float>> data_;
-};
 
 }  // namespace
 
@@ -268,7 +230,7 @@ TEST(TopoDem, APagedStyleSourceGivesTheSameAnswersAsTheInMemoryOne) {
   for (auto& v : data) v = h(rng);
   data[40] = -1.0f;  // a hole
   const TopoDem mem(g, marsPlane(), std::make_shared<InMemorySamples>(30, 25, data));
-  const TopoDem gen(g, marsPlane(), std::make_shared<FunctionSource>(30, 25, data));
+  const TopoDem gen(g, marsPlane(), std::make_shared<test::SampleOnlySource>(30, 25, data));
   std::uniform_real_distribution<double> ux(98.0, 151.0), uy(140.0, 202.0);
   for (int i = 0; i < 500; ++i) {
     const double x = ux(rng), y = uy(rng);
@@ -363,7 +325,7 @@ TEST(TopoDem, ABlockSourceGivesTheSameAnswersAndRunsOfQueriesStayInOneBlock) {
   for (auto& v : data) v = h(rng);
   data[77] = -1.0f;  // a hole
   const TopoDem mem(g, marsPlane(), std::make_shared<InMemorySamples>(30, 25, data));
-  auto blocks = std::make_shared<BlockSource>(30, 25, data);
+  auto blocks = std::make_shared<test::BlockSource>(30, 25, data);
   const TopoDem paged(g, marsPlane(), blocks);
   std::uniform_real_distribution<double> ux(98.0, 151.0), uy(140.0, 202.0);
   for (int i = 0; i < 2000; ++i) {
@@ -380,11 +342,12 @@ TEST(TopoDem, ABlockSourceGivesTheSameAnswersAndRunsOfQueriesStayInOneBlock) {
     }
   }
   // 1,000 bilinear queries inside one block's interior cells: one block fetch, no samples.
-  blocks->blockCalls = blocks->sampleCalls = 0;
+  blocks->blockCalls = 0;
+  blocks->sampleCalls = 0;
   for (int i = 0; i < 1000; ++i) {
     const double x = 100.0 + 2.0 * (5.0 + 2.5 * i / 1000.0);  // columns 5.0 … 7.5
     (void)paged.height(x, 200.0 - 2.0 * 8.5);                 // rows 8…9 (block rows 7…13)
   }
-  EXPECT_EQ(blocks->blockCalls, 1u);
-  EXPECT_EQ(blocks->sampleCalls, 0u);
+  EXPECT_EQ(blocks->blockCalls.load(), 1u);
+  EXPECT_EQ(blocks->sampleCalls.load(), 0u);
 }
