@@ -54,21 +54,13 @@ Opened openPath(const fs::path& path, const std::shared_ptr<PatchCache>& cache) 
   return {store, cache, Pager(store, cache)};
 }
 
-// Whether the bilinear cell of (x, y) lies across a patch edge of the DEM (128×128 patches;
-// sample (r, c) at x = −500 + c, y = 400 − r): its first column or row is 127 mod 128.
-bool acrossPatchEdge(double x, double y) {
-  const auto c = static_cast<std::size_t>(x + 500.0), r = static_cast<std::size_t>(400.0 - y);
-  return c % 128 == 127 || r % 128 == 127;
-}
-
 // Bilinear heights over a lattice that meets every sample cell of the DEM, so every patch of
-// level 0: 7.3 m apart across x in [−500, 399], y in [−299, 400]. With `edges`, whether each
-// point's cell lies across a patch edge instead (1 or 0).
-std::vector<double> sweep(const TopoDem& dem, bool edges = false) {
+// level 0: 7.3 m apart across x in [−500, 399], y in [−299, 400].
+std::vector<double> sweep(const TopoDem& dem) {
   std::vector<double> out;
   for (double y = 400.0; y >= -299.0; y -= 7.3) {
     for (double x = -500.0; x <= 399.0; x += 7.3) {
-      out.push_back(edges ? (acrossPatchEdge(x, y) ? 1.0 : 0.0) : dem.height(x, y).height);
+      out.push_back(dem.height(x, y).height);
     }
   }
   return out;
@@ -85,32 +77,16 @@ const std::vector<double>& inMemory() {
   return want;
 }
 
-// The same answers: bit for bit, NaN (the fixture's hole) included, except within 1e-9 m
-// where `edge[i]` (a cell across a patch edge). Such a cell is read from the block table when
-// both its patches are resident and through the generic kernel when one is not, and the two
-// differ in the last bits (by up to 12 ulps here; so does one pager alone, cold against warm,
-// without any sharing): a pager's answer there depends on its cache's state, which these
-// tests do not fix.
-void expectSame(const std::vector<double>& got, const std::vector<double>& want,
-                const std::vector<bool>& edge) {
-  ASSERT_EQ(got.size(), want.size());
-  ASSERT_EQ(got.size(), edge.size());
-  for (std::size_t i = 0; i < got.size(); ++i) {
-    if (edge[i] && !std::isnan(want[i])) {
-      ASSERT_NEAR(got[i], want[i], 1e-9) << "point " << i;
-    } else {
-      ASSERT_EQ(std::bit_cast<std::uint64_t>(got[i]), std::bit_cast<std::uint64_t>(want[i]))
-          << "point " << i << ": " << got[i] << " against " << want[i];
-    }
-  }
-}
+// The same answers: bit for bit, NaN (the fixture's hole) included. (A cell across a patch
+// edge is read from the block table when both its patches are resident and through the
+// generic kernel when one is not; the two give the same bits, also within the snap slack of
+// a cell line, which the lattice below meets: Pager.HeightsWithinTheSnapSlackOfACellLine*.)
 void expectSameBits(const std::vector<double>& got, const std::vector<double>& want) {
-  static const std::vector<bool> edge = [] {
-    std::vector<bool> e;
-    for (const double v : sweep(inMemoryDem(), true)) e.push_back(v != 0.0);
-    return e;
-  }();
-  expectSame(got, want, edge);
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    ASSERT_EQ(std::bit_cast<std::uint64_t>(got[i]), std::bit_cast<std::uint64_t>(want[i]))
+        << "point " << i << ": " << got[i] << " against " << want[i];
+  }
 }
 
 // Every sample of a level, through its source (patch by patch, so every patch is loaded).
@@ -196,9 +172,7 @@ TEST(PagerSharing, PagersOfOneFileThroughOneCacheLoadEachPatchOnce) {
 
 TEST(PagerSharing, PagersOfOneFileThroughTwoCachesHoldEachPatchAsOneObject) {
   // Pager b's cache holds 4 patches: its budget is its own, and it evicts, but every patch it
-  // loads is the one a's cache holds, not a second read. (b's samples are compared rather
-  // than its heights: where a cell's patches are not all resident, a paged height may differ
-  // from the in-memory one in the last bits, see expectSame().)
+  // loads is the one a's cache holds, not a second read.
   auto big = std::make_shared<PatchCache>(std::size_t{64} << 20);
   auto small = std::make_shared<PatchCache>(4 * patchBytes());
   const Opened a = openPath(fixture().path, big);
@@ -207,6 +181,7 @@ TEST(PagerSharing, PagersOfOneFileThroughTwoCachesHoldEachPatchAsOneObject) {
   const std::vector<double>& want = inMemory();
   expectSameBits(sweep(a.pager.dem("dem")), want);
   expectSameSamples(samplesOf(*b.pager.source("dem")), samplesOf(*fixture().demSamples));
+  expectSameBits(sweep(b.pager.dem("dem")), want);  // 4 patches resident at most
   EXPECT_EQ(reads(a), kPatchRows * kPatchCols);
   EXPECT_EQ(reads(b), 0u);
   for (std::size_t pr = 0; pr < kPatchRows; ++pr) {
@@ -254,13 +229,9 @@ TEST(PagerSharing, EightThreadsOnTwoPagersOfOneFileReadEachPatchOnceWithinBudget
   std::mt19937 rng(30);
   std::uniform_real_distribution<double> x(-500.0, 399.0), y(-299.0, 400.0);
   for (std::size_t i = 0; i < xs.size(); ++i) xs[i] = x(rng), ys[i] = y(rng);
-  std::vector<bool> edge(xs.size());
-  for (std::size_t i = 0; i < xs.size(); ++i) {
-    want[i] = mem.height(xs[i], ys[i]).height;
-    edge[i] = acrossPatchEdge(xs[i], ys[i]);
-  }
+  for (std::size_t i = 0; i < xs.size(); ++i) want[i] = mem.height(xs[i], ys[i]).height;
   for (const std::vector<double>& got : heightsFromEightThreads(da, db, xs, ys)) {
-    expectSame(got, want, edge);
+    expectSameBits(got, want);
   }
 
   std::uint64_t held = 0;  // patches resident in either cache
@@ -290,16 +261,14 @@ TEST(PagerSharing, EightThreadsOnTwoPagersOfOneFileUnderEvictionGetTheInMemoryAn
   const TopoDem da = a.pager.dem("dem"), db = b.pager.dem("dem");
   const TopoDem mem = inMemoryDem();
   std::vector<double> xs(3000), ys(3000), want(3000);
-  std::vector<bool> edge(xs.size());
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> x(-499.0, 398.0), y(-298.0, 399.0);
   for (std::size_t i = 0; i < xs.size(); ++i) {
     xs[i] = x(rng), ys[i] = y(rng);
     want[i] = mem.height(xs[i], ys[i]).height;
-    edge[i] = acrossPatchEdge(xs[i], ys[i]);
   }
   for (const std::vector<double>& got : heightsFromEightThreads(da, db, xs, ys)) {
-    expectSame(got, want, edge);
+    expectSameBits(got, want);
   }
   for (const Opened* o : {&a, &b}) {
     const CacheStats s = o->cache->stats();

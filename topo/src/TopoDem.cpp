@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <optional>
 #include <string>
 
 namespace regolith::topo {
@@ -21,8 +22,9 @@ using detail::KernelResult;
 
 // Locates (x, y) in the grid; false if outside the pixel extent.
 struct Where {
-  double u, v;
+  double u, v;  // snapped onto a sample line within the slack, clamped to the centres
   bool inside;
+  double rawU, rawV;  // as the point gives them
 };
 
 bool isPowerOfTwo(double d) noexcept {
@@ -34,16 +36,30 @@ bool isPowerOfTwo(double d) noexcept {
 // TopoGrid::edgeSlack(), so that points on a reported edge are inside.
 inline Where locate(const detail::DemIndexer& m, double x, double y, double cmax, double rmax,
                     const glm::dvec2& slack) noexcept {
-  double u = m.u(x);
-  double v = m.v(y);
+  const double rawU = m.u(x), rawV = m.v(y);
   // On a sample line to a few ulps (a sample centre given as grid indices, or computed
   // another way) is on it: a hole next to it then has zero weight, as it has exactly there.
-  u = detail::snapToLine(u, slack.x);
-  v = detail::snapToLine(v, slack.y);
+  const double u = detail::snapToLine(rawU, slack.x);
+  const double v = detail::snapToLine(rawV, slack.y);
   const bool inside = u >= -0.5 - slack.x && u <= cmax + 0.5 + slack.x && v >= -0.5 - slack.y &&
                       v <= rmax + 0.5 + slack.y;
   // Within the half-pixel border the stencil sits on the outermost samples.
-  return {std::clamp(u, 0.0, cmax), std::clamp(v, 0.0, rmax), inside};
+  return {std::clamp(u, 0.0, cmax), std::clamp(v, 0.0, rmax), inside, rawU, rawV};
+}
+
+// A bilinear height() is the interpolation at the point itself wherever the kernel has a
+// value there (the cell (⌊u⌋, ⌊v⌋) inside the sample centres, no missing sample of non-zero
+// weight): what the fast paths answer (ResidentBilinear::evalResident, pagedBilinear), with
+// the same arithmetic, so that a height never depends on the path that answered it, nor a
+// paged one on what is resident (stop 31: up to 12 ulps between a cold and a warm cache).
+// Snapping onto a line decides only the rest: a sample whose weight vanishes on the line
+// (a hole beside a sample centre), and the border. The fast paths cannot snap instead: the
+// test for a point near a line made bilinear heights 2–33 % slower (docs/paging.md).
+// The unsnapped point, when snapping moved it and its cell is inside the centres.
+inline std::optional<Where> unsnapped(const Where& w, double cmax, double rmax) noexcept {
+  if (w.rawU == w.u && w.rawV == w.v) return std::nullopt;
+  if (!(w.rawU >= 0.0 && w.rawU < cmax && w.rawV >= 0.0 && w.rawV < rmax)) return std::nullopt;
+  return Where{w.rawU, w.rawV, true, w.rawU, w.rawV};
 }
 
 // The calling thread's block, moved to the one holding the cell of `w` if needed.
@@ -62,6 +78,24 @@ KernelResult withAccessor(const TopoGrid& g, const SampleSource& src, const floa
   if (resident != nullptr) return fn(ClampAcc<detail::MemFetch>{{resident, cols}, rows, cols});
   const detail::ThreadBlock& tb = threadBlock(src, w);
   return fn(ClampAcc<detail::BlockFetch>{{&src, &tb}, rows, cols});
+}
+
+// The bilinear height at w (a cell inside the sample centres), or nothing where the kernel
+// has no value there (a missing sample of non-zero weight). On a paged source, the block
+// path first: a fast path's arithmetic either way (detail::bilinearPatch, bilinear()).
+std::optional<double> bilinearHeightAt(const TopoGrid& g, const SampleSource& src,
+                                       const float* resident, const detail::ResidentBilinear& f,
+                                       const Where& w) {
+  detail::CellValue cv;
+  if (resident == nullptr && detail::blockBilinear<false>(threadBlock(src, w), f, w.u, w.v, cv))
+      [[likely]] {
+    return cv.h;
+  }
+  const KernelResult k = withAccessor(g, src, resident, w, [&](const auto& acc) {
+    return detail::evaluate<false>(Interpolation::Bilinear, acc, w.u, w.v, f.nodata);
+  });
+  if (k.status != QueryStatus::Ok) return std::nullopt;
+  return k.h;
 }
 
 // The check is inline and the throwing part out of line, so that the hot path stays small.
@@ -179,9 +213,14 @@ HeightSample TopoDem::heightGeneric(double x, double y, Interpolation interp) co
   requirePoint(x, y, "TopoDem::height()");
   const Where w = locate(index_, x, y, fast_.uMax, fast_.vMax, slack_);
   if (!w.inside) return {};
-  if (resident_ == nullptr && interp == Interpolation::Bilinear) {
+  if (interp == Interpolation::Bilinear) {
+    if (const std::optional<Where> raw = unsnapped(w, fast_.uMax, fast_.vMax)) {
+      const std::optional<double> h = bilinearHeightAt(grid_, *samples_, resident_, fast_, *raw);
+      if (h) return {*h, QueryStatus::Ok};
+    }
     detail::CellValue cv;
-    if (detail::blockBilinear<false>(threadBlock(*samples_, w), fast_, w.u, w.v, cv)) [[likely]] {
+    if (resident_ == nullptr &&
+        detail::blockBilinear<false>(threadBlock(*samples_, w), fast_, w.u, w.v, cv)) [[likely]] {
       return {cv.h, QueryStatus::Ok};
     }
   }
@@ -197,6 +236,9 @@ SurfaceSample TopoDem::surfaceGeneric(double x, double y, Interpolation interp,
   requirePoint(x, y, "TopoDem::surface()");
   const Where w = locate(index_, x, y, fast_.uMax, fast_.vMax, slack_);
   if (!w.inside) return {};
+  // Snapped, unlike a bilinear height() (see unsnapped()): the gradient must be the cell's
+  // the snapped point lies in, and the height its own, so a sample centre given a few ulps
+  // off its lines gives the sample (`regolith query`, docs/queries.md "Edges").
   if (resident_ == nullptr && interp == Interpolation::Bilinear) {
     // A point within the slack of a cell line is on it now (w is snapped): surface()'s paged
     // path (lock-free, also across block edges), else the thread's block fetched from the
