@@ -478,6 +478,21 @@ GDALRasterBandH elevationBand(GDALDatasetH ds, const std::string& p) {
     throw ImportError(p + ": band 1 has data type " + GDALGetDataTypeName(type) +
                       ", expected real numbers");
   }
+  // GDAL reads a whole block to read any sample of it. A header of a few bytes can declare
+  // rows of 10^9 samples in one block each (a fuzzed NOAA NGS geoid grid, 48 bytes, asked
+  // for 4.5 GB), so the size of a block is refused before any read. Real products' blocks
+  // are a row or a tile: a row of 1M float64 samples is 8 MiB.
+  constexpr double kMaxBlockBytes = 256.0 * 1024 * 1024;
+  int bx = 0, by = 0;
+  GDALGetBlockSize(band, &bx, &by);
+  const double blockBytes = static_cast<double>(bx) * static_cast<double>(by) *
+                            static_cast<double>(GDALGetDataTypeSizeBytes(type));
+  if (!(bx > 0 && by > 0 && blockBytes <= kMaxBlockBytes)) {
+    throw ImportError(p + ": band 1 is stored in blocks of " + std::to_string(bx) + " x " +
+                      std::to_string(by) + " samples of " + GDALGetDataTypeName(type) + " (" +
+                      number(blockBytes / (1024.0 * 1024.0)) +
+                      " MiB), expected at most 256 MiB per block (GDAL reads whole blocks)");
+  }
   return band;
 }
 
@@ -517,6 +532,12 @@ std::array<double, 6> northUpGeotransform(GDALDatasetH ds, const std::string& p)
   std::array<double, 6> gt{};
   if (GDALGetGeoTransform(ds, gt.data()) != CE_None) {
     throw ImportError(p + ": has no geotransform, expected a georeferenced raster");
+  }
+  if (!std::all_of(gt.begin(), gt.end(), [](double v) { return std::isfinite(v); })) {
+    throw ImportError(p + ": geotransform has a non-finite term (origin " + number(gt[0]) + ", " +
+                      number(gt[3]) + ", pixel size " + number(gt[1]) + " x " + number(gt[5]) +
+                      ", rotation " + number(gt[2]) + ", " + number(gt[4]) +
+                      "), expected finite numbers");
   }
   if (gt[2] != 0.0 || gt[4] != 0.0) {
     throw ImportError(p + ": geotransform is rotated (terms " + number(gt[2]) + ", " +

@@ -26,7 +26,9 @@
 
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -712,6 +714,60 @@ TEST(ImportErrors, ARasterWithoutGeoreferencing) {
                      "placement: --spacing, --origin and --body, optionally --height-scale, "
                      "--height-offset and --heading (regolith import), or spacing=, origin=, "
                      "body=, height_scale=, height_offset=, heading= (regolith.import_raster())");
+}
+
+namespace {
+/// A NOAA NGS geoid grid (GDAL's NGSGEOID driver) of nothing but its 44-byte header: south
+/// latitude, west longitude, latitude and longitude steps (float64), rows, columns and kind
+/// (int32, 1 = float32), little-endian. GDAL opens it from the header alone, so a few bytes
+/// declare whatever geometry they like.
+fs::path ngsGeoidHeader(const std::string& name, double south, double west, double step,
+                        std::int32_t rows, std::int32_t cols) {
+  static_assert(std::endian::native == std::endian::little);
+  const fs::path p = scratch(name);
+  std::ofstream f(p, std::ios::binary);
+  for (const double d : {south, west, step, step}) {
+    f.write(reinterpret_cast<const char*>(&d), sizeof d);  // NOLINT(*-reinterpret-cast)
+  }
+  for (const std::int32_t i : {rows, cols, std::int32_t{1}}) {
+    f.write(reinterpret_cast<const char*>(&i), sizeof i);  // NOLINT(*-reinterpret-cast)
+  }
+  return p;
+}
+}  // namespace
+
+TEST(ImportErrors, ABlockBeyond256MiBIsRefusedBeforeAnyRead) {
+  // Found by fuzz_info_json (stop 31): 48 bytes declaring rows of 1.1e9 samples in one block
+  // each made GDAL allocate 4.5 GB to read one sample. Here 2 rows of 3e8 float32 samples:
+  // blocks of 1.1 GiB, from a 44-byte file.
+  GDALAllRegister();
+  const fs::path p = ngsGeoidHeader("huge_block.bin", 10.0, 20.0, 1e-6, 2, 300'000'000);
+  ASSERT_EQ(fs::file_size(p), 44U);
+  std::string msg = errorOf([&] { (void)describeRaster(p); });
+  EXPECT_EQ(msg, "store::describeRaster(): " + p.string() +
+                     ": band 1 is stored in blocks of 300000000 x 1 samples of Float32 "
+                     "(1144.40917969 MiB), expected at most 256 MiB per block (GDAL reads "
+                     "whole blocks)");
+  msg = errorOf([&] { (void)importRaster(p, scratch("huge_block.h5")); });
+  EXPECT_NE(msg.find("store::importRaster(): " + p.string() + ": band 1 is stored in blocks"),
+            std::string::npos)
+      << msg;
+  EXPECT_FALSE(fs::exists(scratch("huge_block.h5")));
+  // The same header with rows GDAL reads in blocks of 12 bytes is not refused for its blocks.
+  const fs::path small = ngsGeoidHeader("small_block.bin", 10.0, 20.0, 1e-6, 2, 3);
+  msg = errorOf([&] { (void)describeRaster(small); });
+  EXPECT_EQ(msg.find("blocks"), std::string::npos) << msg;
+}
+
+TEST(ImportErrors, ANonFiniteGeotransformIsRefusedNamingItsTerms) {
+  // The geoid header with a NaN south edge: GDAL reports the origin's latitude as NaN.
+  GDALAllRegister();
+  const fs::path p =
+      ngsGeoidHeader("nan_origin.bin", std::numeric_limits<double>::quiet_NaN(), 20.0, 0.25, 2, 3);
+  const std::string msg = errorOf([&] { (void)describeRaster(p); });
+  EXPECT_EQ(msg, "store::describeRaster(): " + p.string() +
+                     ": geotransform has a non-finite term (origin 19.875, nan, pixel size 0.25 "
+                     "x -0.25, rotation 0, 0), expected finite numbers");
 }
 
 // ---- tiles -----------------------------------------------------------------------------------
