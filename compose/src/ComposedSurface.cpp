@@ -109,18 +109,38 @@ ComposedSurface::ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules
 
 ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double metres,
                                         bool wantNormal, std::vector<Share>* shares) const {
+  const auto entries = snapshot_->entries();
+  const std::span<const std::uint32_t> cell = snapshot_->cellCandidates(latDeg, lonDeg);
+  if (cell.size() == 1 && !wantNormal && shares == nullptr) {
+    // One candidate in the point's cell (the common case away from dataset borders): if it
+    // answers, it is the surface, a tier of one whose height is kept exactly (below), so
+    // none of the composition's machinery is needed. Otherwise the general path decides.
+    const Dataset& d = *entries[cell.front()].dataset;
+    const std::size_t level = metres > 0.0 ? d.levelFor(metres) : 0;
+    const Contribution c = d.evaluate(latDeg, lonDeg, level, false, false);
+    if (c.status == QueryStatus::Ok && c.coverage > 0.0) {
+      ComposedSample out;
+      out.height = c.height;
+      out.status = QueryStatus::Ok;
+      out.contributors = 1;
+      return out;
+    }
+  }
   const ScratchLease lease;
   Scratch& s = lease.get();
   s.members.clear();
-  const auto entries = snapshot_->entries();
   ComposedSample out;
   bool sawNodata = false, sawUnmappable = false, sawOutside = false;
   double finest = std::numeric_limits<double>::infinity();
+  // Several candidates will most likely give several members, whose weights need each one's
+  // quality: evaluate() then finds it from the point it located (quality() locates again).
+  bool qualityKnown = false;
   const auto evaluateAll = [&](std::span<const std::uint32_t> candidates) {
+    qualityKnown = candidates.size() > 1;
     for (const std::uint32_t e : candidates) {
       const Dataset& d = *entries[e].dataset;
       const std::size_t level = metres > 0.0 ? d.levelFor(metres) : 0;
-      Contribution c = d.evaluate(latDeg, lonDeg, level, wantNormal, false);
+      Contribution c = d.evaluate(latDeg, lonDeg, level, wantNormal, qualityKnown);
       if (c.status != QueryStatus::Ok) {
         sawNodata |= c.status == QueryStatus::Nodata;
         sawUnmappable |= c.status == QueryStatus::Unmappable;
@@ -142,7 +162,6 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
   // composition is the same as from the exact catalogue query, which takes a walk of the
   // index and a sine and cosine per angle. Many candidates: the exact query, fewer evaluations.
   constexpr std::size_t kCellCandidatesAtMost = 4;
-  const std::span<const std::uint32_t> cell = snapshot_->cellCandidates(latDeg, lonDeg);
   const bool fromCell = cell.size() <= kCellCandidatesAtMost;
   evaluateAll(fromCell ? cell : exactCandidates());
   if (s.members.empty() && fromCell && !cell.empty()) {
@@ -165,7 +184,7 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
       const double ratio = finest / m.spacing;
       m.resolution =
           rules_.resolutionPower == 2.0 ? ratio * ratio : std::pow(ratio, rules_.resolutionPower);
-      m.c.quality = entries[m.entry].dataset->quality(latDeg, lonDeg);
+      if (!qualityKnown) m.c.quality = entries[m.entry].dataset->quality(latDeg, lonDeg);
     }
   } else {
     s.members.front().c.quality = 1.0;  // any positive weight: it is the only one

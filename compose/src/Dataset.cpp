@@ -84,12 +84,27 @@ const char* roleName(Role role) noexcept {
   return "unknown";
 }
 
-double projectionQuality(double groundX, double groundY, double nominal, double n) noexcept {
-  if (!(groundX > 0.0 && groundY > 0.0 && nominal > 0.0 && n > 1.0)) return kMinQuality;
+namespace {
+// projectionQuality() given log(n) (n > 1): the compositions of several datasets ask for a
+// quality per dataset and query, with n = kQualityN every time.
+double qualityGivenLogN(double groundX, double groundY, double nominal, double logN) noexcept {
+  if (!(groundX > 0.0 && groundY > 0.0 && nominal > 0.0)) return kMinQuality;
   const double anisotropy = std::abs(std::log(groundX / groundY));
   const double distortion = std::abs(std::log(std::sqrt(groundX * groundY) / nominal));
-  const double alpha = 1.0 - std::max(anisotropy, distortion) / std::log(n);
+  const double alpha = 1.0 - std::max(anisotropy, distortion) / logN;
   return std::clamp(alpha, kMinQuality, 1.0);
+}
+// A function, not a global: a Dataset may be built during another file's static
+// initialisation.
+double logQualityN() noexcept {
+  static const double v = std::log(kQualityN);
+  return v;
+}
+}  // namespace
+
+double projectionQuality(double groundX, double groundY, double nominal, double n) noexcept {
+  if (!(n > 1.0)) return kMinQuality;
+  return qualityGivenLogN(groundX, groundY, nominal, std::log(n));
 }
 
 std::shared_ptr<const Dataset> Dataset::planet(const topo::GridPyramid& pyramid,
@@ -248,7 +263,7 @@ double Dataset::planetQuality(double latDeg) const {
   const double lat = std::clamp(latDeg, -90.0, 90.0);
   const double gx = body_.primeVerticalRadius(lat) * std::cos(lat * kDeg) * grid.spacingX() * kDeg;
   const double gy = body_.meridianRadius(lat) * grid.spacingY() * kDeg;
-  return projectionQuality(gx, gy, planetNominal_, kQualityN);
+  return qualityGivenLogN(gx, gy, planetNominal_, logQualityN());
 }
 
 double Dataset::qualityAt(const GridPoint& g) const {
@@ -286,7 +301,7 @@ void Dataset::buildQualityLattice() {
         const glm::dmat3 j = placement_->jacobian(x, y, 0.0);
         const double gx = glm::length(j[0]) * grid.spacingX();
         const double gy = glm::length(j[1]) * grid.spacingY();
-        quality_[r * kQualityLattice + c] = projectionQuality(gx, gy, groundSpacing_, kQualityN);
+        quality_[r * kQualityLattice + c] = qualityGivenLogN(gx, gy, groundSpacing_, logQualityN());
       } catch (const DomainError&) {  // NOLINT(bugprone-empty-catch): no image, lowest quality
       }
     }
@@ -443,7 +458,9 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, 
                    ? s.height
                    : s.height + options_.heightOffset;
   out.coverage = coverageAt(g, latDeg);
-  if (wantQuality) out.quality = qualityAt(g);
+  // quality()'s value: a planet's from the query's own latitude (no round trip through the
+  // grid's latitude type).
+  if (wantQuality) out.quality = isPlanet() ? planetQuality(latDeg) : qualityAt(g);
   if (wantSlope) {
     out.normalStatus = s.normalStatus;
     if (s.normalValid()) {

@@ -12,10 +12,13 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <random>
+#include <span>
 #include <vector>
 
 namespace regolith::compose {
@@ -69,6 +72,46 @@ TEST(ComposedSurface, OneDatasetAnswersItsOwnHeightAndNormal) {
     EXPECT_NEAR(glm::length(c.normal - ref.normal), 0.0, 1e-12);
   }
   EXPECT_EQ(s.height(40.0, 0.0).status, QueryStatus::OutsideGrid);
+}
+
+TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate) {
+  // height() and heights() answer a point whose 1° cell has one candidate dataset straight
+  // from it (ComposedSurface.cpp); surface() always takes the general path. Same statuses,
+  // contributor counts and height bits, on one dataset, on the global grid beside a feathered
+  // regional one (cells with one and with two candidates), on the regional grid's own cells and
+  // outside every grid.
+  TwoPlanets t([](double lat, double lon) { return 100.0 + 3.0 * lat - 0.7 * lon; },
+               [](double lat, double lon) { return 250.0 - 2.0 * lat + 1.3 * lon; }, 60e3);
+  Catalogue only(kMoon);
+  only.add(Dataset::planet(
+      planetPyramid(kMoon, 9.75, -9.75, 0.5, 40, 40, [](double lat, double) { return 10.0 * lat; }),
+      named("only")));
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> lat(-30.0, 30.0), lon(-40.0, 40.0);
+  std::size_t single = 0, several = 0;
+  for (const auto& snapshot : {t.catalogue.snapshot(), only.snapshot()}) {
+    const ComposedSurface s(snapshot, Rules{Policy::Weighted, 2.0});
+    for (int i = 0; i < 3000; ++i) {
+      const double la = lat(rng), lo = lon(rng);
+      const topo::HeightSample h = s.height(la, lo);
+      const ComposedSample g = s.surface(la, lo, topo::NormalFrame::BodyFixed);
+      ASSERT_EQ(h.status, g.status) << la << ", " << lo;
+      if (g.status != QueryStatus::Ok) continue;
+      ASSERT_EQ(std::bit_cast<std::uint64_t>(h.height), std::bit_cast<std::uint64_t>(g.height))
+          << la << ", " << lo << ": " << h.height << " against " << g.height;
+      double hb = 0.0;
+      QueryStatus sb = QueryStatus::OutsideGrid;
+      std::uint32_t cb = 0;
+      s.heights(std::span(&la, 1), std::span(&lo, 1), std::span(&hb, 1), std::span(&sb, 1),
+                std::span(&cb, 1));
+      ASSERT_EQ(sb, QueryStatus::Ok);
+      ASSERT_EQ(std::bit_cast<std::uint64_t>(hb), std::bit_cast<std::uint64_t>(g.height));
+      ASSERT_EQ(cb, g.contributors) << la << ", " << lo;
+      ++(snapshot->cellCandidates(la, lo).size() == 1 ? single : several);
+    }
+  }
+  EXPECT_GT(single, 1000U);
+  EXPECT_GT(several, 100U);
 }
 
 TEST(ComposedSurface, WeightedBlendFollowsResolutionAndQuality) {
