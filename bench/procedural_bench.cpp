@@ -12,18 +12,27 @@
 //   procedural/random/resident           random points in a 12 × 12-patch region (36 MiB,
 //       within the budget), warmed first: hits only
 //
+// With REGOLITH_SCALE_STORE=<store file> (scripts/scale-store.sh), the same traverses also run
+// on that store's planet grid REGOLITH_SCALE_GRID (default mars), read from disk through a
+// 64 MiB cache: store/traverse/{heights,surfaces}_{cold,warm}. A cold run drops the cache,
+// not the kernel's page cache, and not the patch the thread read last (the thread's block
+// keeps it alive, and the pager finds it again): a path within one patch loads nothing.
+//
 // Counters: patch loads and evictions, and the peak resident bytes against the budget.
 #include <regolith/store/Procedural.hpp>
+#include <regolith/store/Store.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
 
 #include <benchmark/benchmark.h>
 
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <memory>
 #include <numbers>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -42,16 +51,29 @@ ProceduralMarsOptions planetOptions() {
   return o;
 }
 
-/// One pager and planet over a fresh 64 MiB cache (the pole heights are computed here, outside
-/// the timing: seconds at this size).
+/// One pager and planet over a fresh 64 MiB cache: the procedural Mars (its pole heights are
+/// computed here, outside the timing: seconds at this size), or a store's planet grid.
 struct Planet {
   std::shared_ptr<PatchCache> cache = std::make_shared<PatchCache>(kBudget);
-  Pager pager = proceduralPager(planetOptions(), cache);
-  TopoPlanet planet = pager.planet("mars");
+  Pager pager;
+  TopoPlanet planet;
+  Planet() : pager(proceduralPager(planetOptions(), cache)), planet(pager.planet("mars")) {}
+  Planet(const std::string& path, const std::string& grid)
+      : pager(std::make_shared<const Store>(Store::open(path)), cache),
+        planet(pager.planet(grid)) {}
 };
 
 Planet& shared() {
   static Planet p;
+  return p;
+}
+
+/// The store of REGOLITH_SCALE_STORE (only asked for when it is set).
+Planet& scaleStore() {
+  static Planet p = [] {
+    const char* grid = std::getenv("REGOLITH_SCALE_GRID");
+    return Planet(std::getenv("REGOLITH_SCALE_STORE"), grid != nullptr ? grid : "mars");
+  }();
   return p;
 }
 
@@ -114,22 +136,22 @@ double drive(const TopoPlanet& planet, bool surfaces) {
   return sink;
 }
 
-void traverseCold(benchmark::State& state, bool surfaces) {
+void traverseCold(benchmark::State& state, Planet& (*planet)(), bool surfaces) {
   (void)path();
   for (auto _ : state) {
     state.PauseTiming();
-    Planet& p = shared();
+    Planet& p = planet();
     p.cache->clear();
     p.cache->resetStats();
     state.ResumeTiming();
     benchmark::DoNotOptimize(drive(p.planet, surfaces));
   }
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(path().points.size()));
-  reportCache(state, *shared().cache);
+  reportCache(state, *planet().cache);
 }
 
-void traverseWarm(benchmark::State& state, bool surfaces) {
-  Planet& p = shared();
+void traverseWarm(benchmark::State& state, Planet& (*planet)(), bool surfaces) {
+  Planet& p = planet();
   (void)drive(p.planet, surfaces);  // the path's patches resident
   p.cache->resetStats();
   for (auto _ : state) benchmark::DoNotOptimize(drive(p.planet, surfaces));
@@ -183,16 +205,18 @@ int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("procedural/patch/pole", patchCompute, 0)
       ->Unit(benchmark::kMillisecond)
       ->Iterations(8);
-  for (const bool surfaces : {false, true}) {
-    const std::string what = surfaces ? "surfaces" : "heights";
-    benchmark::RegisterBenchmark(("procedural/traverse/" + what + "_cold").c_str(), traverseCold,
-                                 surfaces)
-        ->Unit(benchmark::kMillisecond)
-        ->Iterations(1);
-    benchmark::RegisterBenchmark(("procedural/traverse/" + what + "_warm").c_str(), traverseWarm,
-                                 surfaces)
-        ->Unit(benchmark::kMillisecond)
-        ->Iterations(3);
+  std::vector<std::pair<std::string, Planet& (*)()>> planets{{"procedural", shared}};
+  if (std::getenv("REGOLITH_SCALE_STORE") != nullptr) planets.emplace_back("store", scaleStore);
+  for (const auto& [name, planet] : planets) {
+    for (const bool surfaces : {false, true}) {
+      const std::string what = name + "/traverse/" + (surfaces ? "surfaces" : "heights");
+      benchmark::RegisterBenchmark((what + "_cold").c_str(), traverseCold, planet, surfaces)
+          ->Unit(benchmark::kMillisecond)
+          ->Iterations(1);
+      benchmark::RegisterBenchmark((what + "_warm").c_str(), traverseWarm, planet, surfaces)
+          ->Unit(benchmark::kMillisecond)
+          ->Iterations(3);
+    }
   }
   benchmark::RegisterBenchmark("procedural/random/cold", randomCold)
       ->Unit(benchmark::kMillisecond)
