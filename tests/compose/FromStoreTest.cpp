@@ -135,6 +135,12 @@ TEST(FromStore, BadCatalogueFilesNameTheFileAndTheKey) {
   EXPECT_NE(m.find("non-empty array"), std::string::npos) << m;
   m = messageOf("notjson.json", "{datasets: ");
   EXPECT_NE(m.find("valid JSON"), std::string::npos) << m;
+  // A number beyond double: nlohmann throws out_of_range, not parse_error (fuzz_info_json,
+  // stop 31: it escaped as a non-Regolith exception).
+  m = messageOf("overflow.json", R"({"tier_ratio": 1e999, "datasets": []})");
+  EXPECT_NE(m.find("overflow.json"), std::string::npos) << m;
+  EXPECT_NE(m.find("number overflow"), std::string::npos) << m;
+  EXPECT_NE(m.find("valid JSON"), std::string::npos) << m;
   m = messageOf("nogrid.json", R"({"datasets": [{"store": "moon.h5", "grid": "nope"}]})");
   EXPECT_NE(m.find("nope"), std::string::npos) << m;
   m = messageOf("nostore.json", R"({"datasets": [{"store": "missing.h5", "grid": "g"}]})");
