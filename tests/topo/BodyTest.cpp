@@ -641,3 +641,17 @@ TEST(BodyHelpers, LongitudeWrappingHitsTheDocumentedHalfOpenRanges) {
 }
 
 }  // namespace
+
+// The premise of TopoPlanet's and compose::Dataset's shortcut on a sphere (both radii of
+// curvature taken as the radius, two sines fewer): Body's formulas give the radius there
+// bit for bit, at every latitude.
+TEST(Body, OnASphereBothRadiiOfCurvatureAreTheRadiusExactly) {
+  for (const Body& b : {Body::marsSphere(), Body::moon(), Body::sphere("round", 1234.5678)}) {
+    ASSERT_TRUE(b.isSphere()) << b.name();
+    for (double lat = -90.0; lat <= 90.0; lat += 0.37) {
+      EXPECT_EQ(b.primeVerticalRadius(lat), b.equatorialRadius()) << b.name() << " " << lat;
+      EXPECT_EQ(b.meridianRadius(lat), b.equatorialRadius()) << b.name() << " " << lat;
+    }
+  }
+  EXPECT_FALSE(Body::marsEllipsoid().isSphere());
+}
