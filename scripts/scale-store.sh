@@ -64,12 +64,18 @@ fi
 cleanup() { ((keep)) || rm -f "$dir/scale.h5" "$dir/cog-src.h5" "$dir/cog-import.h5" "$dir"/cog-*.tif "$dir"/*.time; }
 trap cleanup EXIT
 
-# Runs "$@" under /usr/bin/time; prints "wall cpu peak_rss_kib" of it.
+# Runs "$@" under /usr/bin/time and sets T_WALL (s), T_CPU (user + system s) and T_RSS (peak
+# KiB); stops the script naming the command if it fails.
 timed() {
   local out=$1
   shift
-  /usr/bin/time -f '%e %U %S %M' -o "$out" "$@" >&2
-  awk '{printf "%s %.2f %s\n", $1, $2 + $3, $4}' "$out"
+  if ! /usr/bin/time -f '%e %U %S %M' -o "$out" "$@" >&2; then
+    echo "scale-store: failed: $*" >&2
+    exit 1
+  fi
+  local user sys
+  read -r T_WALL user sys T_RSS <"$out"
+  T_CPU=$(awk -v u="$user" -v s="$sys" 'BEGIN { printf "%.2f", u + s }')
 }
 size_of() { stat -c %s "$1"; }
 fmt() { python3 -c "import sys; print(format(float(sys.argv[1]), sys.argv[2]))" "$1" "$2"; }
@@ -82,7 +88,8 @@ echo
 
 # 1. The build.
 echo "scale-store: generating $dir/scale.h5 ($rows rows)" >&2
-read -r wall cpu rss < <(timed "$dir/gen.time" "$regolith" generate mars-planet --size "$rows" --out "$dir/scale.h5")
+timed "$dir/gen.time" "$regolith" generate mars-planet --size "$rows" --out "$dir/scale.h5"
+wall=$T_WALL cpu=$T_CPU rss=$T_RSS
 samples=$((rows * 2 * rows))
 bytes=$(size_of "$dir/scale.h5")
 echo "## Build"
@@ -101,7 +108,8 @@ echo "| what | wall s | CPU s | peak RSS MiB | bytes/sample | samples/s (wall) |
 echo "|---|---:|---:|---:|---:|---:|"
 if ((cog_rows < rows)); then
   echo "scale-store: generating $dir/cog-src.h5 ($cog_rows rows) for the COG comparison" >&2
-  read -r wall2 cpu2 rss2 < <(timed "$dir/gen2.time" "$regolith" generate mars-planet --size "$cog_rows" --out "$dir/cog-src.h5")
+  timed "$dir/gen2.time" "$regolith" generate mars-planet --size "$cog_rows" --out "$dir/cog-src.h5"
+  wall2=$T_WALL cpu2=$T_CPU rss2=$T_RSS
   src=$dir/cog-src.h5
 else
   wall2=$wall cpu2=$cpu rss2=$rss
@@ -112,11 +120,13 @@ echo "| \`regolith generate mars-planet --size $cog_rows\` (computes the samples
 georef=(-a_srs "+proj=longlat +R=3396190 +no_defs" -a_ullr -180 90 180 -90)
 for compress in NONE LZW; do
   out=$dir/cog-$compress.tif
-  read -r w c r < <(timed "$dir/cog.time" gdal_translate -q -of COG -co "COMPRESS=$compress" -co NUM_THREADS=ALL_CPUS "${georef[@]}" "HDF5:\"$src\"://grids/mars/level0" "$out")
+  timed "$dir/cog.time" gdal_translate -q -of COG -co "COMPRESS=$compress" -co NUM_THREADS=ALL_CPUS "${georef[@]}" "HDF5:\"$src\"://grids/mars/level0" "$out"
+  w=$T_WALL c=$T_CPU r=$T_RSS
   echo "| \`gdal_translate -of COG -co COMPRESS=$compress\` from the store's level 0 | $w | $c | $((r / 1024)) | $(fmt "$(python3 -c "print($(size_of "$out") / $csamples)")" .3f) | $(fmt "$(python3 -c "print($csamples / max($w, 0.01))")" .3g) |"
   if [[ $compress == NONE ]]; then
     # The same work the other way: Regolith's import of that COG into a store with its pyramid.
-    read -r w c r < <(timed "$dir/imp.time" "$regolith" import "$out" --out "$dir/cog-import.h5")
+    timed "$dir/imp.time" "$regolith" import "$out" --out "$dir/cog-import.h5"
+    w=$T_WALL c=$T_CPU r=$T_RSS
     echo "| \`regolith import\` of that COG (store and pyramid) | $w | $c | $((r / 1024)) | $(fmt "$(python3 -c "print($(size_of "$dir/cog-import.h5") / $csamples)")" .3f) | $(fmt "$(python3 -c "print($csamples / max($w, 0.01))")" .3g) |"
     rm -f "$dir/cog-import.h5"
   fi
