@@ -24,6 +24,9 @@ PACKAGES=(
   libglm-dev libegl-dev libgl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev libpng-dev
   # a virtual X server for the viewer's window test (xvfb-run needs xauth)
   xvfb xauth
+  # /usr/bin/time (wall, CPU and peak RSS of each step of scripts/scale-store.sh, which ctest
+  # scale_store_script runs)
+  time
   # tests, benchmarks, CLI, JSON
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   # Python bindings and Python-side oracles (Debian's interpreter, not PyPI)
