@@ -41,6 +41,10 @@ std::string lower(std::string s) {
   return s;
 }
 
+// The most samples one of the checks at open (rows beyond a pole, repeated columns) reads
+// at once: 4 MiB of float32, whatever a header declares.
+constexpr std::size_t kReadPieceSamples = std::size_t{1} << 20;
+
 std::string number(double v) {
   std::ostringstream o;
   o.precision(12);
@@ -419,25 +423,32 @@ void Raster::dropRepeatedColumns() {
     throw ImportError(prefix_ + ": " + spans +
                       ", and no whole number of columns spans 360 deg; expected at most 360");
   }
-  const std::size_t extra = i.cols - n, band = 64;
+  const std::size_t extra = i.cols - n;
+  // Bands of up to 64 rows, and of fewer columns than kReadPieceSamples: the extra columns
+  // of a hostile header can be 10^9 wide.
+  const std::size_t width = std::min(extra, kReadPieceSamples);
+  const std::size_t band =
+      std::max<std::size_t>(1, std::min<std::size_t>(64, kReadPieceSamples / width));
   std::vector<float> head, tail;
   for (std::size_t r = 0; r < i.rows; r += band) {
-    const std::size_t nr = std::min(band, i.rows - r);
-    head.resize(nr * extra);
-    tail.resize(nr * extra);
-    (void)readSource(layout_.rowOffset + r, layout_.colOffset, nr, extra, head);
-    (void)readSource(layout_.rowOffset + r, layout_.colOffset + n, nr, extra, tail);
-    for (std::size_t k = 0; k < head.size(); ++k) {
-      const bool same = head[k] == tail[k] || (std::isnan(head[k]) && std::isnan(tail[k]));
-      if (!same) {
-        const std::size_t row = r + k / extra, col = n + k % extra;
-        throw ImportError(prefix_ + ": " + spans + "; column " + std::to_string(col) +
-                          " repeats the longitude of column " + std::to_string(col - n) +
-                          " with another value (row " + std::to_string(row) + ": " +
-                          number(static_cast<double>(tail[k])) + " vs " +
-                          number(static_cast<double>(head[k])) +
-                          " m); expected at most 360 deg, or repeated columns equal to the "
-                          "first ones");
+    for (std::size_t c0 = 0; c0 < extra; c0 += width) {
+      const std::size_t nr = std::min(band, i.rows - r), nc = std::min(width, extra - c0);
+      head.resize(nr * nc);
+      tail.resize(nr * nc);
+      (void)readSource(layout_.rowOffset + r, layout_.colOffset + c0, nr, nc, head);
+      (void)readSource(layout_.rowOffset + r, layout_.colOffset + n + c0, nr, nc, tail);
+      for (std::size_t k = 0; k < head.size(); ++k) {
+        const bool same = head[k] == tail[k] || (std::isnan(head[k]) && std::isnan(tail[k]));
+        if (!same) {
+          const std::size_t row = r + k / nc, col = n + c0 + k % nc;
+          throw ImportError(prefix_ + ": " + spans + "; column " + std::to_string(col) +
+                            " repeats the longitude of column " + std::to_string(col - n) +
+                            " with another value (row " + std::to_string(row) + ": " +
+                            number(static_cast<double>(tail[k])) + " vs " +
+                            number(static_cast<double>(head[k])) +
+                            " m); expected at most 360 deg, or repeated columns equal to the "
+                            "first ones");
+        }
       }
     }
   }
@@ -447,8 +458,17 @@ void Raster::dropRepeatedColumns() {
 
 bool Raster::allMissing(std::size_t row0, std::size_t nrows, std::size_t col0,
                         std::size_t ncols) const {
-  std::vector<float> v(nrows * ncols);
-  return readSource(row0, col0, nrows, ncols, v) == v.size();
+  // Row by row, in pieces of at most kReadPieceSamples: a header can declare rows of 10^9
+  // samples (fuzz_import, stop 31: one read of the rows beyond a pole asked for 4 GB).
+  std::vector<float> v;
+  for (std::size_t r = 0; r < nrows; ++r) {
+    for (std::size_t c = 0; c < ncols; c += kReadPieceSamples) {
+      const std::size_t n = std::min(kReadPieceSamples, ncols - c);
+      v.resize(n);
+      if (readSource(row0 + r, col0 + c, 1, n, v) != n) return false;
+    }
+  }
+  return true;
 }
 
 namespace {

@@ -759,6 +759,64 @@ TEST(ImportErrors, ABlockBeyond256MiBIsRefusedBeforeAnyRead) {
   EXPECT_EQ(msg.find("blocks"), std::string::npos) << msg;
 }
 
+namespace {
+/// The process's peak resident KiB since the last resetPeakRss() (VmHWM).
+long peakRssKiB() {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::stol(line.substr(6));
+  }
+  return -1;
+}
+/// Resets VmHWM to the current RSS (Linux ≥ 4.0: "5" to clear_refs).
+bool resetPeakRss() {
+  std::ofstream f("/proc/self/clear_refs");
+  f << "5";
+  return static_cast<bool>(f.flush());
+}
+}  // namespace
+
+TEST(ImportErrors, RowsBeyondAPoleOfAVeryWideRasterAreCheckedInBoundedMemory) {
+  // Found by fuzz_import (stop 31): the check that the rows beyond a pole are wholly missing
+  // read them in one piece, 4 GB for a header declaring 10^9 columns. A sparse tiled GeoTIFF
+  // (nothing written, so every sample is the nodata value) of 2^27 columns whose first row's
+  // centre lies beyond the north pole: that row was one read of 512 MiB (the test then fails:
+  // the peak grows by more than 256 MiB); in pieces of 4 MiB it stays far below.
+  GDALAllRegister();
+  const fs::path p = scratch("wide_beyond_pole.tif");
+  constexpr int kCols = 1 << 27, kRows = 3;
+  const double dx = 360.0 / kCols;
+  {
+    const char* opts[] = {"TILED=YES", "BLOCKXSIZE=512", "BLOCKYSIZE=16", "SPARSE_OK=TRUE",
+                          nullptr};
+    DatasetPtr ds(GDALCreate(GDALGetDriverByName("GTiff"), p.c_str(), kCols, kRows, 1, GDT_Float32,
+                             const_cast<char**>(opts)));  // NOLINT
+    ASSERT_TRUE(ds);
+    const double gt[6] = {-180.0, dx, 0.0, 90.0 + dx, 0.0, -dx};  // row 0 half a pixel beyond
+    GDALSetGeoTransform(ds.get(), const_cast<double*>(gt));       // NOLINT
+    OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+    OSRSetFromUserInput(srs, "+proj=longlat +R=3396190 +no_defs");
+    GDALSetSpatialRef(ds.get(), srs);
+    OSRDestroySpatialReference(srs);
+    GDALSetRasterNoDataValue(GDALGetRasterBand(ds.get(), 1), -32768.0);
+  }
+  ASSERT_LT(fs::file_size(p), std::uintmax_t{64} << 20);
+  // GDAL's own block cache (5 % of RAM by default) would fill with the sparse tiles read:
+  // 64 MiB here, restored after, so that the peak is the import's own memory.
+  const GIntBig cacheMax = GDALGetCacheMax64();
+  GDALSetCacheMax64(GIntBig{64} << 20);
+  ASSERT_TRUE(resetPeakRss());
+  const long before = peakRssKiB();
+  ASSERT_GT(before, 0);
+  const GridInfo g = describeRaster(p);
+  const long grew = peakRssKiB() - before;
+  GDALSetCacheMax64(cacheMax);
+  EXPECT_EQ(g.rows, 2U);  // the row beyond the pole, wholly missing, dropped
+  EXPECT_EQ(g.cols, static_cast<std::size_t>(kCols));
+  EXPECT_LT(grew, 256L * 1024) << "peak RSS grew by " << grew << " KiB";
+}
+
 TEST(ImportErrors, ANonFiniteGeotransformIsRefusedNamingItsTerms) {
   // The geoid header with a NaN south edge: GDAL reports the origin's latitude as NaN.
   GDALAllRegister();
