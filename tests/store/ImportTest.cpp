@@ -782,7 +782,7 @@ TEST(ImportErrors, RowsBeyondAPoleOfAVeryWideRasterAreCheckedInBoundedMemory) {
   // read them in one piece, 4 GB for a header declaring 10^9 columns. A sparse tiled GeoTIFF
   // (nothing written, so every sample is the nodata value) of 2^27 columns whose first row's
   // centre lies beyond the north pole: that row was one read of 512 MiB (the test then fails:
-  // the peak grows by more than 256 MiB); in pieces of 4 MiB it stays far below.
+  // the peak grows by more than 448 MiB); in pieces of 4 MiB it stays far below.
   GDALAllRegister();
   const fs::path p = scratch("wide_beyond_pole.tif");
   constexpr int kCols = 1 << 27, kRows = 3;
@@ -812,9 +812,14 @@ TEST(ImportErrors, RowsBeyondAPoleOfAVeryWideRasterAreCheckedInBoundedMemory) {
   const GridInfo g = describeRaster(p);
   const long grew = peakRssKiB() - before;
   GDALSetCacheMax64(cacheMax);
+  std::cout << "[ measured ] rows beyond a pole, 2^27 columns: peak RSS grew by " << grew
+            << " KiB\n";
   EXPECT_EQ(g.rows, 2U);  // the row beyond the pole, wholly missing, dropped
   EXPECT_EQ(g.cols, static_cast<std::size_t>(kCols));
-  EXPECT_LT(grew, 256L * 1024) << "peak RSS grew by " << grew << " KiB";
+  // The old single read allocated (and zeroed) 512 MiB for that row alone: +705 MB in all.
+  // In pieces the peak grows by GDAL's cache and buffers and a few pieces: about 200 MB in a
+  // Release build, 296 MB under AddressSanitizer (its quarantine keeps freed blocks).
+  EXPECT_LT(grew, 448L * 1024) << "peak RSS grew by " << grew << " KiB";
 }
 
 TEST(ImportErrors, ANonFiniteGeotransformIsRefusedNamingItsTerms) {
