@@ -760,6 +760,20 @@ TEST(ImportErrors, ABlockBeyond256MiBIsRefusedBeforeAnyRead) {
 }
 
 namespace {
+// ThreadSanitizer's shadow memory (several bytes per byte the program touches) is in RSS, so
+// there the peak measures TSan, not the import's allocations (1.1 GB for the same run).
+#if defined(__SANITIZE_THREAD__)
+constexpr bool kRssMeasuresAllocations = false;
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+constexpr bool kRssMeasuresAllocations = false;
+#else
+constexpr bool kRssMeasuresAllocations = true;
+#endif
+#else
+constexpr bool kRssMeasuresAllocations = true;
+#endif
+
 /// The process's peak resident KiB since the last resetPeakRss() (VmHWM).
 long peakRssKiB() {
   std::ifstream f("/proc/self/status");
@@ -819,7 +833,11 @@ TEST(ImportErrors, RowsBeyondAPoleOfAVeryWideRasterAreCheckedInBoundedMemory) {
   // The old single read allocated (and zeroed) 512 MiB for that row alone: +705 MB in all.
   // In pieces the peak grows by GDAL's cache and buffers and a few pieces: about 200 MB in a
   // Release build, 296 MB under AddressSanitizer (its quarantine keeps freed blocks).
-  EXPECT_LT(grew, 448L * 1024) << "peak RSS grew by " << grew << " KiB";
+  // Under TSan (kRssMeasuresAllocations false) the bound is the Release and ASan builds';
+  // the import must still answer.
+  if (kRssMeasuresAllocations) {
+    EXPECT_LT(grew, 448L * 1024) << "peak RSS grew by " << grew << " KiB";
+  }
 }
 
 TEST(ImportErrors, ANonFiniteGeotransformIsRefusedNamingItsTerms) {
