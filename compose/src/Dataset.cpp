@@ -261,13 +261,8 @@ double Dataset::coverageAt(const GridPoint& g, double latDeg) const {
 double Dataset::planetQuality(double latDeg) const {
   const topo::TopoGrid& grid = levels_.front().level.grid;
   const double lat = std::clamp(latDeg, -90.0, 90.0);
-  // On a sphere both radii of curvature are the radius, which is what Body's formulas give
-  // there bit for bit (e² = 0): two sines fewer per dataset and query.
-  const bool sphere = body_.isSphere();
-  const double a = body_.equatorialRadius();
-  const double gx =
-      (sphere ? a : body_.primeVerticalRadius(lat)) * std::cos(lat * kDeg) * grid.spacingX() * kDeg;
-  const double gy = (sphere ? a : body_.meridianRadius(lat)) * grid.spacingY() * kDeg;
+  const double gx = body_.primeVerticalRadius(lat) * std::cos(lat * kDeg) * grid.spacingX() * kDeg;
+  const double gy = body_.meridianRadius(lat) * grid.spacingY() * kDeg;
   return qualityGivenLogN(gx, gy, planetNominal_, logQualityN());
 }
 

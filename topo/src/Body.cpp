@@ -87,12 +87,16 @@ double Body::fromPlanetodetic(double latDeg, LatitudeType type) const noexcept {
   return type == LatitudeType::Planetodetic ? latDeg : planetocentricFromPlanetodetic(latDeg);
 }
 
+// On a sphere (e² = 0) both radii are the radius; the formulas give it bit for bit, and the
+// shortcut saves the sine that per-query callers (planet normals, composition quality) pay.
 double Body::primeVerticalRadius(double latDeg) const noexcept {
+  if (isSphere()) return a_;
   const double s = std::sin(latDeg * kDeg);
   return a_ / std::sqrt(1.0 - e2_ * s * s);
 }
 
 double Body::meridianRadius(double latDeg) const noexcept {
+  if (isSphere()) return a_;
   const double s = std::sin(latDeg * kDeg);
   const double w = 1.0 - e2_ * s * s;
   return a_ * (1.0 - e2_) / (w * std::sqrt(w));

@@ -302,12 +302,8 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp,
       const double sinD = std::sin(latD * kDeg);
       hPhi *= q / (cosD * cosD + q * q * sinD * sinD);  // ∂φc/∂φd
     }
-    // On a sphere both radii of curvature are the radius, which Body's formulas give there
-    // bit for bit (e² = 0): two sines fewer per normal.
-    const bool sphere = body_.isSphere();
-    const double a = body_.equatorialRadius();
-    const double n = sphere ? a : body_.primeVerticalRadius(latD);
-    const double m = sphere ? a : body_.meridianRadius(latD);
+    const double n = body_.primeVerticalRadius(latD);
+    const double m = body_.meridianRadius(latD);
     const double he = cosD > 1e-300 ? hLam / ((n + h) * cosD) : 0.0;
     const double hn = hPhi / (m + h);
     enu = glm::normalize(glm::dvec3(-he, -hn, 1.0));
