@@ -3,7 +3,8 @@
 //   build/bench/compose_bench --benchmark_min_time=0.3
 // - Covering/N: one catalogue point query among N scattered DEMs (O(log N)).
 // - PlainPaged vs Composed/k: a height at random points of a paged planet grid, straight
-//   through TopoPlanet and through the composition with k covering datasets.
+//   through TopoPlanet and through the composition with k covering datasets; PlainEach/k, the
+//   k plain heights at each point that Composed/k reads, without the composition.
 // - ComposedWindow/N: composing one clipmap level window (255 × 255 samples, what a frame's
 //   loader reads when the focus jumps) with the same 5 covering datasets among N registered.
 // - Traverse/plain and Traverse/composed: the rover across a feathered border, on the DEM
@@ -158,6 +159,25 @@ void PlainPaged(benchmark::State& state) {
   }
 }
 BENCHMARK(PlainPaged);
+
+// The plain queries Composed/k makes, without the composition: at each point a height from
+// each of the first k grids in turn, straight through TopoPlanet (so the thread's block
+// changes grid at every query, as in the composition). Composed/k − PlainEach/k is what the
+// composition itself costs.
+void PlainEach(benchmark::State& state) {
+  const auto k = static_cast<std::size_t>(state.range(0));
+  const char* names[] = {"global", "regional1", "regional2"};
+  std::vector<topo::TopoPlanet> planets;
+  for (std::size_t j = 0; j < k; ++j) planets.push_back(paged().pager->planet(names[j]));
+  const Points pts(1 << 16);
+  std::size_t i = 0;
+  for (auto _ : state) {
+    for (const topo::TopoPlanet& p : planets)
+      benchmark::DoNotOptimize(p.height({pts.lat[i], pts.lon[i]}).height);
+    i = (i + 1) & (pts.lat.size() - 1);
+  }
+}
+BENCHMARK(PlainEach)->Arg(1)->Arg(2)->Arg(3);
 
 void Composed(benchmark::State& state) {
   const auto k = static_cast<std::size_t>(state.range(0));

@@ -143,7 +143,10 @@ std::vector<std::uint32_t> Snapshot::cellList(int latCell, int lonCell, Role rol
 std::span<const std::uint32_t> Snapshot::cellCandidates(double latDeg, double lonDeg,
                                                         Role role) const {
   if (nodes_.empty() || !std::isfinite(latDeg) || !std::isfinite(lonDeg)) return {};
-  const double lon = lonDeg - 360.0 * std::floor((lonDeg + 180.0) / 360.0);  // [-180, 180)
+  // [-180, 180): most points are there already (and a division is a tenth of the look-up).
+  const double lon = lonDeg >= -180.0 && lonDeg < 180.0
+                         ? lonDeg
+                         : lonDeg - 360.0 * std::floor((lonDeg + 180.0) / 360.0);
   const int latCell = std::clamp(static_cast<int>(std::floor(latDeg + 90.0)), 0, kLatCells - 1);
   const int lonCell = std::clamp(static_cast<int>(std::floor(lon + 180.0)), 0, kLonCells - 1);
   std::atomic<CellTable*>& slot = cells_[static_cast<std::size_t>(role) % kRoles];

@@ -25,13 +25,15 @@ struct Member {
   double spacing = 0.0;
   int priority = 0;
   int tier = 0;
+  bool qualityPending = false;        // c.quality not evaluated yet (see evaluateAll)
   glm::dvec2 gradC{0.0}, gradQ{0.0};  // ∂/∂east, ∂/∂north of coverage and quality
 };
 
 /// Per-thread scratch, so a query allocates nothing once warm.
 struct Scratch {
   std::vector<std::uint32_t> candidates;
-  std::vector<Member> members;
+  std::vector<Member> members;       // in candidate order, each built in place
+  std::vector<std::uint32_t> order;  // members' indices, sorted into tiers
   std::vector<std::pair<std::size_t, std::size_t>> tiers;  // [begin, end) of members, bottom-up
   std::vector<double> alphas;                              // each tier's α
 };
@@ -132,24 +134,35 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
   ComposedSample out;
   bool sawNodata = false, sawUnmappable = false, sawOutside = false;
   double finest = std::numeric_limits<double>::infinity();
-  // Several candidates will most likely give several members, whose weights need each one's
-  // quality: evaluate() then finds it from the point it located (quality() locates again).
-  bool qualityKnown = false;
+  // Several candidates will most likely give several members, whose weights may need each
+  // one's quality: evaluate() then finds it from the point it located (quality() locates
+  // again, through the placement's projection for a DEM). A planet grid's quality needs no
+  // location (only the latitude) and costs a cosine and two logarithms, so for a height it
+  // waits until the tiers show whether the member shares a tier (below).
+  const bool eagerPlanetQuality = wantNormal || shares != nullptr;
   const auto evaluateAll = [&](std::span<const std::uint32_t> candidates) {
-    qualityKnown = candidates.size() > 1;
     for (const std::uint32_t e : candidates) {
       const Dataset& d = *entries[e].dataset;
+      const bool quality = candidates.size() > 1 && (eagerPlanetQuality || !d.isPlanet());
       const std::size_t level = metres > 0.0 ? d.levelFor(metres) : 0;
-      Contribution c = d.evaluate(latDeg, lonDeg, level, wantNormal, qualityKnown);
-      if (c.status != QueryStatus::Ok) {
+      // Written in place, field by field: a Member built on the stack and copied in was read
+      // back in wider pieces than it was written, a store-forwarding stall per piece (a
+      // third of a two-dataset composition's time).
+      Member& m = s.members.emplace_back();
+      const Contribution& c = m.c;
+      d.evaluateInto(latDeg, lonDeg, level, wantNormal, quality, m.c);
+      if (c.status != QueryStatus::Ok || !(c.coverage > 0.0)) {
         sawNodata |= c.status == QueryStatus::Nodata;
         sawUnmappable |= c.status == QueryStatus::Unmappable;
         sawOutside |= c.status == QueryStatus::OutsideGrid;
+        s.members.pop_back();
         continue;
       }
-      if (!(c.coverage > 0.0)) continue;
-      finest = std::min(finest, d.groundSpacing());
-      s.members.push_back({e, c, 1.0, d.groundSpacing(), d.options().priority, 0, {}, {}});
+      m.entry = e;
+      m.qualityPending = !quality;
+      m.spacing = d.groundSpacing();
+      m.priority = d.options().priority;
+      finest = std::min(finest, m.spacing);
     }
   };
   const auto exactCandidates = [&]() -> std::span<const std::uint32_t> {
@@ -179,32 +192,39 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
   }
   // Weights matter only between several contributors (or to report shares): one alone is
   // the surface, and its quality costs as much as its height.
-  if (s.members.size() > 1 || shares != nullptr) {
+  const bool weighted = s.members.size() > 1 || shares != nullptr;
+  if (weighted) {
     for (Member& m : s.members) {
       const double ratio = finest / m.spacing;
       m.resolution =
           rules_.resolutionPower == 2.0 ? ratio * ratio : std::pow(ratio, rules_.resolutionPower);
-      if (!qualityKnown) m.c.quality = entries[m.entry].dataset->quality(latDeg, lonDeg);
     }
   } else {
     s.members.front().c.quality = 1.0;  // any positive weight: it is the only one
+    s.members.front().qualityPending = false;
   }
   // Tiers: higher priority first, then finer resolution classes first. A class holds the
   // datasets whose spacing is within rules_.tierRatio of its finest (FinestWins: equal
   // spacings only), so similar data blend by weight and much finer data composite over
   // coarser with their coverage as alpha (docs/composition.md "Tiers").
   const double ratio = rules_.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules_.tierRatio;
+  // The members in tier order, through their indices (moving Members would copy them).
+  s.order.resize(s.members.size());
+  for (std::size_t i = 0; i < s.order.size(); ++i) s.order[i] = static_cast<std::uint32_t>(i);
+  const auto member = [&s](std::size_t i) -> Member& { return s.members[s.order[i]]; };
   if (s.members.size() > 1) {
-    std::sort(s.members.begin(), s.members.end(), [](const Member& a, const Member& b) {
+    std::sort(s.order.begin(), s.order.end(), [&s](std::uint32_t ia, std::uint32_t ib) {
+      const Member& a = s.members[ia];
+      const Member& b = s.members[ib];
       if (a.priority != b.priority) return a.priority > b.priority;
       if (a.spacing != b.spacing) return a.spacing < b.spacing;
       return a.entry < b.entry;
     });
     int tier = 0;
-    double tierFinest = s.members.front().spacing;
+    double tierFinest = member(0).spacing;
     for (std::size_t i = 1; i < s.members.size(); ++i) {
-      Member& m = s.members[i];
-      if (m.priority != s.members[i - 1].priority || m.spacing > tierFinest * ratio) {
+      Member& m = member(i);
+      if (m.priority != member(i - 1).priority || m.spacing > tierFinest * ratio) {
         ++tier;
         tierFinest = m.spacing;
       }
@@ -212,6 +232,21 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
     }
   }
   auto sameTier = [](const Member& a, const Member& b) { return a.tier == b.tier; };
+  if (weighted) {
+    // The qualities not evaluated yet. A member alone in its tier is the tier's height
+    // exactly, whatever its weight (its w·h/w is never formed), so for a height any positive
+    // quality gives the same bits; its normal (w·slope/w) and the shares use the quality.
+    for (std::size_t i = 0; i < s.order.size(); ++i) {
+      Member& m = member(i);
+      if (!m.qualityPending) continue;
+      const bool alone = (i == 0 || !sameTier(member(i - 1), m)) &&
+                         (i + 1 == s.order.size() || !sameTier(member(i + 1), m));
+      m.c.quality = alone && !wantNormal && shares == nullptr
+                        ? 1.0
+                        : entries[m.entry].dataset->quality(latDeg, lonDeg);
+      m.qualityPending = false;
+    }
+  }
 
   const bool several = s.members.size() > 1;
   if (wantNormal && several) {
@@ -252,22 +287,22 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
   alphas.clear();
   while (end > 0) {
     std::size_t begin = end - 1;
-    while (begin > 0 && sameTier(s.members[begin - 1], s.members[end - 1])) --begin;
+    while (begin > 0 && sameTier(member(begin - 1), member(end - 1))) --begin;
     double sumW = 0.0, sumWH = 0.0, keep = 1.0;
     for (std::size_t i = begin; i < end; ++i) {
-      const Member& m = s.members[i];
+      const Member& m = member(i);
       const double w = m.c.coverage * m.c.quality * m.resolution;
       sumW += w;
       sumWH += w * m.c.height;
       keep *= 1.0 - m.c.coverage;
     }
     // A tier of one keeps its member's height exactly (w·h/w may round).
-    const double ht = end - begin == 1 ? s.members[begin].c.height : sumWH / sumW;
+    const double ht = end - begin == 1 ? member(begin).c.height : sumWH / sumW;
     const double alpha = bottom ? 1.0 : 1.0 - keep;
     glm::dvec2 gradHt(0.0), gradAlpha(0.0);
     if (wantNormal) {
       for (std::size_t i = begin; i < end; ++i) {
-        const Member& m = s.members[i];
+        const Member& m = member(i);
         if (m.c.normalStatus != QueryStatus::Ok) {
           if (normalOk) badNormal = m.c.normalStatus;
           normalOk = false;
@@ -281,7 +316,7 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
           if (!bottom) {
             double others = 1.0;
             for (std::size_t j = begin; j < end; ++j) {
-              if (j != i) others *= 1.0 - s.members[j].c.coverage;
+              if (j != i) others *= 1.0 - member(j).c.coverage;
             }
             gradAlpha += others * m.gradC;
           }
@@ -310,7 +345,7 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
     for (std::size_t t = tiers.size(); t-- > 0;) {
       if (above > 0.0) {
         for (std::size_t i = tiers[t].first; i < tiers[t].second; ++i) {
-          const Member& m = s.members[i];
+          const Member& m = member(i);
           n += m.c.coverage * m.c.quality * m.resolution > 0.0 && alphas[t] > 0.0 ? 1U : 0U;
         }
       }
@@ -334,11 +369,11 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
       const auto [begin, tierEnd] = tiers[t];
       double sumW = 0.0;
       for (std::size_t i = begin; i < tierEnd; ++i) {
-        const Member& m = s.members[i];
+        const Member& m = member(i);
         sumW += m.c.coverage * m.c.quality * m.resolution;
       }
       for (std::size_t i = begin; i < tierEnd; ++i) {
-        const Member& m = s.members[i];
+        const Member& m = member(i);
         const double w = m.c.coverage * m.c.quality * m.resolution;
         shares->push_back({entries[m.entry].id, m.c.height, m.c.coverage, m.c.quality,
                            above * alphas[t] * w / sumW});

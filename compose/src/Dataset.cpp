@@ -392,12 +392,19 @@ double Dataset::quality(double latDeg, double lonDeg) const {
 Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, bool wantSlope,
                                bool wantQuality) const {
   Contribution out;
+  evaluateInto(latDeg, lonDeg, level, wantSlope, wantQuality, out);
+  return out;
+}
+
+void Dataset::evaluateInto(double latDeg, double lonDeg, std::size_t level, bool wantSlope,
+                           bool wantQuality, Contribution& out) const {
+  out = Contribution{};
   const GridPoint g = locate(latDeg, lonDeg);
   if (!g.mapped) {
     out.status = out.normalStatus = topo::QueryStatus::Unmappable;
-    return out;
+    return;
   }
-  if (!g.inside) return out;
+  if (!g.inside) return;
   const Level& lv = levels_[std::min(level, levels_.size() - 1)];
   const auto bilinear = topo::Interpolation::Bilinear;
   const auto bodyFixed = topo::NormalFrame::BodyFixed;
@@ -452,7 +459,7 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, 
     }
   }
   out.status = s.status;
-  if (!s.valid()) return out;
+  if (!s.valid()) return;
   // The tangent plane's iteration has applied the offset already.
   out.height = placement_ && placement_->localTangentPlane() != nullptr
                    ? s.height
@@ -474,7 +481,6 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, 
       }
     }
   }
-  return out;
 }
 
 }  // namespace regolith::compose

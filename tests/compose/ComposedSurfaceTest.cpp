@@ -79,17 +79,26 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
   // from it (ComposedSurface.cpp); surface() always takes the general path. Same statuses,
   // contributor counts and height bits, on one dataset, on the global grid beside a feathered
   // regional one (cells with one and with two candidates), on the regional grid's own cells and
-  // outside every grid.
+  // outside every grid. height() also leaves a planet grid's quality unevaluated where the
+  // grid is alone in its tier (surface() evaluates every one): the third catalogue adds a
+  // much finer feathered grid, a tier of its own over the tier of the other two.
   TwoPlanets t([](double lat, double lon) { return 100.0 + 3.0 * lat - 0.7 * lon; },
                [](double lat, double lon) { return 250.0 - 2.0 * lat + 1.3 * lon; }, 60e3);
+  TwoPlanets three([](double lat, double lon) { return 100.0 + 3.0 * lat - 0.7 * lon; },
+                   [](double lat, double lon) { return 250.0 - 2.0 * lat + 1.3 * lon; }, 60e3);
+  three.catalogue.add(
+      Dataset::planet(planetPyramid(kMoon, 4.95, -4.95, 0.1, 100, 100,
+                                    [](double lat, double lon) { return 180.0 + lat * lon; }),
+                      named("fine", 40e3)));
   Catalogue only(kMoon);
   only.add(Dataset::planet(
       planetPyramid(kMoon, 9.75, -9.75, 0.5, 40, 40, [](double lat, double) { return 10.0 * lat; }),
       named("only")));
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> lat(-30.0, 30.0), lon(-40.0, 40.0);
-  std::size_t single = 0, several = 0;
-  for (const auto& snapshot : {t.catalogue.snapshot(), only.snapshot()}) {
+  std::size_t single = 0, several = 0, threeTiers = 0;
+  for (const auto& snapshot :
+       {t.catalogue.snapshot(), only.snapshot(), three.catalogue.snapshot()}) {
     const ComposedSurface s(snapshot, Rules{Policy::Weighted, 2.0});
     for (int i = 0; i < 3000; ++i) {
       const double la = lat(rng), lo = lon(rng);
@@ -108,10 +117,12 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
       ASSERT_EQ(std::bit_cast<std::uint64_t>(hb), std::bit_cast<std::uint64_t>(g.height));
       ASSERT_EQ(cb, g.contributors) << la << ", " << lo;
       ++(snapshot->cellCandidates(la, lo).size() == 1 ? single : several);
+      threeTiers += g.contributors == 3 ? 1U : 0U;
     }
   }
   EXPECT_GT(single, 1000U);
   EXPECT_GT(several, 100U);
+  EXPECT_GT(threeTiers, 10U);  // points in the fine grid's feather, where all three blend
 }
 
 TEST(ComposedSurface, WeightedBlendFollowsResolutionAndQuality) {

@@ -137,6 +137,12 @@ class Dataset {
   /// weight, and the quality costs as much as the height.
   [[nodiscard]] Contribution evaluate(double latDeg, double lonDeg, std::size_t level = 0,
                                       bool wantSlope = false, bool wantQuality = true) const;
+  /// evaluate() written into `out`, for callers that keep contributions in their own storage:
+  /// a Contribution returned and then copied is read back in wider pieces than it was
+  /// written, which the processor cannot forward from its store buffer (a stall of some
+  /// ten cycles per piece on the composition's path).
+  void evaluateInto(double latDeg, double lonDeg, std::size_t level, bool wantSlope,
+                    bool wantQuality, Contribution& out) const;
   /// The projection quality alone at a point of the pixel extent (kMinQuality outside it).
   [[nodiscard]] double quality(double latDeg, double lonDeg) const;
   /// Coverage and quality only (no height read): the weight's spatial terms {c, q}, for
