@@ -160,6 +160,19 @@ void PlainPaged(benchmark::State& state) {
 }
 BENCHMARK(PlainPaged);
 
+// regional1 alone (0.01°, 1000², random points over all of it): PlainEach/2 − PlainPaged −
+// PlainRegional is what alternating between two grids costs the plain queries.
+void PlainRegional(benchmark::State& state) {
+  const topo::TopoPlanet planet = paged().pager->planet("regional1");
+  const Points pts(1 << 16);
+  std::size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(planet.height({pts.lat[i], pts.lon[i]}).height);
+    i = (i + 1) & (pts.lat.size() - 1);
+  }
+}
+BENCHMARK(PlainRegional);
+
 // The plain queries Composed/k makes, without the composition: at each point a height from
 // each of the first k grids in turn, straight through TopoPlanet (so the thread's block
 // changes grid at every query, as in the composition). Composed/k − PlainEach/k is what the

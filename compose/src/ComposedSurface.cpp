@@ -19,6 +19,9 @@ namespace {
 using topo::QueryStatus;
 
 struct Member {
+  // A user-provided constructor: a value-initialised Member (emplace_back()) is zero-filled
+  // first, by a `rep stos` that cost a tenth of a two-dataset composition.
+  explicit Member(std::uint32_t e) noexcept : entry(e) {}
   std::uint32_t entry = 0;
   Contribution c;
   double resolution = 1.0;  // (finest spacing / spacing)^p
@@ -141,6 +144,11 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
   // waits until the tiers show whether the member shares a tier (below).
   const bool eagerPlanetQuality = wantNormal || shares != nullptr;
   const auto evaluateAll = [&](std::span<const std::uint32_t> candidates) {
+    // The first candidate's memory miss overlaps those of the others, fetched meanwhile.
+    for (std::size_t i = 1; i < candidates.size(); ++i) {
+      const Dataset& d = *entries[candidates[i]].dataset;
+      d.prefetch(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0);
+    }
     for (const std::uint32_t e : candidates) {
       const Dataset& d = *entries[e].dataset;
       const bool quality = candidates.size() > 1 && (eagerPlanetQuality || !d.isPlanet());
@@ -148,7 +156,7 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
       // Written in place, field by field: a Member built on the stack and copied in was read
       // back in wider pieces than it was written, a store-forwarding stall per piece (a
       // third of a two-dataset composition's time).
-      Member& m = s.members.emplace_back();
+      Member& m = s.members.emplace_back(e);
       const Contribution& c = m.c;
       d.evaluateInto(latDeg, lonDeg, level, wantNormal, quality, m.c);
       if (c.status != QueryStatus::Ok || !(c.coverage > 0.0)) {
@@ -158,7 +166,6 @@ ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double met
         s.members.pop_back();
         continue;
       }
-      m.entry = e;
       m.qualityPending = !quality;
       m.spacing = d.groundSpacing();
       m.priority = d.options().priority;

@@ -389,6 +389,12 @@ double Dataset::quality(double latDeg, double lonDeg) const {
   return isPlanet() ? planetQuality(latDeg) : qualityAt(g);
 }
 
+void Dataset::prefetch(double latDeg, double lonDeg, std::size_t level) const noexcept {
+  if (!isPlanet()) return;
+  const GridPoint g = locate(latDeg, lonDeg);
+  if (g.inside) levels_[std::min(level, levels_.size() - 1)].planet->prefetch({g.y, g.x});
+}
+
 Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, bool wantSlope,
                                bool wantQuality) const {
   Contribution out;

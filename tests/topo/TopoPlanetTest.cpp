@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <random>
@@ -214,6 +215,59 @@ bool sameBits(const glm::dvec3& a, const glm::dvec3& b) {
   return sameBits(a.x, b.x) && sameBits(a.y, b.y) && sameBits(a.z, b.z);
 }
 }  // namespace
+
+TEST(TopoPlanet, PrefetchIsAHintThatTakesAnyPointAndChangesNoAnswer) {
+  // prefetch() (a composition overlaps its datasets' memory misses with it) on a resident and
+  // a block-paged global grid and a regional one, for points inside, on the seam, in the caps,
+  // beyond the extent and not numbers at all: no error, and every height after it is the one
+  // before it, bit for bit.
+  const double d = 2.0;
+  const std::size_t rows = 90, cols = 180;
+  const TopoGrid g(rows, cols, -180.0 + d / 2, 90.0 - d / 2, d, d);
+  const TopoGrid regional(20, 30, 10.0, 20.0, 0.5, 0.5);
+  auto samples = [](const TopoGrid& grid) {
+    std::vector<float> s(grid.rows() * grid.cols());
+    for (std::size_t r = 0; r < grid.rows(); ++r) {
+      for (std::size_t c = 0; c < grid.cols(); ++c) {
+        const glm::dvec2 p = grid.sampleCentre(double(r), double(c));
+        s[r * grid.cols() + c] = float(field(p.y, p.x));
+      }
+    }
+    return s;
+  };
+  const Body body = Body::marsSphere();
+  const auto lt = LatitudeType::Planetodetic;
+  const TopoPlanet resident(g, body, lt, std::make_shared<InMemorySamples>(rows, cols, samples(g)));
+  const TopoPlanet blocks(g, body, lt, std::make_shared<test::BlockSource>(rows, cols, samples(g)));
+  const TopoPlanet part(regional, body, lt,
+                        std::make_shared<InMemorySamples>(20, 30, samples(regional)));
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<LatLon> pts = {{0.0, 0.0},     {89.9, 10.0},  {-90.0, 0.0},  {90.0, 180.0},
+                             {12.0, -179.9}, {12.0, 179.9}, {15.0, 25.0},  {-60.0, 1e308},
+                             {0.0, -1e308},  {90.5, 0.0},   {-1e300, 0.0}, {nan, 0.0},
+                             {0.0, nan},     {inf, 0.0},    {0.0, -inf},   {5.0, 720.0}};
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> lat(-90.0, 90.0), lon(-540.0, 540.0);
+  for (int i = 0; i < 500; ++i) pts.push_back({lat(rng), lon(rng)});
+  for (const TopoPlanet* t : {&resident, &blocks, &part}) {
+    std::vector<HeightSample> before;
+    for (const LatLon& p : pts) {
+      const bool valid =
+          std::isfinite(p.latDeg) && std::isfinite(p.lonDeg) && std::abs(p.latDeg) <= 90.0;
+      before.push_back(valid ? t->height(p) : HeightSample{});
+    }
+    for (const LatLon& p : pts) t->prefetch(p);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      if (!(std::isfinite(pts[i].latDeg) && std::isfinite(pts[i].lonDeg) &&
+            std::abs(pts[i].latDeg) <= 90.0))
+        continue;
+      const HeightSample h = t->height(pts[i]);
+      ASSERT_EQ(h.status, before[i].status) << pts[i].latDeg << ", " << pts[i].lonDeg;
+      ASSERT_TRUE(sameBits(h.height, before[i].height)) << pts[i].latDeg << ", " << pts[i].lonDeg;
+    }
+  }
+}
 
 TEST(TopoPlanet, BilinearFastPathsGiveTheGenericKernelsBits) {
   // One global 2°-grid with a nodata hole, read three ways: resident (the resident fast

@@ -215,6 +215,25 @@ bool TopoPlanet::bilinearFast(double u, double v, bool grad, detail::KernelResul
   return true;
 }
 
+void TopoPlanet::prefetch(const LatLon& given) const noexcept {
+  if (!std::isfinite(given.latDeg) || !std::isfinite(given.lonDeg) || std::abs(given.latDeg) > 90.0)
+    return;
+  const LatLon ll{given.latDeg,
+                  std::abs(given.lonDeg) > 360.0 ? wrapLongitude180(given.lonDeg) : given.lonDeg};
+  const Located L = locate(ll);
+  if (!L.inside || L.cap != 0) return;
+  // locate() keeps u and v within the sample centres (u < cols for a global grid).
+  const auto r = static_cast<std::size_t>(L.v), c = static_cast<std::size_t>(L.u);
+  if (r >= grid_.rows() || c >= grid_.cols()) return;
+  if (resident_ != nullptr) {
+    const float* p = resident_ + r * grid_.cols() + c;
+    __builtin_prefetch(p);
+    if (r + 1 < grid_.rows()) __builtin_prefetch(p + grid_.cols());
+  } else if (table_ != nullptr) {
+    table_->prefetchCell(r, c);
+  }
+}
+
 SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp, NormalFrame frame,
                                       bool wantNormal) const {
   // Longitudes beyond a turn are reduced exactly first (wrapLongitude180), so that 1e308 is

@@ -143,6 +143,11 @@ class Dataset {
   /// ten cycles per piece on the composition's path).
   void evaluateInto(double latDeg, double lonDeg, std::size_t level, bool wantSlope,
                     bool wantQuality, Contribution& out) const;
+  /// Asks the processor to fetch the samples evaluate() would read at a point of level
+  /// `level` into its cache (topo::TopoPlanet::prefetch()): a hint, never failing, so that a
+  /// composition overlaps the memory misses of its datasets. Planet grids only (a DEM's
+  /// placement costs a projection to locate the point, more than the miss it would hide).
+  void prefetch(double latDeg, double lonDeg, std::size_t level = 0) const noexcept;
   /// The projection quality alone at a point of the pixel extent (kMinQuality outside it).
   [[nodiscard]] double quality(double latDeg, double lonDeg) const;
   /// Coverage and quality only (no height read): the weight's spatial terms {c, q}, for

@@ -72,6 +72,13 @@ class TopoPlanet {
                                       Interpolation interp = Interpolation::Bilinear,
                                       NormalFrame frame = NormalFrame::Grid) const;
 
+  /// Asks the processor to fetch the samples of the bilinear cell holding a point into its
+  /// cache, if they are in memory (resident, or a published block of a paged source): a hint
+  /// that reads no sample and never fails, so that a caller about to read several grids at
+  /// one point (a composition) overlaps their memory misses. Any point is accepted; one the
+  /// grid does not hold, or a pole cap's, is ignored.
+  void prefetch(const LatLon& ll) const noexcept;
+
   /// Batch heights; spans of equal length (status may be empty).
   void heights(std::span<const double> latsDeg, std::span<const double> lonsDeg,
                std::span<double> out, std::span<QueryStatus> status,
