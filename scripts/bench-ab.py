@@ -87,8 +87,9 @@ def main() -> int:
         med = {n: statistics.median(times[bench][n]) for n, _ in builds if n in times[bench]}
         line = f"{bench:52s} {units[bench]:4s}" + "".join(
             f" {med.get(n, float('nan')):10.2f}" for n, _ in builds)
-        line += "".join(f" {med.get(n, float('nan')) / med[first]:12.3f}"
-                        for n, _ in builds[1:])
+        # A benchmark one build lacks (added since) has its times and no ratio.
+        base = med.get(first, float("nan"))
+        line += "".join(f" {med.get(n, float('nan')) / base:12.3f}" for n, _ in builds[1:])
         print(line)
     print(f"(median of {args.rounds} alternated rounds; real time)")
     return 0
