@@ -17,6 +17,10 @@
 //                              the same points: the baseline for dem/heights_batch/bilinear
 //   planet/height, planet/heights_batch   TopoPlanet on a 1440x720 global grid (MOLA MEGDR
 //                                         size, 0.25 deg)
+//   planet/surfaces_batch      heights and body-fixed normals, bilinear, on that sphere
+//   planet_ellipsoid/heights_batch, planet_ellipsoid/surfaces_batch   the same samples on
+//                              Body::marsEllipsoid(), planetocentric (the latitude conversion
+//                              and both radii of curvature per normal): surfaces / heights
 
 #include <regolith/topo/Body.hpp>
 #include <regolith/topo/Placement.hpp>
@@ -119,6 +123,7 @@ struct DemFixture {
 
 struct PlanetFixture {
   TopoPlanet planet;
+  TopoPlanet ellipsoid;  // the same samples on Body::marsEllipsoid()
   Points rover, random;  // xs = latitude (deg), ys = longitude (deg)
 };
 
@@ -160,6 +165,7 @@ PlanetFixture makePlanetFixture() {
       });
   const Body mars = Body::marsSphere();
   TopoPlanet planet(grid, mars, LatitudeType::Planetocentric, samples);
+  TopoPlanet ellipsoid(grid, Body::marsEllipsoid(), LatitudeType::Planetocentric, samples);
 
   const double radius = mars.equatorialRadius();
   double lat = 18.4, lon = 77.5;
@@ -169,7 +175,7 @@ PlanetFixture makePlanetFixture() {
     return std::pair{lat, lon};
   });
   Points random = uniformPoints(kRandomPoints, -90.0, 90.0, -180.0, 180.0, 67890);
-  return {std::move(planet), std::move(rover), std::move(random)};
+  return {std::move(planet), std::move(ellipsoid), std::move(rover), std::move(random)};
 }
 
 // Walks the point list kChunk points per iteration and reports per-query figures.
@@ -304,6 +310,18 @@ void planetHeightsBatch(benchmark::State& state, const PlanetFixture* f, const P
   });
 }
 
+void planetSurfacesBatch(benchmark::State& state, const TopoPlanet* planet, const Points* pts) {
+  std::vector<double> h(kChunk);
+  std::vector<glm::dvec3> n(kChunk);
+  runChunks(state, *pts, [&](std::size_t off) {
+    planet->surfaces(std::span(pts->xs).subspan(off, kChunk),
+                     std::span(pts->ys).subspan(off, kChunk), h, n, {}, Interpolation::Bilinear,
+                     NormalFrame::BodyFixed);
+    benchmark::DoNotOptimize(n.data());
+    benchmark::ClobberMemory();
+  });
+}
+
 struct Kernel {
   const char* name;
   Interpolation interp;
@@ -349,6 +367,21 @@ void registerAll(const DemFixture& dem, const PlanetFixture& planet) {
       reg("planet/height" + ks, planetHeight, &planet, s.planet, k.interp);
       reg("planet/heights_batch" + ks, planetHeightsBatch, &planet, s.planet, k.interp);
     }
+    reg("planet/surfaces_batch/bilinear" + suffix, planetSurfacesBatch, &planet.planet, s.planet);
+    reg(
+        "planet_ellipsoid/heights_batch/bilinear" + suffix,
+        [](benchmark::State& st, const TopoPlanet* p, const Points* pts) {
+          std::vector<double> out(kChunk);
+          runChunks(st, *pts, [&](std::size_t off) {
+            p->heights(std::span(pts->xs).subspan(off, kChunk),
+                       std::span(pts->ys).subspan(off, kChunk), out, {}, Interpolation::Bilinear);
+            benchmark::DoNotOptimize(out.data());
+            benchmark::ClobberMemory();
+          });
+        },
+        &planet.ellipsoid, s.planet);
+    reg("planet_ellipsoid/surfaces_batch/bilinear" + suffix, planetSurfacesBatch, &planet.ellipsoid,
+        s.planet);
   }
 }
 

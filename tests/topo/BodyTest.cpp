@@ -655,3 +655,25 @@ TEST(Body, OnASphereBothRadiiOfCurvatureAreTheRadiusExactly) {
   }
   EXPECT_FALSE(Body::marsEllipsoid().isSphere());
 }
+
+TEST(Body, RadiiAndFrameFromTheLatitudesSineGiveThePerLatitudeFunctionsBits) {
+  // radiiOfCurvature() and enuFrameOf() take the sine (and cosine) a per-query normal has
+  // already computed (TopoPlanet): given those of latDeg·π/180, the same bits as
+  // meridianRadius(), primeVerticalRadius() and enuFrame().
+  const double deg = std::numbers::pi / 180.0;
+  for (const Body& b : {Body::marsEllipsoid(), Body::earthWgs84(), Body::marsSphere(),
+                        Body::ellipsoid("flat", 1000.0, 300.0)}) {
+    for (double lat = -90.0; lat <= 90.0; lat += 0.173) {
+      for (const double l : {lat, -90.0, 90.0, 0.0, 1e-300}) {
+        const double s = std::sin(l * deg), c = std::cos(l * deg);
+        const Body::Radii r = b.radiiOfCurvature(s);
+        EXPECT_EQ(r.meridian, b.meridianRadius(l)) << b.name() << " " << l;
+        EXPECT_EQ(r.primeVertical, b.primeVerticalRadius(l)) << b.name() << " " << l;
+        for (const double lon : {-180.0, -33.3, 0.0, 77.5, 180.0}) {
+          const glm::dmat3 f = Body::enuFrameOf(s, c, lon), g = b.enuFrame(l, lon);
+          for (int k = 0; k < 3; ++k) EXPECT_EQ(f[k], g[k]) << b.name() << " " << l << " " << lon;
+        }
+      }
+    }
+  }
+}

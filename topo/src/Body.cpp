@@ -91,15 +91,19 @@ double Body::fromPlanetodetic(double latDeg, LatitudeType type) const noexcept {
 // shortcut saves the sine that per-query callers (planet normals, composition quality) pay.
 double Body::primeVerticalRadius(double latDeg) const noexcept {
   if (isSphere()) return a_;
-  const double s = std::sin(latDeg * kDeg);
-  return a_ / std::sqrt(1.0 - e2_ * s * s);
+  return radiiOfCurvature(std::sin(latDeg * kDeg)).primeVertical;
 }
 
 double Body::meridianRadius(double latDeg) const noexcept {
   if (isSphere()) return a_;
-  const double s = std::sin(latDeg * kDeg);
-  const double w = 1.0 - e2_ * s * s;
-  return a_ * (1.0 - e2_) / (w * std::sqrt(w));
+  return radiiOfCurvature(std::sin(latDeg * kDeg)).meridian;
+}
+
+Body::Radii Body::radiiOfCurvature(double sinLat) const noexcept {
+  if (isSphere()) return {a_, a_};
+  const double w = 1.0 - e2_ * sinLat * sinLat;
+  const double root = std::sqrt(w);
+  return {a_ * (1.0 - e2_) / (w * root), a_ / root};
 }
 
 glm::dvec3 Body::toBodyFixed(const Geodetic& g) const noexcept {
@@ -139,8 +143,13 @@ Geodetic Body::toGeodetic(const glm::dvec3& p) const noexcept {
 }
 
 glm::dmat3 Body::enuFrame(double latDeg, double lonDeg) const noexcept {
-  const double phi = latDeg * kDeg, lam = lonDeg * kDeg;
-  const double sp = std::sin(phi), cp = std::cos(phi), sl = std::sin(lam), cl = std::cos(lam);
+  const double phi = latDeg * kDeg;
+  return enuFrameOf(std::sin(phi), std::cos(phi), lonDeg);
+}
+
+glm::dmat3 Body::enuFrameOf(double sp, double cp, double lonDeg) noexcept {
+  const double lam = lonDeg * kDeg;
+  const double sl = std::sin(lam), cl = std::cos(lam);
   const glm::dvec3 east(-sl, cl, 0.0);
   const glm::dvec3 north(-sp * cl, -sp * sl, cp);
   const glm::dvec3 up(cp * cl, cp * sl, sp);

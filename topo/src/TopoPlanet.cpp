@@ -305,7 +305,9 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp,
   if (!wantNormal) return s;
 
   const double latD = body_.toPlanetodetic(ll.latDeg, latType_);
-  const double cosD = std::cos(latD * kDeg);
+  // One sine and cosine of the latitude (the compiler makes them one sincos call) serve the
+  // latitude conversion's derivative, both radii of curvature and the body-fixed frame.
+  const double sinD = std::sin(latD * kDeg), cosD = std::cos(latD * kDeg);
   glm::dvec3 enu;
   if (analytic && (cosD > 1e-9 || hermiteCap)) {
     s.normalStatus = k.gradStatus;
@@ -318,13 +320,11 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp,
     if (latType_ == LatitudeType::Planetocentric && !body_.isSphere()) {
       const double q = (body_.polarRadius() / body_.equatorialRadius()) *
                        (body_.polarRadius() / body_.equatorialRadius());
-      const double sinD = std::sin(latD * kDeg);
       hPhi *= q / (cosD * cosD + q * q * sinD * sinD);  // ∂φc/∂φd
     }
-    const double n = body_.primeVerticalRadius(latD);
-    const double m = body_.meridianRadius(latD);
-    const double he = cosD > 1e-300 ? hLam / ((n + h) * cosD) : 0.0;
-    const double hn = hPhi / (m + h);
+    const Body::Radii radii = body_.radiiOfCurvature(sinD);
+    const double he = cosD > 1e-300 ? hLam / ((radii.primeVertical + h) * cosD) : 0.0;
+    const double hn = hPhi / (radii.meridian + h);
     enu = glm::normalize(glm::dvec3(-he, -hn, 1.0));
   } else {
     enu = capNormalEnu(ll, interp, h);
@@ -335,7 +335,7 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp,
     }
     s.normalStatus = QueryStatus::Ok;
   }
-  s.normal = frame == NormalFrame::Grid ? enu : body_.enuFrame(latD, ll.lonDeg) * enu;
+  s.normal = frame == NormalFrame::Grid ? enu : Body::enuFrameOf(sinD, cosD, ll.lonDeg) * enu;
   return s;
 }
 

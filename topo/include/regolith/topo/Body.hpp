@@ -82,11 +82,21 @@ class Body {
   /// east, north and up (surface normal) vectors in body-fixed coordinates. Defined at the
   /// poles too, where east is the direction of increasing longitude at lonDeg.
   [[nodiscard]] glm::dmat3 enuFrame(double latDeg, double lonDeg) const noexcept;
+  /// enuFrame() given the sine and cosine of the planetodetic latitude (of latDeg·π/180, for
+  /// the same bits), for callers that have them already: a per-query normal needs them for
+  /// its radii of curvature too.
+  [[nodiscard]] static glm::dmat3 enuFrameOf(double sinLat, double cosLat, double lonDeg) noexcept;
 
   /// Meridian radius of curvature M at a planetodetic latitude (metres).
   [[nodiscard]] double meridianRadius(double latDeg) const noexcept;
   /// Prime-vertical radius of curvature N at a planetodetic latitude (metres).
   [[nodiscard]] double primeVerticalRadius(double latDeg) const noexcept;
+  /// Both radii of curvature (metres) given the sine of the planetodetic latitude (of
+  /// latDeg·π/180: then the same bits as meridianRadius() and primeVerticalRadius()).
+  struct Radii {
+    double meridian = 0.0, primeVertical = 0.0;
+  };
+  [[nodiscard]] Radii radiiOfCurvature(double sinLat) const noexcept;
 
  private:
   Body(std::string name, double a, double b);
