@@ -149,8 +149,9 @@ struct Points {
   }
 };
 
-void PlainPaged(benchmark::State& state) {
-  const topo::TopoPlanet planet = paged().pager->planet("global");
+/// Heights at the random points straight through TopoPlanet on one paged grid.
+void plainHeights(benchmark::State& state, const char* grid) {
+  const topo::TopoPlanet planet = paged().pager->planet(grid);
   const Points pts(1 << 16);
   std::size_t i = 0;
   for (auto _ : state) {
@@ -158,19 +159,13 @@ void PlainPaged(benchmark::State& state) {
     i = (i + 1) & (pts.lat.size() - 1);
   }
 }
+
+void PlainPaged(benchmark::State& state) { plainHeights(state, "global"); }
 BENCHMARK(PlainPaged);
 
 // regional1 alone (0.01°, 1000², random points over all of it): PlainEach/2 − PlainPaged −
 // PlainRegional is what alternating between two grids costs the plain queries.
-void PlainRegional(benchmark::State& state) {
-  const topo::TopoPlanet planet = paged().pager->planet("regional1");
-  const Points pts(1 << 16);
-  std::size_t i = 0;
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(planet.height({pts.lat[i], pts.lon[i]}).height);
-    i = (i + 1) & (pts.lat.size() - 1);
-  }
-}
+void PlainRegional(benchmark::State& state) { plainHeights(state, "regional1"); }
 BENCHMARK(PlainRegional);
 
 // The plain queries Composed/k makes, without the composition: at each point a height from
