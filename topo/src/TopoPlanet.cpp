@@ -154,6 +154,13 @@ detail::KernelResult planetAccessor(const TopoGrid& g, const SampleSource& src, 
   return fn(detail::PlanetAcc<detail::BlockFetch>{{&src, &tb}, rows, cols, global, rn, rs});
 }
 
+// Longitudes beyond a turn reduced exactly (wrapLongitude180), so that 1e308 is the meridian
+// fmod(1e308, 360) names, not what rounding of lon − west leaves of it.
+LatLon reduced(const LatLon& given) noexcept {
+  return {given.latDeg,
+          std::abs(given.lonDeg) > 360.0 ? wrapLongitude180(given.lonDeg) : given.lonDeg};
+}
+
 void requireLatLon(const LatLon& ll, const char* op) {
   requireFinite(ll.latDeg, op, "latitude");
   requireFinite(ll.lonDeg, op, "longitude");
@@ -218,8 +225,7 @@ bool TopoPlanet::bilinearFast(double u, double v, bool grad, detail::KernelResul
 void TopoPlanet::prefetch(const LatLon& given) const noexcept {
   if (!std::isfinite(given.latDeg) || !std::isfinite(given.lonDeg) || std::abs(given.latDeg) > 90.0)
     return;
-  const LatLon ll{given.latDeg,
-                  std::abs(given.lonDeg) > 360.0 ? wrapLongitude180(given.lonDeg) : given.lonDeg};
+  const LatLon ll = reduced(given);
   const Located L = locate(ll);
   if (!L.inside || L.cap != 0) return;
   // locate() keeps u and v within the sample centres (u < cols for a global grid).
@@ -236,10 +242,7 @@ void TopoPlanet::prefetch(const LatLon& given) const noexcept {
 
 SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp, NormalFrame frame,
                                       bool wantNormal) const {
-  // Longitudes beyond a turn are reduced exactly first (wrapLongitude180), so that 1e308 is
-  // the meridian fmod(1e308, 360) names, not what rounding of lon − west leaves of it.
-  const LatLon ll{given.latDeg,
-                  std::abs(given.lonDeg) > 360.0 ? wrapLongitude180(given.lonDeg) : given.lonDeg};
+  const LatLon ll = reduced(given);
   SurfaceSample s;
   const Located L = locate(ll);
   if (!L.inside) return s;
