@@ -5,6 +5,8 @@
 // - PlainPaged vs Composed/k: a height at random points of a paged planet grid, straight
 //   through TopoPlanet and through the composition with k covering datasets; PlainEach/k, the
 //   k plain heights at each point that Composed/k reads, without the composition.
+// - PlainBatch vs ComposedBatch: the same per point through the batch calls (64 points a
+//   call, items_per_second), where the processor may overlap one point's work with the next.
 // - ComposedWindow/N: composing one clipmap level window (255 × 255 samples, what a frame's
 //   loader reads when the focus jumps) with the same 5 covering datasets among N registered.
 // - Traverse/plain and Traverse/composed: the rover across a feathered border, on the DEM
@@ -201,6 +203,40 @@ void Composed(benchmark::State& state) {
   }
 }
 BENCHMARK(Composed)->Arg(1)->Arg(2)->Arg(3);
+
+// Batches of 64 points, one dataset: the per-point cost where the processor may overlap
+// queries (a rover's wheels are a batch).
+void PlainBatch(benchmark::State& state) {
+  const topo::TopoPlanet planet = paged().pager->planet("global");
+  const Points pts(1 << 16);
+  std::vector<double> out(64);
+  std::size_t i = 0;
+  for (auto _ : state) {
+    planet.heights(std::span<const double>(pts.lat).subspan(i, 64),
+                   std::span<const double>(pts.lon).subspan(i, 64), std::span<double>(out), {});
+    benchmark::DoNotOptimize(out.data());
+    i = (i + 64) & (pts.lat.size() - 1);
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * 64);
+}
+BENCHMARK(PlainBatch);
+
+void ComposedBatch(benchmark::State& state) {
+  compose::Catalogue cat(kMars);
+  cat.add(compose::datasetFromStore(*paged().pager, "global"));
+  const compose::ComposedSurface s(cat.snapshot(), compose::Rules{compose::Policy::Weighted, 2.0});
+  const Points pts(1 << 16);
+  std::vector<double> out(64);
+  std::size_t i = 0;
+  for (auto _ : state) {
+    s.heights(std::span<const double>(pts.lat).subspan(i, 64),
+              std::span<const double>(pts.lon).subspan(i, 64), std::span<double>(out), {});
+    benchmark::DoNotOptimize(out.data());
+    i = (i + 64) & (pts.lat.size() - 1);
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * 64);
+}
+BENCHMARK(ComposedBatch);
 
 void ComposedWindow(benchmark::State& state) {
   const auto n = static_cast<std::size_t>(state.range(0));

@@ -147,8 +147,27 @@ std::span<const std::uint32_t> Snapshot::cellCandidates(double latDeg, double lo
   const double lon = lonDeg >= -180.0 && lonDeg < 180.0
                          ? lonDeg
                          : lonDeg - 360.0 * std::floor((lonDeg + 180.0) / 360.0);
-  const int latCell = std::clamp(static_cast<int>(std::floor(latDeg + 90.0)), 0, kLatCells - 1);
-  const int lonCell = std::clamp(static_cast<int>(std::floor(lon + 180.0)), 0, kLonCells - 1);
+  // Clamped first, then truncated: the floor of a value in [0, n - 1], without a floor()
+  // call or a conversion of a huge value.
+  const auto cellOf = [](double x, int n) {
+    return static_cast<int>(std::clamp(x, 0.0, static_cast<double>(n - 1)));
+  };
+  const int latCell = cellOf(latDeg + 90.0, kLatCells);
+  const int lonCell = cellOf(lon + 180.0, kLonCells);
+  const std::size_t index =
+      static_cast<std::size_t>(latCell) * kLonCells + static_cast<std::size_t>(lonCell);
+  // The common case, a built list, without a call or a saved register.
+  if (const CellTable* table =
+          cells_[static_cast<std::size_t>(role) % kRoles].load(std::memory_order_acquire)) {
+    if (const CellTable::List* list = table->lists[index].load(std::memory_order_acquire))
+        [[likely]] {
+      return *list;
+    }
+  }
+  return buildCell(latCell, lonCell, role);
+}
+
+std::span<const std::uint32_t> Snapshot::buildCell(int latCell, int lonCell, Role role) const {
   std::atomic<CellTable*>& slot = cells_[static_cast<std::size_t>(role) % kRoles];
   CellTable* table = slot.load(std::memory_order_acquire);
   if (table == nullptr) {

@@ -65,19 +65,24 @@ class ScratchLease {
   Scratch* scratch_ = nullptr;
 };
 
-void checkPoint(double latDeg, double lonDeg, const char* op) {
-  topo::requireFinite(latDeg, op, "latitude");
-  topo::requireFinite(lonDeg, op, "longitude");
-  if (std::abs(latDeg) > 90.0) {
-    throw InvalidArgument(core::format({.operation = op,
-                                        .field = "latitude",
-                                        .value = core::number(latDeg) + " deg",
-                                        .expected = "within -90 .. 90"}));
-  }
+bool pointOk(double latDeg, double lonDeg) noexcept {
+  return std::abs(latDeg) <= 90.0 && std::isfinite(lonDeg);  // false for a NaN latitude
 }
 
-bool pointOk(double latDeg, double lonDeg) noexcept {
-  return std::isfinite(latDeg) && std::isfinite(lonDeg) && std::abs(latDeg) <= 90.0;
+[[noreturn]] void throwBadPoint(double latDeg, double lonDeg, const char* op) {
+  topo::requireFinite(latDeg, op, "latitude");
+  topo::requireFinite(lonDeg, op, "longitude");
+  // Both finite, so pointOk() failed on the latitude's range.
+  throw InvalidArgument(core::format({.operation = op,
+                                      .field = "latitude",
+                                      .value = core::number(latDeg) + " deg",
+                                      .expected = "within -90 .. 90"}));
+}
+
+/// One test on a query's path, the messages out of line.
+inline void checkPoint(double latDeg, double lonDeg, const char* op) {
+  if (!pointOk(latDeg, lonDeg)) [[unlikely]]
+    throwBadPoint(latDeg, lonDeg, op);
 }
 
 }  // namespace
@@ -112,25 +117,34 @@ ComposedSurface::ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules
   }
 }
 
+bool ComposedSurface::soleHeight(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
+                                 double metres, double& height) const {
+  // One candidate in the point's cell: if it answers, it is the surface, a tier of one
+  // whose height is kept exactly (composeGeneral()), so none of the composition's
+  // machinery is needed. Otherwise the general path decides.
+  if (cell.size() != 1) return false;
+  const Dataset& d = *snapshot_->entries()[cell.front()].dataset;
+  return d.soleHeight(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, height);
+}
+
 ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double metres,
                                         bool wantNormal, std::vector<Share>* shares) const {
-  const auto entries = snapshot_->entries();
   const std::span<const std::uint32_t> cell = snapshot_->cellCandidates(latDeg, lonDeg);
-  if (cell.size() == 1 && !wantNormal && shares == nullptr) {
-    // One candidate in the point's cell (the common case away from dataset borders): if it
-    // answers, it is the surface, a tier of one whose height is kept exactly (below), so
-    // none of the composition's machinery is needed. Otherwise the general path decides.
-    const Dataset& d = *entries[cell.front()].dataset;
-    const std::size_t level = metres > 0.0 ? d.levelFor(metres) : 0;
-    const Contribution c = d.evaluate(latDeg, lonDeg, level, false, false);
-    if (c.status == QueryStatus::Ok && c.coverage > 0.0) {
-      ComposedSample out;
-      out.height = c.height;
-      out.status = QueryStatus::Ok;
-      out.contributors = 1;
-      return out;
-    }
+  double h = 0.0;
+  if (!wantNormal && shares == nullptr && soleHeight(cell, latDeg, lonDeg, metres, h)) {
+    ComposedSample out;
+    out.height = h;
+    out.status = QueryStatus::Ok;
+    out.contributors = 1;
+    return out;
   }
+  return composeGeneral(cell, latDeg, lonDeg, metres, wantNormal, shares);
+}
+
+ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> cell, double latDeg,
+                                               double lonDeg, double metres, bool wantNormal,
+                                               std::vector<Share>* shares) const {
+  const auto entries = snapshot_->entries();
   const ScratchLease lease;
   Scratch& s = lease.get();
   s.members.clear();

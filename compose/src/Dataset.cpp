@@ -165,6 +165,16 @@ Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement
     globalLon_ = p.isGlobalInLongitude();
     northPole_ = p.hasNorthCap();
     southPole_ = p.hasSouthCap();
+    frame_.centre = 0.5 * (g0.west() + g0.east());
+    frame_.turnLow = frame_.centre - 180.0;
+    frame_.turnHigh = frame_.centre + 180.0;
+    frame_.west = g0.west();
+    frame_.east = g0.east();
+    frame_.south = g0.south() - 1e-9;
+    frame_.north = g0.north() + 1e-9;
+    // planetocentricFromPlanetodetic() is the identity on a sphere.
+    frame_.sameLatitude = latType_ == topo::LatitudeType::Planetodetic || body_.isSphere();
+    plainPlanet_ = !options_.mask && !(options_.featherMetres > 0.0);
     const double r = (2.0 * body_.equatorialRadius() + body_.polarRadius()) / 3.0;
     groundSpacing_ = r * kDeg * std::sqrt(g0.spacingX() * g0.spacingY());
     // A planet grid's nominal pixel is its size on the equator.
@@ -199,17 +209,17 @@ Dataset::GridPoint Dataset::locate(double latDeg, double lonDeg) const {
   const topo::TopoGrid& g = levels_.front().level.grid;
   GridPoint p;
   if (isPlanet()) {
+    const PlanetFrame& f = frame_;
     // The longitude in the turn nearest the grid's centre, so a grid spanning ±180° or
     // 0…360° finds its points either way.
-    const double centre = 0.5 * (g.west() + g.east());
     // (Kept as given when already in that turn: wrapping would round it by an ulp of 540.)
-    p.x = lonDeg >= centre - 180.0 && lonDeg < centre + 180.0
+    p.x = lonDeg >= f.turnLow && lonDeg < f.turnHigh
               ? lonDeg
-              : centre + topo::wrapLongitude180(lonDeg - centre);
-    p.y = body_.fromPlanetodetic(latDeg, latType_);
+              : f.centre + topo::wrapLongitude180(lonDeg - f.centre);
+    p.y = f.sameLatitude ? latDeg : body_.planetocentricFromPlanetodetic(latDeg);
     p.mapped = true;
-    const bool inLon = globalLon_ || (p.x >= g.west() && p.x <= g.east());
-    p.inside = inLon && p.y >= g.south() - 1e-9 && p.y <= g.north() + 1e-9;
+    const bool inLon = globalLon_ || (p.x >= f.west && p.x <= f.east);
+    p.inside = inLon && p.y >= f.south && p.y <= f.north;
     return p;
   }
   try {
@@ -400,6 +410,25 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, 
   Contribution out;
   evaluateInto(latDeg, lonDeg, level, wantSlope, wantQuality, out);
   return out;
+}
+
+bool Dataset::soleHeight(double latDeg, double lonDeg, std::size_t level, double& height) const {
+  if (plainPlanet_) {
+    // evaluateInto()'s planet path with coverageAt() = 1 inside the grid.
+    const GridPoint g = locate(latDeg, lonDeg);
+    if (!g.inside) return false;
+    const Level& lv = levels_[std::min(level, levels_.size() - 1)];
+    const topo::HeightSample h =
+        lv.planet->heightUnchecked({g.y, g.x}, topo::Interpolation::Bilinear);
+    if (!h.valid()) return false;
+    height = h.height + options_.heightOffset;
+    return true;
+  }
+  Contribution c;
+  evaluateInto(latDeg, lonDeg, level, false, false, c);
+  if (c.status != topo::QueryStatus::Ok || !(c.coverage > 0.0)) return false;
+  height = c.height;
+  return true;
 }
 
 void Dataset::evaluateInto(double latDeg, double lonDeg, std::size_t level, bool wantSlope,

@@ -174,6 +174,14 @@ TEST(Catalogue, CellCandidatesHoldEveryCoveringDataset) {
   // An empty catalogue and a non-finite point have none.
   EXPECT_TRUE(Catalogue(kMars).snapshot()->cellCandidates(0.0, 0.0).empty());
   EXPECT_TRUE(snap->cellCandidates(std::nan(""), 0.0).empty());
+  // A finite latitude beyond the poles (no query passes one; the call is public) is the
+  // last cell's, without converting a huge value to an integer (undefined behaviour, which
+  // the sanitizer jobs would report).
+  for (const double lat : {1e300, 90.5, -1e300, -91.0}) {
+    const auto beyond = snap->cellCandidates(lat, 10.0);
+    const auto edge = snap->cellCandidates(lat > 0.0 ? 90.0 : -90.0, 10.0);
+    EXPECT_TRUE(std::equal(beyond.begin(), beyond.end(), edge.begin(), edge.end())) << lat;
+  }
 }
 
 TEST(Catalogue, QueriesVisitLogarithmicallyManyNodes) {

@@ -19,6 +19,8 @@
 #include <numbers>
 #include <random>
 #include <span>
+#include <string>
+#include <tuple>
 #include <vector>
 
 namespace regolith::compose {
@@ -363,8 +365,29 @@ TEST(ComposedSurface, BatchGivesEachPointItsOwnStatus) {
   EXPECT_EQ(st[4], QueryStatus::OutsideGrid);
   std::vector<double> shortOut(4);
   EXPECT_THROW(s.heights(lats, lons, shortOut, st), InvalidArgument);
-  EXPECT_THROW((void)s.height(nan, 0.0), InvalidArgument);
-  EXPECT_THROW((void)s.height(91.0, 0.0), InvalidArgument);
+  // Each bad coordinate is named (the checks run out of line, after one test on the path).
+  const double inf = std::numeric_limits<double>::infinity();
+  const auto message = [&](double lat, double lon) -> std::string {
+    try {
+      (void)s.height(lat, lon);
+    } catch (const InvalidArgument& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  for (const auto& [lat, lon, field] :
+       {std::tuple{nan, 0.0, "latitude"}, std::tuple{-inf, 0.0, "latitude"},
+        std::tuple{0.0, nan, "longitude"}, std::tuple{0.0, inf, "longitude"},
+        std::tuple{91.0, 0.0, "latitude"}, std::tuple{-1e300, 0.0, "latitude"}}) {
+    const std::string m = message(lat, lon);
+    EXPECT_NE(m.find("compose::ComposedSurface::height()"), std::string::npos) << m;
+    EXPECT_NE(m.find(field), std::string::npos) << m;
+    EXPECT_NE(m.find(std::isfinite(lat) && std::isfinite(lon) ? "within -90 .. 90" : "finite"),
+              std::string::npos)
+        << m;
+  }
+  EXPECT_THROW((void)s.heightAt(91.0, 0.0, 10.0), InvalidArgument);
+  EXPECT_THROW((void)s.surface(0.0, nan), InvalidArgument);
 }
 
 TEST(ComposedSurface, NodataFallsThroughToTheDatasetBelow) {

@@ -9,7 +9,10 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <random>
@@ -82,6 +85,76 @@ TEST(Dataset, MaskScalesCoverageAndFeatherStartsAtTheEdge) {
   EXPECT_NEAR(at(-455.0, 0.0).coverage, 0.5, 1e-6);
   EXPECT_EQ(at(-600.0, 0.0).status, topo::QueryStatus::OutsideGrid);
   EXPECT_EQ(at(-600.0, 0.0).coverage, 0.0);
+}
+
+TEST(Dataset, SoleHeightIsEvaluatesHeightWhereItAnswersWithCoverage) {
+  // soleHeight() (a composition's query where one dataset is the cell's only candidate; a
+  // planet grid without feather or mask takes a shortcut) against evaluate(): true exactly
+  // where evaluate() answers Ok with coverage > 0, and then the same height bit for bit. A
+  // global grid, a regional one with an offset (shortcut), the same feathered and masked
+  // (general path), a planetocentric one on an ellipsoid and a DEM, at random points, on
+  // their edges, across the seam and beyond a turn of longitude.
+  const topo::Body ellipsoid = topo::Body::marsEllipsoid();
+  const auto f = [](double lat, double lon) {
+    return 100.0 * std::sin(3.0 * lat * kDeg) * std::cos(2.0 * lon * kDeg);
+  };
+  DatasetOptions offset = named("regional");
+  offset.heightOffset = 12.5;
+  DatasetOptions feathered = offset;
+  feathered.featherMetres = 20000.0;
+  DatasetOptions masked = offset;
+  masked.mask = topo::InMemorySamples::fromFunction(
+      40, 60, [](std::size_t r, std::size_t c) { return (r + c) % 7 == 0 ? 0.0F : 1.0F; });
+  auto centric = testing::planetPyramid(ellipsoid, 29.875, 170.125, 0.25, 40, 60, f);
+  centric.latitudeType = topo::LatitudeType::Planetocentric;
+  const topo::LocalTangentPlane ltp(kMars, {10.0, 20.0, 0.0});
+  const std::shared_ptr<const Dataset> datasets[] = {
+      Dataset::planet(globalPlanet(kMars, 2.0,
+                                   [&](double la, double lo) {
+                                     // A hole: the shortcut declines its Nodata too.
+                                     return la > 40.0 && la < 60.0 && lo > 0.0 && lo < 30.0
+                                                ? std::numeric_limits<double>::quiet_NaN()
+                                                : f(la, lo);
+                                   }),
+                      named("global")),
+      Dataset::planet(testing::planetPyramid(kMars, 29.875, 170.125, 0.25, 40, 60, f), offset),
+      Dataset::planet(testing::planetPyramid(kMars, 29.875, 170.125, 0.25, 40, 60, f), feathered),
+      Dataset::planet(testing::planetPyramid(kMars, 29.875, 170.125, 0.25, 40, 60, f), masked),
+      Dataset::planet(centric, named("centric")),
+      Dataset::dem(demPyramid(100.0, 51, 51, [](double x, double y) { return 0.01 * (x - y); }),
+                   topo::Placement(ltp), named("dem"))};
+  std::vector<std::array<double, 2>> pts = {
+      {30.0, 170.0}, {20.0, 185.0}, {20.125, 184.875}, {29.9999, 170.0001}, {20.0, -175.0},
+      {20.0, 545.0}, {90.0, 0.0},   {-90.0, 180.0},    {10.0, 20.0},        {0.0, -180.0}};
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> lat(18.0, 32.0), lon(165.0, 190.0), any(-90.0, 90.0);
+  for (int i = 0; i < 2000; ++i) pts.push_back({lat(rng), lon(rng)});
+  for (int i = 0; i < 500; ++i) pts.push_back({any(rng), 4.0 * any(rng)});
+  for (int i = 0; i < 200; ++i) pts.push_back({45.0 + 0.2 * any(rng), 15.0 + 0.2 * any(rng)});
+  for (int i = 0; i < 200; ++i) {
+    const topo::Geodetic g = ltp.inverse({50.0 * any(rng), 50.0 * any(rng), 0.0});
+    pts.push_back({g.latDeg, g.lonDeg});
+  }
+  for (const auto& d : datasets) {
+    int answered = 0, declined = 0;
+    for (const auto& [la, lo] : pts) {
+      const Contribution c = d->evaluate(la, lo, 0, false, false);
+      double h = std::numeric_limits<double>::quiet_NaN();
+      const bool sole = d->soleHeight(la, lo, 0, h);
+      const bool expected = c.status == topo::QueryStatus::Ok && c.coverage > 0.0;
+      ASSERT_EQ(sole, expected) << d->options().name << " at " << la << ", " << lo;
+      if (!sole) {
+        ++declined;
+        continue;
+      }
+      ++answered;
+      ASSERT_EQ(std::bit_cast<std::uint64_t>(h), std::bit_cast<std::uint64_t>(c.height))
+          << d->options().name << " at " << la << ", " << lo;
+    }
+    // Both outcomes were exercised for every dataset.
+    EXPECT_GT(answered, 50) << d->options().name;
+    EXPECT_GT(declined, 50) << d->options().name;
+  }
 }
 
 TEST(Dataset, RefusesBadOptionsWithClearMessages) {

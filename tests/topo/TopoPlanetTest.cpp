@@ -269,6 +269,57 @@ TEST(TopoPlanet, PrefetchIsAHintThatTakesAnyPointAndChangesNoAnswer) {
   }
 }
 
+TEST(TopoPlanet, HeightUncheckedIsHeightWithoutTheChecks) {
+  // heightUnchecked() (the composition checks each point once) gives height()'s status and
+  // bits at every valid point, on a global, a block-paged and a regional grid, in the caps,
+  // on the seam and beyond a turn, for every interpolation; height() still refuses what
+  // heightUnchecked() leaves to its caller.
+  const double d = 2.0;
+  const std::size_t rows = 90, cols = 180;
+  const TopoGrid g(rows, cols, -180.0 + d / 2, 90.0 - d / 2, d, d);
+  const TopoGrid regional(20, 30, 10.0, 20.0, 0.5, 0.5);
+  auto samples = [](const TopoGrid& grid) {
+    std::vector<float> s(grid.rows() * grid.cols());
+    for (std::size_t r = 0; r < grid.rows(); ++r) {
+      for (std::size_t c = 0; c < grid.cols(); ++c) {
+        const glm::dvec2 p = grid.sampleCentre(double(r), double(c));
+        s[r * grid.cols() + c] = float(field(p.y, p.x));
+      }
+    }
+    return s;
+  };
+  const Body body = Body::marsEllipsoid();
+  const auto lt = LatitudeType::Planetocentric;
+  const TopoPlanet resident(g, body, lt, std::make_shared<InMemorySamples>(rows, cols, samples(g)));
+  const TopoPlanet blocks(g, body, lt, std::make_shared<test::BlockSource>(rows, cols, samples(g)));
+  const TopoPlanet part(regional, body, lt,
+                        std::make_shared<InMemorySamples>(20, 30, samples(regional)));
+  std::vector<LatLon> pts = {{0.0, 0.0},     {89.9, 10.0},  {-90.0, 0.0},  {90.0, 180.0},
+                             {12.0, -180.0}, {12.0, 179.9}, {15.0, 25.0},  {-60.0, 1e308},
+                             {0.0, -1e308},  {5.0, 720.0},  {19.75, 10.0}, {10.25, 24.75}};
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> lat(-90.0, 90.0), lon(-540.0, 540.0);
+  for (int i = 0; i < 1000; ++i) pts.push_back({lat(rng), lon(rng)});
+  std::uniform_real_distribution<double> rlat(9.0, 21.0), rlon(9.0, 26.0);
+  for (int i = 0; i < 500; ++i) pts.push_back({rlat(rng), rlon(rng)});
+  for (const TopoPlanet* t : {&resident, &blocks, &part}) {
+    for (const Interpolation interp :
+         {Interpolation::Bilinear, Interpolation::Bicubic, Interpolation::Nearest}) {
+      for (const LatLon& p : pts) {
+        const HeightSample a = t->height(p, interp), b = t->heightUnchecked(p, interp);
+        ASSERT_EQ(a.status, b.status) << p.latDeg << ", " << p.lonDeg;
+        ASSERT_TRUE(sameBits(a.height, b.height)) << p.latDeg << ", " << p.lonDeg;
+      }
+    }
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const LatLon bad :
+       {LatLon{nan, 0.0}, LatLon{0.0, nan}, LatLon{90.5, 0.0}, LatLon{-1e300, 0.0},
+        LatLon{0.0, -std::numeric_limits<double>::infinity()}}) {
+    EXPECT_THROW((void)resident.height(bad), InvalidArgument) << bad.latDeg << ", " << bad.lonDeg;
+  }
+}
+
 TEST(TopoPlanet, BilinearFastPathsGiveTheGenericKernelsBits) {
   // One global 2°-grid with a nodata hole, read three ways: resident (the resident fast
   // path), in 7 × 5 blocks (the thread's-block fast path of paged sources) and sample by

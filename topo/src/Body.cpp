@@ -11,11 +11,9 @@ namespace {
 constexpr double kDeg = std::numbers::pi / 180.0;
 }
 
-void requireFinite(double v, const char* operation, const char* field) {
-  if (!std::isfinite(v)) {
-    throw InvalidArgument(std::string(operation) + ": " + field + " is " + core::number(v) +
-                          ", expected a finite number");
-  }
+void throwNotFinite(double v, const char* operation, const char* field) {
+  throw InvalidArgument(std::string(operation) + ": " + field + " is " + core::number(v) +
+                        ", expected a finite number");
 }
 
 double wrapLongitude180(double lonDeg) noexcept {

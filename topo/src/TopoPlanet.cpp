@@ -161,13 +161,16 @@ LatLon reduced(const LatLon& given) noexcept {
           std::abs(given.lonDeg) > 360.0 ? wrapLongitude180(given.lonDeg) : given.lonDeg};
 }
 
-void requireLatLon(const LatLon& ll, const char* op) {
+[[noreturn]] void throwBadLatLon(const LatLon& ll, const char* op) {
   requireFinite(ll.latDeg, op, "latitude");
   requireFinite(ll.lonDeg, op, "longitude");
-  if (std::abs(ll.latDeg) > 90.0) {
-    throw InvalidArgument(std::string(op) + ": latitude is " + core::number(ll.latDeg) +
-                          " deg, expected within [-90, 90]");
-  }
+  throw InvalidArgument(std::string(op) + ": latitude is " + core::number(ll.latDeg) +
+                        " deg, expected within [-90, 90]");
+}
+// One test on the common path (|lat| <= 90 is false for NaN), the messages out of line.
+inline void requireLatLon(const LatLon& ll, const char* op) {
+  if (!(std::abs(ll.latDeg) <= 90.0 && std::isfinite(ll.lonDeg))) [[unlikely]]
+    throwBadLatLon(ll, op);
 }
 // Checks every point of a batch before anything is written; the message names the index.
 void requireLatLons(std::span<const double> lats, std::span<const double> lons, const char* op) {
@@ -183,6 +186,10 @@ void requireLatLons(std::span<const double> lats, std::span<const double> lons, 
 
 HeightSample TopoPlanet::height(const LatLon& ll, Interpolation interp) const {
   requireLatLon(ll, "TopoPlanet::height()");
+  return heightUnchecked(ll, interp);
+}
+
+HeightSample TopoPlanet::heightUnchecked(const LatLon& ll, Interpolation interp) const {
   const SurfaceSample s = surfaceImpl(ll, interp, NormalFrame::Grid, false);
   return {s.height, s.status};
 }

@@ -79,6 +79,8 @@ class Snapshot {
   };
   std::uint32_t build(std::uint32_t first, std::uint32_t count);
   [[nodiscard]] std::vector<std::uint32_t> cellList(int latCell, int lonCell, Role role) const;
+  /// cellCandidates() where the cell's list (or the role's table) is not built yet.
+  [[nodiscard]] std::span<const std::uint32_t> buildCell(int latCell, int lonCell, Role role) const;
 
   /// cellCandidates()'s tables, one per role, each 180 × 360 lists (null until built).
   struct CellTable;

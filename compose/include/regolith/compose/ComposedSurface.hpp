@@ -111,6 +111,13 @@ class ComposedSurface {
  private:
   ComposedSample compose(double latDeg, double lonDeg, double metres, bool wantNormal,
                          std::vector<Share>* shares) const;
+  /// A height where the point's cell has one candidate and it answers (else false): the
+  /// common case away from dataset borders, kept out of compose()'s large frame.
+  bool soleHeight(std::span<const std::uint32_t> cell, double latDeg, double lonDeg, double metres,
+                  double& height) const;
+  /// compose() past its shortcut, given the point's cell candidates.
+  ComposedSample composeGeneral(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
+                                double metres, bool wantNormal, std::vector<Share>* shares) const;
 
   std::shared_ptr<const Snapshot> snapshot_;
   Rules rules_;

@@ -143,6 +143,13 @@ class Dataset {
   /// ten cycles per piece on the composition's path).
   void evaluateInto(double latDeg, double lonDeg, std::size_t level, bool wantSlope,
                     bool wantQuality, Contribution& out) const;
+  /// The height evaluate() gives at a point where it answers Ok with coverage > 0 (then
+  /// true), else false: a composition's query where the dataset is the only candidate.
+  /// A planet grid without feather or mask (coverage 1 wherever it answers) skips the
+  /// contribution's other fields and, the point being checked, the grid's argument checks.
+  /// Requires finite coordinates with |lat| <= 90.
+  [[nodiscard]] bool soleHeight(double latDeg, double lonDeg, std::size_t level,
+                                double& height) const;
   /// Asks the processor to fetch the samples evaluate() would read at a point of level
   /// `level` into its cache (topo::TopoPlanet::prefetch()): a hint, never failing, so that a
   /// composition overlaps the memory misses of its datasets. Planet grids only (a DEM's
@@ -187,6 +194,16 @@ class Dataset {
   topo::LatitudeType latType_ = topo::LatitudeType::Planetodetic;
   std::vector<Level> levels_;
   bool globalLon_ = false, northPole_ = false, southPole_ = false;
+  /// A planet grid's locate() constants, computed once (the same bits as computing them at
+  /// each query): its longitude centre, the turn around it, its extent (latitudes with
+  /// locate()'s 1e-9° tolerance), and whether its latitude type is the query's.
+  struct PlanetFrame {
+    double centre = 0.0, turnLow = 0.0, turnHigh = 0.0;
+    double west = 0.0, east = 0.0, south = 0.0, north = 0.0;
+    bool sameLatitude = true;
+  } frame_;
+  /// soleHeight()'s shortcut applies: a planet grid without feather or mask.
+  bool plainPlanet_ = false;
   double groundSpacing_ = 0.0;
   double planetNominal_ = 0.0;  // a planet grid's pixel on the equator, metres (geometric mean)
   std::array<double, 2> heightRange_{0.0, 0.0};

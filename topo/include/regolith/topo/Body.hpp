@@ -5,6 +5,7 @@
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
+#include <cmath>
 #include <string>
 #include <string_view>
 
@@ -114,7 +115,13 @@ class Body {
 /// which rounds to 0 rather than to the double below 360).
 [[nodiscard]] double wrapLongitude360(double lonDeg) noexcept;
 
-/// Throws InvalidArgument naming `operation` and `field` unless v is finite.
-void requireFinite(double v, const char* operation, const char* field);
+/// Throws InvalidArgument naming `operation` and `field`: v is not finite (requireFinite()).
+[[noreturn]] void throwNotFinite(double v, const char* operation, const char* field);
+/// Throws InvalidArgument naming `operation` and `field` unless v is finite. Inline, the
+/// throw out of line: point queries check every coordinate, at some tens of millions a second.
+inline void requireFinite(double v, const char* operation, const char* field) {
+  if (!std::isfinite(v)) [[unlikely]]
+    throwNotFinite(v, operation, field);
+}
 
 }  // namespace regolith::topo

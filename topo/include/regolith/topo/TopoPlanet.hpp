@@ -67,6 +67,12 @@ class TopoPlanet {
   /// Height at a point whose latitude is in the grid's latitude type.
   [[nodiscard]] HeightSample height(const LatLon& ll,
                                     Interpolation interp = Interpolation::Bilinear) const;
+  /// height() without its argument checks, for a caller that has made them (a finite
+  /// latitude within [-90, 90] and a finite longitude; anything else is undefined): the
+  /// composition, which checks each point once for all its datasets. Throws only what
+  /// reading a paged source throws.
+  [[nodiscard]] HeightSample heightUnchecked(const LatLon& ll,
+                                             Interpolation interp = Interpolation::Bilinear) const;
   /// Height and unit normal. The Grid frame is east-north-up at the point.
   [[nodiscard]] SurfaceSample surface(const LatLon& ll,
                                       Interpolation interp = Interpolation::Bilinear,
