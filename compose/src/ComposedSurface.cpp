@@ -7,6 +7,7 @@
 #include <glm/vec2.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <deque>
 #include <string>
@@ -17,6 +18,10 @@ namespace regolith::compose {
 namespace {
 
 using topo::QueryStatus;
+
+/// Most candidates of a point's 1° cell the composition evaluates; more: the exact catalogue
+/// query's (composeGeneral()).
+constexpr std::size_t kCellCandidatesAtMost = 4;
 
 struct Member {
   // A user-provided constructor: a value-initialised Member (emplace_back()) is zero-filled
@@ -127,11 +132,50 @@ bool ComposedSurface::soleHeight(std::span<const std::uint32_t> cell, double lat
   return d.soleHeight(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, height);
 }
 
+bool ComposedSurface::topTierHeight(std::span<const std::uint32_t> cell, double latDeg,
+                                    double lonDeg, double metres, double& height) const {
+  // A few candidates (the general path's cell case), in the general path's tier order:
+  // priority first, then spacing, then entry.
+  if (cell.size() < 2 || cell.size() > kCellCandidatesAtMost) return false;
+  const auto entries = snapshot_->entries();
+  std::array<std::uint32_t, kCellCandidatesAtMost> order{};
+  std::copy(cell.begin(), cell.end(), order.begin());
+  const auto first = order.begin(), last = order.begin() + static_cast<std::ptrdiff_t>(cell.size());
+  const auto precedes = [&entries](std::uint32_t ia, std::uint32_t ib) {
+    const Dataset& a = *entries[ia].dataset;
+    const Dataset& b = *entries[ib].dataset;
+    if (a.options().priority != b.options().priority)
+      return a.options().priority > b.options().priority;
+    if (a.groundSpacing() != b.groundSpacing()) return a.groundSpacing() < b.groundSpacing();
+    return ia < ib;
+  };
+  std::partial_sort(first, first + 2, last, precedes);
+  const Dataset& top = *entries[order[0]].dataset;
+  const Dataset& next = *entries[order[1]].dataset;
+  // The next candidate could join the top one's tier if it answers: the general path decides.
+  const double ratio = rules_.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules_.tierRatio;
+  if (next.options().priority == top.options().priority &&
+      !(next.groundSpacing() > top.groundSpacing() * ratio)) {
+    return false;
+  }
+  Contribution c;
+  top.evaluateInto(latDeg, lonDeg, metres > 0.0 ? top.levelFor(metres) : 0, false, false, c);
+  // Full coverage: the tier's α is 1, so the tiers below have no share (composeGeneral()).
+  if (c.status != QueryStatus::Ok || c.coverage != 1.0) return false;
+  height = c.height;
+  return true;
+}
+
 ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double metres,
                                         bool wantNormal, std::vector<Share>* shares) const {
   const std::span<const std::uint32_t> cell = snapshot_->cellCandidates(latDeg, lonDeg);
   double h = 0.0;
-  if (!wantNormal && shares == nullptr && soleHeight(cell, latDeg, lonDeg, metres, h)) {
+  // A height alone needs only the top tier where its one member covers the point fully:
+  // one candidate in the cell (the common case away from dataset borders), or nested data
+  // (a finer or higher-priority dataset inside coarser ones, away from its feather).
+  if (!wantNormal && shares == nullptr &&
+      (soleHeight(cell, latDeg, lonDeg, metres, h) ||
+       topTierHeight(cell, latDeg, lonDeg, metres, h))) {
     ComposedSample out;
     out.height = h;
     out.status = QueryStatus::Ok;
@@ -191,11 +235,11 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
     snapshot_->covering(latDeg, lonDeg, s.candidates);
     return s.candidates;
   };
-  // The candidates of the point's 1° cell (a table look-up) while they are few: a dataset
-  // among them that does not reach the point answers OutsideGrid and is skipped, so the
-  // composition is the same as from the exact catalogue query, which takes a walk of the
-  // index and a sine and cosine per angle. Many candidates: the exact query, fewer evaluations.
-  constexpr std::size_t kCellCandidatesAtMost = 4;
+  // The candidates of the point's 1° cell (a table look-up) while they are few
+  // (kCellCandidatesAtMost): a dataset among them that does not reach the point answers
+  // OutsideGrid and is skipped, so the composition is the same as from the exact catalogue
+  // query, which takes a walk of the index and a sine and cosine per angle. Many
+  // candidates: the exact query, fewer evaluations.
   const bool fromCell = cell.size() <= kCellCandidatesAtMost;
   evaluateAll(fromCell ? cell : exactCandidates());
   if (s.members.empty() && fromCell && !cell.empty()) {
@@ -350,7 +394,9 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
       accGrad = gradHt;
     } else {
       accGrad = alpha * gradHt + (1.0 - alpha) * accGrad + (ht - acc) * gradAlpha;
-      acc = alpha * ht + (1.0 - alpha) * acc;
+      // A tier of full coverage hides the ones below exactly (1·ht + 0·acc would turn a
+      // height of -0 into +0 below a positive one): topTierHeight()'s answer.
+      acc = alpha == 1.0 ? ht : alpha * ht + (1.0 - alpha) * acc;
     }
     tiers.emplace_back(begin, end);
     alphas.push_back(alpha);

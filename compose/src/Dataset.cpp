@@ -218,7 +218,9 @@ Dataset::GridPoint Dataset::locate(double latDeg, double lonDeg) const {
               : f.centre + topo::wrapLongitude180(lonDeg - f.centre);
     p.y = f.sameLatitude ? latDeg : body_.planetocentricFromPlanetodetic(latDeg);
     p.mapped = true;
-    const bool inLon = globalLon_ || (p.x >= f.west && p.x <= f.east);
+    // A non-finite longitude is in no grid (a NaN latitude fails the range test): the grid's
+    // unchecked query is never given one.
+    const bool inLon = globalLon_ ? std::isfinite(p.x) : (p.x >= f.west && p.x <= f.east);
     p.inside = inLon && p.y >= f.south && p.y <= f.north;
     return p;
   }
@@ -449,7 +451,8 @@ void Dataset::evaluateInto(double latDeg, double lonDeg, std::size_t level, bool
     if (wantSlope) {
       s = lv.planet->surface(ll, bilinear, bodyFixed);
     } else {
-      const topo::HeightSample h = lv.planet->height(ll, bilinear);
+      // The point is checked (evaluate()'s contract), and so is its conversion.
+      const topo::HeightSample h = lv.planet->heightUnchecked(ll, bilinear);
       s.height = h.height;
       s.status = h.status;
     }

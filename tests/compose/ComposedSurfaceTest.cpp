@@ -21,6 +21,7 @@
 #include <span>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 namespace regolith::compose {
@@ -78,7 +79,8 @@ TEST(ComposedSurface, OneDatasetAnswersItsOwnHeightAndNormal) {
 
 TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate) {
   // height() and heights() answer a point whose 1° cell has one candidate dataset straight
-  // from it (ComposedSurface.cpp); surface() always takes the general path. Same statuses,
+  // from it, and one where the top tier's one member covers the point fully from that
+  // member (ComposedSurface.cpp); surface() always takes the general path. Same statuses,
   // contributor counts and height bits, on one dataset, on the global grid beside a feathered
   // regional one (cells with one and with two candidates), on the regional grid's own cells and
   // outside every grid. height() also leaves a planet grid's quality unevaluated where the
@@ -98,10 +100,17 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
       named("only")));
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> lat(-30.0, 30.0), lon(-40.0, 40.0);
-  std::size_t single = 0, several = 0, threeTiers = 0;
-  for (const auto& snapshot :
-       {t.catalogue.snapshot(), only.snapshot(), three.catalogue.snapshot()}) {
-    const ComposedSurface s(snapshot, Rules{Policy::Weighted, 2.0});
+  // Where a cell has several candidates and the first in tier order is alone in its tier
+  // and covers the point fully, height() reads that one only (topTierHeight()): the fine
+  // grid's interior, and (FinestWins: one tier per spacing) the regional grid's.
+  std::size_t single = 0, several = 0, threeTiers = 0, topAlone = 0;
+  for (const auto& [snapshot, policy] :
+       {std::pair{t.catalogue.snapshot(), Policy::Weighted},
+        std::pair{only.snapshot(), Policy::Weighted},
+        std::pair{three.catalogue.snapshot(), Policy::Weighted},
+        std::pair{t.catalogue.snapshot(), Policy::FinestWins},
+        std::pair{three.catalogue.snapshot(), Policy::FinestWins}}) {
+    const ComposedSurface s(snapshot, Rules{policy, 2.0});
     for (int i = 0; i < 3000; ++i) {
       const double la = lat(rng), lo = lon(rng);
       const topo::HeightSample h = s.height(la, lo);
@@ -118,13 +127,16 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
       ASSERT_EQ(sb, QueryStatus::Ok);
       ASSERT_EQ(std::bit_cast<std::uint64_t>(hb), std::bit_cast<std::uint64_t>(g.height));
       ASSERT_EQ(cb, g.contributors) << la << ", " << lo;
-      ++(snapshot->cellCandidates(la, lo).size() == 1 ? single : several);
+      const bool one = snapshot->cellCandidates(la, lo).size() == 1;
+      ++(one ? single : several);
       threeTiers += g.contributors == 3 ? 1U : 0U;
+      topAlone += !one && g.contributors == 1 ? 1U : 0U;
     }
   }
   EXPECT_GT(single, 1000U);
   EXPECT_GT(several, 100U);
   EXPECT_GT(threeTiers, 10U);  // points in the fine grid's feather, where all three blend
+  EXPECT_GT(topAlone, 100U);
 }
 
 TEST(ComposedSurface, WeightedBlendFollowsResolutionAndQuality) {

@@ -115,7 +115,12 @@ class ComposedSurface {
   /// common case away from dataset borders, kept out of compose()'s large frame.
   bool soleHeight(std::span<const std::uint32_t> cell, double latDeg, double lonDeg, double metres,
                   double& height) const;
-  /// compose() past its shortcut, given the point's cell candidates.
+  /// A height where the point's cell has 2 to 4 candidates, the first in tier order is
+  /// alone in its tier (no other of its priority within the tier ratio of its spacing) and
+  /// covers the point fully (else false): nested data, which hides the tiers below.
+  bool topTierHeight(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
+                     double metres, double& height) const;
+  /// compose() past its shortcuts, given the point's cell candidates.
   ComposedSample composeGeneral(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
                                 double metres, bool wantNormal, std::vector<Share>* shares) const;
 

@@ -132,7 +132,8 @@ class Dataset {
   /// Height, coverage, quality and (if wantSlope) the height's gradient at a planetodetic
   /// latitude and longitude, from level `level` (clamped to the coarsest). Never throws for
   /// a finite point: a point the dataset does not have gets its status and coverage 0.
-  /// Requires finite coordinates with |lat| ≤ 90.
+  /// Requires finite coordinates with |lat| ≤ 90 (a planet grid answers OutsideGrid for a
+  /// non-finite one).
   /// `wantQuality` false leaves quality at 0: a composition with one contributor needs no
   /// weight, and the quality costs as much as the height.
   [[nodiscard]] Contribution evaluate(double latDeg, double lonDeg, std::size_t level = 0,
