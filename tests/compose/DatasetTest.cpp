@@ -17,6 +17,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace regolith::compose {
@@ -154,6 +155,20 @@ TEST(Dataset, SoleHeightIsEvaluatesHeightWhereItAnswersWithCoverage) {
     // Both outcomes were exercised for every dataset.
     EXPECT_GT(answered, 50) << d->options().name;
     EXPECT_GT(declined, 50) << d->options().name;
+  }
+  // A non-finite point is outside every planet grid (their grids' unchecked reads never see
+  // one), global or not: no error, no height.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < 5; ++k) {
+    for (const auto& [la, lo] : {std::pair{nan, 10.0}, std::pair{20.0, nan}, std::pair{20.0, inf},
+                                 std::pair{-inf, 0.0}, std::pair{25.0, -inf}}) {
+      const Contribution c = datasets[k]->evaluate(la, lo);
+      EXPECT_EQ(c.status, topo::QueryStatus::OutsideGrid) << k << ": " << la << ", " << lo;
+      EXPECT_EQ(c.coverage, 0.0);
+      double h = 0.0;
+      EXPECT_FALSE(datasets[k]->soleHeight(la, lo, 0, h));
+    }
   }
 }
 
