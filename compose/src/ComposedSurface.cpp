@@ -122,16 +122,6 @@ ComposedSurface::ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules
   }
 }
 
-bool ComposedSurface::soleHeight(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
-                                 double metres, double& height) const {
-  // One candidate in the point's cell: if it answers, it is the surface, a tier of one
-  // whose height is kept exactly (composeGeneral()), so none of the composition's
-  // machinery is needed. Otherwise the general path decides.
-  if (cell.size() != 1) return false;
-  const Dataset& d = *snapshot_->entries()[cell.front()].dataset;
-  return d.soleHeight(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, height);
-}
-
 bool ComposedSurface::topTierHeight(std::span<const std::uint32_t> cell, double latDeg,
                                     double lonDeg, double metres, double& height) const {
   // A few candidates (the general path's cell case), in the general path's tier order:
@@ -166,16 +156,32 @@ bool ComposedSurface::topTierHeight(std::span<const std::uint32_t> cell, double 
   return true;
 }
 
+// A height alone needs only the top tier where its one member covers the point fully: one
+// candidate in the cell (the common case away from dataset borders; if it answers, it is the
+// surface, a tier of one whose height composeGeneral() keeps exactly), or nested data (a
+// finer or higher-priority dataset inside coarser ones, away from its feather).
+bool ComposedSurface::fastHeight(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
+                                 double metres, double& height) const {
+  if (cell.size() == 1) {
+    const Dataset& d = *snapshot_->entries()[cell.front()].dataset;
+    return d.soleHeight(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, height);
+  }
+  return topTierHeight(cell, latDeg, lonDeg, metres, height);
+}
+
+topo::HeightSample ComposedSurface::heightOf(double latDeg, double lonDeg, double metres) const {
+  const std::span<const std::uint32_t> cell = snapshot_->cellCandidates(latDeg, lonDeg);
+  double h = 0.0;
+  if (fastHeight(cell, latDeg, lonDeg, metres, h)) return {h, QueryStatus::Ok};
+  const ComposedSample c = composeGeneral(cell, latDeg, lonDeg, metres, false, nullptr);
+  return {c.height, c.status};
+}
+
 ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double metres,
                                         bool wantNormal, std::vector<Share>* shares) const {
   const std::span<const std::uint32_t> cell = snapshot_->cellCandidates(latDeg, lonDeg);
   double h = 0.0;
-  // A height alone needs only the top tier where its one member covers the point fully:
-  // one candidate in the cell (the common case away from dataset borders), or nested data
-  // (a finer or higher-priority dataset inside coarser ones, away from its feather).
-  if (!wantNormal && shares == nullptr &&
-      (soleHeight(cell, latDeg, lonDeg, metres, h) ||
-       topTierHeight(cell, latDeg, lonDeg, metres, h))) {
+  if (!wantNormal && shares == nullptr && fastHeight(cell, latDeg, lonDeg, metres, h)) {
     ComposedSample out;
     out.height = h;
     out.status = QueryStatus::Ok;
@@ -453,14 +459,12 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
 
 topo::HeightSample ComposedSurface::height(double latDeg, double lonDeg) const {
   checkPoint(latDeg, lonDeg, "compose::ComposedSurface::height()");
-  const ComposedSample c = compose(latDeg, lonDeg, 0.0, false, nullptr);
-  return {c.height, c.status};
+  return heightOf(latDeg, lonDeg, 0.0);
 }
 
 topo::HeightSample ComposedSurface::heightAt(double latDeg, double lonDeg, double metres) const {
   checkPoint(latDeg, lonDeg, "compose::ComposedSurface::heightAt()");
-  const ComposedSample c = compose(latDeg, lonDeg, metres, false, nullptr);
-  return {c.height, c.status};
+  return heightOf(latDeg, lonDeg, metres);
 }
 
 ComposedSample ComposedSurface::surface(double latDeg, double lonDeg,

@@ -205,25 +205,28 @@ Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement
   computeBounds();
 }
 
+Dataset::GridPoint Dataset::locatePlanet(double latDeg, double lonDeg) const noexcept {
+  GridPoint p;
+  const PlanetFrame& f = frame_;
+  // The longitude in the turn nearest the grid's centre, so a grid spanning ±180° or
+  // 0…360° finds its points either way.
+  // (Kept as given when already in that turn: wrapping would round it by an ulp of 540.)
+  p.x = lonDeg >= f.turnLow && lonDeg < f.turnHigh
+            ? lonDeg
+            : f.centre + topo::wrapLongitude180(lonDeg - f.centre);
+  p.y = f.sameLatitude ? latDeg : body_.planetocentricFromPlanetodetic(latDeg);
+  p.mapped = true;
+  // A non-finite longitude is in no grid (a NaN latitude fails the range test): the grid's
+  // unchecked query is never given one.
+  const bool inLon = globalLon_ ? std::isfinite(p.x) : (p.x >= f.west && p.x <= f.east);
+  p.inside = inLon && p.y >= f.south && p.y <= f.north;
+  return p;
+}
+
 Dataset::GridPoint Dataset::locate(double latDeg, double lonDeg) const {
+  if (isPlanet()) return locatePlanet(latDeg, lonDeg);
   const topo::TopoGrid& g = levels_.front().level.grid;
   GridPoint p;
-  if (isPlanet()) {
-    const PlanetFrame& f = frame_;
-    // The longitude in the turn nearest the grid's centre, so a grid spanning ±180° or
-    // 0…360° finds its points either way.
-    // (Kept as given when already in that turn: wrapping would round it by an ulp of 540.)
-    p.x = lonDeg >= f.turnLow && lonDeg < f.turnHigh
-              ? lonDeg
-              : f.centre + topo::wrapLongitude180(lonDeg - f.centre);
-    p.y = f.sameLatitude ? latDeg : body_.planetocentricFromPlanetodetic(latDeg);
-    p.mapped = true;
-    // A non-finite longitude is in no grid (a NaN latitude fails the range test): the grid's
-    // unchecked query is never given one.
-    const bool inLon = globalLon_ ? std::isfinite(p.x) : (p.x >= f.west && p.x <= f.east);
-    p.inside = inLon && p.y >= f.south && p.y <= f.north;
-    return p;
-  }
   try {
     const double h = 0.5 * (heightRange_[0] + heightRange_[1]);
     const glm::dvec3 xyh =
@@ -417,7 +420,7 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, 
 bool Dataset::soleHeight(double latDeg, double lonDeg, std::size_t level, double& height) const {
   if (plainPlanet_) {
     // evaluateInto()'s planet path with coverageAt() = 1 inside the grid.
-    const GridPoint g = locate(latDeg, lonDeg);
+    const GridPoint g = locatePlanet(latDeg, lonDeg);
     if (!g.inside) return false;
     const Level& lv = levels_[std::min(level, levels_.size() - 1)];
     const topo::HeightSample h =

@@ -111,9 +111,11 @@ class ComposedSurface {
  private:
   ComposedSample compose(double latDeg, double lonDeg, double metres, bool wantNormal,
                          std::vector<Share>* shares) const;
-  /// A height where the point's cell has one candidate and it answers (else false): the
-  /// common case away from dataset borders, kept out of compose()'s large frame.
-  bool soleHeight(std::span<const std::uint32_t> cell, double latDeg, double lonDeg, double metres,
+  /// height() and heightAt() past their checks: fastHeight(), else the general path.
+  [[nodiscard]] topo::HeightSample heightOf(double latDeg, double lonDeg, double metres) const;
+  /// A height from the top tier alone, where its one member covers the point fully (else
+  /// false): the cell's one candidate (Dataset::soleHeight()), or topTierHeight().
+  bool fastHeight(std::span<const std::uint32_t> cell, double latDeg, double lonDeg, double metres,
                   double& height) const;
   /// A height where the point's cell has 2 to 4 candidates, the first in tier order is
   /// alone in its tier (no other of its priority within the tier ratio of its spacing) and

@@ -183,6 +183,8 @@ class Dataset {
   Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement> placement,
           DatasetOptions options);
   [[nodiscard]] GridPoint locate(double latDeg, double lonDeg) const;
+  /// locate() for a planet grid (from frame_).
+  [[nodiscard]] GridPoint locatePlanet(double latDeg, double lonDeg) const noexcept;
   [[nodiscard]] double coverageAt(const GridPoint& g, double latDeg) const;
   [[nodiscard]] double qualityAt(const GridPoint& g) const;
   [[nodiscard]] double planetQuality(double latDeg) const;
