@@ -7,7 +7,6 @@
 #include <glm/vec2.hpp>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <deque>
 #include <string>
@@ -40,8 +39,9 @@ struct Member {
 /// Per-thread scratch, so a query allocates nothing once warm.
 struct Scratch {
   std::vector<std::uint32_t> candidates;
-  std::vector<Member> members;       // in candidate order, each built in place
-  std::vector<std::uint32_t> order;  // members' indices, sorted into tiers
+  std::vector<std::uint32_t> ranked;  // the candidates in tier order (evaluateAll)
+  std::vector<Member> members;        // in evaluation order, each built in place
+  std::vector<std::uint32_t> order;   // members' indices, sorted into tiers
   std::vector<std::pair<std::size_t, std::size_t>> tiers;  // [begin, end) of members, bottom-up
   std::vector<double> alphas;                              // each tier's α
 };
@@ -122,51 +122,15 @@ ComposedSurface::ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules
   }
 }
 
-bool ComposedSurface::topTierHeight(std::span<const std::uint32_t> cell, double latDeg,
-                                    double lonDeg, double metres, double& height) const {
-  // A few candidates (the general path's cell case), in the general path's tier order:
-  // priority first, then spacing, then entry.
-  if (cell.size() < 2 || cell.size() > kCellCandidatesAtMost) return false;
-  const auto entries = snapshot_->entries();
-  std::array<std::uint32_t, kCellCandidatesAtMost> order{};
-  std::copy(cell.begin(), cell.end(), order.begin());
-  const auto first = order.begin(), last = order.begin() + static_cast<std::ptrdiff_t>(cell.size());
-  const auto precedes = [&entries](std::uint32_t ia, std::uint32_t ib) {
-    const Dataset& a = *entries[ia].dataset;
-    const Dataset& b = *entries[ib].dataset;
-    if (a.options().priority != b.options().priority)
-      return a.options().priority > b.options().priority;
-    if (a.groundSpacing() != b.groundSpacing()) return a.groundSpacing() < b.groundSpacing();
-    return ia < ib;
-  };
-  std::partial_sort(first, first + 2, last, precedes);
-  const Dataset& top = *entries[order[0]].dataset;
-  const Dataset& next = *entries[order[1]].dataset;
-  // The next candidate could join the top one's tier if it answers: the general path decides.
-  const double ratio = rules_.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules_.tierRatio;
-  if (next.options().priority == top.options().priority &&
-      !(next.groundSpacing() > top.groundSpacing() * ratio)) {
-    return false;
-  }
-  Contribution c;
-  top.evaluateInto(latDeg, lonDeg, metres > 0.0 ? top.levelFor(metres) : 0, false, false, c);
-  // Full coverage: the tier's α is 1, so the tiers below have no share (composeGeneral()).
-  if (c.status != QueryStatus::Ok || c.coverage != 1.0) return false;
-  height = c.height;
-  return true;
-}
-
-// A height alone needs only the top tier where its one member covers the point fully: one
-// candidate in the cell (the common case away from dataset borders; if it answers, it is the
-// surface, a tier of one whose height composeGeneral() keeps exactly), or nested data (a
-// finer or higher-priority dataset inside coarser ones, away from its feather).
+// A height where the point's cell has one candidate that answers: it is the surface, a tier
+// of one whose height composeGeneral() keeps exactly (the common case away from dataset
+// borders). Nested data (a dataset covering the point fully over coarser ones) is
+// composeGeneral()'s, which reads the top tier only.
 bool ComposedSurface::fastHeight(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
                                  double metres, double& height) const {
-  if (cell.size() == 1) {
-    const Dataset& d = *snapshot_->entries()[cell.front()].dataset;
-    return d.soleHeight(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, height);
-  }
-  return topTierHeight(cell, latDeg, lonDeg, metres, height);
+  if (cell.size() != 1) return false;
+  const Dataset& d = *snapshot_->entries()[cell.front()].dataset;
+  return d.soleHeight(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, height);
 }
 
 topo::HeightSample ComposedSurface::heightOf(double latDeg, double lonDeg, double metres) const {
@@ -207,14 +171,53 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
   // location (only the latitude) and costs a cosine and two logarithms, so for a height it
   // waits until the tiers show whether the member shares a tier (below).
   const bool eagerPlanetQuality = wantNormal || shares != nullptr;
+  // Candidates are evaluated in tier order (priority, then spacing, then entry: the order
+  // the members are sorted into below). For a height, a complete tier with a member of full
+  // coverage has α = 1 and hides every tier below exactly (acc = its height, see below), so
+  // the candidates after it are not read, provided none is finer than the finest member so
+  // far (the resolution weights are relative to the finest member).
+  const double ratio = rules_.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules_.tierRatio;
+  const bool heightOnly = !wantNormal && shares == nullptr;
   const auto evaluateAll = [&](std::span<const std::uint32_t> candidates) {
-    // The first candidate's memory miss overlaps those of the others, fetched meanwhile.
-    for (std::size_t i = 1; i < candidates.size(); ++i) {
-      const Dataset& d = *entries[candidates[i]].dataset;
+    s.ranked.assign(candidates.begin(), candidates.end());
+    std::sort(s.ranked.begin(), s.ranked.end(), [&entries](std::uint32_t ia, std::uint32_t ib) {
+      const Dataset& a = *entries[ia].dataset;
+      const Dataset& b = *entries[ib].dataset;
+      if (a.options().priority != b.options().priority)
+        return a.options().priority > b.options().priority;
+      if (a.groundSpacing() != b.groundSpacing()) return a.groundSpacing() < b.groundSpacing();
+      return ia < ib;
+    });
+    // The first candidate's memory miss overlaps those of the others, fetched meanwhile:
+    // for a height, those of the first one's tier only (if the first covers the point fully,
+    // the ones below are not read, and a prefetch of theirs costs a locate and evicts).
+    const Dataset* first = s.ranked.empty() ? nullptr : entries[s.ranked.front()].dataset.get();
+    for (std::size_t i = 1; i < s.ranked.size(); ++i) {
+      const Dataset& d = *entries[s.ranked[i]].dataset;
+      if (heightOnly && (d.options().priority != first->options().priority ||
+                         d.groundSpacing() > first->groundSpacing() * ratio))
+        break;
       d.prefetch(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0);
     }
-    for (const std::uint32_t e : candidates) {
+    // The current tier: its first member's priority and spacing, and whether a member of it
+    // covers the point fully.
+    bool inTier = false, tierFull = false;
+    int tierPriority = 0;
+    double tierFinest = 0.0;
+    for (std::size_t i = 0; i < s.ranked.size(); ++i) {
+      const std::uint32_t e = s.ranked[i];
       const Dataset& d = *entries[e].dataset;
+      if (inTier &&
+          (d.options().priority != tierPriority || d.groundSpacing() > tierFinest * ratio)) {
+        // The tier is complete (the candidates are in tier order).
+        if (heightOnly && tierFull) {
+          bool finer = false;
+          for (std::size_t j = i; j < s.ranked.size(); ++j)
+            finer |= entries[s.ranked[j]].dataset->groundSpacing() < finest;
+          if (!finer) return;
+        }
+        inTier = tierFull = false;
+      }
       const bool quality = candidates.size() > 1 && (eagerPlanetQuality || !d.isPlanet());
       const std::size_t level = metres > 0.0 ? d.levelFor(metres) : 0;
       // Written in place, field by field: a Member built on the stack and copied in was read
@@ -234,6 +237,12 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
       m.spacing = d.groundSpacing();
       m.priority = d.options().priority;
       finest = std::min(finest, m.spacing);
+      if (!inTier) {
+        inTier = true;
+        tierPriority = m.priority;
+        tierFinest = m.spacing;
+      }
+      tierFull |= c.coverage == 1.0;
     }
   };
   const auto exactCandidates = [&]() -> std::span<const std::uint32_t> {
@@ -266,9 +275,9 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
   const bool weighted = s.members.size() > 1 || shares != nullptr;
   if (weighted) {
     for (Member& m : s.members) {
-      const double ratio = finest / m.spacing;
-      m.resolution =
-          rules_.resolutionPower == 2.0 ? ratio * ratio : std::pow(ratio, rules_.resolutionPower);
+      const double relative = finest / m.spacing;
+      m.resolution = rules_.resolutionPower == 2.0 ? relative * relative
+                                                   : std::pow(relative, rules_.resolutionPower);
     }
   } else {
     s.members.front().c.quality = 1.0;  // any positive weight: it is the only one
@@ -278,7 +287,6 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
   // datasets whose spacing is within rules_.tierRatio of its finest (FinestWins: equal
   // spacings only), so similar data blend by weight and much finer data composite over
   // coarser with their coverage as alpha (docs/composition.md "Tiers").
-  const double ratio = rules_.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules_.tierRatio;
   // The members in tier order, through their indices (moving Members would copy them).
   s.order.resize(s.members.size());
   for (std::size_t i = 0; i < s.order.size(); ++i) s.order[i] = static_cast<std::uint32_t>(i);
@@ -401,7 +409,7 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
     } else {
       accGrad = alpha * gradHt + (1.0 - alpha) * accGrad + (ht - acc) * gradAlpha;
       // A tier of full coverage hides the ones below exactly (1·ht + 0·acc would turn a
-      // height of -0 into +0 below a positive one): topTierHeight()'s answer.
+      // height of -0 into +0 below a positive one), as when evaluateAll() leaves them unread.
       acc = alpha == 1.0 ? ht : alpha * ht + (1.0 - alpha) * acc;
     }
     tiers.emplace_back(begin, end);

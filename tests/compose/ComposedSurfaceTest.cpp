@@ -100,16 +100,32 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
       named("only")));
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> lat(-30.0, 30.0), lon(-40.0, 40.0);
-  // Where a cell has several candidates and the first in tier order is alone in its tier
-  // and covers the point fully, height() reads that one only (topTierHeight()): the fine
-  // grid's interior, and (FinestWins: one tier per spacing) the regional grid's.
+  // Two coarse grids of priority 1 that share a tier over a finer one of priority 0: the
+  // top tier covers fully, but the weights are relative to the finest member, so the fine
+  // grid below must still be read (spacings not a power of 2 apart: the weights' scale
+  // would cancel exactly).
+  Catalogue priority(kMoon);
+  priority.add(Dataset::planet(
+      globalPlanet(kMoon, 1.0, [](double la, double lo) { return 50.0 + la - 0.3 * lo; }),
+      named("coarse", 0.0, 1)));
+  priority.add(
+      Dataset::planet(planetPyramid(kMoon, 39.25, -49.25, 1.5, 54, 67,
+                                    [](double la, double lo) { return 70.0 - 0.5 * la + lo; }),
+                      named("coarser", 0.0, 1)));
+  priority.add(
+      Dataset::planet(planetPyramid(kMoon, 19.85, -19.85, 0.3, 133, 133,
+                                    [](double la, double lo) { return 10.0 * std::sin(la) * lo; }),
+                      named("fine below")));
+  // Where a complete tier covers the point fully, a height reads no dataset below it
+  // (composeGeneral()): the fine grid's interior, and (FinestWins: one tier per spacing) the
+  // regional grid's.
   std::size_t single = 0, several = 0, threeTiers = 0, topAlone = 0;
-  for (const auto& [snapshot, policy] :
-       {std::pair{t.catalogue.snapshot(), Policy::Weighted},
-        std::pair{only.snapshot(), Policy::Weighted},
-        std::pair{three.catalogue.snapshot(), Policy::Weighted},
-        std::pair{t.catalogue.snapshot(), Policy::FinestWins},
-        std::pair{three.catalogue.snapshot(), Policy::FinestWins}}) {
+  for (const auto& [snapshot, policy] : {std::pair{t.catalogue.snapshot(), Policy::Weighted},
+                                         std::pair{only.snapshot(), Policy::Weighted},
+                                         std::pair{three.catalogue.snapshot(), Policy::Weighted},
+                                         std::pair{t.catalogue.snapshot(), Policy::FinestWins},
+                                         std::pair{three.catalogue.snapshot(), Policy::FinestWins},
+                                         std::pair{priority.snapshot(), Policy::Weighted}}) {
     const ComposedSurface s(snapshot, Rules{policy, 2.0});
     for (int i = 0; i < 3000; ++i) {
       const double la = lat(rng), lo = lon(rng);

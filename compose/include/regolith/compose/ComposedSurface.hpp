@@ -113,15 +113,10 @@ class ComposedSurface {
                          std::vector<Share>* shares) const;
   /// height() and heightAt() past their checks: fastHeight(), else the general path.
   [[nodiscard]] topo::HeightSample heightOf(double latDeg, double lonDeg, double metres) const;
-  /// A height from the top tier alone, where its one member covers the point fully (else
-  /// false): the cell's one candidate (Dataset::soleHeight()), or topTierHeight().
+  /// A height where the point's cell has one candidate and it answers (else false):
+  /// Dataset::soleHeight(), out of composeGeneral()'s large frame.
   bool fastHeight(std::span<const std::uint32_t> cell, double latDeg, double lonDeg, double metres,
                   double& height) const;
-  /// A height where the point's cell has 2 to 4 candidates, the first in tier order is
-  /// alone in its tier (no other of its priority within the tier ratio of its spacing) and
-  /// covers the point fully (else false): nested data, which hides the tiers below.
-  bool topTierHeight(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
-                     double metres, double& height) const;
   /// compose() past its shortcuts, given the point's cell candidates.
   ComposedSample composeGeneral(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
                                 double metres, bool wantNormal, std::vector<Share>* shares) const;
