@@ -315,14 +315,25 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
     // The qualities not evaluated yet. A member alone in its tier is the tier's height
     // exactly, whatever its weight (its w·h/w is never formed), so for a height any positive
     // quality gives the same bits; its normal (w·slope/w) and the shares use the quality.
+    // Planet grids of one body and spacing have one quality at a latitude (overlapping
+    // products of one kind): computed once.
+    const Dataset* last = nullptr;
+    double lastQuality = 0.0;
     for (std::size_t i = 0; i < s.order.size(); ++i) {
       Member& m = member(i);
       if (!m.qualityPending) continue;
       const bool alone = (i == 0 || !sameTier(member(i - 1), m)) &&
                          (i + 1 == s.order.size() || !sameTier(member(i + 1), m));
-      m.c.quality = alone && !wantNormal && shares == nullptr
-                        ? 1.0
-                        : entries[m.entry].dataset->quality(latDeg, lonDeg);
+      const Dataset& d = *entries[m.entry].dataset;
+      if (alone && !wantNormal && shares == nullptr) {
+        m.c.quality = 1.0;
+      } else if (last != nullptr && d.samePlanetQuality(*last)) {
+        m.c.quality = lastQuality;
+      } else {
+        m.c.quality = d.quality(latDeg, lonDeg);
+        last = &d;
+        lastQuality = m.c.quality;
+      }
       m.qualityPending = false;
     }
   }

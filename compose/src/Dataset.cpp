@@ -396,6 +396,16 @@ std::size_t Dataset::levelFor(double metres) const noexcept {
   return l;
 }
 
+bool Dataset::samePlanetQuality(const Dataset& other) const noexcept {
+  if (!isPlanet() || !other.isPlanet()) return false;
+  const topo::TopoGrid& a = levels_.front().level.grid;
+  const topo::TopoGrid& b = other.levels_.front().level.grid;
+  // planetQuality()'s inputs: the radii, the spacings and the nominal pixel made of them.
+  return body_.equatorialRadius() == other.body_.equatorialRadius() &&
+         body_.polarRadius() == other.body_.polarRadius() && a.spacingX() == b.spacingX() &&
+         a.spacingY() == b.spacingY() && planetNominal_ == other.planetNominal_;
+}
+
 double Dataset::quality(double latDeg, double lonDeg) const {
   const GridPoint g = locate(latDeg, lonDeg);
   if (!g.inside) return kMinQuality;

@@ -112,6 +112,11 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
       Dataset::planet(planetPyramid(kMoon, 39.25, -49.25, 1.5, 54, 67,
                                     [](double la, double lo) { return 70.0 - 0.5 * la + lo; }),
                       named("coarser", 0.0, 1)));
+  // A twin of the coarse grid's spacing, over part of it: one quality serves both.
+  priority.add(
+      Dataset::planet(planetPyramid(kMoon, 29.5, -29.5, 1.0, 50, 60,
+                                    [](double la, double lo) { return 60.0 + 0.2 * la * lo; }),
+                      named("coarse twin", 0.0, 1)));
   priority.add(
       Dataset::planet(planetPyramid(kMoon, 19.85, -19.85, 0.3, 133, 133,
                                     [](double la, double lo) { return 10.0 * std::sin(la) * lo; }),

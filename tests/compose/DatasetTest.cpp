@@ -172,6 +172,40 @@ TEST(Dataset, SoleHeightIsEvaluatesHeightWhereItAnswersWithCoverage) {
   }
 }
 
+TEST(Dataset, PlanetGridsOfOneBodyAndSpacingShareTheirQuality) {
+  // samePlanetQuality() (the composition computes such grids' quality once per point): true
+  // exactly for planet grids of one body and level-0 spacing, whatever their extent, and then
+  // quality() is equal at every point inside both.
+  const auto f = [](double, double) { return 0.0; };
+  const auto global = Dataset::planet(globalPlanet(kMars, 0.5, f), named("global"));
+  const auto part = Dataset::planet(testing::planetPyramid(kMars, 59.75, 10.25, 0.5, 100, 80, f),
+                                    named("part", 5000.0, 3));
+  const auto finer = Dataset::planet(testing::planetPyramid(kMars, 59.75, 10.25, 0.25, 100, 80, f),
+                                     named("finer"));
+  // The same longitude spacing, half the latitude spacing.
+  topo::GridPyramid anisotropic = testing::planetPyramid(kMars, 59.75, 10.25, 0.5, 100, 80, f);
+  anisotropic.levels[0].grid = topo::TopoGrid(100, 80, 10.25, 59.75, 0.5, 0.25);
+  const auto wider = Dataset::planet(anisotropic, named("wider"));
+  const auto moon = Dataset::planet(globalPlanet(topo::Body::moon(), 0.5, f), named("moon"));
+  const auto dem =
+      Dataset::dem(demPyramid(100.0, 11, 11, f),
+                   topo::Placement(topo::LocalTangentPlane(kMars, {0.0, 0.0, 0.0})), named("dem"));
+  EXPECT_TRUE(global->samePlanetQuality(*part));
+  EXPECT_TRUE(part->samePlanetQuality(*global));
+  EXPECT_TRUE(global->samePlanetQuality(*global));
+  EXPECT_FALSE(global->samePlanetQuality(*finer));
+  EXPECT_FALSE(global->samePlanetQuality(*wider));
+  EXPECT_FALSE(global->samePlanetQuality(*moon));
+  EXPECT_FALSE(global->samePlanetQuality(*dem));
+  EXPECT_FALSE(dem->samePlanetQuality(*dem));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> lat(11.0, 59.0), lon(11.0, 49.0);
+  for (int i = 0; i < 500; ++i) {
+    const double la = lat(rng), lo = lon(rng);
+    ASSERT_EQ(global->quality(la, lo), part->quality(la, lo)) << la << ", " << lo;
+  }
+}
+
 TEST(Dataset, RefusesBadOptionsWithClearMessages) {
   auto pyr = demPyramid(10.0, 11, 11, [](double, double) { return 0.0; });
   const topo::Placement pl(topo::LocalTangentPlane(kMars, {0.0, 0.0, 0.0}));

@@ -156,6 +156,9 @@ class Dataset {
   /// composition overlaps the memory misses of its datasets. Planet grids only (a DEM's
   /// placement costs a projection to locate the point, more than the miss it would hide).
   void prefetch(double latDeg, double lonDeg, std::size_t level = 0) const noexcept;
+  /// True if both are planet grids whose quality() is one function of the latitude: the
+  /// same body radii and level-0 spacings (quality() at a point inside both is then equal).
+  [[nodiscard]] bool samePlanetQuality(const Dataset& other) const noexcept;
   /// The projection quality alone at a point of the pixel extent (kMinQuality outside it).
   [[nodiscard]] double quality(double latDeg, double lonDeg) const;
   /// Coverage and quality only (no height read): the weight's spatial terms {c, q}, for
