@@ -205,19 +205,24 @@ void Composed(benchmark::State& state) {
 BENCHMARK(Composed)->Arg(1)->Arg(2)->Arg(3);
 
 // Batches of 64 points, one dataset: the per-point cost where the processor may overlap
-// queries (a rover's wheels are a batch).
-void PlainBatch(benchmark::State& state) {
-  const topo::TopoPlanet planet = paged().pager->planet("global");
+// queries (a rover's wheels are a batch). `query` writes the heights of a batch.
+template <class Query>
+void batchesOf64(benchmark::State& state, const Query& query) {
   const Points pts(1 << 16);
   std::vector<double> out(64);
   std::size_t i = 0;
   for (auto _ : state) {
-    planet.heights(std::span<const double>(pts.lat).subspan(i, 64),
-                   std::span<const double>(pts.lon).subspan(i, 64), std::span<double>(out), {});
+    query(std::span<const double>(pts.lat).subspan(i, 64),
+          std::span<const double>(pts.lon).subspan(i, 64), std::span<double>(out));
     benchmark::DoNotOptimize(out.data());
     i = (i + 64) & (pts.lat.size() - 1);
   }
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * 64);
+}
+
+void PlainBatch(benchmark::State& state) {
+  const topo::TopoPlanet planet = paged().pager->planet("global");
+  batchesOf64(state, [&](auto lats, auto lons, auto out) { planet.heights(lats, lons, out, {}); });
 }
 BENCHMARK(PlainBatch);
 
@@ -225,16 +230,7 @@ void ComposedBatch(benchmark::State& state) {
   compose::Catalogue cat(kMars);
   cat.add(compose::datasetFromStore(*paged().pager, "global"));
   const compose::ComposedSurface s(cat.snapshot(), compose::Rules{compose::Policy::Weighted, 2.0});
-  const Points pts(1 << 16);
-  std::vector<double> out(64);
-  std::size_t i = 0;
-  for (auto _ : state) {
-    s.heights(std::span<const double>(pts.lat).subspan(i, 64),
-              std::span<const double>(pts.lon).subspan(i, 64), std::span<double>(out), {});
-    benchmark::DoNotOptimize(out.data());
-    i = (i + 64) & (pts.lat.size() - 1);
-  }
-  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * 64);
+  batchesOf64(state, [&](auto lats, auto lons, auto out) { s.heights(lats, lons, out, {}); });
 }
 BENCHMARK(ComposedBatch);
 

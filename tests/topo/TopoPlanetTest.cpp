@@ -214,18 +214,16 @@ bool sameBits(double a, double b) { return a == b || (std::isnan(a) && std::isna
 bool sameBits(const glm::dvec3& a, const glm::dvec3& b) {
   return sameBits(a.x, b.x) && sameBits(a.y, b.y) && sameBits(a.z, b.z);
 }
-}  // namespace
-
-TEST(TopoPlanet, PrefetchIsAHintThatTakesAnyPointAndChangesNoAnswer) {
-  // prefetch() (a composition overlaps its datasets' memory misses with it) on a resident and
-  // a block-paged global grid and a regional one, for points inside, on the seam, in the caps,
-  // beyond the extent and not numbers at all: no error, and every height after it is the one
-  // before it, bit for bit.
-  const double d = 2.0;
-  const std::size_t rows = 90, cols = 180;
-  const TopoGrid g(rows, cols, -180.0 + d / 2, 90.0 - d / 2, d, d);
-  const TopoGrid regional(20, 30, 10.0, 20.0, 0.5, 0.5);
-  auto samples = [](const TopoGrid& grid) {
+/// A global 2° grid of field(), resident and in 7 × 5 blocks, and a regional 0.5° one.
+struct ThreeGrids {
+  TopoPlanet resident, blocks, part;
+  ThreeGrids(const Body& body, LatitudeType lt)
+      : resident(global(), body, lt, std::make_shared<InMemorySamples>(90, 180, of(global()))),
+        blocks(global(), body, lt, std::make_shared<test::BlockSource>(90, 180, of(global()))),
+        part(regional(), body, lt, std::make_shared<InMemorySamples>(20, 30, of(regional()))) {}
+  static TopoGrid global() { return {90, 180, -179.0, 89.0, 2.0, 2.0}; }
+  static TopoGrid regional() { return {20, 30, 10.0, 20.0, 0.5, 0.5}; }
+  static std::vector<float> of(const TopoGrid& grid) {
     std::vector<float> s(grid.rows() * grid.cols());
     for (std::size_t r = 0; r < grid.rows(); ++r) {
       for (std::size_t c = 0; c < grid.cols(); ++c) {
@@ -234,13 +232,16 @@ TEST(TopoPlanet, PrefetchIsAHintThatTakesAnyPointAndChangesNoAnswer) {
       }
     }
     return s;
-  };
-  const Body body = Body::marsSphere();
-  const auto lt = LatitudeType::Planetodetic;
-  const TopoPlanet resident(g, body, lt, std::make_shared<InMemorySamples>(rows, cols, samples(g)));
-  const TopoPlanet blocks(g, body, lt, std::make_shared<test::BlockSource>(rows, cols, samples(g)));
-  const TopoPlanet part(regional, body, lt,
-                        std::make_shared<InMemorySamples>(20, 30, samples(regional)));
+  }
+};
+}  // namespace
+
+TEST(TopoPlanet, PrefetchIsAHintThatTakesAnyPointAndChangesNoAnswer) {
+  // prefetch() (a composition overlaps its datasets' memory misses with it) on a resident and
+  // a block-paged global grid and a regional one, for points inside, on the seam, in the caps,
+  // beyond the extent and not numbers at all: no error, and every height after it is the one
+  // before it, bit for bit.
+  const ThreeGrids grids(Body::marsSphere(), LatitudeType::Planetodetic);
   const double inf = std::numeric_limits<double>::infinity();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<LatLon> pts = {{0.0, 0.0},     {89.9, 10.0},  {-90.0, 0.0},  {90.0, 180.0},
@@ -250,7 +251,7 @@ TEST(TopoPlanet, PrefetchIsAHintThatTakesAnyPointAndChangesNoAnswer) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> lat(-90.0, 90.0), lon(-540.0, 540.0);
   for (int i = 0; i < 500; ++i) pts.push_back({lat(rng), lon(rng)});
-  for (const TopoPlanet* t : {&resident, &blocks, &part}) {
+  for (const TopoPlanet* t : {&grids.resident, &grids.blocks, &grids.part}) {
     std::vector<HeightSample> before;
     for (const LatLon& p : pts) {
       const bool valid =
@@ -274,26 +275,7 @@ TEST(TopoPlanet, HeightUncheckedIsHeightWithoutTheChecks) {
   // bits at every valid point, on a global, a block-paged and a regional grid, in the caps,
   // on the seam and beyond a turn, for every interpolation; height() still refuses what
   // heightUnchecked() leaves to its caller.
-  const double d = 2.0;
-  const std::size_t rows = 90, cols = 180;
-  const TopoGrid g(rows, cols, -180.0 + d / 2, 90.0 - d / 2, d, d);
-  const TopoGrid regional(20, 30, 10.0, 20.0, 0.5, 0.5);
-  auto samples = [](const TopoGrid& grid) {
-    std::vector<float> s(grid.rows() * grid.cols());
-    for (std::size_t r = 0; r < grid.rows(); ++r) {
-      for (std::size_t c = 0; c < grid.cols(); ++c) {
-        const glm::dvec2 p = grid.sampleCentre(double(r), double(c));
-        s[r * grid.cols() + c] = float(field(p.y, p.x));
-      }
-    }
-    return s;
-  };
-  const Body body = Body::marsEllipsoid();
-  const auto lt = LatitudeType::Planetocentric;
-  const TopoPlanet resident(g, body, lt, std::make_shared<InMemorySamples>(rows, cols, samples(g)));
-  const TopoPlanet blocks(g, body, lt, std::make_shared<test::BlockSource>(rows, cols, samples(g)));
-  const TopoPlanet part(regional, body, lt,
-                        std::make_shared<InMemorySamples>(20, 30, samples(regional)));
+  const ThreeGrids grids(Body::marsEllipsoid(), LatitudeType::Planetocentric);
   std::vector<LatLon> pts = {{0.0, 0.0},     {89.9, 10.0},  {-90.0, 0.0},  {90.0, 180.0},
                              {12.0, -180.0}, {12.0, 179.9}, {15.0, 25.0},  {-60.0, 1e308},
                              {0.0, -1e308},  {5.0, 720.0},  {19.75, 10.0}, {10.25, 24.75}};
@@ -302,7 +284,7 @@ TEST(TopoPlanet, HeightUncheckedIsHeightWithoutTheChecks) {
   for (int i = 0; i < 1000; ++i) pts.push_back({lat(rng), lon(rng)});
   std::uniform_real_distribution<double> rlat(9.0, 21.0), rlon(9.0, 26.0);
   for (int i = 0; i < 500; ++i) pts.push_back({rlat(rng), rlon(rng)});
-  for (const TopoPlanet* t : {&resident, &blocks, &part}) {
+  for (const TopoPlanet* t : {&grids.resident, &grids.blocks, &grids.part}) {
     for (const Interpolation interp :
          {Interpolation::Bilinear, Interpolation::Bicubic, Interpolation::Nearest}) {
       for (const LatLon& p : pts) {
@@ -316,7 +298,8 @@ TEST(TopoPlanet, HeightUncheckedIsHeightWithoutTheChecks) {
   for (const LatLon bad :
        {LatLon{nan, 0.0}, LatLon{0.0, nan}, LatLon{90.5, 0.0}, LatLon{-1e300, 0.0},
         LatLon{0.0, -std::numeric_limits<double>::infinity()}}) {
-    EXPECT_THROW((void)resident.height(bad), InvalidArgument) << bad.latDeg << ", " << bad.lonDeg;
+    EXPECT_THROW((void)grids.resident.height(bad), InvalidArgument)
+        << bad.latDeg << ", " << bad.lonDeg;
   }
 }
 
