@@ -48,7 +48,7 @@ void runView(const Args& a) {
   auto [fw, fh] = window.framebufferSize();
   // A script's screenshots and picks must not depend on how fast the terrain reads.
   viewer::Viewer view(std::move(scene), fw, fh, std::cout,
-                      a.script.empty() ? clod::Loading::Background : clod::Loading::Wait);
+                      a.script.empty() ? render::Loading::Background : render::Loading::Wait);
   std::vector<double> frameMs;
   std::size_t step = 0;
   double last = 0.0;

@@ -1,5 +1,5 @@
 #include <regolith/clod/Camera.hpp>
-#include <regolith/scenegraph/Pose.hpp>
+#include <regolith/topo/ViewUp.hpp>
 
 #include <glm/geometric.hpp>
 
@@ -13,8 +13,8 @@ glm::dvec3 Camera::forward() const noexcept { return glm::normalize(target - pos
 glm::dmat3 Camera::rotation() const noexcept {
   const glm::dvec3 f = forward();
   // At nadir, or looking at the body's centre, the local vertical is parallel to the view:
-  // another up then (Pose::viewUp), not a NaN matrix and an empty image.
-  const glm::dvec3 r = glm::normalize(glm::cross(f, scenegraph::Pose::viewUp(f, up)));
+  // another up then (topo::viewUp()), not a NaN matrix and an empty image.
+  const glm::dvec3 r = glm::normalize(glm::cross(f, topo::viewUp(f, up)));
   const glm::dvec3 u = glm::cross(r, f);
   // glm is column-major: m[col][row]; rows are r, u, −f.
   glm::dmat3 m(1.0);

@@ -20,6 +20,7 @@
 #include <deque>
 #include <exception>
 #include <mutex>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <thread>
@@ -427,6 +428,15 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
   glBindVertexArray(0);
   gl::checkGl("ClipmapTerrain::draw()");
   return frame;
+}
+
+// The public bound and the shader's arrays are one number.
+static_assert(kMaxClipmapCutOuts == static_cast<std::size_t>(shaders::kMaxCutOuts));
+
+glm::dvec3 cutOutProjection(double near, double fovYDegrees, int width, int height) {
+  const double f = 1.0 / std::tan(0.5 * fovYDegrees * std::numbers::pi / 180.0);
+  const double aspect = static_cast<double>(width) / height;
+  return {near, aspect / f, 1.0 / f};
 }
 
 void ClipmapTerrain::setCutOuts(std::span<const ClipmapCutOut> cutOuts,

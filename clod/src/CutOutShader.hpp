@@ -1,6 +1,7 @@
 #pragma once
 // Cut-outs (scene graph, issue 6): where a DEM has data, the planet under it gives way.
-// Private to clod. SceneRenderer sets the uniforms; ClipmapTerrain only compiles them in.
+// Private to clod. ClipmapTerrain compiles the test in and sets its uniforms from what
+// render::SceneRenderer hands it (ClipmapTerrain::setCutOuts()).
 //
 // The fragment's camera-relative position is rebuilt from gl_FragCoord and its reversed-Z
 // depth (depth = near / view distance), mapped to the cutting DEM's mask cells (eye → (col,

@@ -217,7 +217,7 @@ gl::RgbaImage renderSceneView(const SceneViewOptions& options) {
   const scenegraph::NodeId victoria = g.at("victoria");
   const scenegraph::NodeId cam =
       g.add(victoria, "view_camera", options.camera, scenegraph::NodeKind::Camera);
-  clod::SceneView view;
+  render::SceneView view;
   view.fovYDegrees = options.fovYDegrees;
   view.near = options.near;
   view.width = options.width;
@@ -280,7 +280,7 @@ FlyoverSummary renderFlyover(scene::Scene& s, const FlyoverOptions& options) {
     const topo::Body& body = *mars->pyramid->body();
     const DemoCameras paper = paperCameraNodes(s);
     const scenegraph::NodeId orbitCamera = paper.orbit, mastCamera = paper.mast;
-    clod::SceneRenderer renderer;
+    render::SceneRenderer renderer;
     s.registerWith(renderer);
     gl::RenderTarget target(options.width, options.height);
     // The far field of Mars in the planet clipmap's albedo and light (null when the scene's
@@ -336,7 +336,7 @@ FlyoverSummary renderFlyover(scene::Scene& s, const FlyoverOptions& options) {
       if (focus == victoriaNode && summary.focusSwitchFrame < 0) summary.focusSwitchFrame = i;
       if (i == 0) summary.startDistance = dist;
       summary.endDistance = dist;
-      clod::SceneView view;
+      render::SceneView view;
       view.fovYDegrees = 45.0;
       view.near = std::clamp(0.01 * dist, 0.05, 1000.0);
       view.width = options.width;
@@ -355,7 +355,7 @@ FlyoverSummary renderFlyover(scene::Scene& s, const FlyoverOptions& options) {
       if (farField) {
         // Beyond the clipmaps: the far field, in Mars's body-fixed frame, where nothing is
         // drawn yet.
-        const clod::Camera marsCamera = clod::cameraInItem(g.relative(marsNode, cam), view);
+        const clod::Camera marsCamera = render::cameraInItem(g.relative(marsNode, cam), view);
         const glm::dvec3 sun =
             g.relative(marsNode, focus).applyVector(glm::normalize(view.lightInFocus));
         const farfield::FarFieldFrame ff = farField->draw(target, marsCamera, sun, true);
@@ -374,7 +374,7 @@ FlyoverSummary renderFlyover(scene::Scene& s, const FlyoverOptions& options) {
       const int half = options.width / 2;
       target.clear({0.02F, 0.02F, 0.04F, 1.0F});
       for (const auto& [camera, x] : {std::pair{orbitCamera, 0}, {mastCamera, half}}) {
-        clod::SceneView view;
+        render::SceneView view;
         view.x = x;
         view.width = half;
         view.height = options.height;

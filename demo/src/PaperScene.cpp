@@ -60,7 +60,7 @@ PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layou
   n.rover = graph.add(n.victoria, "rover", roverPose(layout.roverInDem, layout.roverHeadingDeg),
                       NodeKind::Object, kDrawRover);
   // Rover frame: x forward, y left, z up. Mast camera 2.1 m up, just ahead of the mast head
-  // of clod::roverMesh(), looking 15° down ahead.
+  // of render::roverMesh(), looking 15° down ahead.
   n.mastCamera =
       graph.add(n.rover, "mast_camera",
                 Pose::lookAt({0.85, 0.0, 2.1},

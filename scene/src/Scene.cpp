@@ -32,7 +32,7 @@ namespace regolith::scene {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
-constexpr std::size_t kMaxDemsPerBody = 4;  // clod::SceneRenderer::addCutOut()
+constexpr std::size_t kMaxDemsPerBody = 4;  // render::SceneRenderer::addCutOut()
 
 glm::dvec3 vec(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
 glm::vec3 colour(const std::array<double, 3>& a) {
@@ -606,7 +606,7 @@ gl::RgbaImage Scene::render(const std::string& camera) const {
     throw InvalidArgument("Scene::render(): no camera named '" + camera +
                           "', expected one of: " + (s.d.cameras.empty() ? "none" : names.str()));
   }
-  clod::SceneView view;
+  render::SceneView view;
   view.fovYDegrees = c->fovY;
   view.near = c->near;
   view.width = c->width;
@@ -620,7 +620,7 @@ gl::RgbaImage Scene::render(const std::string& camera) const {
   return render(s.cameras.at(camera), s.graph.at(focusOf(camera)), view, c->width, c->height);
 }
 
-void Scene::registerWith(clod::SceneRenderer& renderer) const {
+void Scene::registerWith(render::SceneRenderer& renderer) const {
   const Impl& s = *impl_;
   for (const Impl::Terrain& t : s.terrains) renderer.addTerrain(t.key, t.pyramid, t.options);
   for (const Impl::Terrain& t : s.terrains) {
@@ -628,17 +628,17 @@ void Scene::registerWith(clod::SceneRenderer& renderer) const {
     for (const Impl::Terrain& b : s.terrains)
       if (b.name == t.body) renderer.addCutOut(b.key, t.key);
   }
-  for (const Impl::Thing& o : s.objects) renderer.addMesh(o.key, clod::roverMesh(), o.colour);
+  for (const Impl::Thing& o : s.objects) renderer.addMesh(o.key, render::roverMesh(), o.colour);
 }
 
 gl::RgbaImage Scene::render(scenegraph::NodeId camera, scenegraph::NodeId focus,
-                            clod::SceneView view, int width, int height) const {
+                            render::SceneView view, int width, int height) const {
   const Impl& s = *impl_;
   std::unique_ptr<gl::HeadlessContext> context;
   if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<gl::HeadlessContext>();
   gl::RgbaImage image;
   {
-    clod::SceneRenderer renderer;
+    render::SceneRenderer renderer;
     registerWith(renderer);
     gl::RenderTarget target(width, height);
     view.lightInFocus = s.graph.relative(focus, s.lightFrame).applyVector(s.lightDirection);

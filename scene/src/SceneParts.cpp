@@ -85,9 +85,9 @@ std::unique_ptr<farfield::FarField> planetFarField(
 
 farfield::FarFieldMode drawFarField(farfield::FarField& farField, const scenegraph::SceneGraph& g,
                                     scenegraph::NodeId planet, scenegraph::NodeId camera,
-                                    scenegraph::NodeId focus, const clod::SceneView& view,
+                                    scenegraph::NodeId focus, const render::SceneView& view,
                                     const gl::RenderTarget& target) {
-  const clod::Camera planetCamera = clod::cameraInItem(g.relative(planet, camera), view);
+  const clod::Camera planetCamera = render::cameraInItem(g.relative(planet, camera), view);
   const glm::dvec3 sun = g.relative(planet, focus).applyVector(glm::normalize(view.lightInFocus));
   return farField.draw(target, planetCamera, sun, true).mode;
 }

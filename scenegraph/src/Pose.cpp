@@ -1,6 +1,7 @@
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
 #include <regolith/scenegraph/Pose.hpp>
+#include <regolith/topo/ViewUp.hpp>
 
 #include <glm/geometric.hpp>
 
@@ -40,24 +41,9 @@ Pose Pose::lookAt(const glm::dvec3& eye, const glm::dvec3& target, const glm::dv
   if (!(glm::length(d) > 0.0))
     throw InvalidArgument("Pose::lookAt(): eye and target coincide, expected distinct points");
   const glm::dvec3 f = glm::normalize(d);
-  const glm::dvec3 r = glm::normalize(glm::cross(f, viewUp(f, up)));
+  const glm::dvec3 r = glm::normalize(glm::cross(f, topo::viewUp(f, up)));
   const glm::dvec3 u = glm::cross(r, f);
   return fromAxes(eye, r, u, -f);
-}
-
-glm::dvec3 Pose::viewUp(const glm::dvec3& forward, const glm::dvec3& up) noexcept {
-  const double lf = glm::length(forward), lu = glm::length(up);
-  // sin of the angle between them; NaN (not finite input) fails the test too.
-  const double s = glm::length(glm::cross(forward, up)) / (lf * lu);
-  if (s > 1e-6) return up;
-  const glm::dvec3 f = forward / lf;
-  int k = 0;  // the axis least aligned with the view
-  for (int i = 1; i < 3; ++i) {
-    if (std::abs(f[i]) < std::abs(f[k])) k = i;
-  }
-  glm::dvec3 e(0.0);
-  e[k] = 1.0;
-  return glm::normalize(e - f * glm::dot(f, e));
 }
 
 Pose Pose::inverse() const noexcept {

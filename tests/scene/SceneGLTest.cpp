@@ -3,8 +3,8 @@
 // drawing the demo's pixels.
 #include <regolith/clod/Camera.hpp>
 #include <regolith/clod/Effects.hpp>
-#include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/render/SceneRenderer.hpp>
 #include <regolith/scene/Scene.hpp>
 #include <regolith/scene/SceneDescription.hpp>
 #include <regolith/scenegraph/Pose.hpp>
@@ -189,12 +189,12 @@ TEST(SceneGL, DemoSceneFileDrawsTheDemosPixels) {
   EXPECT_NEAR(rover.x, view.roverX, 1e-9);
   EXPECT_NEAR(rover.y, view.roverY, 1e-9);
   EXPECT_EQ(rover.z, built.demHeight("victoria", view.roverX, view.roverY));
-  clod::SceneView sv;
+  render::SceneView sv;
   sv.width = view.width;
   sv.height = view.height;
   sv.fovYDegrees = view.fovYDegrees;
   sv.near = view.near;
-  const clod::Camera camera = clod::cameraInItem(view.camera, sv);
+  const clod::Camera camera = render::cameraInItem(view.camera, sv);
   const glm::dvec3 body = camera.project({rover.x, rover.y, rover.z + 0.8});
   const auto* r = drawn.pixel(static_cast<int>(body.x), static_cast<int>(body.y));
   EXPECT_NEAR(r[0], r[1], 12) << body.x << ", " << body.y;

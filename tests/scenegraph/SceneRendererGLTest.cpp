@@ -1,11 +1,11 @@
-// clod::SceneRenderer drawing the paper's scene (the demo's scene file, demo::buildScene()): the
+// render::SceneRenderer drawing the paper's scene (the demo's scene file, demo::buildScene()): the
 // DEM wins over the planet with no gap at the border, sits at its geodetic place and height, two
 // DEMs on one planet, several cameras, and a focus switch that changes nothing on screen.
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/gl/RenderTarget.hpp>
+#include <regolith/render/SceneRenderer.hpp>
 #include <regolith/scene/Scene.hpp>
 #include <regolith/scenegraph/SitePose.hpp>
 #include <regolith/topo/Projection.hpp>
@@ -79,7 +79,7 @@ class PaperScene {
   [[nodiscard]] glm::dvec3 lightInFocus(NodeId focus) const {
     return scene_.lightIn(scene_.graph().node(focus).name);
   }
-  void registerWith(clod::SceneRenderer& r) const { scene_.registerWith(r); }
+  void registerWith(render::SceneRenderer& r) const { scene_.registerWith(r); }
   [[nodiscard]] std::shared_ptr<const clod::HeightPyramid> mars() const { return pyramid("mars"); }
   [[nodiscard]] std::shared_ptr<const clod::HeightPyramid> victoria() const {
     return pyramid("victoria");
@@ -121,7 +121,7 @@ class SceneGLTest : public ::testing::Test {
   static void SetUpTestSuite() {
     test::glContext();
     scene_ = std::make_unique<PaperScene>(sceneOptions(Full));
-    renderer_ = std::make_unique<clod::SceneRenderer>();
+    renderer_ = std::make_unique<render::SceneRenderer>();
     scene_->registerWith(*renderer_);
     auto& g = scene_->graph();
     camInMars_ = g.add(scene_->nodes().mars, "test_camera_mars", Pose{}, NodeKind::Camera);
@@ -145,7 +145,7 @@ class SceneGLTest : public ::testing::Test {
     test::glContext();
     gl::RenderTarget target(w, h);
     target.clear(kMagenta);
-    clod::SceneView view;
+    render::SceneView view;
     view.width = w;
     view.height = h;
     view.fovYDegrees = fov;
@@ -153,10 +153,10 @@ class SceneGLTest : public ::testing::Test {
     view.lightInFocus = scene_->lightInFocus(focus);
     const RenderList list = scene_->graph().renderList(focus, camera);
     renderer_->prepare(list, view);
-    const clod::SceneFrame f = renderer_->draw(list, view);
+    const render::SceneFrame f = renderer_->draw(list, view);
     EXPECT_EQ(f.itemsUnknown, 0U);
     Shot s{target.readColor(), target.readDepth(),
-           clod::cameraInItem(list.findDrawable(kDrawMars)->cameraInItem(), view)};
+           render::cameraInItem(list.findDrawable(kDrawMars)->cameraInItem(), view)};
     return s;
   }
 
@@ -182,7 +182,7 @@ class SceneGLTest : public ::testing::Test {
   }
 
   static inline std::unique_ptr<PaperScene> scene_;
-  static inline std::unique_ptr<clod::SceneRenderer> renderer_;
+  static inline std::unique_ptr<render::SceneRenderer> renderer_;
   static inline NodeId camInMars_ = 0, camInDem_ = 0;
 };
 
@@ -343,7 +343,7 @@ TEST_F(SceneRendererGLTest, OrbitAndMastCamerasRenderTheSameSceneAsViewports) {
   gl::RenderTarget target(320, 120);
   target.clear(kMagenta);
   for (const auto& [camera, x] : {std::pair{n.orbitCamera, 0}, {n.mastCamera, 160}}) {
-    clod::SceneView view;
+    render::SceneView view;
     view.x = x;
     view.width = 160;
     view.height = 120;
@@ -454,7 +454,7 @@ TEST_F(SceneRendererGLTest, LargeDemCutsThePlanetThroughACoarserMask) {
   auto dem =
       std::make_shared<const clod::HeightPyramid>(std::move(levels), clod::SurfaceKind::Plane);
   test::glContext();
-  clod::SceneRenderer r;
+  render::SceneRenderer r;
   clod::ClipmapOptions o;
   o.size = 63;
   o.albedo = demo::kPlanetAlbedo;
@@ -472,7 +472,7 @@ TEST_F(SceneRendererGLTest, LargeDemCutsThePlanetThroughACoarserMask) {
             NodeKind::Camera);
   gl::RenderTarget target(200, 150);
   target.clear(kMagenta);
-  clod::SceneView view;
+  render::SceneView view;
   view.width = 200;
   view.height = 150;
   view.near = 1.0;
@@ -507,7 +507,7 @@ TEST_F(SceneRendererGLTest, DemWinsWhereItHasDataEvenBelowThePlanet) {
   test::glContext();
   std::size_t demPixels[2] = {0, 0};
   for (const bool cut : {false, true}) {
-    clod::SceneRenderer r;
+    render::SceneRenderer r;
     clod::ClipmapOptions o;
     o.size = 63;
     o.albedo = demo::kPlanetAlbedo;
@@ -517,7 +517,7 @@ TEST_F(SceneRendererGLTest, DemWinsWhereItHasDataEvenBelowThePlanet) {
     if (cut) r.addCutOut(0, 1);
     gl::RenderTarget target(200, 150);
     target.clear(kMagenta);
-    clod::SceneView view;
+    render::SceneView view;
     view.width = 200;
     view.height = 150;
     view.near = 1.0;
@@ -543,15 +543,15 @@ TEST_F(SceneRendererGLTest, DemWinsWhereItHasDataEvenBelowThePlanet) {
 
 TEST_F(SceneRendererGLTest, RejectsBadRegistrations) {
   test::glContext();
-  clod::SceneRenderer r;
+  render::SceneRenderer r;
   EXPECT_THROW(r.addTerrain(1, nullptr), InvalidArgument);
   r.addTerrain(0, scene_->mars());
   r.addTerrain(1, scene_->victoria());
   EXPECT_THROW(r.addTerrain(1, scene_->victoria()), InvalidArgument);
   EXPECT_THROW(r.addCutOut(1, 0), InvalidArgument);  // a DEM is no planet
   EXPECT_THROW(r.addCutOut(0, 7), InvalidArgument);  // unknown
-  EXPECT_THROW(r.addMesh(2, {clod::MeshVertex{}}, {1, 1, 1}), InvalidArgument);
-  clod::SceneView bad;
+  EXPECT_THROW(r.addMesh(2, {render::MeshVertex{}}, {1, 1, 1}), InvalidArgument);
+  render::SceneView bad;
   bad.width = 0;
   EXPECT_THROW(r.draw(RenderList{}, bad), InvalidArgument);
 }
@@ -560,7 +560,7 @@ TEST_F(SceneRendererGLTest, OnlyAPlanetThatADemCutsCarriesTheCutOutTest) {
   // The cut-out test is shader code like an effect: a planet compiles it only once a DEM is
   // registered to win over it; until then (and for DEMs) the program is the bare one.
   test::glContext();
-  clod::SceneRenderer r;
+  render::SceneRenderer r;
   r.addTerrain(0, scene_->mars());
   r.addTerrain(1, scene_->victoria());
   const auto fragment = [&](int key) { return r.terrain(key)->programSources().fragment; };

@@ -170,7 +170,7 @@ ViewScene fromScene(const std::shared_ptr<scene::Scene>& built, const std::strin
     if (!t.planet && firstDem == nullptr) firstDem = &t;
   }
   for (const scene::SceneObject& o : built->objects()) {
-    v.meshes.push_back({o.drawable, clod::roverMesh(), o.colour});
+    v.meshes.push_back({o.drawable, render::roverMesh(), o.colour});
     v.objects.push_back({o.name, o.node, nullptr, 4.0});
   }
   for (const scene::Camera& c : built->description().cameras) {

@@ -7,8 +7,8 @@
 // nothing else.
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
-#include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
+#include <regolith/render/SceneRenderer.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
 #include <regolith/store/PatchCache.hpp>
 
@@ -44,7 +44,7 @@ struct ViewTerrain {
 /// A small mesh (a rover) in the frame of the node whose drawable key is `drawable`.
 struct ViewMesh {
   int drawable = 0;
-  std::vector<clod::MeshVertex> vertices;
+  std::vector<render::MeshVertex> vertices;
   glm::vec3 albedo{0.8F};
 };
 

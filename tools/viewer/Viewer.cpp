@@ -60,7 +60,7 @@ std::string Pick::text() const {
   return buf;
 }
 
-Viewer::Viewer(ViewScene scene, int width, int height, std::ostream& log, clod::Loading loading)
+Viewer::Viewer(ViewScene scene, int width, int height, std::ostream& log, render::Loading loading)
     : scene_(std::move(scene)), log_(log), loading_(loading) {
   if (scene_.objects.empty() || scene_.openings.empty() || !scene_.graph)
     throw InvalidArgument("view: the scene has no object to look at");
@@ -84,7 +84,7 @@ Viewer::Viewer(ViewScene scene, int width, int height, std::ostream& log, clod::
 Viewer::~Viewer() = default;
 
 void Viewer::rebuild() {
-  renderer_ = std::make_unique<clod::SceneRenderer>();
+  renderer_ = std::make_unique<render::SceneRenderer>();
   farFields_.clear();
   for (std::size_t t = 0; t < scene_.terrains.size(); ++t) {
     const ViewTerrain& terrain = scene_.terrains[t];
@@ -187,9 +187,9 @@ scenegraph::NodeId Viewer::shownCamera(std::size_t viewport) {
   return node;
 }
 
-clod::SceneView Viewer::viewOf(std::size_t viewport) const {
+render::SceneView Viewer::viewOf(std::size_t viewport) const {
   const Viewport& v = viewports_[viewport];
-  clod::SceneView view;
+  render::SceneView view;
   if (v.state.sceneCamera >= 0) {
     const ViewCamera& c = scene_.cameras[static_cast<std::size_t>(v.state.sceneCamera)];
     view.fovYDegrees = c.fovYDegrees;
@@ -249,7 +249,7 @@ void Viewer::switchFocus(std::size_t viewport, std::size_t object) {
   // Two world points that stay put: the old focus's origin and the new one's. Projected
   // with the camera before (in the old focus frame) and after (in the new one), each must
   // land on the same pixel.
-  const clod::SceneView view = viewOf(viewport);
+  const render::SceneView view = viewOf(viewport);
   const auto project = [&](const ViewportState& st, const glm::dvec3& p) {
     clod::Camera c;
     c.position = st.eye;
@@ -406,7 +406,7 @@ void Viewer::drag(double dx, double dy, int button) {
     setOrbit(s, hd + 0.3 * dx, el + 0.3 * dy, d);
   } else {
     // Pan: the look-at point follows the cursor on the ground.
-    const clod::SceneView view = viewOf(active_);
+    const render::SceneView view = viewOf(active_);
     const double metresPerPixel =
         2.0 * d * std::tan(0.5 * view.fovYDegrees * kDeg) / std::max(view.height, 1);
     glm::dvec3 e, n, u;
@@ -491,17 +491,17 @@ void Viewer::draw(int width, int height) {
       v.target = std::make_unique<gl::RenderTarget>(v.width, v.height);
     const scenegraph::NodeId camera = shownCamera(k);
     const scenegraph::NodeId focus = scene_.objects[v.state.object].node;
-    const clod::SceneView view = viewOf(k);
+    const render::SceneView view = viewOf(k);
     v.target->clear(kSpace);
     const scenegraph::RenderList list = scene_.graph->renderList(focus, camera);
-    renderer_->prepare(list, view, split_ ? clod::Loading::Wait : loading_);
-    const clod::SceneFrame frame = renderer_->draw(list, view);
+    renderer_->prepare(list, view, split_ ? render::Loading::Wait : loading_);
+    const render::SceneFrame frame = renderer_->draw(list, view);
     vertices_ += frame.vertices;
     for (std::size_t t = 0; t < scene_.terrains.size(); ++t) {
       farfield::FarField* farField = farFields_[t][k].get();
       if (farField == nullptr) continue;
       const scenegraph::NodeId body = scene_.terrains[t].node;
-      const clod::Camera inBody = clod::cameraInItem(scene_.graph->relative(body, camera), view);
+      const clod::Camera inBody = render::cameraInItem(scene_.graph->relative(body, camera), view);
       const farfield::FarFieldFrame ff = farField->draw(*v.target, inBody, lightIn(body), true);
       if (ff.mode == farfield::FarFieldMode::Pgm) {
         vertices_ += static_cast<std::size_t>(farField->pgm().options().gridWidth) *
@@ -585,8 +585,8 @@ Pick Viewer::pick(double x, double y) {
     if (depth > 0.0F) {
       const scenegraph::NodeId camera = shownCamera(k);
       const scenegraph::NodeId focus = scene_.objects[v.state.object].node;
-      const clod::SceneView view = viewOf(k);
-      const clod::Camera cam = clod::cameraInItem(scene_.graph->relative(focus, camera), view);
+      const render::SceneView view = viewOf(k);
+      const clod::Camera cam = render::cameraInItem(scene_.graph->relative(focus, camera), view);
       // The pixel's centre, at the depth it holds, in double.
       const glm::dvec3 ray = cam.ray(px + 0.5, py + 0.5);
       const double along = cam.viewDistance(static_cast<double>(depth));

@@ -4,10 +4,10 @@
 // a HUD and screenshots. It draws into offscreen render targets, so the window (gl::Window)
 // only shows its image and a script can drive it exactly as a user would.
 #include <regolith/clod/Camera.hpp>
-#include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/farfield/FarField.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/gl/Window.hpp>
+#include <regolith/render/SceneRenderer.hpp>
 
 #include "Hud.hpp"
 #include "ViewScene.hpp"
@@ -54,13 +54,13 @@ struct ViewportState {
 class Viewer {
  public:
   /// `log` receives one line per pick, focus switch, effect toggle and screenshot.
-  /// `loading`: how the terrains load (clod::SceneRenderer::prepare()). In the background (the
+  /// `loading`: how the terrains load (render::SceneRenderer::prepare()). In the background (the
   /// default) a frame never waits for a read and shows coarser levels until the finer
   /// arrive; Wait for frames that must not depend on read speed (scripts with screenshots).
   /// Split viewports always wait: their two cameras move each terrain's clipmap twice a
   /// frame, and in the background neither view would settle.
   Viewer(ViewScene scene, int width, int height, std::ostream& log,
-         clod::Loading loading = clod::Loading::Background);
+         render::Loading loading = render::Loading::Background);
   ~Viewer();
   Viewer(const Viewer&) = delete;
   Viewer& operator=(const Viewer&) = delete;
@@ -102,7 +102,7 @@ class Viewer {
   void drag(double dx, double dy, int button);
   void stepHeldKeys();
   [[nodiscard]] std::size_t viewportAt(double x) const;
-  [[nodiscard]] clod::SceneView viewOf(std::size_t viewport) const;
+  [[nodiscard]] render::SceneView viewOf(std::size_t viewport) const;
   [[nodiscard]] scenegraph::NodeId shownCamera(std::size_t viewport);
   [[nodiscard]] glm::dvec3 lightIn(scenegraph::NodeId node) const;
   void lightBehind(std::size_t viewport);
@@ -110,14 +110,14 @@ class Viewer {
 
   ViewScene scene_;
   std::ostream& log_;
-  std::unique_ptr<clod::SceneRenderer> renderer_;
+  std::unique_ptr<render::SceneRenderer> renderer_;
   // Per terrain (none without far-field layers), one per viewport.
   std::vector<std::array<std::unique_ptr<farfield::FarField>, 2>> farFields_;
   std::vector<std::set<std::string>> off_;                    // per terrain: effects off
   std::vector<std::pair<std::size_t, std::string>> toggles_;  // key 1..9 → (terrain, effect)
   std::vector<Viewport> viewports_;
   bool split_ = false;
-  clod::Loading loading_ = clod::Loading::Background;
+  render::Loading loading_ = render::Loading::Background;
   std::size_t active_ = 0;
   std::map<std::pair<std::size_t, std::size_t>, scenegraph::NodeId> cameraNodes_;
   glm::dvec3 light_{0.0, 0.0, 1.0};  // towards the sun, in lightNode_'s frame

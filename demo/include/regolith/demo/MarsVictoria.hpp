@@ -168,7 +168,7 @@ gl::RgbaImage renderSceneView(const SceneViewOptions& options);
 /// The paper layout's cameras (demo/PaperScene.hpp) as scene-file cameras, which
 /// sceneDescription() declares: "orbit_camera" 20 km above Victoria's origin looking straight
 /// down, north up (in the frame of the DEM "victoria", heading 0; near plane 100 m); the
-/// rover's "mast_camera", 2.1 m up just ahead of the mast head of clod::roverMesh(), looking
+/// rover's "mast_camera", 2.1 m up just ahead of the mast head of render::roverMesh(), looking
 /// 15° down ahead; and "chase_camera" 8 m behind and 3 m above the rover (in the frame of the
 /// object "rover"; near plane 0.05 m). Each 960 × 540, 45° vertical field of view.
 [[nodiscard]] std::vector<scene::Camera> paperCameras();

@@ -5,10 +5,10 @@
 
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
-#include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/compose/ComposedSurface.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/gl/Image.hpp>
+#include <regolith/render/SceneRenderer.hpp>
 #include <regolith/rover/Rover.hpp>
 #include <regolith/rover/TrackLayer.hpp>
 #include <regolith/scene/SceneDescription.hpp>
@@ -128,11 +128,11 @@ class Scene {
   /// render() does: `view` gives the intrinsics and viewport; its light is replaced by the
   /// scene's light in `focus`'s frame. Needs a current GL context or makes one.
   [[nodiscard]] gl::RgbaImage render(scenegraph::NodeId camera, scenegraph::NodeId focus,
-                                     clod::SceneView view, int width, int height) const;
+                                     render::SceneView view, int width, int height) const;
   /// Registers what render() draws with a renderer a caller keeps across frames (the
   /// fly-over): every terrain with its options, the cut-outs of the DEMs in their bodies,
   /// and the objects' meshes. The far field is not registered (terrains() gives its layers).
-  void registerWith(clod::SceneRenderer& renderer) const;
+  void registerWith(render::SceneRenderer& renderer) const;
 
  private:
   struct Impl;

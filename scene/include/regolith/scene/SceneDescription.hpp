@@ -158,7 +158,7 @@ struct Dem {
   bool operator==(const Dem&) const = default;
 };
 
-/// An object on a DEM. Today one kind: "rover" (clod::roverMesh()), standing at `pose`
+/// An object on a DEM. Today one kind: "rover" (render::roverMesh()), standing at `pose`
 /// (grid x, y on the surface; heading clockwise from +y) or where a traverse of `waypoints`
 /// (rover::runTraverse over the DEM) stops; its tracks are pressed into the DEM's tracks
 /// layer if the DEM declares one.

@@ -6,11 +6,11 @@
 
 #include <regolith/clod/Camera.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
-#include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/compose/ComposedSurface.hpp>
 #include <regolith/farfield/FarField.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/gl/RenderTarget.hpp>
+#include <regolith/render/SceneRenderer.hpp>
 #include <regolith/rover/TrackLayer.hpp>
 #include <regolith/rover/Traverse.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
@@ -57,7 +57,7 @@ namespace regolith::scene {
 /// `camera`'s view of `focus`'s render list.
 farfield::FarFieldMode drawFarField(farfield::FarField& farField, const scenegraph::SceneGraph& g,
                                     scenegraph::NodeId planet, scenegraph::NodeId camera,
-                                    scenegraph::NodeId focus, const clod::SceneView& view,
+                                    scenegraph::NodeId focus, const render::SceneView& view,
                                     const gl::RenderTarget& target);
 
 /// A traverse over `dem` that presses the six wheels into `tracks` every

@@ -23,17 +23,10 @@ struct Pose {
   /// A camera pose (GL eye convention: the camera looks along its −z, +y is up in the
   /// image) at `eye` looking at `target` with `up` roughly up, all in the parent frame.
   /// An `up` within 1e-6 rad of the view direction (a camera at nadir, or looking at the
-  /// body's centre, with the local vertical as up) is replaced as viewUp() says. Throws
+  /// body's centre, with the local vertical as up) is replaced as topo::viewUp() says. Throws
   /// InvalidArgument if eye = target.
   [[nodiscard]] static Pose lookAt(const glm::dvec3& eye, const glm::dvec3& target,
                                    const glm::dvec3& up);
-  /// The up vector a view along `forward` uses: `up` itself, unless it is zero, not finite
-  /// or within 1e-6 rad of parallel to forward (its cross product with forward is then
-  /// mostly rounding, and the view matrix would be NaN or noise). Then the axis of the
-  /// frame (x, y or z) most perpendicular to forward, made perpendicular to it. Every
-  /// camera (clod::Camera, lookAt) goes through this one rule.
-  [[nodiscard]] static glm::dvec3 viewUp(const glm::dvec3& forward, const glm::dvec3& up) noexcept;
-
   /// A child-frame point in the parent frame.
   [[nodiscard]] glm::dvec3 apply(const glm::dvec3& p) const noexcept {
     return rotation * p + translation;

@@ -1,5 +1,5 @@
-#include <regolith/clod/CutOutGeometry.hpp>
 #include <regolith/core/Assert.hpp>
+#include <regolith/render/CutOutGeometry.hpp>
 
 #include <glm/matrix.hpp>
 
@@ -10,7 +10,7 @@
 #include <numbers>
 #include <tuple>
 
-namespace regolith::clod {
+namespace regolith::render {
 
 CellMask cellMask(const topo::TopoGrid& grid, std::span<const float> heights) {
   const std::size_t rows = grid.rows(), cols = grid.cols();
@@ -112,7 +112,7 @@ BorderSkirt borderSkirt(const topo::TopoGrid& grid, std::span<const float> heigh
   return s;
 }
 
-std::size_t cutOutMaskLevel(const HeightPyramid& dem, std::size_t maxSide) {
+std::size_t cutOutMaskLevel(const clod::HeightPyramid& dem, std::size_t maxSide) {
   std::size_t m = 0;
   while (m + 1 < dem.levelCount() &&
          std::max(dem.level(m).grid.rows(), dem.level(m).grid.cols()) > maxSide)
@@ -120,8 +120,10 @@ std::size_t cutOutMaskLevel(const HeightPyramid& dem, std::size_t maxSide) {
   return m;
 }
 
-CutOutTransform cutOutTransform(const scenegraph::Pose& planetToDem, const glm::dmat3& eyeToPlanet,
-                                const glm::dvec3& cameraInPlanet, const topo::TopoGrid& maskGrid) {
+clod::CutOutTransform cutOutTransform(const scenegraph::Pose& planetToDem,
+                                      const glm::dmat3& eyeToPlanet,
+                                      const glm::dvec3& cameraInPlanet,
+                                      const topo::TopoGrid& maskGrid) {
   const topo::TopoGrid& g = maskGrid;
   const glm::dmat3 eyeToGrid = planetToDem.matrix() * eyeToPlanet;
   const glm::dvec3 camInGrid = planetToDem.apply(cameraInPlanet);
@@ -129,19 +131,13 @@ CutOutTransform cutOutTransform(const scenegraph::Pose& planetToDem, const glm::
   glm::dmat3 s(1.0);
   s[0][0] = 1.0 / g.spacingX();
   s[1][1] = -1.0 / g.spacingY();
-  CutOutTransform t;
+  clod::CutOutTransform t;
   t.eyeToCell = s * eyeToGrid;
   t.cellOfCamera = s * camInGrid + glm::dvec3(-g.x0() / g.spacingX(), g.y0() / g.spacingY(), 0.0);
   return t;
 }
 
-glm::dvec3 cutOutProjection(double near, double fovYDegrees, int width, int height) {
-  const double f = 1.0 / std::tan(0.5 * fovYDegrees * std::numbers::pi / 180.0);
-  const double aspect = static_cast<double>(width) / height;
-  return {near, aspect / f, 1.0 / f};
-}
-
-PlanetCell planetCellUnder(const HeightPyramid& planet, std::size_t level,
+PlanetCell planetCellUnder(const clod::HeightPyramid& planet, std::size_t level,
                            const glm::dvec3& point) {
   const auto& pg = planet.level(level).grid;
   const glm::dvec2 ll = planet.gridPoint(point);
@@ -185,4 +181,4 @@ SkirtDrop skirtDrop(const BorderSkirt& skirt, std::span<const PlanetUnderDem> pl
   return d;
 }
 
-}  // namespace regolith::clod
+}  // namespace regolith::render

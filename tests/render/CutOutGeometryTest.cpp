@@ -1,9 +1,11 @@
-// The cut-out geometry (CutOutGeometry.hpp) without a GL context: cell masks, the border skirt
-// against a walk of the DEM's border written here, the skirt's drop against the exact
-// sagitta of a chord, the eye → cell map against topo::TopoGrid::fractionalIndex and
-// clod::Camera::project, and the planet cell under a point near the poles and the seam.
+// The cut-out geometry (render/CutOutGeometry.hpp, and clod::cutOutProjection()) without a GL
+// context: cell masks, the border skirt against a walk of the DEM's border written here, the
+// skirt's drop against the exact sagitta of a chord, the eye → cell map against
+// topo::TopoGrid::fractionalIndex and clod::Camera::project, and the planet cell under a point near
+// the poles and the seam.
 #include <regolith/clod/Camera.hpp>
-#include <regolith/clod/CutOutGeometry.hpp>
+#include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/render/CutOutGeometry.hpp>
 #include <regolith/topo/Body.hpp>
 
 #include <glm/geometric.hpp>
@@ -20,8 +22,14 @@
 #include <utility>
 #include <vector>
 
-namespace regolith::clod {
+namespace regolith::render {
 namespace {
+
+using clod::Camera;
+using clod::cutOutProjection;
+using clod::CutOutTransform;
+using clod::HeightPyramid;
+using clod::SurfaceKind;
 
 constexpr float kNodata = -9999.0F;
 
@@ -301,4 +309,4 @@ TEST(CutOutGeometry, MaskLevelIsTheFinestSmallEnoughLevel) {
 }
 
 }  // namespace
-}  // namespace regolith::clod
+}  // namespace regolith::render

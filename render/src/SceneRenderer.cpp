@@ -1,6 +1,4 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/CutOutGeometry.hpp>
-#include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Executor.hpp>
 #include <regolith/gl/Gl.hpp>
@@ -8,8 +6,8 @@
 #include <regolith/gl/GlObjects.hpp>
 #include <regolith/gl/Program.hpp>
 #include <regolith/gl/RenderTarget.hpp>
-
-#include "CutOutShader.hpp"
+#include <regolith/render/CutOutGeometry.hpp>
+#include <regolith/render/SceneRenderer.hpp>
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -25,7 +23,16 @@
 #include <utility>
 #include <vector>
 
-namespace regolith::clod {
+namespace regolith::render {
+
+// The near field this layer draws (clod), named here without its namespace.
+using clod::Camera;
+using clod::ClipmapCutOut;
+using clod::ClipmapFrame;
+using clod::ClipmapOptions;
+using clod::ClipmapTerrain;
+using clod::HeightPyramid;
+using clod::SurfaceKind;
 
 namespace {
 
@@ -263,9 +270,9 @@ void SceneRenderer::addCutOut(int planet, int dem) {
   if (t.pyramid->kind() != SurfaceKind::Plane || t.pyramid->placement())
     throw InvalidArgument("SceneRenderer::addCutOut(): terrain " + std::to_string(dem) +
                           " is not a plane DEM in its own frame (place it with the scene graph)");
-  if (p->second->cutBy.size() >= static_cast<std::size_t>(shaders::kMaxCutOuts))
+  if (p->second->cutBy.size() >= clod::kMaxClipmapCutOuts)
     throw InvalidArgument("SceneRenderer::addCutOut(): planet " + std::to_string(planet) +
-                          " already has " + std::to_string(shaders::kMaxCutOuts) + " DEMs");
+                          " already has " + std::to_string(clod::kMaxClipmapCutOuts) + " DEMs");
   p->second->cutBy.push_back(dem);
   if (!p->second->options.cutOuts) {
     // The planet's program gains the cut-out test (only planets that DEMs cut carry it).
@@ -509,4 +516,4 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
   return frame;
 }
 
-}  // namespace regolith::clod
+}  // namespace regolith::render

@@ -1,15 +1,16 @@
 #pragma once
 /// \file
-/// The CPU geometry of cut-outs (SceneRenderer::addCutOut): a DEM's cell mask, the skirt that
-/// hangs from its data border, how deep that skirt must reach below a planet, and the map
-/// from a planet fragment's eye coordinates to the DEM's mask cells. Pure functions of their
-/// arguments: no GL, no I/O (the heights come in as arrays), so they are tested without a
-/// context. Thread-safe.
+/// The CPU geometry of cut-outs (render::SceneRenderer::addCutOut): a DEM's cell mask, the skirt
+/// that hangs from its data border, how deep that skirt must reach below a planet, and the map from
+/// a planet fragment's eye coordinates to the DEM's mask cells. Pure functions of their arguments:
+/// no GL, no I/O (the heights come in as arrays), so they are tested without a context.
+/// Thread-safe.
 ///
 /// Frames: a DEM's grid frame is (x east, y north, h up) metres of its topo::TopoGrid; a
 /// planet's frame is body-fixed metres; eye coordinates are the camera's (x right, y up,
 /// looking down −z), camera-relative.
 
+#include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/scenegraph/Pose.hpp>
 #include <regolith/topo/TopoGrid.hpp>
@@ -24,7 +25,7 @@
 #include <tuple>
 #include <vector>
 
-namespace regolith::clod {
+namespace regolith::render {
 
 /// Which cells of a grid level have data: cell (r, c) spans samples r..r+1, c..c+1 and has
 /// data if all four corner samples do. Row 0 is the grid's first (northernmost) row.
@@ -76,30 +77,17 @@ inline constexpr std::size_t kMaxCutOutMaskSide = 4096;
 
 /// The finest level of `dem` with at most `maxSide` samples a side, or its coarsest level if
 /// none is that small (the caller rejects it then).
-[[nodiscard]] std::size_t cutOutMaskLevel(const HeightPyramid& dem,
+[[nodiscard]] std::size_t cutOutMaskLevel(const clod::HeightPyramid& dem,
                                           std::size_t maxSide = kMaxCutOutMaskSide);
 
-/// The affine map eye → DEM mask cell that the cut-out test applies per fragment:
-/// (col, row, h / 1) = eyeToCell · eye + cellOfCamera, where integer (col, row) are the
-/// corners of cell (row, col) (topo::TopoGrid::fractionalIndex of the grid-frame point).
-/// Double precision; the shader takes it cast to float.
-struct CutOutTransform {
-  glm::dmat3 eyeToCell{1.0};
-  glm::dvec3 cellOfCamera{0.0};
-};
-
-/// The cut-out map of mask grid `maskGrid`, for a camera at `cameraInPlanet` whose eye axes
-/// in the planet frame are the columns of `eyeToPlanet` (Camera::rotation() transposed),
-/// with `planetToDem` the pose planet frame → DEM grid frame.
-[[nodiscard]] CutOutTransform cutOutTransform(const scenegraph::Pose& planetToDem,
-                                              const glm::dmat3& eyeToPlanet,
-                                              const glm::dvec3& cameraInPlanet,
-                                              const topo::TopoGrid& maskGrid);
-
-/// What the cut-out test needs of the projection to rebuild a fragment's eye position from
-/// gl_FragCoord and its reversed-Z depth: (near, aspect / f, 1 / f), f = 1 / tan(fovY / 2),
-/// aspect = width / height (Camera's projection).
-[[nodiscard]] glm::dvec3 cutOutProjection(double near, double fovYDegrees, int width, int height);
+/// The cut-out map (clod::CutOutTransform: eye → DEM mask cell, double precision) of mask
+/// grid `maskGrid`, for a camera at `cameraInPlanet` whose eye axes in the planet frame are
+/// the columns of `eyeToPlanet` (clod::Camera::rotation() transposed), with `planetToDem`
+/// the pose planet frame → DEM grid frame.
+[[nodiscard]] clod::CutOutTransform cutOutTransform(const scenegraph::Pose& planetToDem,
+                                                    const glm::dmat3& eyeToPlanet,
+                                                    const glm::dvec3& cameraInPlanet,
+                                                    const topo::TopoGrid& maskGrid);
 
 /// The planet sample (row, col) of pyramid level `level` whose cell holds the planet-frame
 /// point `point` (the cell's north-west sample, clamped onto the grid).
@@ -110,7 +98,7 @@ struct PlanetCell {
     return std::tie(a.level, a.row, a.col) < std::tie(b.level, b.row, b.col);
   }
 };
-[[nodiscard]] PlanetCell planetCellUnder(const HeightPyramid& planet, std::size_t level,
+[[nodiscard]] PlanetCell planetCellUnder(const clod::HeightPyramid& planet, std::size_t level,
                                          const glm::dvec3& point);
 
 /// One planet under a DEM, as the skirt's depth needs it.
@@ -138,4 +126,4 @@ struct SkirtDrop {
 [[nodiscard]] SkirtDrop skirtDrop(const BorderSkirt& skirt, std::span<const PlanetUnderDem> planets,
                                   double coarsestSpacing, double maskSpacing, bool coarseMask);
 
-}  // namespace regolith::clod
+}  // namespace regolith::render

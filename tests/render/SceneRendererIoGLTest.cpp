@@ -1,12 +1,12 @@
-// clod::SceneRenderer reads no terrain inside draw(): prepare() moves the clipmaps and reads
+// render::SceneRenderer reads no terrain inside draw(): prepare() moves the clipmaps and reads
 // their windows on the executors (waiting for them, or in the background for a frame loop),
 // and starts the reads of the planet's samples under a DEM (the skirt's depth); the DEM's
 // mask and skirt are read when the cut-out is added. Counted by a SampleSource that wraps
 // the real in-memory samples and notes which thread read them; a gate holds the reads back
 // to show that a background prepare() does not wait for them.
 #include <regolith/clod/ClipmapTerrain.hpp>
-#include <regolith/clod/SceneRenderer.hpp>
 #include <regolith/gl/RenderTarget.hpp>
+#include <regolith/render/SceneRenderer.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
 #include <regolith/scenegraph/SitePose.hpp>
 #include <regolith/topo/Body.hpp>
@@ -27,8 +27,13 @@
 #include <utility>
 #include <vector>
 
-namespace regolith::clod {
+namespace regolith::render {
 namespace {
+
+using clod::ClipmapOptions;
+using clod::HeightPyramid;
+using clod::LatLonLines;
+using clod::SurfaceKind;
 
 // Reads of the sources a test wraps: sample() and readWindow() calls, on the thread that
 // drew (the render thread) and on any other thread.
@@ -290,4 +295,4 @@ TEST(SceneRendererIoGLTest, BackgroundPrepareDoesNotWaitAndEndsAtTheWaitingFrame
 }
 
 }  // namespace
-}  // namespace regolith::clod
+}  // namespace regolith::render

@@ -21,8 +21,10 @@ class Program;
 }  // namespace regolith::gl
 
 namespace regolith::clod {
-
 class ClipmapTerrain;  // <regolith/clod/ClipmapTerrain.hpp>: this header needs no GL header
+}  // namespace regolith::clod
+
+namespace regolith::render {
 
 /// A mesh vertex in its item's frame (metres, float: meshes are small, e.g. a rover).
 struct MeshVertex {
@@ -97,8 +99,8 @@ class SceneRenderer {
   /// Terrain drawn for render-list items with key `drawable`. Its scene frame (grid frame
   /// for a Plane pyramid, body-fixed for a Planet or placed DEM) is the item's frame.
   /// Throws InvalidArgument if the key is taken.
-  void addTerrain(int drawable, std::shared_ptr<const HeightPyramid> pyramid,
-                  const ClipmapOptions& options = {});
+  void addTerrain(int drawable, std::shared_ptr<const clod::HeightPyramid> pyramid,
+                  const clod::ClipmapOptions& options = {});
   /// A mesh in its item's frame for key `drawable`, flat-lit with `albedo`.
   void addMesh(int drawable, const std::vector<MeshVertex>& vertices, const glm::vec3& albedo);
   /// DEM `dem` (a Plane pyramid, registered with addTerrain) wins over planet `planet` (a
@@ -126,7 +128,7 @@ class SceneRenderer {
   void setBorderSkirts(bool on) noexcept { skirts_ = on; }
 
   /// The clipmap of a terrain key (nullptr if none).
-  [[nodiscard]] const ClipmapTerrain* terrain(int drawable) const;
+  [[nodiscard]] const clod::ClipmapTerrain* terrain(int drawable) const;
 
  private:
   struct Terrain;
@@ -140,6 +142,6 @@ class SceneRenderer {
 };
 
 /// The clod Camera for drawing an item whose camera pose (camera → item frame) is `pose`.
-[[nodiscard]] Camera cameraInItem(const scenegraph::Pose& pose, const SceneView& view);
+[[nodiscard]] clod::Camera cameraInItem(const scenegraph::Pose& pose, const SceneView& view);
 
-}  // namespace regolith::clod
+}  // namespace regolith::render
