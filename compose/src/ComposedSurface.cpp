@@ -18,10 +18,6 @@ namespace {
 
 using topo::QueryStatus;
 
-/// Most candidates of a point's 1° cell the composition evaluates; more: the exact catalogue
-/// query's (composeGeneral()).
-constexpr std::size_t kCellCandidatesAtMost = 4;
-
 struct Member {
   // A user-provided constructor: a value-initialised Member (emplace_back()) is zero-filled
   // first, by a `rep stos` that cost a tenth of a two-dataset composition.
@@ -40,8 +36,7 @@ struct Member {
 struct Scratch {
   std::vector<std::uint32_t> candidates;
   std::vector<std::uint32_t> ranked;  // the candidates in tier order (evaluateAll)
-  std::vector<Member> members;        // in evaluation order, each built in place
-  std::vector<std::uint32_t> order;   // members' indices, sorted into tiers
+  std::vector<Member> members;        // in evaluation (tier) order, each built in place
   std::vector<std::pair<std::size_t, std::size_t>> tiers;  // [begin, end) of members, bottom-up
   std::vector<double> alphas;                              // each tier's α
 };
@@ -171,8 +166,8 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
   // location (only the latitude) and costs a cosine and two logarithms, so for a height it
   // waits until the tiers show whether the member shares a tier (below).
   const bool eagerPlanetQuality = wantNormal || shares != nullptr;
-  // Candidates are evaluated in tier order (priority, then spacing, then entry: the order
-  // the members are sorted into below). For a height, a complete tier with a member of full
+  // Candidates are evaluated in tier order (priority, then spacing, then entry), so the
+  // members come out in it and need no sorting. For a height, a complete tier with a member of full
   // coverage has α = 1 and hides every tier below exactly (acc = its height, see below), so
   // the candidates after it are not read, provided none is finer than the finest member so
   // far (the resolution weights are relative to the finest member).
@@ -255,6 +250,7 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
   // OutsideGrid and is skipped, so the composition is the same as from the exact catalogue
   // query, which takes a walk of the index and a sine and cosine per angle. Many
   // candidates: the exact query, fewer evaluations.
+  constexpr std::size_t kCellCandidatesAtMost = 4;
   const bool fromCell = cell.size() <= kCellCandidatesAtMost;
   evaluateAll(fromCell ? cell : exactCandidates());
   if (s.members.empty() && fromCell && !cell.empty()) {
@@ -287,18 +283,11 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
   // datasets whose spacing is within rules_.tierRatio of its finest (FinestWins: equal
   // spacings only), so similar data blend by weight and much finer data composite over
   // coarser with their coverage as alpha (docs/composition.md "Tiers").
-  // The members in tier order, through their indices (moving Members would copy them).
-  s.order.resize(s.members.size());
-  for (std::size_t i = 0; i < s.order.size(); ++i) s.order[i] = static_cast<std::uint32_t>(i);
-  const auto member = [&s](std::size_t i) -> Member& { return s.members[s.order[i]]; };
+  // The members are in tier order already: evaluateAll() read the candidates in it and
+  // appended each member as it came (priority, then spacing, then entry: one order, in one
+  // place).
+  const auto member = [&s](std::size_t i) -> Member& { return s.members[i]; };
   if (s.members.size() > 1) {
-    std::sort(s.order.begin(), s.order.end(), [&s](std::uint32_t ia, std::uint32_t ib) {
-      const Member& a = s.members[ia];
-      const Member& b = s.members[ib];
-      if (a.priority != b.priority) return a.priority > b.priority;
-      if (a.spacing != b.spacing) return a.spacing < b.spacing;
-      return a.entry < b.entry;
-    });
     int tier = 0;
     double tierFinest = member(0).spacing;
     for (std::size_t i = 1; i < s.members.size(); ++i) {
@@ -319,11 +308,11 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
     // products of one kind): computed once.
     const Dataset* last = nullptr;
     double lastQuality = 0.0;
-    for (std::size_t i = 0; i < s.order.size(); ++i) {
+    for (std::size_t i = 0; i < s.members.size(); ++i) {
       Member& m = member(i);
       if (!m.qualityPending) continue;
       const bool alone = (i == 0 || !sameTier(member(i - 1), m)) &&
-                         (i + 1 == s.order.size() || !sameTier(member(i + 1), m));
+                         (i + 1 == s.members.size() || !sameTier(member(i + 1), m));
       const Dataset& d = *entries[m.entry].dataset;
       if (alone && !wantNormal && shares == nullptr) {
         m.c.quality = 1.0;
