@@ -677,3 +677,33 @@ TEST(Body, RadiiAndFrameFromTheLatitudesSineGiveThePerLatitudeFunctionsBits) {
     }
   }
 }
+
+TEST(Body, PlanetodeticSinCosIsTheSineAndCosineOfTheConvertedLatitude) {
+  // planetodeticSinCos() forms no angle; its oracle is the sine and cosine of
+  // toPlanetodetic() (an arctangent, checked against PROJ above): within a few ulp, the
+  // same bits where no conversion happens (planetodetic latitudes, spheres), exact poles.
+  const double deg = std::numbers::pi / 180.0;
+  for (const Body& b : {Body::marsEllipsoid(), Body::earthWgs84(), Body::marsSphere(),
+                        Body::ellipsoid("flat", 1000.0, 300.0)}) {
+    for (const LatitudeType type : {LatitudeType::Planetocentric, LatitudeType::Planetodetic}) {
+      for (double lat = -90.0; lat <= 90.0; lat += 0.0731) {
+        for (const double l : {lat, -90.0, 90.0, 0.0, 1e-300, 89.999999, -89.999999}) {
+          const double d = b.toPlanetodetic(l, type) * deg;
+          const Body::SinCos sc = b.planetodeticSinCos(l, type);
+          if (type == LatitudeType::Planetodetic || b.isSphere()) {
+            EXPECT_EQ(sc.sin, std::sin(d)) << b.name() << " " << l;
+            EXPECT_EQ(sc.cos, std::cos(d)) << b.name() << " " << l;
+          } else {
+            EXPECT_NEAR(sc.sin, std::sin(d), 4e-16) << b.name() << " " << l;
+            EXPECT_NEAR(sc.cos, std::cos(d), 4e-16) << b.name() << " " << l;
+          }
+          EXPECT_NEAR(sc.sin * sc.sin + sc.cos * sc.cos, 1.0, 1e-15) << b.name() << " " << l;
+        }
+      }
+      EXPECT_EQ(b.planetodeticSinCos(90.0, type).sin, 1.0) << b.name();
+      EXPECT_EQ(b.planetodeticSinCos(-90.0, type).sin, -1.0) << b.name();
+      EXPECT_EQ(b.planetodeticSinCos(0.0, type).sin, 0.0) << b.name();
+      EXPECT_EQ(b.planetodeticSinCos(0.0, type).cos, 1.0) << b.name();
+    }
+  }
+}

@@ -81,6 +81,16 @@ double Body::toPlanetodetic(double latDeg, LatitudeType type) const noexcept {
   return type == LatitudeType::Planetodetic ? latDeg : planetodeticFromPlanetocentric(latDeg);
 }
 
+Body::SinCos Body::planetodeticSinCos(double latDeg, LatitudeType type) const noexcept {
+  const double p = latDeg * kDeg;
+  const double sp = std::sin(p), cp = std::cos(p);
+  if (type == LatitudeType::Planetodetic || isSphere()) return {sp, cp};
+  // The vector whose angle planetodeticFromPlanetocentric() takes, normalised.
+  const double y = a_ * a_ * sp, x = b_ * b_ * cp;
+  const double r = std::sqrt(x * x + y * y);
+  return {y / r, x / r};
+}
+
 double Body::fromPlanetodetic(double latDeg, LatitudeType type) const noexcept {
   return type == LatitudeType::Planetodetic ? latDeg : planetocentricFromPlanetodetic(latDeg);
 }

@@ -314,10 +314,11 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp,
   s.height = h;
   if (!wantNormal) return s;
 
-  const double latD = body_.toPlanetodetic(ll.latDeg, latType_);
-  // One sine and cosine of the latitude (the compiler makes them one sincos call) serve the
+  // One sine and cosine of the planetodetic latitude (one sincos call, and on an ellipsoid's
+  // planetocentric grid a square root instead of the conversion's arctangent) serve the
   // latitude conversion's derivative, both radii of curvature and the body-fixed frame.
-  const double sinD = std::sin(latD * kDeg), cosD = std::cos(latD * kDeg);
+  const Body::SinCos sc = body_.planetodeticSinCos(ll.latDeg, latType_);
+  const double sinD = sc.sin, cosD = sc.cos;
   glm::dvec3 enu;
   if (analytic && (cosD > 1e-9 || hermiteCap)) {
     s.normalStatus = k.gradStatus;

@@ -69,6 +69,16 @@ class Body {
   [[nodiscard]] double planetodeticFromPlanetocentric(double latDeg) const noexcept;
   /// Converts a latitude of the given type to planetodetic.
   [[nodiscard]] double toPlanetodetic(double latDeg, LatitudeType type) const noexcept;
+  /// The sine and cosine of a latitude's planetodetic value.
+  struct SinCos {
+    double sin = 0.0, cos = 1.0;
+  };
+  /// sin and cos of toPlanetodetic(latDeg, type) without forming the angle: from a
+  /// planetocentric latitude φc on an ellipsoid, (sin φd, cos φd) = (a² sin φc, b² cos φc)
+  /// / |(a² sin φc, b² cos φc)| (tan φd = (a/b)² tan φc): one sine and cosine and one square
+  /// root where the angle costs an arctangent more. Within a few ulp of the sine and cosine
+  /// of toPlanetodetic(); exactly (±1, cos) at the poles' ±90°, as it.
+  [[nodiscard]] SinCos planetodeticSinCos(double latDeg, LatitudeType type) const noexcept;
   /// Converts a planetodetic latitude to the given type.
   [[nodiscard]] double fromPlanetodetic(double latDeg, LatitudeType type) const noexcept;
 
