@@ -15,7 +15,6 @@ namespace regolith::store {
 
 namespace {
 
-using writer::BlockStats;
 using writer::checkCancel;
 using writer::Context;
 using writer::createGroup;
@@ -96,10 +95,11 @@ void writeGrid(hid_t grids, const GridSource& src, const Prepared& p, const Writ
   // Level 0's statistics, per block keyed by its position and summed in that order (band by
   // band, then along the band), so that they do not depend on the threads.
   std::mutex statsMutex;
-  std::map<std::pair<std::size_t, std::size_t>, BlockStats> blockStats;
-  BlockStats all;
+  std::map<std::pair<std::size_t, std::size_t>, BlockStatistics> blockStats;
+  BlockStatistics all;
   const auto sumBand = [&] {
     for (const auto& [key, b] : blockStats) {
+      if (o.blockStatistics) o.blockStatistics(info.name, b);
       all.min = std::min(all.min, b.min);
       all.max = std::max(all.max, b.max);
       all.sum += b.sum;
@@ -110,7 +110,9 @@ void writeGrid(hid_t grids, const GridSource& src, const Prepared& p, const Writ
   const Missing missing{info.nodata};
   const auto collect = [&](std::size_t br0, std::size_t c0, const std::vector<float>& out) {
     if (!o.statistics) return;
-    BlockStats b;
+    BlockStatistics b;
+    b.row0 = br0;
+    b.col0 = c0;
     for (const float v : out) {
       if (missing(v)) continue;
       const auto d = static_cast<double>(v);

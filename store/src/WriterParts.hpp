@@ -109,14 +109,6 @@ struct Missing {
   [[nodiscard]] float stored() const noexcept { return nodata.value_or(kNan); }
 };
 
-/// Level 0's valid heights in one block: the parts of HeightStatistics.
-struct BlockStats {
-  double min = std::numeric_limits<double>::infinity();
-  double max = -std::numeric_limits<double>::infinity();
-  double sum = 0.0;
-  std::uint64_t count = 0;
-};
-
 /// One dataset of a grid, written chunk by chunk (already encoded) and read back.
 class LevelWriter {
  public:

@@ -1309,6 +1309,17 @@ TEST(ImportWindow, TheBodyOptionNamesTheBodyTheCrsDoesNot) {
 
 // ---- height statistics ---------------------------------------------------------------------
 
+/// GDAL's sample i as the store holds it (metres above the reference radius, through float),
+/// or nothing where the import counts it missing.
+std::optional<double> oracleHeight(const Oracle& o, std::size_t i, double radiusReference) {
+  const double raw = o.raw[i];
+  if (o.mask[i] == 0 || std::isnan(raw) || (o.nodata && raw == *o.nodata) || raw < -3.40282255e38 ||
+      (o.declaresNothing && raw == -32768.0)) {
+    return std::nullopt;
+  }
+  return static_cast<double>(static_cast<float>((o.offset - radiusReference) + o.scale * raw));
+}
+
 TEST(ImportStatistics, TheStoreRecordsMinMaxMeanAndValidCountOfGdalsHeights) {
   for (const char* name : {"vest64_dtm_specialpixels_downsampled.cub", "dem_unfinished.tif",
                            "Polar_Crater_1_1m_ngate_edited2_forPDS_lowres.cub"}) {
@@ -1318,13 +1329,9 @@ TEST(ImportStatistics, TheStoreRecordsMinMaxMeanAndValidCountOfGdalsHeights) {
     double lo = std::numeric_limits<double>::infinity(), hi = -lo, sum = 0.0;
     std::uint64_t valid = 0;
     for (std::size_t i = 0; i < o.raw.size(); ++i) {
-      const double raw = o.raw[i];
-      if (o.mask[i] == 0 || std::isnan(raw) || (o.nodata && raw == *o.nodata) ||
-          raw < -3.40282255e38 || (o.declaresNothing && raw == -32768.0)) {
-        continue;
-      }
-      const auto h =
-          static_cast<double>(static_cast<float>((o.offset - rep.radiusReference) + o.scale * raw));
+      const std::optional<double> sample = oracleHeight(o, i, rep.radiusReference);
+      if (!sample) continue;
+      const double h = *sample;
       lo = std::min(lo, h);
       hi = std::max(hi, h);
       sum += h;
@@ -1344,6 +1351,55 @@ TEST(ImportStatistics, TheStoreRecordsMinMaxMeanAndValidCountOfGdalsHeights) {
     EXPECT_NEAR(st->mean, sum / static_cast<double>(valid),
                 1e-12 * std::abs(sum / static_cast<double>(valid)));
     EXPECT_EQ(s.formatVersion(), (std::array<int, 2>{1, 4}));
+  }
+}
+
+TEST(ImportStatistics, EachLevel0BlocksStatisticsReachTheCallerRowMajorAsTheWriterSumsThem) {
+  // WriteOptions::blockStatistics (what regolith-mpi gathers from its parts) against GDAL's
+  // samples, block by block (smallPatches(): 64 × 48, not a divisor of the sizes).
+  for (const char* name : {"vest64_dtm_specialpixels_downsampled.cub", "dem_unfinished.tif",
+                           "Polar_Crater_1_1m_ngate_edited2_forPDS_lowres.cub"}) {
+    SCOPED_TRACE(name);
+    std::vector<store::BlockStatistics> blocks;
+    std::vector<std::string> grids;
+    ImportOptions opts = smallPatches();
+    opts.blockStatistics = [&](std::string_view grid, const store::BlockStatistics& b) {
+      grids.emplace_back(grid);
+      blocks.push_back(b);
+    };
+    const ImportReport rep = importRaster(fixture(name), scratch("blocks.h5"), opts);
+    const Oracle o = readGdal(fixture(name));
+    const std::size_t pr = opts.patchRows, pc = opts.patchCols;
+    const std::size_t blockCols = (o.cols + pc - 1) / pc;
+    ASSERT_EQ(blocks.size(), ((o.rows + pr - 1) / pr) * blockCols);
+    std::uint64_t valid = 0;
+    for (std::size_t k = 0; k < blocks.size(); ++k) {
+      const store::BlockStatistics& b = blocks[k];
+      EXPECT_EQ(grids[k], rep.info.name);
+      ASSERT_EQ(b.row0, (k / blockCols) * pr) << k;  // row-major
+      ASSERT_EQ(b.col0, (k % blockCols) * pc) << k;
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo, sum = 0.0;
+      std::uint64_t count = 0;
+      for (std::size_t r = b.row0; r < std::min(b.row0 + pr, o.rows); ++r) {
+        for (std::size_t c = b.col0; c < std::min(b.col0 + pc, o.cols); ++c) {
+          const std::optional<double> h = oracleHeight(o, r * o.cols + c, rep.radiusReference);
+          if (!h) continue;
+          lo = std::min(lo, *h);
+          hi = std::max(hi, *h);
+          sum += *h;  // in the block's row-major order, as the writer
+          ++count;
+        }
+      }
+      EXPECT_EQ(b.count, count) << k;
+      EXPECT_EQ(b.min, lo) << k;  // ±∞ in a block without a valid sample
+      EXPECT_EQ(b.max, hi) << k;
+      EXPECT_EQ(b.sum, sum) << k;
+      valid += count;
+    }
+    const std::optional<HeightStatistics> st =
+        Store::open(scratch("blocks.h5")).grid(rep.info.name).statistics;
+    ASSERT_TRUE(st);
+    EXPECT_EQ(st->validSamples, valid);
   }
 }
 

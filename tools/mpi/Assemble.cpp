@@ -246,35 +246,6 @@ std::filesystem::path writeCoarseLevels(const Assembly& a) {
 
 }  // namespace
 
-std::vector<BlockStats> partBlockStats(const std::filesystem::path& part, const std::string& grid,
-                                       std::size_t patchRows, std::size_t patchCols) {
-  const store::Store s = store::Store::open(part);
-  const store::GridInfo& info = s.grid(grid);
-  std::vector<BlockStats> blocks;
-  std::vector<float> v;
-  for (std::size_t r0 = 0; r0 < info.rows; r0 += patchRows) {
-    const std::size_t nr = std::min(patchRows, info.rows - r0);
-    for (std::size_t c0 = 0; c0 < info.cols; c0 += patchCols) {
-      const std::size_t nc = std::min(patchCols, info.cols - c0);
-      v.resize(nr * nc);
-      s.readWindow(grid, 0, r0, c0, nr, nc, v);
-      BlockStats b;
-      b.min = std::numeric_limits<double>::infinity();
-      b.max = -std::numeric_limits<double>::infinity();
-      for (const float x : v) {
-        if (std::isnan(x)) continue;
-        const auto d = static_cast<double>(x);
-        b.min = std::min(b.min, d);
-        b.max = std::max(b.max, d);
-        b.sum += d;
-        b.count += 1.0;
-      }
-      blocks.push_back(b);
-    }
-  }
-  return blocks;
-}
-
 void assemble(const Assembly& a) {
   const bool tiled = !a.partTiles.empty();
   const std::size_t top = a.plan.partTop;
@@ -309,11 +280,11 @@ void assemble(const Assembly& a) {
     setScalar<std::uint64_t>(g.get(), "levels", H5T_NATIVE_UINT64, a.levels, what);
     // Level 0's statistics: the blocks added in row-major order, as the writer adds them.
     double mn = std::numeric_limits<double>::infinity(), mx = -mn, sum = 0.0, count = 0.0;
-    for (const BlockStats& b : a.blocks) {
+    for (const store::BlockStatistics& b : a.blocks) {
       mn = std::min(mn, b.min);
       mx = std::max(mx, b.max);
       sum += b.sum;
-      count += b.count;
+      count += static_cast<double>(b.count);
     }
     const double nan = std::numeric_limits<double>::quiet_NaN();
     const bool none = count == 0.0;

@@ -2,6 +2,8 @@
 // regolith-mpi: the assembling rank joins the ranks' part stores into one store, copying their
 // encoded chunks as they are (HDF5 direct chunk I/O), and computes the levels above them.
 
+#include <regolith/store/Store.hpp>
+
 #include "MpiPlan.hpp"
 
 #include <cstddef>
@@ -11,18 +13,6 @@
 #include <vector>
 
 namespace regolith::tools::mpi {
-
-/// Level 0's valid heights in one chunk-sized block, as the store writer sums them
-/// (docs/store-format.md, "Height statistics").
-struct BlockStats {
-  double min = 0.0, max = 0.0, sum = 0.0, count = 0.0;
-};
-
-/// The statistics blocks of level-0 rows [row0, row1) of grid `grid` of the part store `part`
-/// (its own rows 0 … row1 − row0), in row-major block order, read back from the part.
-[[nodiscard]] std::vector<BlockStats> partBlockStats(const std::filesystem::path& part,
-                                                     const std::string& grid, std::size_t patchRows,
-                                                     std::size_t patchCols);
 
 /// What the assembly joins.
 struct Assembly {
@@ -36,7 +26,7 @@ struct Assembly {
   std::vector<std::vector<std::size_t>> partTiles;
   std::size_t tileCount = 0;
   /// Every block's statistics, row-major over the whole grid.
-  std::vector<BlockStats> blocks;
+  std::vector<store::BlockStatistics> blocks;
   /// The grid's provenance (tiled grids); empty: the first part's.
   std::string provenance;
   /// Threads for the coarse levels (0: all).

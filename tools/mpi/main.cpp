@@ -282,26 +282,32 @@ std::string mergedProvenance(const Layout& l, const std::vector<fs::path>& parts
   return merged.Format(CPLJSONObject::PrettyFormat::Plain);
 }
 
-std::string encodeBlocks(const std::vector<BlockStats>& b) {
-  std::string s(b.size() * sizeof(BlockStats), '\0');
+std::string encodeBlocks(const std::vector<store::BlockStatistics>& b) {
+  std::string s(b.size() * sizeof(store::BlockStatistics), '\0');
   if (!b.empty()) std::memcpy(s.data(), b.data(), s.size());
   return s;
 }
 
-void appendBlocks(const std::string& s, std::vector<BlockStats>& out) {
-  const std::size_t n = s.size() / sizeof(BlockStats);
+void appendBlocks(const std::string& s, std::vector<store::BlockStatistics>& out) {
+  const std::size_t n = s.size() / sizeof(store::BlockStatistics);
   const std::size_t at = out.size();
   out.resize(at + n);
-  if (n > 0) std::memcpy(out.data() + at, s.data(), n * sizeof(BlockStats));
+  if (n > 0) std::memcpy(out.data() + at, s.data(), n * sizeof(store::BlockStatistics));
 }
 
 /// The part store of part p: levels 0 … partTop of its rows (a window of the one raster, or its
-/// tiles), written with the ordinary import.
-void importPart(const Args& a, const store::ImportOptions& base, const Layout& l, std::size_t p,
-                const fs::path& path) {
+/// tiles), written with the ordinary import. Returns its level-0 blocks' statistics as the
+/// writer summed them (none for tiles written with one level, as the writer).
+std::vector<store::BlockStatistics> importPart(const Args& a, const store::ImportOptions& base,
+                                               const Layout& l, std::size_t p,
+                                               const fs::path& path) {
+  std::vector<store::BlockStatistics> blocks;
   store::ImportOptions o = base;
   o.levels = l.plan.partTop + 1;
   o.gridName = l.grid;
+  o.blockStatistics = [&blocks](std::string_view, const store::BlockStatistics& b) {
+    blocks.push_back(b);
+  };
   const PartRows& part = l.plan.parts[p];
   if (l.tiles.empty()) {
     o.window = store::SampleWindow{part.row0, 0, part.row1 - part.row0, l.cols};
@@ -311,6 +317,7 @@ void importPart(const Args& a, const store::ImportOptions& base, const Layout& l
     for (const std::size_t i : l.partTiles[p]) tiles.emplace_back(a.sources[i]);
     (void)store::importTiles(tiles, path, o);
   }
+  return blocks;
 }
 
 int run(const Args& a, int rank, int size) {
@@ -360,7 +367,6 @@ int run(const Args& a, int rank, int size) {
   (void)std::signal(SIGINT, onTerminate);
 
   std::string error, blocks;
-  double statSeconds = 0.0;
   const auto tParts = std::chrono::steady_clock::now();
   const auto p = static_cast<std::size_t>(rank);
   try {
@@ -378,15 +384,11 @@ int run(const Args& a, int rank, int size) {
     } else if (p < parts) {
       fs::create_directories(dir);
       const fs::path part = dir / ("part-" + std::to_string(p) + ".h5");
-      importPart(a, o, l, p, part);
+      blocks = encodeBlocks(importPart(a, o, l, p, part));
       if (const char* kill = std::getenv("REGOLITH_MPI_TEST_KILL_RANK");
           kill != nullptr && std::to_string(rank) == kill) {
         (void)std::raise(SIGKILL);  // tests: a rank that dies with its part written
       }
-      const bool noStats = !l.tiles.empty() && l.levels == 1;  // as the writer: none then
-      const auto tStats = std::chrono::steady_clock::now();
-      if (!noStats) blocks = encodeBlocks(partBlockStats(part, l.grid, a.patch, a.patch));
-      statSeconds = seconds(tStats);
     }
   } catch (const std::exception& e) {
     error = e.what();
@@ -401,7 +403,7 @@ int run(const Args& a, int rank, int size) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   std::ostringstream slow;
-  slow << partSeconds << " " << statSeconds << " " << cpuSeconds();
+  slow << partSeconds << " " << cpuSeconds();
   const std::vector<std::string> errors = gather(error, rank, size);
   const std::vector<std::string> stats = gather(blocks, rank, size);
   const std::vector<std::string> times = gather(slow.str(), rank, size);
@@ -450,11 +452,10 @@ int run(const Args& a, int rank, int size) {
         std::ostringstream ranks;
         for (const std::string& t : times) {
           std::istringstream in(t);
-          double wall = 0.0, stat = 0.0, cpu = 0.0;
-          in >> wall >> stat >> cpu;
+          double wall = 0.0, cpu = 0.0;
+          in >> wall >> cpu;
           slowest = std::max(slowest, wall);
-          ranks << (ranks.tellp() > 0 ? ", " : "") << "part " << wall << " s (statistics read-back "
-                << stat << " s), CPU " << cpu << " s";
+          ranks << (ranks.tellp() > 0 ? ", " : "") << "part " << wall << " s, CPU " << cpu << " s";
         }
         std::cout << "Wrote " << out.string() << ": grid '" << l.grid << "', " << l.rows
                   << " rows x " << l.cols << " cols, " << l.levels << " levels, from "

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -152,6 +153,20 @@ inline constexpr int kZfpFilterId = 32013;
 /// WriteOptions::memoryBudgetBytes by default: 1 GiB.
 inline constexpr std::size_t kDefaultMemoryBudget = std::size_t{1} << 30U;
 
+/// Level 0's valid heights in one block (one chunk) of a grid being written: what the
+/// grid's height statistics are summed from (WriteOptions::blockStatistics).
+struct BlockStatistics {
+  std::size_t row0 = 0, col0 = 0;  ///< the block's first level-0 sample
+  /// Smallest and largest valid height (+∞ and −∞ when the block has none), their sum and
+  /// count.
+  double min = std::numeric_limits<double>::infinity();
+  double max = -std::numeric_limits<double>::infinity();
+  double sum = 0.0;
+  std::uint64_t count = 0;
+};
+/// Receives one grid's level-0 blocks (WriteOptions::blockStatistics).
+using BlockStatisticsFn = std::function<void(std::string_view grid, const BlockStatistics&)>;
+
 struct WriteOptions {
   /// HDF5 chunk (= pager patch) size; 256×256 by default.
   std::size_t patchRows = 256, patchCols = 256;
@@ -177,6 +192,11 @@ struct WriteOptions {
   /// Compute level 0's height statistics while writing and store them with each grid
   /// (format 1.3, docs/store-format.md); the import does.
   bool statistics = false;
+  /// With statistics: given each level-0 block's statistics as the writer sums them, block
+  /// row by block row and along each (row-major), serially, on the calling thread (may be
+  /// empty). A tiled grid written with one level computes none. regolith-mpi gathers its
+  /// parts' blocks this way, without reading its parts back.
+  BlockStatisticsFn blockStatistics;
   /// Bytes the writer may hold to build one grid's pyramid: its bands, the chunks being
   /// computed and encoded, the per-thread scratch (docs/import.md, "Memory"). Where two
   /// full-width bands per level would exceed it, each level is built in column tiles, the
