@@ -3,7 +3,6 @@
 #include <regolith/core/Message.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/demo/PaperScene.hpp>
-#include <regolith/farfield/FarField.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/scene/SceneParts.hpp>
@@ -283,10 +282,8 @@ FlyoverSummary renderFlyover(scene::Scene& s, const FlyoverOptions& options) {
     render::SceneRenderer renderer;
     s.registerWith(renderer);
     gl::RenderTarget target(options.width, options.height);
-    // The far field of Mars in the planet clipmap's albedo and light (null when the scene's
-    // Mars has none).
-    const std::unique_ptr<farfield::FarField> farField =
-        mars->farField ? scene::planetFarField(mars->farField, mars->options.albedo) : nullptr;
+    // The far field of Mars (when the scene's Mars has one) is the renderer's, from
+    // registerWith(), in the planet clipmap's albedo and light.
     const auto lightIn = [&](scenegraph::NodeId focus) {
       return s.lightIn(focus == marsNode ? "mars" : "victoria");
     };
@@ -351,17 +348,10 @@ FlyoverSummary renderFlyover(scene::Scene& s, const FlyoverOptions& options) {
       target.clear({0.02F, 0.02F, 0.04F, 1.0F});
       const scenegraph::RenderList list = g.renderList(focus, cam);
       renderer.prepare(list, view);
-      renderer.draw(list, view);
-      if (farField) {
-        // Beyond the clipmaps: the far field, in Mars's body-fixed frame, where nothing is
-        // drawn yet.
-        const clod::Camera marsCamera = render::cameraInItem(g.relative(marsNode, cam), view);
-        const glm::dvec3 sun =
-            g.relative(marsNode, focus).applyVector(glm::normalize(view.lightInFocus));
-        const farfield::FarFieldFrame ff = farField->draw(target, marsCamera, sun, true);
-        summary.farFieldFrames += ff.mode == farfield::FarFieldMode::Pgm ? 1 : 0;
-        summary.impostorFrames += ff.mode == farfield::FarFieldMode::Impostor ? 1 : 0;
-      }
+      // Beyond the clipmaps: the far field, where nothing is drawn yet.
+      const render::SceneFrame frame = renderer.draw(list, view, &target);
+      summary.farFieldFrames += frame.farFieldsPgm > 0 ? 1 : 0;
+      summary.impostorFrames += frame.farFieldsImpostor > 0 ? 1 : 0;
       const gl::RgbaImage image = target.readColor();
       renderSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
       const auto path = framePath(options.outputDir, i);

@@ -1,6 +1,8 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Executor.hpp>
+#include <regolith/core/Message.hpp>
+#include <regolith/farfield/FarField.hpp>
 #include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
 #include <regolith/gl/GlObjects.hpp>
@@ -90,8 +92,12 @@ void setupVao(const gl::VertexArray& vao, const gl::Buffer& buffer, GLsizei stri
   glVertexArrayAttribBinding(vao.id(), 3, 0);
 }
 
+// Towards the light in an item's frame (unit, double: the far field's sun).
+glm::dvec3 sunIn(const scenegraph::Pose& itemInFocus, const glm::dvec3& lightInFocus) {
+  return glm::normalize(glm::conjugate(itemInFocus.rotation) * lightInFocus);
+}
 glm::vec3 lightIn(const scenegraph::Pose& itemInFocus, const glm::dvec3& lightInFocus) {
-  return glm::vec3(glm::normalize(glm::conjugate(itemInFocus.rotation) * lightInFocus));
+  return glm::vec3(sunIn(itemInFocus, lightInFocus));
 }
 
 // A terrain's focus: the camera's position, clamped onto a plane DEM's grid so the clipmap
@@ -210,6 +216,13 @@ struct SceneRenderer::Terrain {
   }
 };
 
+// A planet's far field: one farfield::FarField per view slot, made on the slot's first draw.
+struct SceneRenderer::FarFields {
+  std::shared_ptr<const farfield::HeightLayers> layers;
+  farfield::PgmOptions options;
+  std::vector<std::unique_ptr<farfield::FarField>> bySlot;
+};
+
 struct SceneRenderer::Mesh {
   gl::Buffer buffer;
   gl::VertexArray vao;
@@ -324,6 +337,36 @@ void SceneRenderer::addCutOut(int planet, int dem) {
   gl::checkGl("SceneRenderer::addCutOut()");
 }
 
+void SceneRenderer::addFarField(int planet, std::shared_ptr<const farfield::HeightLayers> layers,
+                                const farfield::PgmOptions& options) {
+  const char* op = "SceneRenderer::addFarField()";
+  const auto t = terrains_.find(planet);
+  if (t == terrains_.end())
+    throw InvalidArgument(core::format({.operation = op,
+                                        .field = "planet",
+                                        .value = core::number(planet),
+                                        .expected = "the key of a terrain added before"}));
+  if (t->second->pyramid->kind() != SurfaceKind::Planet)
+    throw InvalidArgument(core::format({.operation = op,
+                                        .field = "planet",
+                                        .value = core::number(planet),
+                                        .expected = "a planet terrain (a Planet pyramid)"}));
+  if (layers == nullptr)
+    throw InvalidArgument(core::format({.operation = op,
+                                        .field = "layers",
+                                        .value = "null",
+                                        .expected = "the planet's height layers"}));
+  if (farFields_.count(planet) != 0)
+    throw InvalidArgument(core::format({.operation = op,
+                                        .field = "planet",
+                                        .value = core::number(planet),
+                                        .expected = "a planet without a far field yet"}));
+  auto f = std::make_unique<FarFields>();
+  f->layers = std::move(layers);
+  f->options = options;
+  farFields_.emplace(planet, std::move(f));
+}
+
 const ClipmapTerrain* SceneRenderer::terrain(int drawable) const {
   const auto it = terrains_.find(drawable);
   return it == terrains_.end() ? nullptr : it->second->clipmap.get();
@@ -380,8 +423,19 @@ std::size_t SceneRenderer::prepare(const scenegraph::RenderList& list, const Sce
   return count;
 }
 
-SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneView& view) {
+SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneView& view,
+                               const gl::RenderTarget* target, std::size_t slot) {
   checkView("SceneRenderer::draw()", view);
+  if (target != nullptr && !farFields_.empty() &&
+      (view.x != 0 || view.y != 0 || view.width != target->width() ||
+       view.height != target->height()))
+    throw InvalidArgument(core::format(
+        {.operation = "SceneRenderer::draw()",
+         .field = "view",
+         .value = "viewport " + core::number(view.x) + ", " + core::number(view.y) + ", " +
+                  core::number(view.width) + " x " + core::number(view.height),
+         .expected = "the whole target (" + core::number(target->width()) + " x " +
+                     core::number(target->height()) + ") where far fields are drawn"}));
   SceneFrame frame;
   frame.texelsUploaded = std::exchange(preparedTexels_, 0);
   glViewport(view.x, view.y, view.width, view.height);
@@ -513,7 +567,33 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
   }
   glBindVertexArray(0);
   gl::checkGl("SceneRenderer::draw()");
+  if (target != nullptr) drawFarFields(list, view, *target, slot, frame);
   return frame;
+}
+
+void SceneRenderer::drawFarFields(const scenegraph::RenderList& list, const SceneView& view,
+                                  const gl::RenderTarget& target, std::size_t slot,
+                                  SceneFrame& frame) {
+  // Beyond the clipmaps: each planet's far field in its body-fixed frame (the item's), where
+  // nothing is drawn yet.
+  for (const scenegraph::RenderItem& item : list.items) {
+    const auto it = farFields_.find(item.drawable);
+    if (it == farFields_.end()) continue;
+    FarFields& f = *it->second;
+    if (f.bySlot.size() <= slot) f.bySlot.resize(slot + 1);
+    std::unique_ptr<farfield::FarField>& field = f.bySlot[slot];
+    if (field == nullptr) field = std::make_unique<farfield::FarField>(f.layers, f.options);
+    const Camera cam = cameraInItem(item.cameraInItem(), view);
+    const farfield::FarFieldFrame ff =
+        field->draw(target, cam, sunIn(item.inFocus, view.lightInFocus), true);
+    if (ff.mode == farfield::FarFieldMode::Pgm) {
+      ++frame.farFieldsPgm;
+      frame.vertices += static_cast<std::size_t>(field->pgm().options().gridWidth) *
+                        static_cast<std::size_t>(field->pgm().options().gridHeight);
+    } else if (ff.mode == farfield::FarFieldMode::Impostor) {
+      ++frame.farFieldsImpostor;
+    }
+  }
 }
 
 }  // namespace regolith::render

@@ -629,6 +629,8 @@ void Scene::registerWith(render::SceneRenderer& renderer) const {
       if (b.name == t.body) renderer.addCutOut(b.key, t.key);
   }
   for (const Impl::Thing& o : s.objects) renderer.addMesh(o.key, render::roverMesh(), o.colour);
+  for (const Impl::Terrain& t : s.terrains)
+    if (t.farField) renderer.addFarField(t.key, t.farField, planetFarFieldOptions(t.albedo));
 }
 
 gl::RgbaImage Scene::render(scenegraph::NodeId camera, scenegraph::NodeId focus,
@@ -644,13 +646,8 @@ gl::RgbaImage Scene::render(scenegraph::NodeId camera, scenegraph::NodeId focus,
     view.lightInFocus = s.graph.relative(focus, s.lightFrame).applyVector(s.lightDirection);
     target.clear({0.02F, 0.02F, 0.04F, 1.0F});
     const scenegraph::RenderList list = s.graph.renderList(focus, camera);
-    renderer.prepare(list, view);  // waits: the headless frame does not depend on read speed
-    renderer.draw(list, view);
-    for (const Impl::Terrain& t : s.terrains) {
-      if (!t.farField) continue;
-      const auto farField = planetFarField(t.farField, t.albedo);
-      (void)drawFarField(*farField, s.graph, t.node, camera, focus, view, target);
-    }
+    renderer.prepare(list, view);        // waits: the headless frame does not depend on read speed
+    renderer.draw(list, view, &target);  // the far fields too
     image = target.readColor();
   }  // GL objects go before the context
   return image;

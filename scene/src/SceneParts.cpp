@@ -73,23 +73,13 @@ std::shared_ptr<const farfield::HeightLayers> farFieldLayers(
       *planet.body(), planet.level(k).grid, *planet.level(k).source, planet.latitudeType(), lo));
 }
 
-std::unique_ptr<farfield::FarField> planetFarField(
-    std::shared_ptr<const farfield::HeightLayers> layers, const glm::vec3& albedo) {
+farfield::PgmOptions planetFarFieldOptions(const glm::vec3& albedo) {
   farfield::PgmOptions po;
   po.gridWidth = po.gridHeight = 512;
   po.heightColours = false;
   po.high = albedo;
   po.ambient = clod::ClipmapOptions{}.ambient;
-  return std::make_unique<farfield::FarField>(std::move(layers), po);
-}
-
-farfield::FarFieldMode drawFarField(farfield::FarField& farField, const scenegraph::SceneGraph& g,
-                                    scenegraph::NodeId planet, scenegraph::NodeId camera,
-                                    scenegraph::NodeId focus, const render::SceneView& view,
-                                    const gl::RenderTarget& target) {
-  const clod::Camera planetCamera = render::cameraInItem(g.relative(planet, camera), view);
-  const glm::dvec3 sun = g.relative(planet, focus).applyVector(glm::normalize(view.lightInFocus));
-  return farField.draw(target, planetCamera, sun, true).mode;
+  return po;
 }
 
 TraverseEnd driveAndPress(const topo::TopoDem& dem, const rover::TraverseOptions& options,

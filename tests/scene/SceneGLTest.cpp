@@ -4,6 +4,8 @@
 #include <regolith/clod/Camera.hpp>
 #include <regolith/clod/Effects.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
+#include <regolith/farfield/PgmRenderer.hpp>
+#include <regolith/gl/RenderTarget.hpp>
 #include <regolith/render/SceneRenderer.hpp>
 #include <regolith/scene/Scene.hpp>
 #include <regolith/scene/SceneDescription.hpp>
@@ -248,6 +250,135 @@ TEST(SceneGL, TheDemosEarthIsDrawnWhereThePapersLayoutPutsIt) {
   }
   for (const auto& [x, y] : {std::pair{80 + 45, 60}, {80 - 45, 60}, {80, 60 - 45}, {3, 3}})
     EXPECT_TRUE(image.is(x, y, 5, 5, 10)) << "sky at " << x << ", " << y;
+}
+
+TEST(SceneGL, TheRenderersFarFieldDrawsThePlanetWholeInEachViewSlot) {
+  test::glContext();
+  // Mars from 3 body radii out on the x axis, through a render::SceneRenderer the scene
+  // registers with: the far field comes with the render target only, and fills the disc
+  // (of angular radius asin(1/3)) whole. A 0.2° planet: its clipmap's levels that span at
+  // most 180° of latitude reach 102° around the point under the camera, less than the 141°
+  // of the ground seen from 3 radii, so the clipmap alone leaves the disc's rim empty.
+  SceneDescription fine =
+      withCamera("mars", {3.0 * 3396190.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, 1.0});
+  ASSERT_EQ(fine.bodies.at(0).heights.at(0).rows, 180U);
+  fine.bodies[0].heights[0].rows = 900;
+  const Scene s(fine);
+  const scenegraph::NodeId mars = s.graph().at("mars");
+  const scenegraph::NodeId camera = s.cameraNode("view");
+  render::SceneView view;
+  view.width = 160;
+  view.height = 120;
+  view.near = 1000.0;
+  view.lightInFocus = s.lightIn("mars");
+  const scenegraph::RenderList list = s.graph().renderList(mars, camera);
+  const auto frameOf = [&](render::SceneRenderer& r, const gl::RenderTarget* target,
+                           std::size_t slot) {
+    r.prepare(list, view);
+    return r.draw(list, view, target, slot);
+  };
+  const auto planetPixels = [](const gl::RgbaImage& im) {
+    int n = 0;
+    for (int y = 0; y < im.height; ++y)
+      for (int x = 0; x < im.width; ++x) n += im.is(x, y, 5, 5, 10) ? 0 : 1;
+    return n;
+  };
+  gl::RenderTarget target(view.width, view.height);
+  render::SceneRenderer near;
+  s.registerWith(near);
+  target.clear({0.02F, 0.02F, 0.04F, 1.0F});
+  const render::SceneFrame withoutTarget = frameOf(near, nullptr, 0);
+  EXPECT_EQ(withoutTarget.farFieldsPgm + withoutTarget.farFieldsImpostor, 0U);
+  const gl::RgbaImage nearImage = target.readColor();
+  test::savePng("scene_renderer_near_only", nearImage);
+  const int nearOnly = planetPixels(nearImage);
+  const double disc =
+      60.0 * std::tan(std::asin(1.0 / 3.0)) / std::tan(22.5 * std::numbers::pi / 180.0);
+  const auto skyInside = [&](const gl::RgbaImage& im, double fraction) {
+    int n = 0;
+    for (int y = 0; y < im.height; ++y) {
+      for (int x = 0; x < im.width; ++x) {
+        const double r = std::hypot(x + 0.5 - 80.0, y + 0.5 - 60.0);
+        n += r < fraction * disc && im.is(x, y, 5, 5, 10) ? 1 : 0;
+      }
+    }
+    return n;
+  };
+  EXPECT_GT(skyInside(nearImage, 0.95), 50) << "the clipmap alone leaves the disc's rim empty";
+
+  render::SceneRenderer whole;
+  s.registerWith(whole);
+  target.clear({0.02F, 0.02F, 0.04F, 1.0F});
+  const render::SceneFrame withTarget = frameOf(whole, &target, 0);
+  EXPECT_EQ(withTarget.farFieldsPgm + withTarget.farFieldsImpostor, 1U);
+  const gl::RgbaImage drawn = target.readColor();
+  test::savePng("scene_renderer_far_field", drawn);
+  EXPECT_GE(planetPixels(drawn), nearOnly);
+  // The disc: 60 · tan(asin(1/3)) / tan(22.5°) ≈ 51 pixels; inside 0.95 of it every pixel
+  // is the planet, beyond 1.15 of it every one is sky.
+  EXPECT_EQ(skyInside(drawn, 0.95), 0);
+  int planetBeyond = 0;
+  for (int y = 0; y < drawn.height; ++y) {
+    for (int x = 0; x < drawn.width; ++x) {
+      const double r = std::hypot(x + 0.5 - 80.0, y + 0.5 - 60.0);
+      planetBeyond += r > 1.15 * disc && !drawn.is(x, y, 5, 5, 10) ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(planetBeyond, 0);
+
+  // A view slot is a view's own: slot 0 drawn twice from one camera gives the same image
+  // whether or not another view is drawn in slot 1 between the two (PGM's primary sphere
+  // lags a frame within its slot).
+  const Scene closer(
+      withCamera("mars", {1.3 * 3396190.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, 1.0}));
+  const auto secondFrame = [&](bool between) {
+    render::SceneRenderer r;
+    s.registerWith(r);
+    target.clear({0.02F, 0.02F, 0.04F, 1.0F});
+    (void)frameOf(r, &target, 0);
+    if (between) {
+      const scenegraph::RenderList l2 =
+          closer.graph().renderList(closer.graph().at("mars"), closer.cameraNode("view"));
+      target.clear({0.02F, 0.02F, 0.04F, 1.0F});
+      r.prepare(l2, view);
+      (void)r.draw(l2, view, &target, 1);
+    }
+    target.clear({0.02F, 0.02F, 0.04F, 1.0F});
+    (void)frameOf(r, &target, 0);
+    return target.readColor();
+  };
+  const gl::RgbaImage alone = secondFrame(false), interleaved = secondFrame(true);
+  EXPECT_TRUE(alone.rgba == interleaved.rgba);
+
+  // Refused, naming the call and what was expected.
+  render::SceneRenderer r;
+  s.registerWith(r);
+  const SceneTerrain planet = s.terrains().front();
+  ASSERT_TRUE(planet.planet);
+  const auto message = [&](auto&& call) {
+    try {
+      call();
+    } catch (const InvalidArgument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message([&] {
+              r.addFarField(planet.drawable, planet.farField, {});
+            }).find("SceneRenderer::addFarField(): planet is"),
+            std::string::npos);  // registered by registerWith() already
+  EXPECT_NE(message([&] { r.addFarField(9999, planet.farField, {}); }).find("9999"),
+            std::string::npos);
+  const SceneTerrain dem = s.terrains().at(1);
+  ASSERT_FALSE(dem.planet);
+  EXPECT_NE(message([&] {
+              r.addFarField(dem.drawable, planet.farField, {});
+            }).find("expected a planet terrain"),
+            std::string::npos);
+  render::SceneView part = view;
+  part.width = 80;
+  EXPECT_NE(message([&] { (void)r.draw(list, part, &target, 0); }).find("the whole target"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -85,7 +85,6 @@ Viewer::~Viewer() = default;
 
 void Viewer::rebuild() {
   renderer_ = std::make_unique<render::SceneRenderer>();
-  farFields_.clear();
   for (std::size_t t = 0; t < scene_.terrains.size(); ++t) {
     const ViewTerrain& terrain = scene_.terrains[t];
     clod::ClipmapOptions o = terrain.options;
@@ -97,10 +96,7 @@ void Viewer::rebuild() {
   for (const ViewMesh& m : scene_.meshes) renderer_->addMesh(m.drawable, m.vertices, m.albedo);
   for (std::size_t t = 0; t < scene_.terrains.size(); ++t) {
     const ViewTerrain& terrain = scene_.terrains[t];
-    if (!terrain.farField) {
-      farFields_.emplace_back();
-      continue;
-    }
+    if (!terrain.farField) continue;
     farfield::PgmOptions po;
     // 160² grid points: the global view's mesh pass dominates the frame on llvmpipe
     // (docs/far-field.md); PGM's error stays under a pixel at this size.
@@ -109,10 +105,10 @@ void Viewer::rebuild() {
     po.heightColours = terrain.options.effects.heightColours && !off_[t].contains("heightColours");
     po.high = terrain.options.albedo;
     po.ambient = terrain.options.ambient;
-    // One per viewport: PGM's primary sphere comes from the previous frame's read-back of
-    // the same view (PrimaryReadback::Lagged), which another viewport's view would spoil.
-    farFields_.push_back({std::make_unique<farfield::FarField>(terrain.farField, po),
-                          std::make_unique<farfield::FarField>(terrain.farField, po)});
+    // Drawn per viewport slot (render(): the viewport's index): PGM's primary sphere comes
+    // from the previous frame's read-back of the same view (PrimaryReadback::Lagged), which
+    // another viewport's view would spoil.
+    renderer_->addFarField(terrain.drawable, terrain.farField, po);
   }
 }
 
@@ -495,19 +491,9 @@ void Viewer::draw(int width, int height) {
     v.target->clear(kSpace);
     const scenegraph::RenderList list = scene_.graph->renderList(focus, camera);
     renderer_->prepare(list, view, split_ ? render::Loading::Wait : loading_);
-    const render::SceneFrame frame = renderer_->draw(list, view);
+    // The far fields too (their PGM grids counted in the vertices), in this viewport's slot.
+    const render::SceneFrame frame = renderer_->draw(list, view, v.target.get(), k);
     vertices_ += frame.vertices;
-    for (std::size_t t = 0; t < scene_.terrains.size(); ++t) {
-      farfield::FarField* farField = farFields_[t][k].get();
-      if (farField == nullptr) continue;
-      const scenegraph::NodeId body = scene_.terrains[t].node;
-      const clod::Camera inBody = render::cameraInItem(scene_.graph->relative(body, camera), view);
-      const farfield::FarFieldFrame ff = farField->draw(*v.target, inBody, lightIn(body), true);
-      if (ff.mode == farfield::FarFieldMode::Pgm) {
-        vertices_ += static_cast<std::size_t>(farField->pgm().options().gridWidth) *
-                     static_cast<std::size_t>(farField->pgm().options().gridHeight);
-      }
-    }
     glBlitNamedFramebuffer(v.target->framebuffer(), image_->framebuffer(), 0, 0, v.width, v.height,
                            v.x, 0, v.x + v.width, v.height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
   }

@@ -4,7 +4,7 @@
 // a HUD and screenshots. It draws into offscreen render targets, so the window (gl::Window)
 // only shows its image and a script can drive it exactly as a user would.
 #include <regolith/clod/Camera.hpp>
-#include <regolith/farfield/FarField.hpp>
+#include <regolith/farfield/PgmRenderer.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/gl/Window.hpp>
 #include <regolith/render/SceneRenderer.hpp>
@@ -14,7 +14,6 @@
 
 #include <glm/vec3.hpp>
 
-#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -111,8 +110,6 @@ class Viewer {
   ViewScene scene_;
   std::ostream& log_;
   std::unique_ptr<render::SceneRenderer> renderer_;
-  // Per terrain (none without far-field layers), one per viewport.
-  std::vector<std::array<std::unique_ptr<farfield::FarField>, 2>> farFields_;
   std::vector<std::set<std::string>> off_;                    // per terrain: effects off
   std::vector<std::pair<std::size_t, std::string>> toggles_;  // key 1..9 → (terrain, effect)
   std::vector<Viewport> viewports_;

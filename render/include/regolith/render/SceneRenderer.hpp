@@ -18,7 +18,14 @@
 
 namespace regolith::gl {
 class Program;
+class RenderTarget;
 }  // namespace regolith::gl
+
+namespace regolith::farfield {
+class FarField;
+class HeightLayers;
+struct PgmOptions;
+}  // namespace regolith::farfield
 
 namespace regolith::clod {
 class ClipmapTerrain;  // <regolith/clod/ClipmapTerrain.hpp>: this header needs no GL header
@@ -72,9 +79,11 @@ enum class Loading {
 /// What one draw() did.
 struct SceneFrame {
   std::size_t terrainsDrawn = 0, meshesDrawn = 0;
-  std::size_t itemsUnknown = 0;    ///< render-list items with a key nothing is registered for
-  std::size_t texelsUploaded = 0;  ///< by the prepare() calls since the previous draw()
-  std::size_t vertices = 0;
+  std::size_t itemsUnknown = 0;       ///< render-list items with a key nothing is registered for
+  std::size_t texelsUploaded = 0;     ///< by the prepare() calls since the previous draw()
+  std::size_t vertices = 0;           ///< the far fields' PGM grids included
+  std::size_t farFieldsPgm = 0;       ///< far fields drawn by PGM
+  std::size_t farFieldsImpostor = 0;  ///< far fields drawn by the ray-cast impostor
 };
 
 /// Draws render lists (scenegraph::SceneGraph::renderList). Each item is drawn in its own frame:
@@ -107,6 +116,13 @@ class SceneRenderer {
   /// Planet pyramid) where the DEM has data. At most 4 DEMs per planet. Throws
   /// InvalidArgument for unknown keys, wrong kinds, or a fifth DEM.
   void addCutOut(int planet, int dem);
+  /// The far field of planet terrain `planet` (registered with addTerrain, a Planet
+  /// pyramid): a farfield::FarField (PGM, and the ray-cast impostor for views too far for
+  /// it) over `layers` with `options`, drawn by draw() beyond the clipmap, wherever the near
+  /// field left the target empty. Throws InvalidArgument for an unknown key, a terrain that
+  /// is not a planet, or a planet that has one already.
+  void addFarField(int planet, std::shared_ptr<const farfield::HeightLayers> layers,
+                   const farfield::PgmOptions& options);
 
   /// Loads what draw() needs for `list` seen through `view`: moves each terrain's clipmap to
   /// its focus (the camera's position in the terrain's frame, clamped onto a plane DEM's
@@ -121,7 +137,15 @@ class SceneRenderer {
   /// Z, as RenderTarget sets it), with what prepare() left resident: draw() reads no terrain
   /// source, moves no clipmap and waits for no read (a terrain never prepared draws nothing;
   /// a DEM's border skirt waits for a frame in which the planet's sample under it is in).
-  SceneFrame draw(const scenegraph::RenderList& list, const SceneView& view);
+  ///
+  /// With `target` (the render target bound, which the view must cover whole: PGM's passes
+  /// are the target's size), draw() then draws the far fields (addFarField) of the list's
+  /// planets. Each view `slot` has far fields of its own: PGM's primary sphere comes from the
+  /// previous frame of the same view, so views drawn in turn (viewports, cameras) each take a
+  /// slot. Without `target` no far field is drawn. Throws InvalidArgument for a view draw()
+  /// cannot draw (a far field's view not covering the target included).
+  SceneFrame draw(const scenegraph::RenderList& list, const SceneView& view,
+                  const gl::RenderTarget* target = nullptr, std::size_t slot = 0);
 
   /// Draws the DEM border skirts (default on). Off only to show what they prevent: the
   /// planet's cut edge and the DEM's border then leave gaps wherever their heights differ.
@@ -134,8 +158,12 @@ class SceneRenderer {
   struct Terrain;
   struct Mesh;
   struct Skirt;
+  struct FarFields;
+  void drawFarFields(const scenegraph::RenderList& list, const SceneView& view,
+                     const gl::RenderTarget& target, std::size_t slot, SceneFrame& frame);
   std::map<int, std::unique_ptr<Terrain>> terrains_;
   std::map<int, std::unique_ptr<Mesh>> meshes_;
+  std::map<int, std::unique_ptr<FarFields>> farFields_;
   std::unique_ptr<gl::Program> meshProgram_;
   bool skirts_ = true;
   std::size_t preparedTexels_ = 0;  // uploaded by prepare() since the last draw()

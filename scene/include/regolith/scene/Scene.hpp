@@ -131,7 +131,8 @@ class Scene {
                                      render::SceneView view, int width, int height) const;
   /// Registers what render() draws with a renderer a caller keeps across frames (the
   /// fly-over): every terrain with its options, the cut-outs of the DEMs in their bodies,
-  /// and the objects' meshes. The far field is not registered (terrains() gives its layers).
+  /// the objects' meshes, and each body's far field (drawn by SceneRenderer::draw() when it
+  /// is given the render target).
   void registerWith(render::SceneRenderer& renderer) const;
 
  private:

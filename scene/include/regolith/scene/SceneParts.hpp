@@ -7,8 +7,8 @@
 #include <regolith/clod/Camera.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/compose/ComposedSurface.hpp>
-#include <regolith/farfield/FarField.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
+#include <regolith/farfield/PgmRenderer.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/render/SceneRenderer.hpp>
 #include <regolith/rover/TrackLayer.hpp>
@@ -48,17 +48,9 @@ namespace regolith::scene {
 [[nodiscard]] std::shared_ptr<const farfield::HeightLayers> farFieldLayers(
     const clod::HeightPyramid& planet, const compose::ComposedSurface* composed);
 
-/// The far field of a planet drawn with a terrain's albedo and clod's ambient, so the clipmap
-/// and PGM look alike where they meet. Needs a current GL context.
-[[nodiscard]] std::unique_ptr<farfield::FarField> planetFarField(
-    std::shared_ptr<const farfield::HeightLayers> layers, const glm::vec3& albedo);
-
-/// Draws planet `planet` beyond the clipmaps into `target`, where nothing is drawn yet, for
-/// `camera`'s view of `focus`'s render list.
-farfield::FarFieldMode drawFarField(farfield::FarField& farField, const scenegraph::SceneGraph& g,
-                                    scenegraph::NodeId planet, scenegraph::NodeId camera,
-                                    scenegraph::NodeId focus, const render::SceneView& view,
-                                    const gl::RenderTarget& target);
+/// The far field's settings for a planet drawn with a terrain's albedo and clod's ambient,
+/// so the clipmap and PGM look alike where they meet (render::SceneRenderer::addFarField).
+[[nodiscard]] farfield::PgmOptions planetFarFieldOptions(const glm::vec3& albedo);
 
 /// A traverse over `dem` that presses the six wheels into `tracks` every
 /// rover::RoverRuts::kSpacingMetres of travel (tracks may be null: nothing is pressed).
