@@ -8,14 +8,15 @@
 # anything; it is a benchmark, not a test.
 #
 #   bash scripts/mpi-bench.sh [DIR, default /tmp/mpibench] [BUILD_DIR, default build]
-# Environment: ROUNDS (default 3). As root, OpenMPI needs OMPI_ALLOW_RUN_AS_ROOT=1 and
-# OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 (set here).
+# Environment: ROUNDS (default 3), DEFLATE (the deflate level, default 6). As root, OpenMPI
+# needs OMPI_ALLOW_RUN_AS_ROOT=1 and OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 (set here).
 set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 dir=${1:-/tmp/mpibench}
 build=$(cd "${2:-$root/build}" && pwd)
 rounds=${ROUNDS:-3}
+deflate=${DEFLATE:-6}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 mkdir -p "$dir/tiles"
 cd "$dir"
@@ -53,13 +54,13 @@ for ((round = 1; round <= rounds; ++round)); do
       rm -f "o$np.h5"
       /usr/bin/time -f "round $round $input np$np wall %e cpu %U+%S" \
         mpirun -np "$np" "$build/tools/mpi/regolith-mpi" import "${src[@]}" --out "o$np.h5" \
-        --deflate 6 >"log-$input-np$np-$round.txt" 2>&1
+        --deflate "$deflate" >"log-$input-np$np-$round.txt" 2>&1
       tail -1 "log-$input-np$np-$round.txt"
       grep 'ranks:' "log-$input-np$np-$round.txt" || true
     done
     rm -f t1.h5
     /usr/bin/time -f "round $round $input import1 wall %e cpu %U+%S" \
-      "$build/tools/regolith" import "${src[@]}" --out t1.h5 --deflate 6 --threads 1 \
+      "$build/tools/regolith" import "${src[@]}" --out t1.h5 --deflate "$deflate" --threads 1 \
       >"log-$input-t1-$round.txt" 2>&1
     tail -1 "log-$input-t1-$round.txt"
   done
