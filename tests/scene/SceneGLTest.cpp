@@ -363,9 +363,9 @@ TEST(SceneGL, TheRenderersFarFieldDrawsThePlanetWholeInEachViewSlot) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(message([&] {
-              r.addFarField(planet.drawable, planet.farField, {});
-            }).find("SceneRenderer::addFarField(): planet is"),
+  EXPECT_NE(message([&] { r.addFarField(planet.drawable, planet.farField, {}); })
+                .find("SceneRenderer::addFarField(): planet is " + std::to_string(planet.drawable) +
+                      ", expected a planet without a far field yet"),
             std::string::npos);  // registered by registerWith() already
   EXPECT_NE(message([&] { r.addFarField(9999, planet.farField, {}); }).find("9999"),
             std::string::npos);
