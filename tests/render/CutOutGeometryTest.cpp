@@ -4,7 +4,7 @@
 // topo::TopoGrid::fractionalIndex and clod::Camera::project, and the planet cell under a point near
 // the poles and the seam.
 #include <regolith/clod/Camera.hpp>
-#include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/clod/CutOut.hpp>
 #include <regolith/render/CutOutGeometry.hpp>
 #include <regolith/topo/Body.hpp>
 

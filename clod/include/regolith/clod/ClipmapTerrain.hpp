@@ -4,11 +4,11 @@
 
 #include <regolith/clod/Camera.hpp>
 #include <regolith/clod/ClipmapOptions.hpp>
+#include <regolith/clod/CutOut.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/gl/GlObjects.hpp>
 #include <regolith/gl/Program.hpp>
 
-#include <glm/mat3x3.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
@@ -21,23 +21,6 @@
 namespace regolith::clod {
 
 class ClipmapLevel;
-
-/// Most DEMs that can win over one terrain (the cut-out shader's arrays).
-inline constexpr std::size_t kMaxClipmapCutOuts = 4;
-
-/// The affine map eye → DEM mask cell that the cut-out test applies per fragment:
-/// (col, row, h / 1) = eyeToCell · eye + cellOfCamera, where integer (col, row) are the
-/// corners of cell (row, col) (topo::TopoGrid::fractionalIndex of the grid-frame point).
-/// Double precision (render::cutOutTransform() makes it); the shader takes it cast to float.
-struct CutOutTransform {
-  glm::dmat3 eyeToCell{1.0};
-  glm::dvec3 cellOfCamera{0.0};
-};
-
-/// What the cut-out test needs of the projection to rebuild a fragment's eye position from
-/// gl_FragCoord and its reversed-Z depth: (near, aspect / f, 1 / f), f = 1 / tan(fovY / 2),
-/// aspect = width / height (Camera's projection).
-[[nodiscard]] glm::dvec3 cutOutProjection(double near, double fovYDegrees, int width, int height);
 
 /// A DEM that wins over a planet terrain where it has data (render::SceneRenderer::addCutOut): its
 /// cell mask (an R8 texture, one texel per cell of render::CellMask, r > 0.5 with data) and this

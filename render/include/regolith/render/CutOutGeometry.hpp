@@ -10,7 +10,7 @@
 /// planet's frame is body-fixed metres; eye coordinates are the camera's (x right, y up,
 /// looking down −z), camera-relative.
 
-#include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/clod/CutOut.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/scenegraph/Pose.hpp>
 #include <regolith/topo/TopoGrid.hpp>
