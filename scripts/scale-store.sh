@@ -10,6 +10,10 @@
 #   3. a rover traverse on the store through a 64 MiB cache (bench/procedural_bench with
 #      REGOLITH_SCALE_STORE): six wheels every 1 cm along 20 km, heights and heights + normals,
 #      cold and warm, as wheel queries/s, patch loads and the peak resident bytes.
+#   4. a fly-over of the store through a 256 MiB cache (bench/flyover_bench with
+#      REGOLITH_SCALE_STORE): 90 frames from two radii down to 500 m at 1280 × 720 headless,
+#      frame times, frames drawn coarser while loading, patch loads, the peak resident bytes
+#      against the budget and the process's peak RSS.
 # A benchmark run by hand, never a CI test at full size (tests/tools runs it at 512 rows).
 # It refuses to start without the disk it needs, and removes what it wrote unless --keep.
 #
@@ -24,7 +28,7 @@ cog_rows=8192
 dir=${TMPDIR:-/tmp}/regolith-scale
 build=$root/build
 keep=0
-usage() { sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,22p' "$0" | sed 's/^# \{0,1\}//'; }
 while (($#)); do
   case $1 in
     --rows) rows=${2:?--rows needs a number}; shift 2 ;;
@@ -45,8 +49,9 @@ done
 ((cog_rows > rows)) && cog_rows=$rows
 regolith=$build/tools/regolith
 bench=$build/bench/procedural_bench
-for exe in "$regolith" "$bench"; do
-  [[ -x $exe ]] || { echo "scale-store: $exe not found; build it first (cmake --build $build --target regolith procedural_bench; the bench needs -DREGOLITH_BUILD_BENCH=ON)" >&2; exit 2; }
+flyover=$build/bench/flyover_bench
+for exe in "$regolith" "$bench" "$flyover"; do
+  [[ -x $exe ]] || { echo "scale-store: $exe not found; build it first (cmake --build $build --target regolith procedural_bench flyover_bench; the benches need -DREGOLITH_BUILD_BENCH=ON)" >&2; exit 2; }
 done
 for tool in gdal_translate /usr/bin/time python3; do
   command -v "$tool" >/dev/null || { echo "scale-store: $tool not found (scripts/install-deps.sh installs it)" >&2; exit 2; }
@@ -149,4 +154,23 @@ for b in rows:
           f"{b['evictions']:.0f} | {b['peak_resident_MiB']:.1f} |")
 PY
 echo
-echo "Commands: \`bash scripts/scale-store.sh --rows $rows --cog-rows $cog_rows\`. Not measured here: a fly-over within a 256 MiB budget (docs/scale.md)."
+
+# 4. A fly-over of the store.
+echo "scale-store: a fly-over of $dir/scale.h5" >&2
+json=$(REGOLITH_SCALE_STORE="$dir/scale.h5" "$flyover" --benchmark_filter='^store/flyover' --benchmark_format=json)
+echo "## A fly-over of the store (256 MiB cache; 1280 × 720, llvmpipe)"
+echo
+python3 - "$json" <<'PY'
+import json, sys
+rows = json.loads(sys.argv[1])["benchmarks"]
+print("| benchmark | frames | frame ms median | p90 | max | frames drawn coarser | patch loads | "
+      "MiB loaded | peak resident MiB | budget MiB | peak RSS MiB |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+for b in rows:
+    print(f"| `{b['name']}` | {b['frames']:.0f} | {b['frame_ms_median']:.1f} | {b['frame_ms_p90']:.1f} | "
+          f"{b['frame_ms_max']:.1f} | {b['frames_coarser']:.0f} | {b['patch_loads']:.0f} | "
+          f"{b['MiB_loaded']:.1f} | {b['peak_resident_MiB']:.1f} | {b['budget_MiB']:.0f} | "
+          f"{b['peak_rss_MiB']:.0f} |")
+PY
+echo
+echo "Commands: \`bash scripts/scale-store.sh --rows $rows --cog-rows $cog_rows\` (docs/scale.md)."

@@ -15,12 +15,16 @@ for want in '| `regolith generate mars-planet --size 512` | 524288 |' \
   '| `regolith generate mars-planet --size 256` (computes the samples too) |' \
   '| `gdal_translate -of COG -co COMPRESS=NONE` from the store' \
   '| `gdal_translate -of COG -co COMPRESS=LZW` from the store' '| `regolith import` of that COG' \
-  '| `store/traverse/heights_cold/iterations:1` |' '| `store/traverse/surfaces_warm/iterations:3` |'; do
+  '| `store/traverse/heights_cold/iterations:1` |' '| `store/traverse/surfaces_warm/iterations:3` |' \
+  '| `store/flyover/iterations:1` | 90 |'; do
   grep -qF -- "$want" "$tmp/out.md" || { cat "$tmp/out.md" >&2; fail "no line '$want'"; }
 done
 # Every traverse row has a positive rate in M wheel queries/s.
 awk -F'|' '/store\/traverse/ { gsub(/[ M]/, "", $3); if (!($3 > 0)) bad = 1 } END { exit bad }' \
   "$tmp/out.md" || fail "a traverse row without a positive rate"
+# The fly-over: positive frame times, and the cache never above its 256 MiB budget.
+awk -F'|' '/store\/flyover/ { if (!($4 > 0 && $6 >= $4 && $10 > 0 && $10 <= $11 && $11 == 256)) bad = 1; n++ }
+  END { exit bad || n != 1 }' "$tmp/out.md" || { cat "$tmp/out.md" >&2; fail "a fly-over row with a bad frame time or resident bytes"; }
 leftover=$(find "$tmp/run" -name '*.h5' -o -name '*.tif' -o -name '*.time')
 [[ -z $leftover ]] || fail "files left behind: $leftover"
 
