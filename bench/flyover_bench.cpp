@@ -30,11 +30,11 @@
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/clod/Render.hpp>
 #include <regolith/farfield/FarField.hpp>
-#include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/gl/Gl.hpp>
 #include <regolith/gl/HeadlessContext.hpp>
 #include <regolith/gl/Image.hpp>
 #include <regolith/gl/RenderTarget.hpp>
+#include <regolith/scene/SceneParts.hpp>
 #include <regolith/store/Procedural.hpp>
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
@@ -132,37 +132,20 @@ void flyover(benchmark::State& state, bool procedural) {
     }
   }
 
-  // The clipmap keeps its levels whose window spans at most 180° (as `regolith render`;
-  // the far field draws the rest of the planet).
+  // The clipmap keeps its levels whose window spans at most 180°, the far field draws the
+  // rest of the planet (as `regolith render` and a scene do: scene/SceneParts.hpp); its
+  // layers are read whole, through the cache, before the timing.
   clod::ClipmapOptions co;
-  std::size_t levels = 0;
-  while (levels < pyramid->levelCount() &&
-         (co.size - 1) * std::abs(pyramid->level(levels).grid.spacingY()) <= 180.0) {
-    ++levels;
-  }
-  co.levels = std::max<std::size_t>(levels, 1);
+  co.levels = scene::planetLevelsWithFarField(*pyramid, co.size);
   const glm::dmat3 enu = body.enuFrame(kLat, kLon);
   const glm::dvec3 sun = glm::normalize(
       std::cos(0.61) * glm::normalize(-0.92 * enu[0] + 0.38 * enu[1]) + std::sin(0.61) * enu[2]);
   co.lightDirection = glm::vec3(sun);
-
-  // The far field's layers from the finest level of at most 4096 columns (read whole,
-  // through the cache, before the timing).
-  std::size_t k = 0;
-  while (k + 1 < pyramid->levelCount() && pyramid->level(k).grid.cols() > 4096) ++k;
-  farfield::LayerOptions lo;
-  lo.equirectWidth = 2048;
-  lo.capSize = 512;
   const auto setup0 = std::chrono::steady_clock::now();
-  auto layers =
-      std::make_shared<const farfield::HeightLayers>(farfield::HeightLayers::fromPlanetGrid(
-          body, pyramid->level(k).grid, *pyramid->level(k).source, pyramid->latitudeType(), lo));
+  const auto layers = scene::farFieldLayers(*pyramid, nullptr);
   const double layerSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - setup0).count();
-  farfield::PgmOptions po;
-  po.heightColours = false;
-  po.high = co.albedo;
-  po.ambient = co.ambient;
+  const farfield::PgmOptions po = scene::planetFarFieldOptions(co.albedo);
 
   const char* pngDir = std::getenv("REGOLITH_FLYOVER_PNG");
   std::vector<double> ms;

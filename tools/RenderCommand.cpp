@@ -1,12 +1,14 @@
-// `regolith render STORE|CATALOGUE`: one headless clipmap image of a store's grid, or of the
-// composed surface of a catalogue file, as a PNG.
+// `regolith render STORE|CATALOGUE`: one headless image of a store's grid, or of the
+// composed surface of a catalogue file, as a PNG: drawn by the scene-rendering layer
+// (render::renderTerrain(): the clipmap, and a planet's far field beyond it).
 #include <regolith/clod/EffectList.hpp>
 #include <regolith/clod/Render.hpp>
 #include <regolith/compose/ComposedPyramid.hpp>
 #include <regolith/compose/FromStore.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
-#include <regolith/farfield/FarField.hpp>
+#include <regolith/render/TerrainImage.hpp>
+#include <regolith/scene/SceneParts.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 
@@ -296,44 +298,14 @@ void runRender(const Args& a, std::ostream& report) {
   }
   // A planet: the far field (docs/far-field.md) draws it beyond the clipmap, so the clipmap
   // keeps only its levels whose window spans at most 180° (a wider one reaches over a pole
-  // onto ground it already covers, and the two copies fight in the depth test).
+  // onto ground it already covers, and the two copies fight in the depth test). Its heights
+  // and look are a scene's (scene::farFieldLayers(), planetFarFieldOptions()).
+  std::optional<render::TerrainFarField> farField;
   if (planet && !a.noFarField) {
-    farfield::LayerOptions lo;
-    lo.equirectWidth = 2048;
-    lo.capSize = 512;
-    std::shared_ptr<const farfield::HeightLayers> layers;
-    if (terrain.surface) {
-      layers = std::make_shared<const farfield::HeightLayers>(
-          farfield::HeightLayers::fromSurface(*terrain.surface, lo));
-    } else {
-      std::size_t k = 0;
-      while (k + 1 < pyramid->levelCount() && pyramid->level(k).grid.cols() > 4096) ++k;
-      layers =
-          std::make_shared<const farfield::HeightLayers>(farfield::HeightLayers::fromPlanetGrid(
-              *pyramid->body(), pyramid->level(k).grid, *pyramid->level(k).source,
-              pyramid->latitudeType(), lo));
-    }
-    const glm::vec3 light = request.clipmap.lightDirection;
-    const clod::ClipmapOptions clipmapLook = request.clipmap;
-    request.afterTerrain = [layers, light, clipmapLook](const gl::RenderTarget& into,
-                                                        const clod::Camera& camera) {
-      farfield::PgmOptions po;
-      po.heightColours = false;  // the clipmap's albedo and lighting: one look
-      po.high = clipmapLook.albedo;
-      po.ambient = clipmapLook.ambient;
-      // Made and dropped here, while render()'s GL context is current.
-      farfield::FarField farField(layers, po);
-      farField.draw(into, camera, glm::dvec3(light), true);
-    };
-    if (terrain.latLonGrid) {
-      std::size_t levels = 0;
-      while (levels < pyramid->levelCount() &&
-             (request.clipmap.size - 1) * std::abs(pyramid->level(levels).grid.spacingY()) <=
-                 180.0) {
-        ++levels;
-      }
-      request.clipmap.levels = std::max<std::size_t>(levels, 1);
-    }
+    farField = render::TerrainFarField{scene::farFieldLayers(*pyramid, terrain.surface.get()),
+                                       scene::planetFarFieldOptions(request.clipmap.albedo)};
+    if (terrain.latLonGrid)
+      request.clipmap.levels = scene::planetLevelsWithFarField(*pyramid, request.clipmap.size);
   }
   if (terrain.latLonGrid) {
     // On a coarse planet whose finest window alone spans more than 180°, shrink the levels
@@ -346,7 +318,7 @@ void runRender(const Args& a, std::ostream& report) {
       request.clipmap.size = fit;
     }
   }
-  clod::renderToPng(pyramid, request, a.out);
+  render::renderTerrainToPng(pyramid, request, farField, a.out);
   // A legend beside the PNG describes this image only: one an earlier render left there
   // goes when this one has none (no height colours or lat/lon lines).
   if (!effects.effects.heightColours && !effects.effects.latLon) {

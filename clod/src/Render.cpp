@@ -117,8 +117,6 @@ Camera cameraLookingAt(const HeightPyramid& pyramid, const glm::dvec3& target,
 
 namespace {
 
-constexpr const char* kRenderOp = "renderImage()";
-
 /// The lowest valid sample of the grid cell around grid point (x, y), from the finest level
 /// that has one: the bilinear surface there lies at or above it. nullopt off the grid or
 /// over nodata at every level.
@@ -147,12 +145,13 @@ std::optional<double> lowestSampleAround(const HeightPyramid& pyramid, double x,
 /// Throws InvalidArgument if the eye lies inside the body: below the lowest sample of the
 /// terrain's cell under it (so a camera above the surface, however close, is never refused),
 /// or, on a planet, nearer the centre than half the polar radius (where no grid point is).
-void refuseEyeInsideBody(const HeightPyramid& pyramid, const glm::dvec3& eye) {
+void refuseEyeInsideBody(const HeightPyramid& pyramid, const glm::dvec3& eye,
+                         const std::string& operation) {
   const std::string expected = "above the terrain's surface (the camera is inside the body)";
   if (pyramid.kind() == SurfaceKind::Planet &&
       glm::length(eye) < 0.5 * pyramid.body()->polarRadius()) {
     throw InvalidArgument(core::format(
-        {kRenderOp,
+        {operation,
          {},
          "camera position",
          text(eye) + " m, " + core::number(glm::length(eye)) + " m from the body's centre",
@@ -168,7 +167,7 @@ void refuseEyeInsideBody(const HeightPyramid& pyramid, const glm::dvec3& eye) {
   const double above = glm::dot(eye - surface, pyramid.up(surface));
   if (above < 0.0) {
     throw InvalidArgument(
-        core::format({kRenderOp,
+        core::format({operation,
                       {},
                       "camera position",
                       text(eye) + " m, " + core::number(-above) + " m below the surface",
@@ -176,10 +175,12 @@ void refuseEyeInsideBody(const HeightPyramid& pyramid, const glm::dvec3& eye) {
   }
 }
 
-/// Every number of the camera: finite and in range; the eye outside the body.
-void validateCamera(const HeightPyramid& pyramid, const Camera& cam) {
-  const auto refuse = [](const std::string& field, const std::string& value, const char* exp) {
-    throw InvalidArgument(core::format({kRenderOp, {}, field, value, exp}));
+}  // namespace
+
+void checkCamera(const HeightPyramid& pyramid, const Camera& cam, const std::string& operation) {
+  const auto refuse = [&operation](const std::string& field, const std::string& value,
+                                   const char* exp) {
+    throw InvalidArgument(core::format({operation, {}, field, value, exp}));
   };
   if (!finite(cam.position)) refuse("camera position", text(cam.position), "finite");
   if (!finite(cam.target)) refuse("camera target", text(cam.target), "finite");
@@ -194,14 +195,16 @@ void validateCamera(const HeightPyramid& pyramid, const Camera& cam) {
     refuse("image size", std::to_string(cam.width) + " x " + std::to_string(cam.height),
            "1 to 16384 pixels a side");
   }
-  refuseEyeInsideBody(pyramid, cam.position);
+  refuseEyeInsideBody(pyramid, cam.position, operation);
 }
+
+namespace {
 
 gl::RgbaImage render(std::shared_ptr<const HeightPyramid> pyramid, const RenderRequest& request,
                      std::optional<Legend>* legendOut) {
   if (!pyramid) throw InvalidArgument("renderImage(): pyramid is null");
   const Camera& cam = request.camera;
-  validateCamera(*pyramid, cam);
+  checkCamera(*pyramid, cam, "renderImage()");
   std::unique_ptr<gl::HeadlessContext> context;
   if (eglGetCurrentContext() == EGL_NO_CONTEXT) context = std::make_unique<gl::HeadlessContext>();
   gl::RgbaImage image;
@@ -211,7 +214,6 @@ gl::RgbaImage render(std::shared_ptr<const HeightPyramid> pyramid, const RenderR
     gl::RenderTarget target(cam.width, cam.height);
     target.clear(request.background);
     terrain.draw(cam);
-    if (request.afterTerrain) request.afterTerrain(target, cam);
     image = target.readColor();
     const Legend legend = Legend::of(terrain, cam);
     if (!legend.empty()) {

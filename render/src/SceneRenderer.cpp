@@ -100,8 +100,8 @@ glm::vec3 lightIn(const scenegraph::Pose& itemInFocus, const glm::dvec3& lightIn
   return glm::vec3(sunIn(itemInFocus, lightInFocus));
 }
 
-// A terrain's focus: the camera's position, clamped onto a plane DEM's grid so the clipmap
-// windows stay on the data whatever the camera does.
+// A terrain's focus: the camera's position (or the view's clipmap centre), clamped onto a
+// plane DEM's grid so the clipmap windows stay on the data whatever the camera does.
 glm::dvec3 focusFor(const HeightPyramid& p, const glm::dvec3& camera) {
   if (p.kind() != SurfaceKind::Plane || p.placement()) return camera;
   const auto& g = p.level(0).grid;
@@ -346,11 +346,12 @@ void SceneRenderer::addFarField(int planet, std::shared_ptr<const farfield::Heig
                                         .field = "planet",
                                         .value = core::number(planet),
                                         .expected = "the key of a terrain added before"}));
-  if (t->second->pyramid->kind() != SurfaceKind::Planet)
-    throw InvalidArgument(core::format({.operation = op,
-                                        .field = "planet",
-                                        .value = core::number(planet),
-                                        .expected = "a planet terrain (a Planet pyramid)"}));
+  if (t->second->pyramid->kind() != SurfaceKind::Planet && !t->second->pyramid->placement())
+    throw InvalidArgument(core::format(
+        {.operation = op,
+         .field = "planet",
+         .value = core::number(planet),
+         .expected = "a terrain drawn body-fixed (a Planet pyramid, or one with a placement)"}));
   if (layers == nullptr)
     throw InvalidArgument(core::format({.operation = op,
                                         .field = "layers",
@@ -399,8 +400,10 @@ std::size_t SceneRenderer::prepare(const scenegraph::RenderList& list, const Sce
     const auto it = terrains_.find(item.drawable);
     if (it == terrains_.end()) continue;
     Terrain& t = *it->second;
-    const Camera cam = cameraInItem(item.cameraInItem(), view);
-    t.clipmap->requestFocus(focusFor(*t.pyramid, cam.position));
+    const glm::dvec3 centre = view.clipmapCentreInFocus
+                                  ? item.inFocus.inverse().apply(*view.clipmapCentreInFocus)
+                                  : cameraInItem(item.cameraInItem(), view).position;
+    t.clipmap->requestFocus(focusFor(*t.pyramid, centre));
     asked.push_back(t.clipmap.get());
   }
   std::size_t count = 0;

@@ -83,19 +83,19 @@ def test_render_flyover_refuses_to_write_a_frame_over_a_store(tmp_path):
 
 @pytest.mark.parametrize("kwargs,message", [
     (dict(position=(np.nan, 0.0, 300.0), look_at=(0.0, 0.0, 0.0)),
-     "renderImage(): camera position is (nan, 0, 300), expected finite"),
+     "render::renderTerrain(): camera position is (nan, 0, 300), expected finite"),
     (dict(position=(0.0, -900.0, 300.0), look_at=(0.0, np.inf, 0.0)),
-     "renderImage(): camera target is (0, inf, 0), expected finite"),
+     "render::renderTerrain(): camera target is (0, inf, 0), expected finite"),
     (dict(position=(0.0, -900.0, 300.0), heading_deg=np.nan, pitch_deg=-10.0),
      "cameraFromHeadingPitch(): heading is nan deg, expected finite"),
     (dict(position=(0.0, -900.0, 300.0), heading_deg=0.0, pitch_deg=np.nan),
      "cameraFromHeadingPitch(): pitch is nan deg, expected inside (-90, 90)"),
     (dict(position=(0.0, -900.0, 300.0), look_at=(0.0, 0.0, 0.0), fov_deg=np.nan),
-     "renderImage(): field of view is nan deg, expected inside (0, 180)"),
+     "render::renderTerrain(): field of view is nan deg, expected inside (0, 180)"),
     (dict(position=(0.0, -900.0, 300.0), look_at=(0.0, 0.0, 0.0), near=np.inf),
-     "renderImage(): near plane is inf m, expected finite and > 0"),
+     "render::renderTerrain(): near plane is inf m, expected finite and > 0"),
     (dict(position=(0.0, -900.0, 300.0), look_at=(0.0, -900.0, 300.0)),
-     "renderImage(): camera target is (0, -900, 300), expected a point other than the camera "
+     "render::renderTerrain(): camera target is (0, -900, 300), expected a point other than the camera "
      "position"),
 ])
 def test_render_refuses_bad_camera_numbers(dem, kwargs, message):
@@ -106,7 +106,7 @@ def test_render_refuses_bad_camera_numbers(dem, kwargs, message):
 
 def test_render_refuses_a_camera_under_a_dem(dem):
     # The crater floor is about 100 m below the rim; 2000 km below is inside Mars.
-    with pytest.raises(ValueError, match=r"renderImage\(\): camera position is \(0, 0, -2e\+06\) m, "
+    with pytest.raises(ValueError, match=r"render::renderTerrain\(\): camera position is \(0, 0, -2e\+06\) m, "
                        r"[0-9.e+]+ m below the surface, expected above the terrain's surface "
                        r"\(the camera is inside the body\)"):
         dem.render(position=(0.0, 0.0, -2e6), heading_deg=0.0, pitch_deg=-10.0, width=32,

@@ -419,6 +419,34 @@ def test_render_returns_an_rgba_image_of_the_terrain(victoria):
         dem.render(position=(0.0, 0.0, 100.0))
 
 
+def test_planet_render_draws_the_disc_whole_with_the_far_field(tmp_path):
+    # A 0.2° Mars from 3 radii: the clipmap keeps its levels within 180°, the far field draws
+    # the rest, so the whole disc of angular radius asin(1/3) is drawn and nothing beyond it.
+    out = tmp_path / "mars.h5"
+    regolith.generate_mars(out, rows=900)
+    mars = regolith.open(out)
+    r = 3396190.0
+    bg = (0.0, 0.0, 1.0, 1.0)
+    img = mars.render(position=(3.0 * r, 0.0, 0.0), look_at=(0.0, 0.0, 0.0), width=160,
+                      height=120, near=1000.0, clipmap_size=63, background=bg)
+    sky = (img[..., 0] == 0) & (img[..., 1] == 0) & (img[..., 2] == 255)
+    y, x = np.mgrid[0:120, 0:160]
+    radius = np.hypot(x + 0.5 - 80.0, y + 0.5 - 60.0)
+    disc = 60.0 * np.tan(np.arcsin(1.0 / 3.0)) / np.tan(np.radians(22.5))
+    assert not sky[radius < 0.95 * disc].any()
+    assert sky[radius > 1.15 * disc].all()
+    # The clipmap alone, every level (the coarsest, 0.8° apart, spans about 50° each way):
+    # the disc's rim stays empty.
+    alone = mars.render(position=(3.0 * r, 0.0, 0.0), look_at=(0.0, 0.0, 0.0), width=160,
+                        height=120, near=1000.0, clipmap_size=63, background=bg,
+                        far_field=False)
+    sky_alone = (alone[..., 0] == 0) & (alone[..., 1] == 0) & (alone[..., 2] == 255)
+    assert sky_alone[radius < 0.95 * disc].sum() > 50
+    assert sky_alone[radius > 1.15 * disc].all()
+    with pytest.raises(TypeError):
+        mars.render(position=(3.0 * r, 0.0, 0.0), look_at=(0.0, 0.0, 0.0), far_field="yes")
+
+
 # ---- the rover traverse ---------------------------------------------------------------------
 
 

@@ -373,7 +373,7 @@ TEST(SceneGL, TheRenderersFarFieldDrawsThePlanetWholeInEachViewSlot) {
   ASSERT_FALSE(dem.planet);
   EXPECT_NE(message([&] {
               r.addFarField(dem.drawable, planet.farField, {});
-            }).find("expected a planet terrain"),
+            }).find("expected a terrain drawn body-fixed"),
             std::string::npos);
   render::SceneView part = view;
   part.width = 80;

@@ -2,6 +2,7 @@
 
 #include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/scene/Scene.hpp>
+#include <regolith/scene/SceneParts.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
 
@@ -33,27 +34,6 @@ std::pair<float, float> heightRange(const clod::HeightPyramid& p) {
   }
   if (lo > hi) return {0.0F, 1.0F};
   return {lo, std::max(hi, lo + 1.0F)};
-}
-
-/// The clipmap levels of a latitude/longitude grid whose windows span at most 180° (a wider
-/// one reaches over a pole onto ground it already covers; the far field draws beyond).
-std::size_t levelsWithin180(const clod::HeightPyramid& p, int size) {
-  std::size_t levels = 0;
-  while (levels < p.levelCount() &&
-         (size - 1) * std::abs(p.level(levels).grid.spacingY()) <= 180.0) {
-    ++levels;
-  }
-  return std::max<std::size_t>(levels, 1);
-}
-
-std::shared_ptr<const farfield::HeightLayers> planetLayers(const clod::HeightPyramid& p) {
-  farfield::LayerOptions lo;
-  lo.equirectWidth = 2048;
-  lo.capSize = 512;
-  std::size_t k = 0;
-  while (k + 1 < p.levelCount() && p.level(k).grid.cols() > 4096) ++k;
-  return std::make_shared<const farfield::HeightLayers>(farfield::HeightLayers::fromPlanetGrid(
-      *p.body(), p.level(k).grid, *p.level(k).source, p.latitudeType(), lo));
 }
 
 clod::Effects declaredEffects(const clod::HeightPyramid& p, bool latLon) {
@@ -92,8 +72,8 @@ ViewScene storeScene(const std::string& path, const std::string& grid, std::size
     const double dy = std::abs(pyramid->level(0).grid.spacingY());
     const int fit = static_cast<int>(std::floor(180.0 / dy)) / 2 * 2 + 1;
     if (fit < t.options.size && fit >= 15) t.options.size = fit;
-    t.options.levels = levelsWithin180(*pyramid, t.options.size);
-    t.farField = planetLayers(*pyramid);
+    t.options.levels = scene::planetLevelsWithFarField(*pyramid, t.options.size);
+    t.farField = scene::farFieldLayers(*pyramid, nullptr);
     const double radius = pyramid->body()->equatorialRadius();
     o.size = 2.0 * radius;
     // The whole planet, seen from 3.2 radii out, looking at (0°E, 0°N) from 70° above its

@@ -1,8 +1,11 @@
-// Headless rendering into a numpy image (clod::renderImage).
+// Headless rendering into a numpy image (render::renderTerrain(): the scene renderer, as
+// `regolith render`).
 #include <regolith/clod/EffectList.hpp>
 #include <regolith/clod/Render.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/render/TerrainImage.hpp>
 #include <regolith/rover/TrackLayer.hpp>
+#include <regolith/scene/SceneParts.hpp>
 #include <regolith/store/GridInfo.hpp>
 #include <regolith/store/Pager.hpp>
 
@@ -215,7 +218,7 @@ py::array_t<std::uint8_t> render(const Terrain& t, const std::array<double, 3>& 
                                  std::shared_ptr<rover::TrackLayer> tracks,
                                  const py::object& effects,
                                  const std::optional<std::array<double, 2>>& heightRange,
-                                 bool legend) {
+                                 bool legend, bool farField) {
   const char* op = kOp;
   if (lookAt.has_value() == (heading.has_value() || pitch.has_value())) {
     throw InvalidArgument(std::string(op) +
@@ -254,10 +257,18 @@ py::array_t<std::uint8_t> render(const Terrain& t, const std::array<double, 3>& 
                                               pitch.value_or(0.0), fov, width, height);
   }
   req.camera.near = near;
+  // A planet, as `regolith render` draws it: the clipmap's levels whose window spans at most
+  // 180°, the far field beyond them (docs/far-field.md).
+  std::optional<render::TerrainFarField> far;
+  if (farField && pyramid->kind() == clod::SurfaceKind::Planet) {
+    far = render::TerrainFarField{scene::farFieldLayers(*pyramid, nullptr),
+                                  scene::planetFarFieldOptions(req.clipmap.albedo)};
+    req.clipmap.levels = scene::planetLevelsWithFarField(*pyramid, req.clipmap.size);
+  }
   gl::RgbaImage img;
   {
     const py::gil_scoped_release release;
-    img = clod::renderImage(pyramid, req);
+    img = render::renderTerrain(pyramid, req, far).image;
   }
   return imageArray(img);
 }
@@ -287,7 +298,12 @@ void bindRender(py::class_<DemTerrain, std::shared_ptr<DemTerrain>>& dem,
       "'noise': {'amplitude': m, 'wavelength': grid units, 'octaves': 1..8}, 'tracks': "
       "TrackLayer}. Only the named effects are built. height_range: (low, high) metres of the "
       "height colours (default: the grid's lowest and highest height). legend: draw the "
-      "legend of height colours and lat/lon lines into the top-right corner. Raises "
+      "legend of height colours and lat/lon lines into the top-right corner. far_field: on a "
+      "planet, draw the clipmap's levels that span at most 180 degrees and the far field "
+      "(projective grid mapping, or the ray-cast globe from far away) beyond them, as "
+      "`regolith render` does (docs/far-field.md); False draws the clipmap alone, every "
+      "level (a DEM has no far field). Drawn by the scene renderer (render::renderTerrain). "
+      "Raises "
       "InvalidArgument for an unknown effect, a parameter out of range or of an effect not "
       "named, GlError if no GL 4.5 context can be made.";
   const auto def = [&](auto& cls) {
@@ -299,16 +315,17 @@ void bindRender(py::class_<DemTerrain, std::shared_ptr<DemTerrain>>& dem,
            std::optional<double> pitch, double fov, int width, int height, double near,
            int clipmapSize, const std::array<float, 4>& background,
            std::shared_ptr<rover::TrackLayer> tracks, const py::object& effects,
-           const std::optional<std::array<double, 2>>& heightRange, bool legend) {
+           const std::optional<std::array<double, 2>>& heightRange, bool legend, bool farField) {
           return render(t, position, lookAt, heading, pitch, fov, width, height, near, clipmapSize,
-                        background, std::move(tracks), effects, heightRange, legend);
+                        background, std::move(tracks), effects, heightRange, legend, farField);
         },
         py::arg("position"), py::arg("look_at") = py::none(), py::arg("heading_deg") = py::none(),
         py::arg("pitch_deg") = py::none(), py::arg("fov_deg") = 45.0, py::arg("width") = 640,
         py::arg("height") = 480, py::arg("near") = 0.1, py::arg("clipmap_size") = 255,
         py::arg("background") = std::array<float, 4>{0.02F, 0.02F, 0.04F, 1.0F},
         py::arg("tracks") = py::none(), py::arg("effects") = py::none(),
-        py::arg("height_range") = py::none(), py::arg("legend") = true, doc);
+        py::arg("height_range") = py::none(), py::arg("legend") = true, py::arg("far_field") = true,
+        doc);
   };
   def(dem);
   def(planet);

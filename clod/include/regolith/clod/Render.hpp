@@ -6,12 +6,10 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/gl/Image.hpp>
-#include <regolith/gl/RenderTarget.hpp>
 
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
-#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -30,11 +28,14 @@ struct RenderRequest {
   /// the image's top-right corner. renderToPng() also writes it beside the PNG as
   /// `<path>.legend.json` either way.
   bool legendInImage = true;
-  /// Called after the terrain is drawn and before the image is read: further passes into
-  /// the same target with the same camera (the command's far field, farfield::FarField,
-  /// draws the rest of a planet around the clipmap this way). The context is current.
-  std::function<void(const gl::RenderTarget&, const Camera&)> afterTerrain;
 };
+
+/// Throws InvalidArgument naming `operation`, the camera's field, its value and the
+/// expectation, unless every number of `camera` is finite and in range (field of view in
+/// (0, 180)°, near plane > 0, 1 to 16384 pixels a side, target other than the position) and
+/// the eye lies outside the body: above the lowest sample of the terrain's cell under it
+/// (however close), and on a planet farther from the centre than half the polar radius.
+void checkCamera(const HeightPyramid& pyramid, const Camera& camera, const std::string& operation);
 
 /// A camera at `position` looking along a heading (degrees clockwise from north: +y on a
 /// plane, local north on a planet) and a pitch (degrees, negative looks down), with "up"

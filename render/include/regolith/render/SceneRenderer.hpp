@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <map>
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace regolith::gl {
@@ -62,6 +63,10 @@ struct SceneView {
   int x = 0, y = 0, width = 640, height = 480;  ///< viewport in the bound framebuffer (GL: y up)
   /// Towards the light, in the render list's focus frame (normalised when used).
   glm::dvec3 lightInFocus{0.4, -0.3, 0.866};
+  /// Where prepare() centres the clipmaps, in the focus frame (a look-at point on the
+  /// ground, as `regolith render` and clod::renderImage() do); unset: the camera's position.
+  /// Clamped onto a plane DEM's grid either way.
+  std::optional<glm::dvec3> clipmapCentreInFocus;
 };
 
 /// How SceneRenderer::prepare() loads the terrains' windows. Either way the reads run on the
@@ -117,19 +122,20 @@ class SceneRenderer {
   /// InvalidArgument for unknown keys, wrong kinds, or a fifth DEM.
   void addCutOut(int planet, int dem);
   /// The far field of planet terrain `planet` (registered with addTerrain, a Planet
-  /// pyramid): a farfield::FarField (PGM, and the ray-cast impostor for views too far for
-  /// it) over `layers` with `options`, drawn by draw() beyond the clipmap, wherever the near
-  /// field left the target empty. Throws InvalidArgument for an unknown key, a terrain that
-  /// is not a planet, or a planet that has one already.
+  /// pyramid, or a placed one drawn body-fixed: a polar cap's stereographic grid): a
+  /// farfield::FarField (PGM, and the ray-cast impostor for views too far for it) over
+  /// `layers` with `options`, drawn by draw() beyond the clipmap, wherever the near field
+  /// left the target empty. Throws InvalidArgument for an unknown key, a terrain not drawn
+  /// body-fixed, or a planet that has one already.
   void addFarField(int planet, std::shared_ptr<const farfield::HeightLayers> layers,
                    const farfield::PgmOptions& options);
 
   /// Loads what draw() needs for `list` seen through `view`: moves each terrain's clipmap to
-  /// its focus (the camera's position in the terrain's frame, clamped onto a plane DEM's
-  /// grid), reads on the executors as `loading` says, uploads what has arrived, and starts
-  /// reading the planet samples under the DEMs that cut it (the border skirts' depth). Call
-  /// it before each draw() of a list whose camera or items moved. Returns the texels
-  /// uploaded. A read error of the loader (a store I/O error) is rethrown here. Throws
+  /// its focus (view.clipmapCentreInFocus or else the camera's position, in the terrain's
+  /// frame, clamped onto a plane DEM's grid), reads on the executors as `loading` says, uploads
+  /// what has arrived, and starts reading the planet samples under the DEMs that cut it (the border
+  /// skirts' depth). Call it before each draw() of a list whose camera or items moved. Returns the
+  /// texels uploaded. A read error of the loader (a store I/O error) is rethrown here. Throws
   /// InvalidArgument for a view draw() would refuse.
   std::size_t prepare(const scenegraph::RenderList& list, const SceneView& view,
                       Loading loading = Loading::Wait);
