@@ -13,7 +13,7 @@
 #   4. a fly-over of the store through a 256 MiB cache (bench/flyover_bench with
 #      REGOLITH_SCALE_STORE): 90 frames from two radii down to 500 m at 1280 × 720 headless,
 #      frame times, frames drawn coarser while loading, patch loads, the peak resident bytes
-#      against the budget and the process's peak RSS.
+#      against the budget and the process's RSS at the start and at its peak.
 # A benchmark run by hand, never a CI test at full size (tests/tools runs it at 512 rows).
 # It refuses to start without the disk it needs, and removes what it wrote unless --keep.
 #
@@ -164,13 +164,13 @@ python3 - "$json" <<'PY'
 import json, sys
 rows = json.loads(sys.argv[1])["benchmarks"]
 print("| benchmark | frames | frame ms median | p90 | max | frames drawn coarser | patch loads | "
-      "MiB loaded | peak resident MiB | budget MiB | peak RSS MiB |")
-print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+      "MiB loaded | peak resident MiB | budget MiB | RSS at start MiB | peak RSS MiB |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
 for b in rows:
     print(f"| `{b['name']}` | {b['frames']:.0f} | {b['frame_ms_median']:.1f} | {b['frame_ms_p90']:.1f} | "
           f"{b['frame_ms_max']:.1f} | {b['frames_coarser']:.0f} | {b['patch_loads']:.0f} | "
           f"{b['MiB_loaded']:.1f} | {b['peak_resident_MiB']:.1f} | {b['budget_MiB']:.0f} | "
-          f"{b['peak_rss_MiB']:.0f} |")
+          f"{b['rss_before_MiB']:.0f} | {b['peak_rss_MiB']:.0f} |")
 PY
 echo
 echo "Commands: \`bash scripts/scale-store.sh --rows $rows --cog-rows $cog_rows\` (docs/scale.md)."

@@ -22,8 +22,9 @@ done
 # Every traverse row has a positive rate in M wheel queries/s.
 awk -F'|' '/store\/traverse/ { gsub(/[ M]/, "", $3); if (!($3 > 0)) bad = 1 } END { exit bad }' \
   "$tmp/out.md" || fail "a traverse row without a positive rate"
-# The fly-over: positive frame times, and the cache never above its 256 MiB budget.
-awk -F'|' '/store\/flyover/ { if (!($4 > 0 && $6 >= $4 && $10 > 0 && $10 <= $11 && $11 == 256)) bad = 1; n++ }
+# The fly-over: positive frame times, the cache never above its 256 MiB budget, and the
+# process's peak resident set at least its resident set at the start.
+awk -F'|' '/store\/flyover/ { if (!($4 > 0 && $6 >= $4 && $10 > 0 && $10 <= $11 && $11 == 256 && $12 > 0 && $13 >= $12)) bad = 1; n++ }
   END { exit bad || n != 1 }' "$tmp/out.md" || { cat "$tmp/out.md" >&2; fail "a fly-over row with a bad frame time or resident bytes"; }
 leftover=$(find "$tmp/run" -name '*.h5' -o -name '*.tif' -o -name '*.time')
 [[ -z $leftover ]] || fail "files left behind: $leftover"
