@@ -23,7 +23,9 @@
 // the far field's PGM and impostor frames; the cache's patch loads, evictions, MiB loaded
 // and peak resident bytes against its budget; and the process's resident set when the
 // fly-over starts (the GL driver, the far field's layers, the empty cache) and at its peak
-// (VmHWM: that, the cache, the clipmap's textures and the far field's buffers).
+// (VmHWM: that, the cache, the clipmap's textures and the far field's buffers); the bytes
+// read from the disk during the fly-over (read_bytes of /proc/self/io: 0 from a warm page
+// cache; scripts/scale-store.sh drops it first where it may).
 //
 // REGOLITH_FLYOVER_PNG=<folder> writes frames 0, the middle one and the last as PNGs to look at.
 #include <regolith/clod/Camera.hpp>
@@ -40,6 +42,8 @@
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
 
+#include "ProcStats.hpp"
+
 #include <benchmark/benchmark.h>
 #include <glm/geometric.hpp>
 
@@ -48,7 +52,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -65,22 +68,6 @@ constexpr std::size_t kFrames = 90;
 constexpr int kWidth = 1280, kHeight = 720;
 constexpr double kLat = 10.0, kLon = 30.0;  // where the descent ends
 constexpr double kEndAltitude = 500.0;      // metres above the ground at the last frame
-
-/// A line of /proc/self/status in MiB (VmHWM: the peak resident set; VmRSS: now); 0 where
-/// /proc is not there.
-double statusMiB(const std::string& field) {
-  std::ifstream status("/proc/self/status");
-  std::string key;
-  while (status >> key) {
-    if (key == field) {
-      double kib = 0.0;
-      status >> kib;
-      return kib / 1024.0;
-    }
-    status.ignore(4096, '\n');
-  }
-  return 0.0;
-}
 
 store::Pager openPager(bool procedural, const std::shared_ptr<store::PatchCache>& cache,
                        std::string& grid) {
@@ -152,11 +139,12 @@ void flyover(benchmark::State& state, bool procedural) {
   const char* pngDir = std::getenv("REGOLITH_FLYOVER_PNG");
   std::vector<double> ms;
   double coarser = 0.0, pgmFrames = 0.0, impostorFrames = 0.0;
-  double rssBefore = 0.0;
+  double rssBefore = 0.0, diskBefore = 0.0, diskAfter = 0.0;
   for (auto _ : state) {
     cache->clear();
     cache->resetStats();
-    rssBefore = statusMiB("VmRSS:");
+    rssBefore = bench::statusMiB("VmRSS:");
+    diskBefore = bench::diskReadBytes();
     clod::ClipmapTerrain terrain(pyramid, co);
     farfield::FarField farField(layers, po);
     gl::RenderTarget target(kWidth, kHeight);
@@ -190,6 +178,7 @@ void flyover(benchmark::State& state, bool procedural) {
       }
     }
     terrain.finishLoading();
+    diskAfter = bench::diskReadBytes();
   }
   std::vector<double> sorted = ms;
   std::sort(sorted.begin(), sorted.end());
@@ -210,7 +199,8 @@ void flyover(benchmark::State& state, bool procedural) {
   state.counters["peak_resident_MiB"] = static_cast<double>(c.peakResidentBytes) / 1048576.0;
   state.counters["budget_MiB"] = static_cast<double>(kBudget) / 1048576.0;
   state.counters["rss_before_MiB"] = rssBefore;
-  state.counters["peak_rss_MiB"] = statusMiB("VmHWM:");
+  state.counters["disk_MiB_read"] = (diskAfter - diskBefore) / 1048576.0;
+  state.counters["peak_rss_MiB"] = bench::statusMiB("VmHWM:");
   state.counters["layers_s"] = layerSeconds;
 }
 

@@ -18,10 +18,15 @@
 // not the kernel's page cache, and not the patch the thread read last (the thread's block
 // keeps it alive, and the pager finds it again): a path within one patch loads nothing.
 //
-// Counters: patch loads and evictions, and the peak resident bytes against the budget.
+// Counters: patch loads and evictions, the peak resident bytes against the budget, the
+// bytes the cache loaded (decoded patches) and the bytes read from the disk (read_bytes of
+// /proc/self/io: 0 for the procedural planet, and for a store in a warm page cache;
+// scripts/scale-store.sh drops the page cache before each cold run where it may).
 #include <regolith/store/Procedural.hpp>
 #include <regolith/store/Store.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
+
+#include "ProcStats.hpp"
 
 #include <benchmark/benchmark.h>
 
@@ -77,8 +82,12 @@ Planet& scaleStore() {
   return p;
 }
 
-void reportCache(benchmark::State& state, const PatchCache& cache) {
+/// The cache's counters, and the bytes read from the disk since `diskBefore`
+/// (bench::diskReadBytes()).
+void reportCache(benchmark::State& state, const PatchCache& cache, double diskBefore) {
   const CacheStats s = cache.stats();
+  state.counters["disk_MiB_read"] = (bench::diskReadBytes() - diskBefore) / 1048576.0;
+  state.counters["MiB_loaded"] = static_cast<double>(s.bytesLoaded) / 1048576.0;
   state.counters["patch_loads"] = static_cast<double>(s.loads);
   state.counters["evictions"] = static_cast<double>(s.evictions);
   state.counters["peak_resident_MiB"] = static_cast<double>(s.peakResidentBytes) / 1048576.0;
@@ -138,6 +147,8 @@ double drive(const TopoPlanet& planet, bool surfaces) {
 
 void traverseCold(benchmark::State& state, Planet& (*planet)(), bool surfaces) {
   (void)path();
+  (void)planet();  // opened (the store's metadata read) before the disk is counted
+  const double disk = bench::diskReadBytes();
   for (auto _ : state) {
     state.PauseTiming();
     Planet& p = planet();
@@ -147,22 +158,24 @@ void traverseCold(benchmark::State& state, Planet& (*planet)(), bool surfaces) {
     benchmark::DoNotOptimize(drive(p.planet, surfaces));
   }
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(path().points.size()));
-  reportCache(state, *planet().cache);
+  reportCache(state, *planet().cache, disk);
 }
 
 void traverseWarm(benchmark::State& state, Planet& (*planet)(), bool surfaces) {
   Planet& p = planet();
   (void)drive(p.planet, surfaces);  // the path's patches resident
   p.cache->resetStats();
+  const double disk = bench::diskReadBytes();
   for (auto _ : state) benchmark::DoNotOptimize(drive(p.planet, surfaces));
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(path().points.size()));
-  reportCache(state, *p.cache);
+  reportCache(state, *p.cache, disk);
 }
 
 void randomCold(benchmark::State& state) {
   Planet& p = shared();
   p.cache->clear();
   p.cache->resetStats();
+  const double disk = bench::diskReadBytes();
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> z(-1.0, 1.0), lon(-180.0, 180.0);
   for (auto _ : state) {
@@ -171,7 +184,7 @@ void randomCold(benchmark::State& state) {
     benchmark::DoNotOptimize(p.planet.height({lat, lon(rng)}).height);
   }
   state.SetItemsProcessed(state.iterations());
-  reportCache(state, *p.cache);
+  reportCache(state, *p.cache, disk);
 }
 
 void randomResident(benchmark::State& state) {
@@ -187,13 +200,14 @@ void randomResident(benchmark::State& state) {
   for (LatLon& ll : points) ll = {lat0 + u(rng), lon0 + u(rng)};
   for (const LatLon& ll : points) benchmark::DoNotOptimize(p.planet.height(ll).height);
   p.cache->resetStats();
+  const double disk = bench::diskReadBytes();
   for (auto _ : state) {
     double sink = 0.0;
     for (const LatLon& ll : points) sink += p.planet.height(ll).height;
     benchmark::DoNotOptimize(sink);
   }
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(points.size()));
-  reportCache(state, *p.cache);
+  reportCache(state, *p.cache, disk);
 }
 
 }  // namespace

@@ -9,15 +9,22 @@
 #      run: a full-size COG would need the disk twice);
 #   3. a rover traverse on the store through a 64 MiB cache (bench/procedural_bench with
 #      REGOLITH_SCALE_STORE): six wheels every 1 cm along 20 km, heights and heights + normals,
-#      cold and warm, as wheel queries/s, patch loads and the peak resident bytes.
+#      cold and warm, as wheel queries/s, patch loads, the peak resident bytes, the bytes
+#      the cache loaded and the bytes read from the disk (the page cache dropped before each
+#      cold run when run as root);
 #   4. a fly-over of the store through a 256 MiB cache (bench/flyover_bench with
 #      REGOLITH_SCALE_STORE): 90 frames from two radii down to 500 m at 1280 × 720 headless,
 #      frame times, frames drawn coarser while loading, patch loads, the peak resident bytes
-#      against the budget and the process's RSS at the start and at its peak.
+#      against the budget, the process's RSS at the start and at its peak, and the bytes
+#      read from the disk (the page cache dropped first when run as root).
 # A benchmark run by hand, never a CI test at full size (tests/tools runs it at 512 rows).
 # It refuses to start without the disk it needs, and removes what it wrote unless --keep.
 #
 #   bash scripts/scale-store.sh [--rows N] [--cog-rows N] [--dir DIR] [--build DIR] [--keep]
+#                               [--keep-page-cache]
+#
+# --keep-page-cache leaves the kernel's page cache alone (the check at 512 rows, and a user
+# who is not root): cold runs may then find the store in it.
 #
 # Prints a Markdown table per step on stdout (progress and tool output on stderr).
 set -euo pipefail
@@ -28,7 +35,8 @@ cog_rows=8192
 dir=${TMPDIR:-/tmp}/regolith-scale
 build=$root/build
 keep=0
-usage() { sed -n '2,22p' "$0" | sed 's/^# \{0,1\}//'; }
+drop=1
+usage() { awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; }
 while (($#)); do
   case $1 in
     --rows) rows=${2:?--rows needs a number}; shift 2 ;;
@@ -36,8 +44,9 @@ while (($#)); do
     --dir) dir=${2:?--dir needs a folder}; shift 2 ;;
     --build) build=${2:?--build needs a folder}; shift 2 ;;
     --keep) keep=1; shift ;;
+    --keep-page-cache) drop=0; shift ;;
     -h | --help) usage; exit 0 ;;
-    *) echo "scale-store: unknown argument '$1', expected --rows, --cog-rows, --dir, --build or --keep" >&2; exit 2 ;;
+    *) echo "scale-store: unknown argument '$1', expected --rows, --cog-rows, --dir, --build, --keep or --keep-page-cache" >&2; exit 2 ;;
   esac
 done
 for v in rows cog_rows; do
@@ -139,38 +148,60 @@ for compress in NONE LZW; do
 done
 echo
 
-# 3. The rover on the store.
+# 3. The rover on the store. Each run is a process of its own; before each cold one the
+# kernel's page cache is dropped where this user may (root), so the store comes from the disk.
+page_cache="dropped before each cold run"
+((drop)) || page_cache="kept (--keep-page-cache): a cold run may find the store in it"
+drop_page_cache() {
+  ((drop)) || return 0
+  sync
+  if ! { echo 1 >/proc/sys/vm/drop_caches; } 2>/dev/null; then
+    page_cache="not dropped (this user may not): a cold run may find the store in the page cache"
+  fi
+}
 echo "scale-store: the rover traverse on $dir/scale.h5" >&2
-json=$(REGOLITH_SCALE_STORE="$dir/scale.h5" "$bench" --benchmark_filter='^store/traverse' --benchmark_format=json)
+runs=()
+for run in heights_cold heights_warm surfaces_cold surfaces_warm; do
+  [[ $run == *_cold ]] && drop_page_cache
+  runs+=("$(REGOLITH_SCALE_STORE="$dir/scale.h5" "$bench" --benchmark_filter="^store/traverse/$run" --benchmark_format=json)")
+done
 echo "## A rover traverse on the store (64 MiB cache; goal ≥ 20 M wheel queries/s)"
 echo
-python3 - "$json" <<'PY'
+echo "Page cache: $page_cache."
+echo
+python3 - "${runs[@]}" <<'PY'
 import json, sys
-rows = json.loads(sys.argv[1])["benchmarks"]
-print("| benchmark | wheel queries/s | patch loads | evictions | peak resident MiB |")
-print("|---|---:|---:|---:|---:|")
-for b in rows:
-    print(f"| `{b['name']}` | {b['items_per_second'] / 1e6:.1f} M | {b['patch_loads']:.0f} | "
-          f"{b['evictions']:.0f} | {b['peak_resident_MiB']:.1f} |")
+print("| benchmark | wheel queries/s | patch loads | evictions | peak resident MiB | MiB loaded | "
+      "disk MiB read |")
+print("|---|---:|---:|---:|---:|---:|---:|")
+for run in sys.argv[1:]:
+    for b in json.loads(run)["benchmarks"]:
+        print(f"| `{b['name']}` | {b['items_per_second'] / 1e6:.1f} M | {b['patch_loads']:.0f} | "
+              f"{b['evictions']:.0f} | {b['peak_resident_MiB']:.1f} | {b['MiB_loaded']:.1f} | "
+              f"{b['disk_MiB_read']:.1f} |")
 PY
 echo
 
 # 4. A fly-over of the store.
 echo "scale-store: a fly-over of $dir/scale.h5" >&2
+drop_page_cache
 json=$(REGOLITH_SCALE_STORE="$dir/scale.h5" "$flyover" --benchmark_filter='^store/flyover' --benchmark_format=json)
 echo "## A fly-over of the store (256 MiB cache; 1280 × 720, llvmpipe)"
+echo
+echo "Page cache: ${page_cache/each cold run/the fly-over}."
 echo
 python3 - "$json" <<'PY'
 import json, sys
 rows = json.loads(sys.argv[1])["benchmarks"]
 print("| benchmark | frames | frame ms median | p90 | max | frames drawn coarser | patch loads | "
-      "MiB loaded | peak resident MiB | budget MiB | RSS at start MiB | peak RSS MiB |")
-print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+      "MiB loaded | peak resident MiB | budget MiB | RSS at start MiB | peak RSS MiB | "
+      "disk MiB read |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
 for b in rows:
     print(f"| `{b['name']}` | {b['frames']:.0f} | {b['frame_ms_median']:.1f} | {b['frame_ms_p90']:.1f} | "
           f"{b['frame_ms_max']:.1f} | {b['frames_coarser']:.0f} | {b['patch_loads']:.0f} | "
           f"{b['MiB_loaded']:.1f} | {b['peak_resident_MiB']:.1f} | {b['budget_MiB']:.0f} | "
-          f"{b['rss_before_MiB']:.0f} | {b['peak_rss_MiB']:.0f} |")
+          f"{b['rss_before_MiB']:.0f} | {b['peak_rss_MiB']:.0f} | {b['disk_MiB_read']:.1f} |")
 PY
 echo
 echo "Commands: \`bash scripts/scale-store.sh --rows $rows --cog-rows $cog_rows\` (docs/scale.md)."

@@ -9,7 +9,7 @@ trap 'rm -rf "$tmp"' EXIT
 fail() { echo "scale_store_check: $*" >&2; exit 1; }
 
 bash "$src/scripts/scale-store.sh" --rows 512 --cog-rows 256 --dir "$tmp/run" --build "$build" \
-  >"$tmp/out.md" 2>"$tmp/err" || { cat "$tmp/err" >&2; fail "the 512-row run failed"; }
+  --keep-page-cache >"$tmp/out.md" 2>"$tmp/err" || { cat "$tmp/err" >&2; fail "the 512-row run failed"; }
 # shellcheck disable=SC2016 # the backticks are literal Markdown
 for want in '| `regolith generate mars-planet --size 512` | 524288 |' \
   '| `regolith generate mars-planet --size 256` (computes the samples too) |' \
@@ -19,6 +19,9 @@ for want in '| `regolith generate mars-planet --size 512` | 524288 |' \
   '| `store/flyover/iterations:1` | 90 |'; do
   grep -qF -- "$want" "$tmp/out.md" || { cat "$tmp/out.md" >&2; fail "no line '$want'"; }
 done
+# The page cache left alone, said under both the traverse's and the fly-over's table.
+[[ $(grep -cxF 'Page cache: kept (--keep-page-cache): a cold run may find the store in it.' "$tmp/out.md") == 2 ]] ||
+  fail "the page cache's state is not said under both tables"
 # Every traverse row has a positive rate in M wheel queries/s.
 awk -F'|' '/store\/traverse/ { gsub(/[ M]/, "", $3); if (!($3 > 0)) bad = 1 } END { exit bad }' \
   "$tmp/out.md" || fail "a traverse row without a positive rate"
@@ -47,5 +50,12 @@ fi
 grep -qF -- "--rows is 'twelve', expected a whole number in 2 .. 1048576" "$tmp/err" || {
   cat "$tmp/err" >&2
   fail "no clear message for --rows twelve"
+}
+if bash "$src/scripts/scale-store.sh" --drop-caches --build "$build" 2>"$tmp/err"; then
+  fail "--drop-caches was accepted"
+fi
+grep -qF -- "unknown argument '--drop-caches', expected --rows, --cog-rows, --dir, --build, --keep or --keep-page-cache" "$tmp/err" || {
+  cat "$tmp/err" >&2
+  fail "no clear message for an unknown argument"
 }
 echo "scale_store_check: ok"
