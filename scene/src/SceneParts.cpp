@@ -76,6 +76,10 @@ std::shared_ptr<const farfield::HeightLayers> farFieldLayers(
 farfield::PgmOptions planetFarFieldOptions(const glm::vec3& albedo) {
   farfield::PgmOptions po;
   po.gridWidth = po.gridHeight = 512;
+  // A smaller grid while its cells span under 2 pixels (a planet seen whole): about 5× less
+  // time for that frame on llvmpipe, for about 0.1 px more error (docs/far-field.md, "The
+  // mesh pass"); near views keep the full grid.
+  po.minCellPixels = 2.0;
   po.heightColours = false;
   po.high = albedo;
   po.ambient = clod::ClipmapOptions{}.ambient;

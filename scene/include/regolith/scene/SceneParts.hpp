@@ -49,7 +49,8 @@ namespace regolith::scene {
     const clod::HeightPyramid& planet, const compose::ComposedSurface* composed);
 
 /// The far field's settings for a planet drawn with a terrain's albedo and clod's ambient,
-/// so the clipmap and PGM look alike where they meet (render::SceneRenderer::addFarField).
+/// so the clipmap and PGM look alike where they meet (render::SceneRenderer::addFarField):
+/// a 512² grid, thinned while its cells span under 2 pixels (PgmOptions::minCellPixels).
 [[nodiscard]] farfield::PgmOptions planetFarFieldOptions(const glm::vec3& albedo);
 
 /// A traverse over `dem` that presses the six wheels into `tracks` every
