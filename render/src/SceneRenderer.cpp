@@ -591,8 +591,9 @@ void SceneRenderer::drawFarFields(const scenegraph::RenderList& list, const Scen
         field->draw(target, cam, sunIn(item.inFocus, view.lightInFocus), true);
     if (ff.mode == farfield::FarFieldMode::Pgm) {
       ++frame.farFieldsPgm;
-      frame.vertices += static_cast<std::size_t>(field->pgm().options().gridWidth) *
-                        static_cast<std::size_t>(field->pgm().options().gridHeight);
+      // The grid drawn: the options' size, or smaller where PgmOptions::minCellPixels thins it.
+      frame.vertices +=
+          static_cast<std::size_t>(ff.pgm.gridWidth) * static_cast<std::size_t>(ff.pgm.gridHeight);
     } else if (ff.mode == farfield::FarFieldMode::Impostor) {
       ++frame.farFieldsImpostor;
     }

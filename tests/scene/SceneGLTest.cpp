@@ -311,6 +311,11 @@ TEST(SceneGL, TheRenderersFarFieldDrawsThePlanetWholeInEachViewSlot) {
   target.clear({0.02F, 0.02F, 0.04F, 1.0F});
   const render::SceneFrame withTarget = frameOf(whole, &target, 0);
   EXPECT_EQ(withTarget.farFieldsPgm + withTarget.farFieldsImpostor, 1U);
+  // The scene's 512² grid, thinned while its cells span under 2 px (planetFarFieldOptions()):
+  // on this disc of about 100 px the grid drawn is at most 64² points.
+  ASSERT_EQ(withTarget.farFieldsPgm, 1U);
+  EXPECT_GT(withTarget.vertices, withoutTarget.vertices);
+  EXPECT_LE(withTarget.vertices - withoutTarget.vertices, 64U * 64U);
   const gl::RgbaImage drawn = target.readColor();
   test::savePng("scene_renderer_far_field", drawn);
   EXPECT_GE(planetPixels(drawn), nearOnly);

@@ -86,7 +86,7 @@ struct SceneFrame {
   std::size_t terrainsDrawn = 0, meshesDrawn = 0;
   std::size_t itemsUnknown = 0;       ///< render-list items with a key nothing is registered for
   std::size_t texelsUploaded = 0;     ///< by the prepare() calls since the previous draw()
-  std::size_t vertices = 0;           ///< the far fields' PGM grids included
+  std::size_t vertices = 0;           ///< the far fields' PGM grids (as drawn) included
   std::size_t farFieldsPgm = 0;       ///< far fields drawn by PGM
   std::size_t farFieldsImpostor = 0;  ///< far fields drawn by the ray-cast impostor
 };
