@@ -43,7 +43,7 @@ TerrainImage renderTerrain(std::shared_ptr<const clod::HeightPyramid> pyramid,
         graph.root(), "camera", scenegraph::Pose::lookAt(cam.position, cam.target, cam.up),
         scenegraph::NodeKind::Camera);
     SceneRenderer renderer;
-    renderer.addTerrain(kTerrain, pyramid, request.clipmap);
+    renderer.addTerrain(kTerrain, std::move(pyramid), request.clipmap);
     if (farField) renderer.addFarField(kTerrain, farField->layers, farField->options);
     SceneView view;
     view.fovYDegrees = cam.fovYDegrees;
