@@ -6,13 +6,16 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <condition_variable>
 #include <exception>
 #include <limits>
 #include <map>
 #include <mutex>
+#include <span>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace regolith::store {
 namespace {
@@ -336,6 +339,37 @@ class PagedSource final : public topo::SampleSource {
 
 }  // namespace
 
+double PageSource::rowMean(std::string_view grid, std::size_t level, std::size_t row) const {
+  const GridInfo& info = this->grid(grid);
+  if (level >= info.levels || row >= info.levelRows(level)) {
+    throw StoreError(core::format(
+        {"store::PageSource::rowMean()", name(), "row of grid '" + std::string(grid) + "'",
+         "level " + core::number(level) + " row " + core::number(row), "a row of a stored level"}));
+  }
+  // Windows of at most 2^17 samples (0.5 MiB; 3.5 MiB of working memory in the procedural
+  // generator), and at least cols/16, so that a row near a pole of the procedural planet,
+  // whose windows each search about half the longitude cells of every crater band, takes
+  // few windows. The sum topo::TopoPlanet makes of a row: every valid sample, in column
+  // order, in double.
+  constexpr std::size_t kWindowMax = std::size_t{1} << 17, kWindows = 16;
+  const std::size_t cols = info.levelCols(level);
+  const std::size_t window = std::clamp(cols / kWindows, std::size_t{4096}, kWindowMax);
+  std::vector<float> buf(std::min(window, cols));
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (std::size_t c0 = 0; c0 < cols; c0 += window) {
+    const std::size_t nc = std::min(window, cols - c0);
+    readWindow(grid, level, row, c0, 1, nc, std::span(buf.data(), nc));
+    for (std::size_t c = 0; c < nc; ++c) {
+      if (!std::isnan(buf[c])) {
+        sum += static_cast<double>(buf[c]);
+        ++n;
+      }
+    }
+  }
+  return n == 0 ? std::numeric_limits<double>::quiet_NaN() : sum / static_cast<double>(n);
+}
+
 Pager::Pager(std::shared_ptr<const Store> store, std::shared_ptr<PatchCache> cache)
     : store_(std::move(store)), cache_(std::move(cache)) {
   if (!store_ || !cache_) {
@@ -406,13 +440,12 @@ topo::TopoPlanet Pager::planet(std::string_view grid, std::size_t level) const {
     throw StoreError("store::Pager::planet(): " + pages_->name() + ": grid '" + std::string(grid) +
                      "' is a DEM, expected a planet grid");
   }
-  const auto first = pages_->rowMean(grid, level, 0);
-  const auto last = first ? pages_->rowMean(grid, level, e.info->levelRows(level) - 1) : first;
-  if (first && last) {
-    return {topoGridOf(*e.info, level), bodyOf(*e.info), e.info->latitudeType, source(grid, level),
-            topo::TopoPlanet::RowMeans{*first, *last}};
-  }
-  return {topoGridOf(*e.info, level), bodyOf(*e.info), e.info->latitudeType, source(grid, level)};
+  // The pole heights are the means of the first and last rows, read outside the cache when a
+  // query first reaches a cap: opening reads nothing (a 131072-sample row is 512 patches).
+  return {topoGridOf(*e.info, level), bodyOf(*e.info), e.info->latitudeType, source(grid, level),
+          [pages = pages_, name = std::string(grid), level](std::size_t row) {
+            return pages->rowMean(name, level, row);
+          }};
 }
 
 topo::GridPyramid Pager::pyramid(std::string_view grid) const {

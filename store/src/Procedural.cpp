@@ -4,23 +4,12 @@
 #include <regolith/core/Message.hpp>
 #include <regolith/store/Procedural.hpp>
 
-#include <algorithm>
-#include <cmath>
-#include <limits>
-#include <map>
-#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace regolith::store {
 namespace {
-
-/// Row means are evaluated in windows of at most this many samples (3.5 MiB of working
-/// memory in the generator), and at least cols/16 so that a row near a pole, whose windows
-/// each search about half the longitude cells of every crater band, takes few windows.
-constexpr std::size_t kRowWindowMax = std::size_t{1} << 17;
-constexpr std::size_t kRowWindows = 16;
 
 /// The pyramid levels the options ask for, checked against what the rows allow.
 std::size_t levelsFor(const ProceduralMarsOptions& o, const GridInfo& info) {
@@ -99,47 +88,12 @@ class ProceduralMars final : public PageSource {
     levels_[level]->readWindow(row0, col0, rows, cols, out);
   }
 
-  std::optional<double> rowMean(std::string_view grid, std::size_t level,
-                                std::size_t row) const override {
-    const GridInfo& info = this->grid(grid);
-    if (level >= info.levels || row >= info.levelRows(level)) return std::nullopt;
-    const std::pair<std::size_t, std::size_t> key{level, row};
-    {
-      const std::lock_guard lock(mutex_);
-      if (const auto it = means_.find(key); it != means_.end()) return it->second;
-    }
-    // The sum topo::TopoPlanet makes of the row: every valid sample, in column order, in
-    // double. Computed outside the lock (two threads may both compute it; same result).
-    const std::size_t cols = info.levelCols(level);
-    const std::size_t window = std::clamp(cols / kRowWindows, std::size_t{4096}, kRowWindowMax);
-    std::vector<float> buf(std::min(window, cols));
-    double sum = 0.0;
-    std::size_t n = 0;
-    for (std::size_t c0 = 0; c0 < cols; c0 += window) {
-      const std::size_t nc = std::min(window, cols - c0);
-      levels_[level]->readWindow(row, c0, 1, nc, std::span(buf.data(), nc));
-      for (std::size_t c = 0; c < nc; ++c) {
-        if (!std::isnan(buf[c])) {
-          sum += static_cast<double>(buf[c]);
-          ++n;
-        }
-      }
-    }
-    const double mean =
-        n == 0 ? std::numeric_limits<double>::quiet_NaN() : sum / static_cast<double>(n);
-    const std::lock_guard lock(mutex_);
-    means_.emplace(key, mean);
-    return mean;
-  }
-
   std::string name() const override { return name_; }
 
  private:
   GridInfo info_;
   std::vector<std::shared_ptr<const topo::SampleSource>> levels_;  // one generator per level
   std::string name_;
-  mutable std::mutex mutex_;
-  mutable std::map<std::pair<std::size_t, std::size_t>, double> means_;  // (level, row)
 };
 
 }  // namespace

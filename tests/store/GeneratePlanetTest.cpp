@@ -206,6 +206,58 @@ TEST(GeneratePlanet, HeightsNearEachPoleAgreeAcrossLongitudes) {
   }
 }
 
+TEST(GeneratePlanet, APagedPlanetOpensWithoutReadingAndFindsItsPolesOutsideTheCache) {
+  MarsPlanetOptions o = smallPlanet(5);
+  o.rows = 256;  // 512 columns: a row of 16 patches of 32 × 32
+  const fs::path path = scratch("lazy_poles.h5");
+  MarsPlanetGenerator(o).write(path);
+  const std::size_t rows = 256, cols = 512;
+  const std::vector<float> v = readLevel0(path, "mars");
+  ASSERT_EQ(v.size(), rows * cols);
+  const auto rowMean = [&](std::size_t r) {  // the rule: valid samples, column order, double
+    double sum = 0.0;
+    std::size_t n = 0;
+    for (std::size_t c = 0; c < cols; ++c) {
+      if (!std::isnan(v[r * cols + c])) {
+        sum += static_cast<double>(v[r * cols + c]);
+        ++n;
+      }
+    }
+    return sum / static_cast<double>(n);
+  };
+  auto cache = std::make_shared<PatchCache>(std::size_t{8} << 20);
+  const Pager pager(std::make_shared<const Store>(Store::open(path)), cache);
+  const topo::TopoPlanet planet = pager.planet("mars");
+  EXPECT_EQ(cache->stats().loads, 0U) << "opening a planet reads no patch";
+  // A bilinear query in the north cap loads its stencil's patch or two, not the pole row's 16:
+  // the pole's mean is read outside the cache.
+  ASSERT_TRUE(planet.height({89.9, 30.0}).valid());
+  EXPECT_GE(cache->stats().loads, 1U);
+  EXPECT_LE(cache->stats().loads, 2U);
+  EXPECT_EQ(planet.northPoleHeight(), rowMean(0));
+  EXPECT_EQ(planet.height({90.0, 12.0}).height, rowMean(0));
+  ASSERT_TRUE(planet.height({-89.9, -100.0}).valid());
+  EXPECT_LE(cache->stats().loads, 4U);
+  EXPECT_EQ(planet.southPoleHeight(), rowMean(rows - 1));
+  // The caps answer exactly as the same samples in memory, read sample by sample, do.
+  const GridInfo& info = pager.grid("mars");
+  const topo::TopoPlanet mem(topoGridOf(info), bodyOf(info), info.latitudeType,
+                             std::make_shared<topo::InMemorySamples>(rows, cols, v));
+  for (const double lat : {89.9, 89.99, 90.0, -89.8, -90.0}) {
+    for (const double lon : {-179.5, 0.0, 30.0, 123.4}) {
+      for (const topo::Interpolation k :
+           {topo::Interpolation::Nearest, topo::Interpolation::Bilinear,
+            topo::Interpolation::Bicubic}) {
+        const topo::SurfaceSample a = mem.surface({lat, lon}, k);
+        const topo::SurfaceSample b = planet.surface({lat, lon}, k);
+        ASSERT_EQ(a.status, b.status) << lat << "," << lon;
+        EXPECT_EQ(a.height, b.height) << lat << "," << lon;
+        EXPECT_EQ(a.normal, b.normal) << lat << "," << lon;
+      }
+    }
+  }
+}
+
 TEST(GeneratePlanet, CratersFollowAPowerLawAndHaveBowlRimAndEjecta) {
   MarsPlanetOptions o = smallPlanet(3);
   o.rows = 720;

@@ -7,11 +7,14 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <numbers>
 #include <random>
+#include <stdexcept>
+#include <thread>
 #include <vector>
 
 using namespace regolith;
@@ -118,6 +121,112 @@ TEST(TopoPlanet, PoleHeightIsOneValueAndTheCapJoinsTheGridContinuously) {
     const double in = p.height({89.5 - 1e-9, 40.0}, k).height;
     const double out = p.height({89.5 + 1e-9, 40.0}, k).height;
     EXPECT_NEAR(in, out, 1e-4);
+  }
+}
+
+namespace {
+// A copy of a resident planet's samples.
+std::shared_ptr<InMemorySamples> samplesOf(const TopoPlanet& p) {
+  const float* s = p.samples().contiguous();
+  const std::size_t n = p.grid().rows() * p.grid().cols();
+  return std::make_shared<InMemorySamples>(p.grid().rows(), p.grid().cols(),
+                                           std::vector<float>(s, s + n));
+}
+}  // namespace
+
+TEST(TopoPlanet, PoleHeightsAreComputedAtTheFirstCapQueryOnceAndSharedByCopies) {
+  const TopoPlanet ref = globalPlanet(1.0, 0.0);
+  const TopoGrid& g = ref.grid();
+  const auto src = std::make_shared<test::BlockSource>(
+      g.rows(), g.cols(),
+      std::vector<float>(ref.samples().contiguous(),
+                         ref.samples().contiguous() + g.rows() * g.cols()));
+  // Read sample by sample: made without reading any sample.
+  const TopoPlanet bySamples(g, ref.body(), ref.latitudeType(), src);
+  EXPECT_EQ(src->sampleCalls.load(), 0U);
+  EXPECT_EQ(src->blockCalls.load(), 0U);
+  EXPECT_EQ(bySamples.northPoleHeight(), ref.northPoleHeight());
+  EXPECT_EQ(src->sampleCalls.load(), g.cols()) << "the first row, sample by sample";
+
+  // Given a function: called once per pole, at the first query in its cap, by any copy.
+  std::atomic<int> calls{0};
+  std::vector<std::size_t> rows;
+  const TopoPlanet p(g, ref.body(), ref.latitudeType(), samplesOf(ref), [&](std::size_t row) {
+    calls.fetch_add(1);
+    rows.push_back(row);
+    return row == 0 ? ref.northPoleHeight() : ref.southPoleHeight();
+  });
+  const TopoPlanet copy = p;
+  for (const Interpolation k :
+       {Interpolation::Nearest, Interpolation::Bilinear, Interpolation::Bicubic}) {
+    EXPECT_TRUE(p.surface({45.0, 10.0}, k).valid());
+    EXPECT_TRUE(p.surface({-89.0, 10.0}, k).valid());  // the last row of centres is at 89.5°
+  }
+  EXPECT_EQ(calls.load(), 0) << "no query reached a cap";
+  for (const Interpolation k :
+       {Interpolation::Nearest, Interpolation::Bilinear, Interpolation::Bicubic}) {
+    for (const double lat : {89.8, 90.0}) {
+      const SurfaceSample a = ref.surface({lat, 33.0}, k), b = copy.surface({lat, 33.0}, k);
+      EXPECT_EQ(a.height, b.height) << lat;
+      EXPECT_EQ(a.normal, b.normal) << lat;
+    }
+  }
+  EXPECT_EQ(calls.load(), 1);
+  EXPECT_EQ(p.height({89.9, -70.0}).height, ref.height({89.9, -70.0}).height);
+  EXPECT_EQ(p.southPoleHeight(), ref.southPoleHeight());
+  EXPECT_EQ(copy.height({-90.0, 5.0}).height, ref.height({-90.0, 5.0}).height);
+  EXPECT_EQ(calls.load(), 2);
+  EXPECT_EQ(rows, (std::vector<std::size_t>{0, g.rows() - 1}));
+
+  // A grid that reaches neither pole asks for no row.
+  const TopoGrid regional(10, 10, 0.5, 9.5, 1.0, 1.0);
+  int regionalCalls = 0;
+  const TopoPlanet r(regional, Body::moon(), LatitudeType::Planetocentric,
+                     std::make_shared<InMemorySamples>(10, 10, std::vector<float>(100, 1.0f)),
+                     [&](std::size_t) { return ++regionalCalls, 1.0; });
+  EXPECT_TRUE(std::isnan(r.northPoleHeight()));
+  EXPECT_TRUE(std::isnan(r.southPoleHeight()));
+  EXPECT_EQ(regionalCalls, 0);
+}
+
+TEST(TopoPlanet, APoleWhoseRowCannotBeReadFailsItsQueryAndIsAskedForAgain) {
+  const TopoPlanet ref = globalPlanet(1.0, 0.0);
+  int calls = 0;
+  const TopoPlanet p(ref.grid(), ref.body(), ref.latitudeType(), samplesOf(ref),
+                     [&](std::size_t) -> double {
+                       if (++calls == 1) throw std::runtime_error("disk gone");
+                       return ref.northPoleHeight();
+                     });
+  EXPECT_THROW((void)p.height({89.9, 0.0}), std::runtime_error);
+  EXPECT_EQ(p.height({89.9, 0.0}).height, ref.height({89.9, 0.0}).height);
+  EXPECT_EQ(calls, 2);
+  try {
+    const TopoPlanet bad(ref.grid(), ref.body(), ref.latitudeType(), samplesOf(ref),
+                         TopoPlanet::RowMean());
+    ADD_FAILURE() << "an empty RowMean was taken";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "TopoPlanet(): rowMean is empty, expected a function");
+  }
+}
+
+TEST(TopoPlanet, ThreadsRacingToTheFirstCapQueryGetOnePoleHeight) {
+  const TopoPlanet ref = globalPlanet(2.0, -180.0);
+  for (int round = 0; round < 20; ++round) {
+    std::atomic<int> calls{0};
+    const TopoPlanet p(ref.grid(), ref.body(), ref.latitudeType(), samplesOf(ref),
+                       [&](std::size_t row) {
+                         calls.fetch_add(1);
+                         return row == 0 ? ref.northPoleHeight() : ref.southPoleHeight();
+                       });
+    std::vector<double> got(4);
+    std::vector<std::thread> threads;
+    for (std::size_t t = 0; t < got.size(); ++t) {
+      threads.emplace_back([&, t] { got[t] = p.height({90.0, 10.0 * double(t)}).height; });
+    }
+    for (std::thread& t : threads) t.join();
+    for (const double h : got) EXPECT_EQ(h, ref.northPoleHeight());
+    EXPECT_GE(calls.load(), 1);
+    EXPECT_LE(calls.load(), 4);  // each racing thread may compute it once; never more
   }
 }
 

@@ -7,7 +7,9 @@
 
 #include <glm/geometric.hpp>
 
+#include <atomic>
 #include <cmath>
+#include <cstddef>
 #include <numbers>
 #include <string>
 
@@ -17,7 +19,7 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 constexpr double kEdgeTol = 1e-9;  // degrees: how close an edge must be to ±90°/360° spans
 
-double rowMean(const SampleSource& src, const TopoGrid& g, std::size_t row) {
+double meanOfRow(const SampleSource& src, const TopoGrid& g, std::size_t row) {
   double sum = 0.0;
   std::size_t n = 0;
   for (std::size_t c = 0; c < g.cols(); ++c) {
@@ -38,25 +40,41 @@ struct TopoPlanet::Located {
   bool inside = false;
 };
 
+// The pole heights of a planet and its copies. Two threads that reach an unknown pole at
+// once may both compute its mean (the same number) and store it. Atomics
+// rather than a once-flag: topo takes no lock (docs/architecture.md).
+struct TopoPlanet::Poles {
+  TopoPlanet::RowMean mean;  // empty: the rows read sample by sample
+  std::size_t lastRow = 0;
+  bool north = false, south = false;  // whether the grid reaches that pole
+  std::atomic<double> northHeight{kNan}, southHeight{kNan};
+  std::atomic<bool> northKnown{false}, southKnown{false};
+};
+
 TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
                        std::shared_ptr<const SampleSource> samples)
-    : TopoPlanet(std::move(grid), std::move(body), latitudeType, std::move(samples), nullptr) {}
+    : TopoPlanet(std::move(grid), std::move(body), latitudeType, std::move(samples), RowMean(),
+                 false) {}
 
 TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
-                       std::shared_ptr<const SampleSource> samples, RowMeans rowMeans)
-    : TopoPlanet(std::move(grid), std::move(body), latitudeType, std::move(samples), &rowMeans) {}
+                       std::shared_ptr<const SampleSource> samples, RowMean rowMean)
+    : TopoPlanet(std::move(grid), std::move(body), latitudeType, std::move(samples),
+                 std::move(rowMean), true) {}
 
 TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
-                       std::shared_ptr<const SampleSource> samples, const RowMeans* rowMeans)
+                       std::shared_ptr<const SampleSource> samples, RowMean rowMean,
+                       bool rowMeanGiven)
     : grid_(std::move(grid)),
       body_(std::move(body)),
       latType_(latitudeType),
       samples_(std::move(samples)),
-      northPole_(kNan),
-      southPole_(kNan) {
+      poles_(std::make_shared<Poles>()) {
   constexpr const char* op = "TopoPlanet()";
   if (!samples_)
     throw InvalidArgument(std::string(op) + ": samples is null, expected a SampleSource");
+  if (rowMeanGiven && !rowMean) {
+    throw InvalidArgument(std::string(op) + ": rowMean is empty, expected a function");
+  }
   if (samples_->rows() != grid_.rows() || samples_->cols() != grid_.cols()) {
     throw InvalidArgument(std::string(op) + ": samples are " + core::number(samples_->rows()) +
                           "x" + core::number(samples_->cols()) + ", expected the grid's " +
@@ -83,12 +101,24 @@ TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
   resident_ = samples_->contiguous();
   table_ = samples_->blockIndex();
   sourceId_ = samples_->id();
-  if (northCap_ || grid_.y0() >= 90.0) {
-    northPole_ = rowMeans != nullptr ? rowMeans->first : rowMean(*samples_, grid_, 0);
-  }
-  if (southCap_ || lastLat <= -90.0) {
-    southPole_ = rowMeans != nullptr ? rowMeans->last : rowMean(*samples_, grid_, grid_.rows() - 1);
-  }
+  poles_->mean = std::move(rowMean);
+  poles_->lastRow = grid_.rows() - 1;
+  poles_->north = northCap_ || grid_.y0() >= 90.0;
+  poles_->south = southCap_ || lastLat <= -90.0;
+}
+
+double TopoPlanet::poleHeight(bool north) const {
+  Poles& p = *poles_;
+  std::atomic<bool>& known = north ? p.northKnown : p.southKnown;
+  std::atomic<double>& height = north ? p.northHeight : p.southHeight;
+  if (known.load(std::memory_order_acquire)) return height.load(std::memory_order_relaxed);
+  if (!(north ? p.north : p.south)) return kNan;
+  // May throw (a paged source): then asked again next time.
+  const std::size_t row = north ? 0 : p.lastRow;
+  const double mean = p.mean ? p.mean(row) : meanOfRow(*samples_, grid_, row);
+  height.store(mean, std::memory_order_relaxed);
+  known.store(true, std::memory_order_release);
+  return mean;
 }
 
 TopoPlanet::Located TopoPlanet::locate(const LatLon& ll) const {
@@ -283,7 +313,7 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp,
   if (k.status != QueryStatus::Ok) return s;
   double h = k.h, dhdu = k.dhdu, dhdv = k.dhdv;
   if (L.cap != 0) {
-    const double pole = L.cap > 0 ? northPole_ : southPole_;
+    const double pole = poleHeight(L.cap > 0);
     if (std::isnan(pole)) {
       s.status = s.normalStatus = QueryStatus::Nodata;
       return s;

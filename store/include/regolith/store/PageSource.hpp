@@ -5,7 +5,6 @@
 #include <regolith/store/GridInfo.hpp>
 
 #include <cstddef>
-#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -40,18 +39,14 @@ class PageSource {
   virtual void readWindow(std::string_view grid, std::size_t level, std::size_t row0,
                           std::size_t col0, std::size_t rows, std::size_t cols,
                           std::span<float> out) const = 0;
-  /// The mean, summed in double in column order, of the valid samples of one row of a
-  /// level (NaN if none), computed without the cache, or nullopt if the source has no
-  /// cheaper way than reading the row patch by patch (a Store). A planet grid's first and
-  /// last rows give its pole heights (topo::TopoPlanet); a computed planet 2^21 samples wide
-  /// must not page 8192 patches to find them.
-  [[nodiscard]] virtual std::optional<double> rowMean(std::string_view grid, std::size_t level,
-                                                      std::size_t row) const {
-    (void)grid;
-    (void)level;
-    (void)row;
-    return std::nullopt;
-  }
+  /// The mean, summed in double in column order, of the valid (non-NaN) samples of one row
+  /// of a level (NaN if none): a planet grid's first and last rows give its pole heights
+  /// (topo::TopoPlanet, which asks at its first query in a polar cap). This default reads the
+  /// row through readWindow() in windows of at most 2^17 samples, outside any cache, so that
+  /// a planet 2^17 samples wide does not page 2·512 patches through the cache to find its
+  /// poles. Throws StoreError for a row outside the level, and what readWindow() throws.
+  [[nodiscard]] virtual double rowMean(std::string_view grid, std::size_t level,
+                                       std::size_t row) const;
   /// Where the grids come from, for messages: a store's path, or a description such as
   /// "procedural Mars (seed 1, 1048576 rows)".
   [[nodiscard]] virtual std::string name() const = 0;

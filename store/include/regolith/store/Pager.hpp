@@ -72,9 +72,10 @@ class Pager {
                                                                  std::size_t level = 0) const;
   /// A paged TopoDem of one level. Throws StoreError if the grid is a planet grid.
   [[nodiscard]] topo::TopoDem dem(std::string_view grid, std::size_t level = 0) const;
-  /// A paged TopoPlanet of one level. Throws StoreError if the grid is a DEM. Its pole
-  /// heights (the means of the first and last rows) come from PageSource::rowMean() where
-  /// the source offers it, else from the rows read through the cache.
+  /// A paged TopoPlanet of one level. Throws StoreError if the grid is a DEM. Opening it
+  /// reads no sample, at any width: its pole heights (the means of the first and last rows)
+  /// come from PageSource::rowMean(), outside the cache, when a query first reaches a polar
+  /// cap.
   [[nodiscard]] topo::TopoPlanet planet(std::string_view grid, std::size_t level = 0) const;
   /// Every stored level of a grid, paged, in topo terms: what a renderer takes to draw a
   /// store (clod::HeightPyramid) without knowing the store. A DEM's levels are planar (x

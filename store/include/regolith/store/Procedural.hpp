@@ -40,14 +40,13 @@ struct ProceduralMarsOptions {
 /// to the detail the coarser level leaves out (docs/scale.md measures how closely). Every
 /// level must halve the rows exactly, so 2^(levels − 1) must divide rows and leave ≥ 2.
 ///
-/// PageSource::rowMean() evaluates a row in windows of at most 2^17 samples outside the
-/// cache, once per row (kept), so Pager::planet() finds its pole heights without paging
-/// 2·cols/patchCols patches; for a 2^20-row planet that takes seconds at the first
-/// planet() of a level.
+/// Its pole heights (PageSource::rowMean()) are computed in row windows outside the cache
+/// when a query first reaches a polar cap: for a 2^20-row planet that takes seconds, once per
+/// TopoPlanet.
 ///
 /// Throws InvalidArgument for bad planet options (as MarsPlanetGenerator), zero patch
-/// sizes, or levels the rows do not allow. Thread-safety: immutable except the kept row
-/// means (guarded); every member may be called concurrently.
+/// sizes, or levels the rows do not allow. Thread-safety: immutable; every member may be
+/// called concurrently.
 [[nodiscard]] std::shared_ptr<const PageSource> proceduralMars(
     const ProceduralMarsOptions& options);
 

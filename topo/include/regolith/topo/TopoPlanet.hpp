@@ -6,7 +6,9 @@
 #include <regolith/topo/Query.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 
@@ -44,17 +46,16 @@ class TopoPlanet {
   TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
              std::shared_ptr<const SampleSource> samples);
 
-  /// The means of a grid's first and last rows' valid samples (NaN if none), summed in
-  /// double in column order: what the constructor above reads the two rows for, to find the
-  /// pole heights of a grid with polar caps.
-  struct RowMeans {
-    double first = 0.0, last = 0.0;
-  };
-  /// As above, with the row means known beforehand (computed as RowMeans says), for sources
-  /// whose rows are costly to read whole: a computed planet 2^21 samples wide
-  /// (store::proceduralMars()). Equal means give a planet equal to the one above.
+  /// The mean of one row's valid samples, summed in double in column order (NaN if none):
+  /// a pole height. Given a row index of the grid (its first or last row).
+  using RowMean = std::function<double(std::size_t row)>;
+  /// As above, with the pole rows' means computed by `rowMean` instead of by reading the rows
+  /// sample by sample through `samples`: a paged source 2^17 samples wide would page 2·512
+  /// patches through its cache (store::Pager::planet() reads them outside the cache, or
+  /// computes them). Equal means give a planet equal to the one above. Throws as above, and
+  /// InvalidArgument if rowMean is empty.
   TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
-             std::shared_ptr<const SampleSource> samples, RowMeans rowMeans);
+             std::shared_ptr<const SampleSource> samples, RowMean rowMean);
 
   [[nodiscard]] const TopoGrid& grid() const noexcept { return grid_; }
   [[nodiscard]] const Body& body() const noexcept { return body_; }
@@ -102,15 +103,24 @@ class TopoPlanet {
   /// Body-fixed position of a grid latitude/longitude at height h.
   [[nodiscard]] glm::dvec3 toBodyFixed(const LatLon& ll, double h) const;
 
-  /// Mean of the valid samples of the row nearest the north/south pole (NaN if none).
-  [[nodiscard]] double northPoleHeight() const noexcept { return northPole_; }
-  [[nodiscard]] double southPoleHeight() const noexcept { return southPole_; }
+  /// Mean of the valid samples of the row nearest the north/south pole (NaN if none, or if
+  /// the grid does not reach that pole). Computed once, at the first call or the first query
+  /// in that pole's cap, not when the planet is made: opening a planet reads no row, whatever
+  /// its width. Throws what reading the source throws (a paged source), and tries again at
+  /// the next call.
+  [[nodiscard]] double northPoleHeight() const { return poleHeight(true); }
+  [[nodiscard]] double southPoleHeight() const { return poleHeight(false); }
 
  private:
+  /// The constructors' work; rowMeanGiven: the second's (an empty rowMean is refused), else
+  /// the rows are read sample by sample.
   TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
-             std::shared_ptr<const SampleSource> samples, const RowMeans* rowMeans);
+             std::shared_ptr<const SampleSource> samples, RowMean rowMean, bool rowMeanGiven);
 
   struct Located;
+  /// The pole heights, computed when first asked for and shared by copies (TopoPlanet.cpp).
+  struct Poles;
+  [[nodiscard]] double poleHeight(bool north) const;
   [[nodiscard]] Located locate(const LatLon& ll) const;
   [[nodiscard]] SurfaceSample surfaceImpl(const LatLon& ll, Interpolation interp, NormalFrame frame,
                                           bool wantNormal) const;
@@ -129,7 +139,7 @@ class TopoPlanet {
   double northPoleV_ = 0.0;  // fractional row of the north pole
   double southPoleV_ = 0.0;
   glm::dvec2 slack_{0.0};  // grid_.edgeSlack()
-  double northPole_, southPole_;
+  std::shared_ptr<Poles> poles_;
   // The bilinear fast path (TopoPlanet.cpp, bilinearFast): the samples when resident, else
   // the paged source's block table and unique id, as the source gives them; cached.
   const float* resident_ = nullptr;
