@@ -323,16 +323,17 @@ void ClipmapLevel::prefetch(const Plan& p, int margin) const {
                                                             {p.row0 + n, R1, C0, C1},
                                                             {p.row0, p.row0 + n, C0, p.col0},
                                                             {p.row0, p.row0 + n, p.col0 + n, C1}}};
-  std::vector<float> scratch;
+  std::vector<topo::SampleSource::Window> windows;
   for (const auto& r : ring) {
     const std::int64_t r0 = std::max<std::int64_t>(r[0], 0), r1 = std::min(r[1], rows);
     const std::int64_t c0 = std::max<std::int64_t>(r[2], 0), c1 = std::min(r[3], cols);
     if (r1 <= r0 || c1 <= c0) continue;
-    scratch.resize(static_cast<std::size_t>((r1 - r0) * (c1 - c0)));
-    lvl.source->readWindow(static_cast<std::size_t>(r0), static_cast<std::size_t>(c0),
-                           static_cast<std::size_t>(r1 - r0), static_cast<std::size_t>(c1 - c0),
-                           scratch);
+    windows.push_back({static_cast<std::size_t>(r0), static_cast<std::size_t>(c0),
+                       static_cast<std::size_t>(r1 - r0), static_cast<std::size_t>(c1 - c0)});
   }
+  // A hint: a paged source loads the ring in the background (a store's pyramid: its
+  // store::Prefetcher), so the loader goes on to the next level at once.
+  lvl.source->prefetch(windows);
 }
 
 std::size_t ClipmapLevel::moveTo(double gx, double gy, int polar) {

@@ -51,9 +51,9 @@ class ClipmapLevel {
   /// Reads only the pyramid and the plan: safe on a worker thread while the level draws.
   void fetch(Plan& plan) const;
   std::size_t apply(const Plan& plan);
-  /// Reads (and drops) a ring `margin` samples wide around the plan's window, clipped to
-  /// the grid, so a paged source caches the patches of the next moves. Lat/lon lattices
-  /// only; any thread.
+  /// Hints the ring `margin` samples wide around the plan's window, clipped to the grid, to
+  /// the level's source (topo::SampleSource::prefetch()), so a paged source loads the
+  /// patches of the next moves in the background. Lat/lon lattices only; any thread.
   void prefetch(const Plan& plan, int margin) const;
 
   /// This level's window as a rectangle (i0, j0, i1, j1) in `coarser`'s window vertex

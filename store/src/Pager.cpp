@@ -3,6 +3,7 @@
 #include <regolith/core/Message.hpp>
 #include <regolith/store/BlockTable.hpp>
 #include <regolith/store/Pager.hpp>
+#include <regolith/store/Prefetcher.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -259,13 +260,33 @@ std::shared_ptr<const Patch> loadShared(detail::FilePatches* file, const PageSou
 static_assert(kMaxPatchesPerGrid <= BlockTable::kMaxBlocks,
               "every grid a store may hold has a block table");
 
+// The background loader of one exported pyramid (Pager::pyramid()), shared by its levels: a
+// Prefetcher made at the first hint, so that a pyramid nobody hints starts no thread. It
+// holds a copy of the pager (which holds no source), not the levels: no cycle.
+class AheadLoader {
+ public:
+  explicit AheadLoader(Pager pager) : pager_(std::make_shared<const Pager>(std::move(pager))) {}
+  Prefetcher& get() {
+    const std::lock_guard lock(mutex_);
+    // One loading thread: a hint must not take the cores the renderer draws on.
+    if (!prefetcher_) prefetcher_ = std::make_unique<Prefetcher>(pager_, 1);
+    return *prefetcher_;
+  }
+
+ private:
+  std::shared_ptr<const Pager> pager_;
+  std::mutex mutex_;
+  std::unique_ptr<Prefetcher> prefetcher_;
+};
+
 // One level of one grid, paged through the cache. Holds the source and the cache, so it
 // stays usable after the Pager that made it is gone.
 class PagedSource final : public topo::SampleSource {
  public:
   PagedSource(const GridInfo& info, std::uint32_t gridId, std::size_t level,
               std::shared_ptr<const PageSource> pages, std::shared_ptr<PatchCache> cache,
-              std::shared_ptr<detail::FilePatches> file)
+              std::shared_ptr<detail::FilePatches> file,
+              std::shared_ptr<AheadLoader> ahead = nullptr)
       : info_(info),
         rows_(info.levelRows(level)),
         cols_(info.levelCols(level)),
@@ -277,7 +298,8 @@ class PagedSource final : public topo::SampleSource {
         cache_(std::move(cache)),
         file_(std::move(file)),
         table_(cache_->blockTable(gridId, level_, rows_, cols_, pr_, pc_)),
-        loader_([this](const PatchKey& k) { return loadShared(file_.get(), *pages_, info_, k); }) {}
+        loader_([this](const PatchKey& k) { return loadShared(file_.get(), *pages_, info_, k); }),
+        ahead_(std::move(ahead)) {}
 
   std::size_t rows() const noexcept override { return rows_; }
   std::size_t cols() const noexcept override { return cols_; }
@@ -308,6 +330,22 @@ class PagedSource final : public topo::SampleSource {
 
   const topo::BlockIndex* blockIndex() const noexcept override { return table_.get(); }
 
+  // The pyramid's Prefetcher loads the windows; this level's previous hint is cancelled. A
+  // source made by Pager::source() has no loader and ignores hints.
+  void prefetch(std::span<const Window> windows) const noexcept override {
+    if (!ahead_) return;
+    try {
+      std::vector<LevelWindow> w;
+      w.reserve(windows.size());
+      for (const Window& x : windows) w.push_back({level_, x.row0, x.col0, x.rows, x.cols});
+      Prefetcher& pf = ahead_->get();
+      const std::lock_guard lock(aheadMutex_);
+      if (aheadTicket_ != 0) pf.cancel(aheadTicket_);
+      aheadTicket_ = pf.request(info_.name, w);
+    } catch (...) {  // NOLINT(bugprone-empty-catch): a hint; the read that needs it reports
+    }
+  }
+
   bool block(std::size_t row, std::size_t col, topo::SampleBlock& out) const override {
     auto p = patchAt(row, col);
     out.data = p->samples.data();
@@ -335,6 +373,9 @@ class PagedSource final : public topo::SampleSource {
   std::shared_ptr<detail::FilePatches> file_;  // null unless paging a Store
   std::shared_ptr<const BlockTable> table_;    // lock-free hits on resident patches
   PatchCache::Loader loader_;  // made once: a std::function per lookup costs more than a hit
+  std::shared_ptr<AheadLoader> ahead_;  // null unless a level of an exported pyramid
+  mutable std::mutex aheadMutex_;
+  mutable Prefetcher::Ticket aheadTicket_ = 0;  // this level's last hint
 };
 
 }  // namespace
@@ -452,8 +493,11 @@ topo::GridPyramid Pager::pyramid(std::string_view grid) const {
   const GridEntry& e = entry(grid, 0, "store::Pager::pyramid()");
   topo::GridPyramid p;
   p.levels.reserve(e.info->levels);
+  const auto ahead = std::make_shared<AheadLoader>(*this);
   for (std::size_t l = 0; l < e.info->levels; ++l) {
-    p.levels.push_back({topoGridOf(*e.info, l), source(grid, l)});
+    p.levels.push_back(
+        {topoGridOf(*e.info, l),
+         std::make_shared<PagedSource>(*e.info, e.id, l, pages_, cache_, file_, ahead)});
   }
   if (e.info->kind == GridKind::Planet) p.planetBody = bodyOf(*e.info);
   p.latitudeType = e.info->latitudeType;

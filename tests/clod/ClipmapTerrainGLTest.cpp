@@ -14,6 +14,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <mutex>
+#include <span>
 #include <vector>
 
 namespace regolith::clod {
@@ -452,6 +454,89 @@ TEST(ClipmapTerrainGLTest, InnerLevelsSwitchOffFarAwayAndVerticesDoNotGrowWithTh
 
 namespace regolith::clod {
 namespace {
+
+// A level's samples, forwarded, with the prefetch hints it is given recorded.
+class HintedSource final : public topo::SampleSource {
+ public:
+  explicit HintedSource(std::shared_ptr<const topo::SampleSource> inner)
+      : inner_(std::move(inner)) {}
+  std::size_t rows() const noexcept override { return inner_->rows(); }
+  std::size_t cols() const noexcept override { return inner_->cols(); }
+  float sample(std::size_t r, std::size_t c) const override { return inner_->sample(r, c); }
+  void readWindow(std::size_t r0, std::size_t c0, std::size_t nr, std::size_t nc,
+                  std::span<float> out) const override {
+    inner_->readWindow(r0, c0, nr, nc, out);
+  }
+  const float* contiguous() const noexcept override { return inner_->contiguous(); }
+  void prefetch(std::span<const Window> windows) const noexcept override {
+    const std::lock_guard lock(mutex_);
+    hints_.emplace_back(windows.begin(), windows.end());
+  }
+  std::vector<std::vector<Window>> hints() const {
+    const std::lock_guard lock(mutex_);
+    return hints_;
+  }
+
+ private:
+  std::shared_ptr<const topo::SampleSource> inner_;
+  mutable std::mutex mutex_;
+  mutable std::vector<std::vector<Window>> hints_;
+};
+
+TEST(ClipmapTerrainGLTest, TheLoaderHintsTheRingAroundEachLevelsWindowToItsSource) {
+  test::glContext();
+  const auto grid = test::centredGrid(2049, 2049, 1.0);
+  const auto plain = test::planePyramid(grid, test::hills);
+  std::vector<HeightPyramid::Level> levels;
+  std::vector<std::shared_ptr<const HintedSource>> sources;
+  for (std::size_t k = 0; k < plain->levelCount(); ++k) {
+    sources.push_back(std::make_shared<const HintedSource>(plain->level(k).source));
+    levels.push_back({plain->level(k).grid, sources.back()});
+  }
+  const auto pyramid = std::make_shared<const HeightPyramid>(levels, SurfaceKind::Plane);
+  ClipmapOptions opt;
+  opt.size = 127;
+  opt.prefetchMargin = 32;
+  ClipmapTerrain terrain(pyramid, opt);
+  terrain.requestFocus({0.0, 0.0, 0.0});
+  terrain.finishLoading();
+  // Levels 0 and 1 (2049² and 1025² samples) hold their window and its ring whole: one hint
+  // each, four windows that tile the (127 + 2·32)² square around the 127² window.
+  for (std::size_t k = 0; k < 2; ++k) {
+    const auto hints = sources[k]->hints();
+    ASSERT_EQ(hints.size(), 1U) << "level " << k;
+    ASSERT_EQ(hints[0].size(), 4U) << "level " << k;
+    std::size_t r0 = SIZE_MAX, c0 = SIZE_MAX, r1 = 0, c1 = 0, area = 0;
+    for (const topo::SampleSource::Window& w : hints[0]) {
+      r0 = std::min(r0, w.row0);
+      c0 = std::min(c0, w.col0);
+      r1 = std::max(r1, w.row0 + w.rows);
+      c1 = std::max(c1, w.col0 + w.cols);
+      area += w.rows * w.cols;
+    }
+    EXPECT_EQ(r1 - r0, 127U + 64U) << "level " << k;
+    EXPECT_EQ(c1 - c0, 127U + 64U) << "level " << k;
+    EXPECT_EQ(area, 191U * 191U - 127U * 127U) << "level " << k;
+  }
+  // Every hint lies inside its level's grid.
+  for (std::size_t k = 0; k < sources.size(); ++k) {
+    for (const auto& hint : sources[k]->hints()) {
+      for (const topo::SampleSource::Window& w : hint) {
+        EXPECT_GT(w.rows * w.cols, 0U);
+        EXPECT_LE(w.row0 + w.rows, pyramid->level(k).grid.rows());
+        EXPECT_LE(w.col0 + w.cols, pyramid->level(k).grid.cols());
+      }
+    }
+  }
+  // Without a margin there is no hint.
+  ClipmapOptions none = opt;
+  none.prefetchMargin = 0;
+  const std::size_t before = sources[0]->hints().size();
+  ClipmapTerrain quiet(pyramid, none);
+  quiet.requestFocus({0.0, 0.0, 0.0});
+  quiet.finishLoading();
+  EXPECT_EQ(sources[0]->hints().size(), before);
+}
 
 TEST(ClipmapTerrainGLTest, BackgroundLoadingIsCoarseFirstAndNeverShowsAGap) {
   test::glContext();

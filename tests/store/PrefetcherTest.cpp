@@ -8,7 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <mutex>
+#include <thread>
 #include <vector>
 
 using namespace regolith;
@@ -149,4 +151,39 @@ TEST(Prefetcher, PrefetchersShareTheExecutorTheyAreGivenAndStartNoThreads) {
   } catch (const InvalidArgument& e) {
     EXPECT_STREQ(e.what(), "store::Prefetcher(): threads is 0, expected >= 1");
   }
+}
+
+TEST(Prefetcher, APyramidsLevelsLoadTheWindowsTheyAreHintedInTheBackground) {
+  Opened o = openFixture();
+  const topo::GridPyramid pyramid = o.pager.pyramid("dem");
+  EXPECT_EQ(o.cache->stats().loads, 0U) << "exporting reads nothing";
+  // Level 0 rows 100…399, cols 200…599 → patch rows 0…3, cols 1…4 of 128: 4 × 4 patches,
+  // and a window off the grid's edge, clipped.
+  const topo::SampleSource::Window hint[] = {{100, 200, 300, 400}, {650, 850, 500, 500}};
+  pyramid.levels[0].source->prefetch(hint);
+  const auto resident = [&] {
+    std::size_t n = 0;
+    for (std::size_t r = 0; r < 4; ++r) {
+      for (std::size_t c = 1; c <= 4; ++c)
+        n += o.cache->contains(o.pager.keyOf("dem", 0, r * 128, c * 128)) ? 1U : 0U;
+    }
+    return n + (o.cache->contains(o.pager.keyOf("dem", 0, 699, 899)) ? 1U : 0U);
+  };
+  // The loads happen on the pyramid's own loader thread: wait for them (bounded).
+  for (int i = 0; i < 6000 && resident() < 17; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(resident(), 17U);
+  EXPECT_FALSE(o.cache->contains(o.pager.keyOf("dem", 0, 600, 0)));
+  // Reading the hinted window is then all hits.
+  const auto loads = o.cache->stats().loads;
+  std::vector<float> out(300 * 400);
+  pyramid.levels[0].source->readWindow(100, 200, 300, 400, out);
+  EXPECT_EQ(o.cache->stats().loads, loads);
+  // A source from Pager::source() takes the hint and loads nothing; nor does an empty hint.
+  o.cache->clear();
+  o.pager.source("dem", 1)->prefetch(hint);
+  pyramid.levels[1].source->prefetch({});
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_EQ(o.cache->stats().residentBytes, 0U);
 }

@@ -25,9 +25,10 @@ struct ClipmapOptions {
   glm::vec3 lightDirection{0.4F, -0.3F, 0.866F};  ///< towards the light, scene frame
   glm::vec3 albedo{0.78F, 0.66F, 0.55F};
   float ambient = 0.2F;
-  /// Background loading (requestFocus): after each level's window, the loader also reads
-  /// a ring this many cells wide around it, so a paged source has the patches the next
-  /// moves need in its cache (the lazy-load window is the clipmap plus this margin).
+  /// Background loading (requestFocus): after each level's window, the loader hints a ring
+  /// this many cells wide around it to the level's source (topo::SampleSource::prefetch()),
+  /// so a paged source loads the patches the next moves need in the background (a store's
+  /// pyramid: its store::Prefetcher; the lazy-load window is the clipmap plus this margin).
   int prefetchMargin = 32;
   /// Where a coarser level overlaps a finer one, push the coarser surface's depth back by
   /// this fraction so the finer (more exact) surface wins the depth test there: fewer

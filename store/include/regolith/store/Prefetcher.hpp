@@ -82,10 +82,10 @@ class Prefetcher {
 
  private:
   struct Item {
-    int priority;
-    std::uint32_t level;
-    std::uint64_t sequence;
-    Ticket ticket;
+    int priority = 0;
+    std::uint32_t level = 0;
+    std::uint64_t sequence = 0;
+    Ticket ticket = 0;
     PatchKey key;
   };
   struct ItemOrder {

@@ -131,6 +131,16 @@ class SampleSource {
   /// and call block() only if the table has no block for the point. The table must live as
   /// long as the source.
   [[nodiscard]] virtual const BlockIndex* blockIndex() const noexcept { return nullptr; }
+  /// A block of samples: rows [row0, row0 + rows), columns [col0, col0 + cols).
+  struct Window {
+    std::size_t row0 = 0, col0 = 0, rows = 0, cols = 0;
+  };
+  /// A hint that `windows` are likely to be read soon (a renderer's ring around the window it
+  /// has just read): a paged source loads them in the background (a store's pyramid:
+  /// coarser levels first) and drops what is still queued of this source's previous hint.
+  /// Windows are clipped to the grid. Returns at once; never fails (a load that fails here is the
+  /// later read's to report). Default: nothing (samples in memory).
+  virtual void prefetch(std::span<const Window> windows) const noexcept { (void)windows; }
   /// A process-unique id, never reused, so per-thread query state can tell sources apart
   /// even when one is destroyed and another is allocated at the same address.
   [[nodiscard]] std::uint64_t id() const noexcept { return id_; }
