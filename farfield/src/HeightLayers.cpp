@@ -136,7 +136,7 @@ HeightLayers HeightLayers::build(const topo::Body& body, const HeightFunction& h
     missing += localMissing;
   };
   // In slices, so that progress is reported from the calling thread between them.
-  const unsigned threads = std::max(1U, std::thread::hardware_concurrency());
+  const unsigned threads = core::availableCores();
   constexpr std::size_t kSlices = 20;
   for (std::size_t slice = 0; slice < kSlices; ++slice) {
     const std::size_t r0 = rows * slice / kSlices, r1 = rows * (slice + 1) / kSlices;

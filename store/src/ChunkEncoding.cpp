@@ -25,7 +25,7 @@ static_assert(std::endian::native == std::endian::little,
 unsigned threadCount(const WriteOptions& o) {
   if (o.threads > 0) return o.threads;
   if (o.executor != nullptr) return o.executor->concurrency() + 1;
-  return std::max(1U, std::thread::hardware_concurrency());
+  return core::availableCores();
 }
 
 /// Runs f(0) … f(n − 1) on up to threadCount(o) threads, the caller's included: on the

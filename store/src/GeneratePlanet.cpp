@@ -547,7 +547,7 @@ void MarsPlanetGenerator::Impl::inParallel(
   core::Executor* executor = options.write.executor;
   std::size_t threads = options.threads != 0  ? options.threads
                         : executor != nullptr ? executor->concurrency() + 1
-                                              : std::thread::hardware_concurrency();
+                                              : core::availableCores();
   threads = std::clamp<std::size_t>(threads, 1, 64);
   threads = std::min(threads, std::max<std::size_t>(1, nr * nc / 4096));
   threads = std::min(threads, nr);

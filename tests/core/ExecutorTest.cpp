@@ -1,6 +1,7 @@
 #include <regolith/core/Executor.hpp>
 
 #include <gtest/gtest.h>
+#include <sched.h>
 
 #include <atomic>
 #include <chrono>
@@ -104,4 +105,29 @@ TEST(Executor, WithoutAnExecutorParallelForRunsOnAPoolMadeForTheCall) {
                    },
                    2),
                std::runtime_error);
+}
+
+TEST(Executor, AvailableCoresIsTheAffinitySetAndSizesADefaultPool) {
+  cpu_set_t all;
+  CPU_ZERO(&all);
+  ASSERT_EQ(sched_getaffinity(0, sizeof all, &all), 0);
+  EXPECT_EQ(regolith::core::availableCores(), static_cast<unsigned>(CPU_COUNT(&all)));
+  EXPECT_GE(regolith::core::availableCores(), 1U);
+  // A thread bound to one processor (as taskset -c N, or mpirun's binding of a rank) has one
+  // core: a default pool made there gets one worker, not hardware_concurrency().
+  std::size_t first = 0;
+  while (first < std::size_t{CPU_SETSIZE} && !CPU_ISSET(first, &all)) ++first;
+  unsigned cores = 0, workers = 0;
+  std::thread bound([&] {
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(first, &one);
+    if (sched_setaffinity(0, sizeof one, &one) != 0) return;
+    cores = regolith::core::availableCores();
+    ThreadPool pool;
+    workers = pool.concurrency();
+  });
+  bound.join();
+  EXPECT_EQ(cores, 1U);
+  EXPECT_EQ(workers, 1U);
 }

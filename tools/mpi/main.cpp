@@ -3,6 +3,7 @@
 // rank imports a band of level-0 rows with the ordinary writer (serial HDF5) into a part
 // store, and rank 0 joins the parts' encoded chunks as they are and computes the levels above.
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Executor.hpp>
 #include <regolith/store/Import.hpp>
 
 #include "Assemble.hpp"
@@ -322,7 +323,10 @@ std::vector<store::BlockStatistics> importPart(const Args& a, const store::Impor
 
 int run(const Args& a, int rank, int size) {
   const auto t0 = std::chrono::steady_clock::now();
-  // Threads per rank: the cores of this node shared among its ranks, unless --threads says.
+  // Threads per rank, unless --threads says: the cores this rank may run on (one where mpirun
+  // binds each rank to a core, its default for two ranks or fewer), and at most its share of
+  // the node's cores. hardware_concurrency() alone gave a rank bound to one core two threads
+  // on it, slower than one.
   MPI_Comm node = MPI_COMM_NULL;
   MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank, MPI_INFO_NULL, &node);
   int perNode = 1;
@@ -337,7 +341,8 @@ int run(const Args& a, int rank, int size) {
   o.threads =
       a.threads != 0
           ? a.threads
-          : std::max(1U, std::thread::hardware_concurrency() / static_cast<unsigned>(perNode));
+          : std::max(1U, std::min(core::availableCores(), std::thread::hardware_concurrency() /
+                                                              static_cast<unsigned>(perNode)));
   o.memoryBudgetBytes = a.memoryMb == 0 ? 0 : a.memoryMb * (std::size_t{1} << 20U);
   if (a.hasNodata) o.nodata = a.nodata;
   o.body = a.body;

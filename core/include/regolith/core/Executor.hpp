@@ -37,11 +37,17 @@ class Executor {
   [[nodiscard]] virtual unsigned concurrency() const noexcept = 0;
 };
 
+/// The processors this process may run on: the size of its CPU affinity set
+/// (sched_getaffinity(2): one under `taskset -c 0`, or in an MPI rank that mpirun bound to a
+/// core), else std::thread::hardware_concurrency(); at least 1. What a default thread count
+/// should use: more threads than this share the same cores and only add switching.
+[[nodiscard]] unsigned availableCores() noexcept;
+
 /// A fixed set of worker threads taking tasks from one queue. The destructor runs every task
 /// already queued, then joins the workers.
 class ThreadPool final : public Executor {
  public:
-  /// `threads` workers; 0 means std::thread::hardware_concurrency() (at least 1).
+  /// `threads` workers; 0 means availableCores().
   explicit ThreadPool(unsigned threads = 0);
   ThreadPool(const ThreadPool&) = delete;
   ThreadPool& operator=(const ThreadPool&) = delete;

@@ -31,7 +31,7 @@ struct LayerOptions {
   /// `blendDegrees` (0.5..10): the equirectangular layer's texels shrink to slivers there.
   double capLatitude = 60.0;
   double blendDegrees = 5.0;
-  /// Runs the resampling; a pool of hardware_concurrency() if null.
+  /// Runs the resampling; a pool of core::availableCores() threads if null.
   core::Executor* executor = nullptr;
   /// Called with the fraction done (0..1) as rows finish, from the calling thread.
   std::function<void(double)> progress;
