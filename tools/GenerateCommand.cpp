@@ -100,7 +100,8 @@ void addPlanet(CLI::App& generate) {
   cmd->add_option("--craters", a->craters, "Crater density multiplier (0: no craters)")
       ->check(FiniteRange(0.0, 100.0))
       ->capture_default_str();
-  cmd->add_option("--threads", a->threads, "Threads computing samples (0: all cores)")
+  cmd->add_option("--threads", a->threads,
+                  "Threads computing samples (0: the cores this process may run on)")
       ->capture_default_str();
   cmd->add_option("--grid", a->w.grid, "Name of the grid in the store")->capture_default_str();
   cmd->callback([a] {
@@ -139,7 +140,8 @@ void addPlanetOfOptions(CLI::App& cmd, store::PlanetOf& p, std::size_t& threads)
                  "Crater density multiplier, as for mars-planet (0: no craters)")
       ->check(FiniteRange(0.0, 100.0))
       ->capture_default_str();
-  cmd.add_option("--threads", threads, "Threads computing samples (0: all cores)")
+  cmd.add_option("--threads", threads,
+                 "Threads computing samples (0: the cores this process may run on)")
       ->capture_default_str();
 }
 

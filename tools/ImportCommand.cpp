@@ -196,7 +196,8 @@ void addImportCommand(CLI::App& app) {
   cmd->add_option("--compression", a->compression, kCompressionHelp)
       ->check(CLI::IsMember({"deflate", "zfp"}))
       ->capture_default_str();
-  cmd->add_option("--threads", a->threads, "Threads building the pyramid (0: all cores)")
+  cmd->add_option("--threads", a->threads,
+                  "Threads building the pyramid (0: the cores this process may run on)")
       ->capture_default_str();
   cmd->add_option("--memory-mb", a->memoryMb,
                   "MiB the writer may hold to build the pyramid; past it, levels are built in "

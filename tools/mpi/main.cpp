@@ -326,7 +326,7 @@ int run(const Args& a, int rank, int size) {
   // Threads per rank, unless --threads says: the cores this rank may run on (one where mpirun
   // binds each rank to a core, its default for two ranks or fewer), and at most its share of
   // the node's cores. hardware_concurrency() alone gave a rank bound to one core two threads
-  // on it, slower than one.
+  // on it.
   MPI_Comm node = MPI_COMM_NULL;
   MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank, MPI_INFO_NULL, &node);
   int perNode = 1;
@@ -521,8 +521,9 @@ int main(int argc, char** argv) try {
   cmd->add_option("--compression", a.compression, "deflate or zfp")
       ->check(CLI::IsMember({"deflate", "zfp"}))
       ->capture_default_str();
-  cmd->add_option("--threads", a.threads,
-                  "Threads per rank (0: the node's cores shared among its ranks)")
+  cmd->add_option(
+         "--threads", a.threads,
+         "Threads per rank (0: the cores this rank may run on, at most its share of the node's)")
       ->capture_default_str();
   cmd->add_option("--memory-mb", a.memoryMb, "MiB each rank's writer may hold (0: no bound)")
       ->capture_default_str();
