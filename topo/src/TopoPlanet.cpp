@@ -44,8 +44,7 @@ struct TopoPlanet::Located {
 // once may both compute its mean (the same number) and store it. Atomics
 // rather than a once-flag: topo takes no lock (docs/architecture.md).
 struct TopoPlanet::Poles {
-  TopoPlanet::RowMean mean;  // empty: the rows read sample by sample
-  std::size_t lastRow = 0;
+  TopoPlanet::RowMean mean;           // empty: the rows read sample by sample
   bool north = false, south = false;  // whether the grid reaches that pole
   std::atomic<double> northHeight{kNan}, southHeight{kNan};
   std::atomic<bool> northKnown{false}, southKnown{false};
@@ -102,7 +101,6 @@ TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
   table_ = samples_->blockIndex();
   sourceId_ = samples_->id();
   poles_->mean = std::move(rowMean);
-  poles_->lastRow = grid_.rows() - 1;
   poles_->north = northCap_ || grid_.y0() >= 90.0;
   poles_->south = southCap_ || lastLat <= -90.0;
 }
@@ -114,7 +112,7 @@ double TopoPlanet::poleHeight(bool north) const {
   if (known.load(std::memory_order_acquire)) return height.load(std::memory_order_relaxed);
   if (!(north ? p.north : p.south)) return kNan;
   // May throw (a paged source): then asked again next time.
-  const std::size_t row = north ? 0 : p.lastRow;
+  const std::size_t row = north ? 0 : grid_.rows() - 1;
   const double mean = p.mean ? p.mean(row) : meanOfRow(*samples_, grid_, row);
   height.store(mean, std::memory_order_relaxed);
   known.store(true, std::memory_order_release);
