@@ -187,6 +187,14 @@ std::size_t ClipmapLevel::Plan::texels() const noexcept {
 }
 
 void ClipmapLevel::fetch(Plan& p) const {
+  // Lat/lon and plane lattices read runs of samples: the source makes them resident first
+  // (a store's pyramid loads them through its prefetcher, this thread taking part). A polar
+  // lattice interpolates between samples anywhere: it reads as it goes.
+  if (p.polar == 0) {
+    std::vector<topo::SampleSource::Window> windows;
+    for (const auto& region : p.regions) appendWindows(region, windows);
+    if (!windows.empty()) pyramid_.level(level_).source->load(windows);
+  }
   if (p.full) {
     // The anchor sits on the terrain (its centre sample's height), so both the offsets in
     // the texture and anchor − camera stay small near the surface.
@@ -196,6 +204,52 @@ void ClipmapLevel::fetch(Plan& p) const {
     p.anchor = pyramid_.position(a.x, a.y, std::isnan(ah) ? 0.0 : static_cast<double>(ah));
   }
   for (auto& region : p.regions) fill(p, region);
+}
+
+void ClipmapLevel::forEachRun(
+    std::int64_t vr, std::int64_t c0, std::size_t w,
+    const std::function<void(std::size_t, std::size_t, std::size_t, std::size_t)>& fn) const {
+  std::size_t i = 0;
+  while (i < w) {
+    std::size_t rr = 0, cc = 0;
+    if (!realIndex(vr, c0 + static_cast<std::int64_t>(i), rr, cc)) {
+      ++i;
+      continue;
+    }
+    std::size_t len = 1;
+    std::size_t r2 = 0, c2 = 0;
+    while (i + len < w && realIndex(vr, c0 + static_cast<std::int64_t>(i + len), r2, c2) &&
+           r2 == rr && c2 == cc + len)
+      ++len;
+    fn(i, rr, cc, len);
+    i += len;
+  }
+}
+
+void ClipmapLevel::appendWindows(const Plan::Region& region,
+                                 std::vector<topo::SampleSource::Window>& out) const {
+  const std::size_t first = out.size();
+  const auto w = static_cast<std::size_t>(region.c1 - region.c0);
+  for (std::int64_t vr = region.r0; vr < region.r1; ++vr) {
+    forEachRun(vr, region.c0, w, [&](std::size_t, std::size_t rr, std::size_t cc, std::size_t len) {
+      // A run that continues a window of this region by a row above or below joins it
+      // (rows run backwards beyond a pole).
+      for (std::size_t k = first; k < out.size(); ++k) {
+        topo::SampleSource::Window& x = out[k];
+        if (x.col0 != cc || x.cols != len) continue;
+        if (rr == x.row0 + x.rows) {
+          ++x.rows;
+          return;
+        }
+        if (rr + 1 == x.row0) {
+          --x.row0;
+          ++x.rows;
+          return;
+        }
+      }
+      out.push_back({rr, cc, 1, len});
+    });
+  }
 }
 
 void ClipmapLevel::fill(const Plan& p, Plan::Region& region) const {
@@ -226,22 +280,12 @@ void ClipmapLevel::fill(const Plan& p, Plan::Region& region) const {
   std::vector<float> row(w);
   for (std::size_t j = 0; j < h; ++j) {
     const std::int64_t vr = region.r0 + static_cast<std::int64_t>(j);
-    // Read the row's samples as runs of consecutive real columns.
-    std::size_t i = 0;
-    while (i < w) {
-      std::size_t rr = 0, cc = 0;
-      if (!realIndex(vr, region.c0 + static_cast<std::int64_t>(i), rr, cc)) {
-        row[i++] = kNaN;
-        continue;
-      }
-      std::size_t len = 1;
-      std::size_t r2 = 0, c2 = 0;
-      while (i + len < w && realIndex(vr, region.c0 + static_cast<std::int64_t>(i + len), r2, c2) &&
-             r2 == rr && c2 == cc + len)
-        ++len;
-      lvl.source->readWindow(rr, cc, 1, len, std::span<float>(row.data() + i, len));
-      i += len;
-    }
+    // Read the row's samples as runs of consecutive real columns; NaN where none is real.
+    std::fill(row.begin(), row.end(), kNaN);
+    forEachRun(vr, region.c0, w,
+               [&](std::size_t i, std::size_t rr, std::size_t cc, std::size_t len) {
+                 lvl.source->readWindow(rr, cc, 1, len, std::span<float>(row.data() + i, len));
+               });
     for (std::size_t k = 0; k < w; ++k) {
       const std::int64_t vc = region.c0 + static_cast<std::int64_t>(k);
       const float hgt = g.isNodata(row[k]) ? kNaN : row[k];

@@ -12,6 +12,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace regolith::clod {
@@ -94,6 +95,15 @@ class ClipmapLevel {
   [[nodiscard]] glm::dvec2 centreIndexIn(const ClipmapLevel& coarser) const;
   [[nodiscard]] glm::dvec2 indexIn(const ClipmapLevel& coarser, double r, double c) const;
   void fill(const Plan& plan, Plan::Region& region) const;
+  /// Calls fn(i, r, c, len) for each run of consecutive real samples in virtual row vr,
+  /// columns [c0, c0 + w): window columns i … i + len − 1 are real samples (r, c … c + len − 1).
+  void forEachRun(
+      std::int64_t vr, std::int64_t c0, std::size_t w,
+      const std::function<void(std::size_t, std::size_t, std::size_t, std::size_t)>& fn) const;
+  /// The real samples a lat/lon or plane region reads, as windows (fill()'s runs, rows
+  /// with the same run joined).
+  void appendWindows(const Plan::Region& region,
+                     std::vector<topo::SampleSource::Window>& out) const;
   /// Height at a grid point by bilinear interpolation (polar frames), NaN near nodata.
   [[nodiscard]] float interpolate(const glm::dvec2& g) const;
   [[nodiscard]] float sampleAt(std::int64_t vr, std::int64_t vc) const;

@@ -261,20 +261,26 @@ static_assert(kMaxPatchesPerGrid <= BlockTable::kMaxBlocks,
               "every grid a store may hold has a block table");
 
 // The background loader of one exported pyramid (Pager::pyramid()), shared by its levels: a
-// Prefetcher made at the first hint, so that a pyramid nobody hints starts no thread. It
-// holds a copy of the pager (which holds no source), not the levels: no cycle.
+// Prefetcher made at the first hint, so that a pyramid nobody hints starts no work. It loads
+// on the executor the pyramid was given, else on a thread of its own. It holds a copy of the
+// pager (which holds no source), not the levels: no cycle.
 class AheadLoader {
  public:
-  explicit AheadLoader(Pager pager) : pager_(std::make_shared<const Pager>(std::move(pager))) {}
+  AheadLoader(Pager pager, std::shared_ptr<core::Executor> executor)
+      : pager_(std::make_shared<const Pager>(std::move(pager))), executor_(std::move(executor)) {}
   Prefetcher& get() {
     const std::lock_guard lock(mutex_);
-    // One loading thread: a hint must not take the cores the renderer draws on.
-    if (!prefetcher_) prefetcher_ = std::make_unique<Prefetcher>(pager_, 1);
+    // One load at a time: a hint must not take the cores the renderer draws on.
+    if (!prefetcher_) {
+      prefetcher_ = executor_ ? std::make_unique<Prefetcher>(pager_, executor_, 1)
+                              : std::make_unique<Prefetcher>(pager_, 1);
+    }
     return *prefetcher_;
   }
 
  private:
   std::shared_ptr<const Pager> pager_;
+  std::shared_ptr<core::Executor> executor_;
   std::mutex mutex_;
   std::unique_ptr<Prefetcher> prefetcher_;
 };
@@ -335,14 +341,29 @@ class PagedSource final : public topo::SampleSource {
   void prefetch(std::span<const Window> windows) const noexcept override {
     if (!ahead_) return;
     try {
-      std::vector<LevelWindow> w;
-      w.reserve(windows.size());
-      for (const Window& x : windows) w.push_back({level_, x.row0, x.col0, x.rows, x.cols});
+      const std::vector<LevelWindow> w = levelWindows(windows);
       Prefetcher& pf = ahead_->get();
       const std::lock_guard lock(aheadMutex_);
       if (aheadTicket_ != 0) pf.cancel(aheadTicket_);
       aheadTicket_ = pf.request(info_.name, w);
     } catch (...) {  // NOLINT(bugprone-empty-catch): a hint; the read that needs it reports
+    }
+  }
+
+  void load(std::span<const Window> windows) const noexcept override {
+    if (!ahead_) return;
+    try {
+      // Windows whose patches would fill more than half the cache are read as they go:
+      // loaded whole first, their first patches could be evicted before they are read.
+      std::size_t patches = 0;
+      for (const Window& w : windows) {
+        if (w.rows == 0 || w.cols == 0) continue;
+        patches += ((w.row0 + w.rows - 1) / pr_ - w.row0 / pr_ + 1) *
+                   ((w.col0 + w.cols - 1) / pc_ - w.col0 / pc_ + 1);
+      }
+      if (patches * pr_ * pc_ * sizeof(float) > cache_->capacityBytes() / 2) return;
+      ahead_->get().load(info_.name, levelWindows(windows));
+    } catch (...) {  // NOLINT(bugprone-empty-catch): the read that follows reports it
     }
   }
 
@@ -359,6 +380,12 @@ class PagedSource final : public topo::SampleSource {
   }
 
  private:
+  std::vector<LevelWindow> levelWindows(std::span<const Window> windows) const {
+    std::vector<LevelWindow> w;
+    w.reserve(windows.size());
+    for (const Window& x : windows) w.push_back({level_, x.row0, x.col0, x.rows, x.cols});
+    return w;
+  }
   std::shared_ptr<const Patch> patchAt(std::size_t row, std::size_t col) const {
     const PatchKey key{gridId_, level_, static_cast<std::uint32_t>(row / pr_),
                        static_cast<std::uint32_t>(col / pc_)};
@@ -489,11 +516,12 @@ topo::TopoPlanet Pager::planet(std::string_view grid, std::size_t level) const {
           }};
 }
 
-topo::GridPyramid Pager::pyramid(std::string_view grid) const {
+topo::GridPyramid Pager::pyramid(std::string_view grid,
+                                 std::shared_ptr<core::Executor> loader) const {
   const GridEntry& e = entry(grid, 0, "store::Pager::pyramid()");
   topo::GridPyramid p;
   p.levels.reserve(e.info->levels);
-  const auto ahead = std::make_shared<AheadLoader>(*this);
+  const auto ahead = std::make_shared<AheadLoader>(*this, std::move(loader));
   for (std::size_t l = 0; l < e.info->levels; ++l) {
     p.levels.push_back(
         {topoGridOf(*e.info, l),

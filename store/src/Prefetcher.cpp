@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <string>
+#include <unordered_set>
 
 namespace regolith::store {
 
@@ -27,59 +28,93 @@ Prefetcher::Prefetcher(std::shared_ptr<const Pager> pager, std::size_t threads)
 
 Prefetcher::Prefetcher(std::shared_ptr<const Pager> pager, std::shared_ptr<core::Executor> executor,
                        std::size_t maxTasks)
-    : pager_(std::move(pager)), executor_(std::move(executor)) {
-  if (!pager_) throw InvalidArgument("store::Prefetcher(): pager is null");
+    : state_(std::make_shared<State>()), executor_(std::move(executor)) {
+  if (!pager) throw InvalidArgument("store::Prefetcher(): pager is null");
   if (!executor_) throw InvalidArgument("store::Prefetcher(): executor is null");
-  maxTasks_ = maxTasks != 0 ? maxTasks : std::max(1U, executor_->concurrency());
+  state_->pager = std::move(pager);
+  state_->maxTasks = maxTasks != 0 ? maxTasks : std::max(1U, executor_->concurrency());
 }
 
 Prefetcher::~Prefetcher() {
-  std::unique_lock lock(mutex_);
-  stopping_ = true;
-  stats_.cancelled += queue_.size();
-  queue_ = {};
-  pending_.clear();
-  done_.notify_all();
-  // Loading tasks read this object: wait until every one has returned (a load in progress
-  // finishes first).
-  done_.wait(lock, [&] { return tasks_ == 0; });
+  State& s = *state_;
+  std::unique_lock lock(s.mutex);
+  s.stopping = true;
+  s.stats.cancelled += s.queue.size();
+  s.queue = {};
+  s.pending.clear();
+  s.done.notify_all();
+  // A load in progress may call onLoaded, which may refer to what outlives this object only
+  // until the destructor returns: wait for those. A task not yet started holds the state
+  // and returns as it starts (work()).
+  s.done.wait(lock, [&] { return s.busy == 0; });
 }
 
 void Prefetcher::startTasks(std::unique_lock<std::mutex>& lock) {
-  // One task per queued patch, up to maxTasks_; each drains the queue and then returns, so
+  State& s = *state_;
+  // One task per queued patch, up to maxTasks; each drains the queue and then returns, so
   // the executor's threads are never held while there is nothing to load.
-  const std::size_t start = tasks_ < maxTasks_ ? std::min(maxTasks_ - tasks_, queue_.size()) : 0;
-  tasks_ += start;
+  const std::size_t start =
+      s.tasks < s.maxTasks ? std::min(s.maxTasks - s.tasks, s.queue.size()) : 0;
+  s.tasks += start;
   lock.unlock();
-  for (std::size_t i = 0; i < start; ++i) executor_->submit([this] { work(); });
+  for (std::size_t i = 0; i < start; ++i) executor_->submit([state = state_] { work(state); });
   lock.lock();
 }
 
 Prefetcher::Ticket Prefetcher::request(std::string_view grid,
                                        const std::vector<LevelWindow>& windows, int priority) {
-  const GridInfo& info = pager_->grid(grid);  // throws StoreError for unknown grids
+  if (priority == kNow) --priority;  // kNow is load()'s: a request never passes it
+  return enqueue(grid, windows, priority);
+}
+
+void Prefetcher::load(std::string_view grid, const std::vector<LevelWindow>& windows) {
+  const Ticket ticket = enqueue(grid, windows, kNow);
+  State& s = *state_;
+  std::unique_lock lock(s.mutex);
+  // Load the ticket's patches while they are at the front of the queue (the executor's
+  // tasks take them too), then wait for the ones a task is loading.
+  while (s.pending.contains(ticket)) {
+    if (!s.stopping && !s.queue.empty() && s.queue.top().ticket == ticket) {
+      loadTop(s, lock);
+    } else {
+      s.done.wait(lock, [&] {
+        return !s.pending.contains(ticket) ||
+               (!s.stopping && !s.queue.empty() && s.queue.top().ticket == ticket);
+      });
+    }
+  }
+}
+
+Prefetcher::Ticket Prefetcher::enqueue(std::string_view grid,
+                                       const std::vector<LevelWindow>& windows, int priority) {
+  State& s = *state_;
+  const Pager& pager = *s.pager;
+  const GridInfo& info = pager.grid(grid);  // throws StoreError for unknown grids
   std::vector<Item> items;
   for (const LevelWindow& w : windows) {
-    (void)pager_->keyOf(grid, w.level, 0, 0);  // throws StoreError for a missing level
+    (void)pager.keyOf(grid, w.level, 0, 0);  // throws StoreError for a missing level
     const std::size_t rows = info.levelRows(w.level), cols = info.levelCols(w.level);
     if (w.rows == 0 || w.cols == 0 || w.row0 >= rows || w.col0 >= cols) continue;
     const std::size_t r1 = std::min(rows, w.row0 + w.rows), c1 = std::min(cols, w.col0 + w.cols);
     for (std::size_t pr = w.row0 / info.patchRows; pr * info.patchRows < r1; ++pr) {
       for (std::size_t pc = w.col0 / info.patchCols; pc * info.patchCols < c1; ++pc) {
-        const PatchKey key = pager_->keyOf(grid, w.level, pr * info.patchRows, pc * info.patchCols);
+        const PatchKey key = pager.keyOf(grid, w.level, pr * info.patchRows, pc * info.patchCols);
         items.push_back({priority, key.level, 0, 0, key});
       }
     }
   }
-  std::unique_lock lock(mutex_);
-  const Ticket ticket = nextTicket_++;
+  // Each patch once, though windows overlap (a renderer's runs of rows share patches).
+  std::unordered_set<PatchKey, PatchKeyHash> seen;
+  std::erase_if(items, [&](const Item& it) { return !seen.insert(it.key).second; });
+  std::unique_lock lock(s.mutex);
+  const Ticket ticket = s.nextTicket++;
   for (Item& it : items) {
     it.ticket = ticket;
-    it.sequence = nextSequence_++;
-    queue_.push(it);
+    it.sequence = s.nextSequence++;
+    s.queue.push(it);
   }
-  if (!items.empty()) pending_[ticket] = items.size();
-  stats_.queued += items.size();
+  if (!items.empty()) s.pending[ticket] = items.size();
+  s.stats.queued += items.size();
   startTasks(lock);
   return ticket;
 }
@@ -87,7 +122,7 @@ Prefetcher::Ticket Prefetcher::request(std::string_view grid,
 std::vector<LevelWindow> Prefetcher::focusWindows(std::string_view grid, std::size_t row,
                                                   std::size_t col, std::size_t radius,
                                                   std::size_t finestLevel) const {
-  const GridInfo& info = pager_->grid(grid);
+  const GridInfo& info = state_->pager->grid(grid);
   std::vector<LevelWindow> out;
   for (std::size_t level = finestLevel; level < info.levels; ++level) {
     const std::size_t r = row >> level, c = col >> level;
@@ -100,81 +135,87 @@ std::vector<LevelWindow> Prefetcher::focusWindows(std::string_view grid, std::si
 }
 
 void Prefetcher::cancel(Ticket ticket) {
-  const std::lock_guard lock(mutex_);
+  State& s = *state_;
+  const std::lock_guard lock(s.mutex);
   std::vector<Item> keep;
   std::size_t dropped = 0;
-  while (!queue_.empty()) {
-    if (queue_.top().ticket == ticket) {
+  while (!s.queue.empty()) {
+    if (s.queue.top().ticket == ticket) {
       ++dropped;
     } else {
-      keep.push_back(queue_.top());
+      keep.push_back(s.queue.top());
     }
-    queue_.pop();
+    s.queue.pop();
   }
-  for (const Item& it : keep) queue_.push(it);
-  stats_.cancelled += dropped;
-  if (auto p = pending_.find(ticket); p != pending_.end()) {
+  for (const Item& it : keep) s.queue.push(it);
+  s.stats.cancelled += dropped;
+  if (auto p = s.pending.find(ticket); p != s.pending.end()) {
     p->second -= dropped;
-    if (p->second == 0) pending_.erase(p);
+    if (p->second == 0) s.pending.erase(p);
   }
-  done_.notify_all();
+  s.done.notify_all();
 }
 
 void Prefetcher::wait(Ticket ticket) {
-  std::unique_lock lock(mutex_);
-  done_.wait(lock, [&] { return stopping_ || !pending_.contains(ticket); });
+  State& s = *state_;
+  std::unique_lock lock(s.mutex);
+  s.done.wait(lock, [&] { return s.stopping || !s.pending.contains(ticket); });
 }
 
 void Prefetcher::waitIdle() {
-  std::unique_lock lock(mutex_);
-  done_.wait(lock, [&] { return stopping_ || (queue_.empty() && busy_ == 0); });
+  State& s = *state_;
+  std::unique_lock lock(s.mutex);
+  s.done.wait(lock, [&] { return s.stopping || (s.queue.empty() && s.busy == 0); });
 }
 
 PrefetchStats Prefetcher::stats() const {
-  const std::lock_guard lock(mutex_);
-  return stats_;
+  const std::lock_guard lock(state_->mutex);
+  return state_->stats;
 }
 
 std::string Prefetcher::lastError() const {
-  const std::lock_guard lock(mutex_);
-  return lastError_;
+  const std::lock_guard lock(state_->mutex);
+  return state_->lastError;
 }
 
 void Prefetcher::setOnLoaded(std::function<void(const PatchKey&)> fn) {
-  const std::lock_guard lock(mutex_);
-  onLoaded_ = std::move(fn);
+  const std::lock_guard lock(state_->mutex);
+  state_->onLoaded = std::move(fn);
 }
 
-void Prefetcher::work() {
-  std::unique_lock lock(mutex_);
-  while (!stopping_ && !queue_.empty()) {
-    const Item item = queue_.top();
-    queue_.pop();
-    ++busy_;
-    const auto onLoaded = onLoaded_;
-    lock.unlock();
-    std::string error;
-    try {
-      (void)pager_->patch(item.key);
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-    if (error.empty() && onLoaded) onLoaded(item.key);
-    lock.lock();
-    --busy_;
-    if (error.empty()) {
-      ++stats_.loaded;
-    } else {
-      ++stats_.failed;
-      lastError_ = std::move(error);
-    }
-    if (auto p = pending_.find(item.ticket); p != pending_.end() && --p->second == 0) {
-      pending_.erase(p);
-    }
-    done_.notify_all();
+void Prefetcher::loadTop(State& s, std::unique_lock<std::mutex>& lock) {
+  const Item item = s.queue.top();
+  s.queue.pop();
+  ++s.busy;
+  const auto onLoaded = s.onLoaded;
+  lock.unlock();
+  std::string error;
+  try {
+    (void)s.pager->patch(item.key);
+  } catch (const std::exception& e) {
+    error = e.what();
   }
-  --tasks_;
-  done_.notify_all();
+  if (error.empty() && onLoaded) onLoaded(item.key);
+  lock.lock();
+  --s.busy;
+  if (error.empty()) {
+    ++s.stats.loaded;
+  } else {
+    ++s.stats.failed;
+    s.lastError = std::move(error);
+  }
+  if (auto p = s.pending.find(item.ticket); p != s.pending.end() && --p->second == 0) {
+    s.pending.erase(p);
+  }
+  s.done.notify_all();
+}
+
+void Prefetcher::work(const std::shared_ptr<State>& state) {
+  State& s = *state;
+  std::unique_lock lock(s.mutex);
+  while (!s.stopping && !s.queue.empty()) loadTop(s, lock);
+  --s.tasks;
+  s.done.notify_all();
 }
 
 }  // namespace regolith::store

@@ -16,6 +16,7 @@
 #include <limits>
 #include <mutex>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace regolith::clod {
@@ -465,6 +466,17 @@ class HintedSource final : public topo::SampleSource {
   float sample(std::size_t r, std::size_t c) const override { return inner_->sample(r, c); }
   void readWindow(std::size_t r0, std::size_t c0, std::size_t nr, std::size_t nc,
                   std::span<float> out) const override {
+    {
+      const std::lock_guard lock(mutex_);
+      ++reads_;
+      const bool loaded = std::any_of(loads_.begin(), loads_.end(), [&](const auto& load) {
+        return std::any_of(load.begin(), load.end(), [&](const Window& w) {
+          return r0 >= w.row0 && r0 + nr <= w.row0 + w.rows && c0 >= w.col0 &&
+                 c0 + nc <= w.col0 + w.cols;
+        });
+      });
+      if (!loaded) ++readsNotLoaded_;
+    }
     inner_->readWindow(r0, c0, nr, nc, out);
   }
   const float* contiguous() const noexcept override { return inner_->contiguous(); }
@@ -472,16 +484,76 @@ class HintedSource final : public topo::SampleSource {
     const std::lock_guard lock(mutex_);
     hints_.emplace_back(windows.begin(), windows.end());
   }
+  void load(std::span<const Window> windows) const noexcept override {
+    const std::lock_guard lock(mutex_);
+    loads_.emplace_back(windows.begin(), windows.end());
+  }
   std::vector<std::vector<Window>> hints() const {
     const std::lock_guard lock(mutex_);
     return hints_;
+  }
+  std::vector<std::vector<Window>> loads() const {
+    const std::lock_guard lock(mutex_);
+    return loads_;
+  }
+  /// Window reads, and those not inside a window load() was given before them.
+  std::pair<std::size_t, std::size_t> reads() const {
+    const std::lock_guard lock(mutex_);
+    return {reads_, readsNotLoaded_};
   }
 
  private:
   std::shared_ptr<const topo::SampleSource> inner_;
   mutable std::mutex mutex_;
-  mutable std::vector<std::vector<Window>> hints_;
+  mutable std::vector<std::vector<Window>> hints_, loads_;
+  mutable std::size_t reads_ = 0, readsNotLoaded_ = 0;
 };
+
+TEST(ClipmapTerrainGLTest, TheLoaderHasEachLevelsWindowLoadedByItsSourceBeforeReadingIt) {
+  test::glContext();
+  const auto grid = test::centredGrid(2049, 2049, 1.0);
+  const auto plain = test::planePyramid(grid, test::hills);
+  std::vector<HeightPyramid::Level> levels;
+  std::vector<std::shared_ptr<const HintedSource>> sources;
+  for (std::size_t k = 0; k < plain->levelCount(); ++k) {
+    sources.push_back(std::make_shared<const HintedSource>(plain->level(k).source));
+    levels.push_back({plain->level(k).grid, sources.back()});
+  }
+  const auto pyramid = std::make_shared<const HeightPyramid>(levels, SurfaceKind::Plane);
+  ClipmapOptions opt;
+  opt.size = 127;
+  ClipmapTerrain terrain(pyramid, opt);
+  terrain.requestFocus({0.0, 0.0, 0.0});
+  terrain.finishLoading();
+  // Levels 0 and 1 hold their window whole: one load of the 127² window, as one window
+  // (the rows' runs joined).
+  for (std::size_t k = 0; k < 2; ++k) {
+    const auto loads = sources[k]->loads();
+    ASSERT_EQ(loads.size(), 1U) << "level " << k;
+    ASSERT_EQ(loads[0].size(), 1U) << "level " << k;
+    EXPECT_EQ(loads[0][0].rows, 127U) << "level " << k;
+    EXPECT_EQ(loads[0][0].cols, 127U) << "level " << k;
+  }
+  // Then a move: the strip that enters is loaded, then read.
+  terrain.requestFocus({40.0, 0.0, 0.0});
+  terrain.finishLoading();
+  const auto moved = sources[0]->loads();
+  ASSERT_EQ(moved.size(), 2U);
+  std::size_t area = 0;
+  for (const auto& w : moved[1]) area += w.rows * w.cols;
+  EXPECT_GT(area, 0U);
+  EXPECT_LT(area, 127U * 127U) << "only the columns that enter the window";
+  // Every window read at every level lies inside a window loaded before it (the levels
+  // beyond the clipmap's are neither loaded nor read).
+  std::size_t levelsRead = 0;
+  for (std::size_t k = 0; k < sources.size(); ++k) {
+    const auto [reads, notLoaded] = sources[k]->reads();
+    EXPECT_EQ(reads > 0, !sources[k]->loads().empty()) << "level " << k;
+    EXPECT_EQ(notLoaded, 0U) << "level " << k;
+    levelsRead += reads > 0 ? 1 : 0;
+  }
+  EXPECT_EQ(levelsRead, terrain.levelCount());
+}
 
 TEST(ClipmapTerrainGLTest, TheLoaderHintsTheRingAroundEachLevelsWindowToItsSource) {
   test::glContext();

@@ -9,6 +9,8 @@
 
 #include <atomic>
 #include <chrono>
+#include <functional>
+#include <future>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -186,4 +188,142 @@ TEST(Prefetcher, APyramidsLevelsLoadTheWindowsTheyAreHintedInTheBackground) {
   pyramid.levels[1].source->prefetch({});
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   EXPECT_EQ(o.cache->stats().residentBytes, 0U);
+}
+
+namespace {
+/// A real executor (a one-worker core::ThreadPool) that counts the tasks it is given and
+/// the threads that ran them.
+class CountingExecutor final : public core::Executor {
+ public:
+  void submit(std::function<void()> task) override {
+    ++submitted;
+    pool_.submit([this, task = std::move(task)] {
+      {
+        const std::lock_guard lock(m);
+        ran.push_back(std::this_thread::get_id());
+      }
+      task();
+    });
+  }
+  [[nodiscard]] unsigned concurrency() const noexcept override { return 1; }
+  std::atomic<int> submitted{0};
+  std::mutex m;
+  std::vector<std::thread::id> ran;
+
+ private:
+  core::ThreadPool pool_{1};
+};
+}  // namespace
+
+TEST(Prefetcher, APyramidGivenAnExecutorLoadsItsHintsThereAndMakesNoThread) {
+  Opened o = openFixture();
+  const auto executor = std::make_shared<CountingExecutor>();
+  const topo::GridPyramid pyramid = o.pager.pyramid("dem", executor);
+  EXPECT_EQ(executor->submitted, 0) << "exporting submits nothing";
+  const topo::SampleSource::Window hint[] = {{100, 200, 300, 400}};  // 4 × 4 patches
+  pyramid.levels[0].source->prefetch(hint);
+  const auto resident = [&] {
+    std::size_t n = 0;
+    for (std::size_t r = 0; r < 4; ++r) {
+      for (std::size_t c = 1; c <= 4; ++c)
+        n += o.cache->contains(o.pager.keyOf("dem", 0, r * 128, c * 128)) ? 1U : 0U;
+    }
+    return n;
+  };
+  for (int i = 0; i < 6000 && resident() < 16; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(resident(), 16U);
+  // One load at a time: one task drains the queue (more only if it emptied meanwhile).
+  EXPECT_GE(executor->submitted, 1);
+  const std::lock_guard lock(executor->m);
+  ASSERT_FALSE(executor->ran.empty());
+  for (const std::thread::id id : executor->ran) {
+    EXPECT_NE(id, std::this_thread::get_id());
+    EXPECT_EQ(id, executor->ran.front()) << "every load on the executor's one worker";
+  }
+}
+
+TEST(Prefetcher, MayBeDestroyedOnItsExecutorsOnlyWorkerWithItsTaskQueuedBehind) {
+  // A prefetcher on a shared one-worker executor, destroyed by a task on that worker while
+  // its loading task waits in the queue behind: the destructor must not wait for that task
+  // (it could never start), and the task, run later, must load nothing.
+  Opened o = openFixture();
+  std::promise<void> destroyed;
+  auto done = destroyed.get_future();
+  {
+    const auto pool = std::make_shared<core::ThreadPool>(1);
+    auto pf = std::make_unique<Prefetcher>(sharedPager(o), pool, 1);
+    std::promise<void> gate;
+    std::shared_future<void> open = gate.get_future().share();
+    pool->submit([&pf, open, &destroyed] {
+      open.wait();
+      pf.reset();
+      destroyed.set_value();
+    });
+    (void)pf->request("dem", {{0, 100, 200, 300, 400}});  // queued behind the task above
+    gate.set_value();
+    EXPECT_EQ(done.wait_for(std::chrono::seconds(60)), std::future_status::ready)
+        << "the destructor waited for a task queued behind it";
+  }  // the pool runs the queued loading task, which returns without loading, and joins
+  EXPECT_EQ(o.cache->stats().loads, 0U);
+}
+
+TEST(Prefetcher, LoadIsAheadOfQueuedRequestsAndTheCallerLoadsWhileTheExecutorIsBusy) {
+  Opened o = openFixture();
+  const auto pager = sharedPager(o);
+  const auto pool = std::make_shared<core::ThreadPool>(1);
+  std::promise<void> gate;
+  std::shared_future<void> open = gate.get_future().share();
+  pool->submit([open] { open.wait(); });  // the executor's only worker is busy
+  Prefetcher pf(pager, pool, 1);
+  // A request queued first (patch rows 4…5, cols 0…1 of level 0), then a load of 4 × 4
+  // other patches: the load returns with its patches resident though no task could run.
+  const auto queued = pf.request("dem", {{0, 512, 0, 256, 256}});
+  pf.load("dem", {{0, 100, 200, 300, 400}, {0, 150, 250, 10, 10}});  // the second inside the first
+  for (std::size_t r = 0; r < 4; ++r) {
+    for (std::size_t c = 1; c <= 4; ++c)
+      EXPECT_TRUE(o.cache->contains(pager->keyOf("dem", 0, r * 128, c * 128)));
+  }
+  EXPECT_FALSE(o.cache->contains(pager->keyOf("dem", 0, 512, 0))) << "the request waits";
+  EXPECT_EQ(pf.stats().loaded, 16U) << "each patch once, though the windows overlap";
+  gate.set_value();
+  pf.wait(queued);
+  EXPECT_TRUE(o.cache->contains(pager->keyOf("dem", 0, 512, 0)));
+  EXPECT_EQ(pf.stats().loaded, 20U);
+  EXPECT_THROW(pf.load("nosuch", {{0, 0, 0, 1, 1}}), StoreError);
+  pf.load("dem", {});  // nothing to load: returns at once
+}
+
+TEST(Prefetcher, APyramidsLevelLoadsAWindowBeforeReturningAndAPagerSourceLoadsNothing) {
+  Opened o = openFixture();
+  const topo::GridPyramid pyramid = o.pager.pyramid("dem");
+  const topo::SampleSource::Window window[] = {{100, 200, 300, 400}};
+  pyramid.levels[0].source->load(window);
+  for (std::size_t r = 0; r < 4; ++r) {
+    for (std::size_t c = 1; c <= 4; ++c)
+      EXPECT_TRUE(o.cache->contains(o.pager.keyOf("dem", 0, r * 128, c * 128)));
+  }
+  const auto loads = o.cache->stats().loads;
+  std::vector<float> out(300 * 400);
+  pyramid.levels[0].source->readWindow(100, 200, 300, 400, out);
+  EXPECT_EQ(o.cache->stats().loads, loads) << "the read is all hits";
+  o.cache->clear();
+  o.pager.source("dem", 0)->load(window);
+  EXPECT_EQ(o.cache->stats().residentBytes, 0U);
+}
+
+TEST(Prefetcher, ALevelLeavesWindowsOfOverHalfItsCacheToTheReads) {
+  Opened o = openFixture();
+  // Room for three 128² patches: a window of 16 would evict its first patches before they
+  // were read, so load() leaves it to the reads; one patch is loaded.
+  const auto small = std::make_shared<PatchCache>(3 * (128 * 128 * sizeof(float) + 4096));
+  const Pager pager(o.store, small);
+  const topo::GridPyramid pyramid = pager.pyramid("dem");
+  const topo::SampleSource::Window big[] = {{100, 200, 300, 400}}, one[] = {{0, 0, 10, 10}};
+  pyramid.levels[0].source->load(big);
+  EXPECT_EQ(small->stats().loads, 0U);
+  pyramid.levels[0].source->load(one);
+  EXPECT_EQ(small->stats().loads, 1U);
+  EXPECT_TRUE(small->contains(pager.keyOf("dem", 0, 0, 0)));
 }

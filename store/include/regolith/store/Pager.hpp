@@ -2,6 +2,7 @@
 /// \file
 /// Lazy paging of store grids into a shared patch cache.
 
+#include <regolith/core/Executor.hpp>
 #include <regolith/store/PageSource.hpp>
 #include <regolith/store/PatchCache.hpp>
 #include <regolith/store/Store.hpp>
@@ -81,8 +82,13 @@ class Pager {
   /// store (clod::HeightPyramid) without knowing the store. A DEM's levels are planar (x
   /// east, y north, metres; no body); a planet grid's are longitude/latitude on its body.
   /// Rendering pages patches into this pager's cache, so memory stays within its budget;
-  /// the sources keep the store and the cache alive. Throws StoreError for an unknown grid.
-  [[nodiscard]] topo::GridPyramid pyramid(std::string_view grid) const;
+  /// the sources keep the store and the cache alive. The levels share one background
+  /// loader for the windows a renderer hints (topo::SampleSource::prefetch(), one patch
+  /// at a time, coarser levels first): on `loader` if given (the renderer's own executor,
+  /// say), else on a thread the pyramid makes at its first hint. Throws StoreError for an
+  /// unknown grid.
+  [[nodiscard]] topo::GridPyramid pyramid(std::string_view grid,
+                                          std::shared_ptr<core::Executor> loader = nullptr) const;
 
   /// The cache key of the patch holding sample (row, col) of a level. Pagers of one store
   /// file give the same keys.

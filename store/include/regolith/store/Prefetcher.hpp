@@ -8,9 +8,11 @@
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <queue>
+#include <string>
 #include <string_view>
 #include <unordered_map>
 #include <vector>
@@ -41,7 +43,8 @@ struct PrefetchStats {
 /// nothing to load.
 ///
 /// Thread-safety: every member may be called from any thread. The destructor cancels what
-/// is queued and waits for the loading tasks to return (a load in progress finishes first).
+/// is queued and waits for the loads in progress to finish; it may run on a thread of the
+/// executor (a task queued behind it then returns without loading).
 class Prefetcher {
  public:
   using Ticket = std::uint64_t;
@@ -67,6 +70,13 @@ class Prefetcher {
   [[nodiscard]] std::vector<LevelWindow> focusWindows(std::string_view grid, std::size_t row,
                                                       std::size_t col, std::size_t radius,
                                                       std::size_t finestLevel = 0) const;
+  /// Makes the patches covering the windows of `grid` resident now (a renderer's window it
+  /// is about to read): queues them ahead of every request, loads them on the calling
+  /// thread as well as on the executor, and returns when each is loaded or failed (a
+  /// failure is counted and kept in lastError(); the read that follows reports it). The
+  /// caller takes part, so a call from a task on the executor's only worker cannot wait for
+  /// a task queued behind it. Throws StoreError for an unknown grid or level.
+  void load(std::string_view grid, const std::vector<LevelWindow>& windows);
   /// Drops the ticket's queued patches (loads in progress finish).
   void cancel(Ticket ticket);
   /// Blocks until the ticket's patches are all loaded, cancelled or failed.
@@ -91,27 +101,40 @@ class Prefetcher {
   struct ItemOrder {
     bool operator()(const Item& a, const Item& b) const noexcept;
   };
+  /// load()'s priority, above any request()'s (a request asking for it gets one less).
+  static constexpr int kNow = std::numeric_limits<int>::max();
+  /// What the loading tasks read, shared with them: a task the executor starts after the
+  /// prefetcher is gone (queued behind other work) finds `stopping` and returns, touching
+  /// only this. So the destructor waits only for loads in progress, never for a task still
+  /// queued, and may run on a thread of the executor itself (a 1-worker executor, whose
+  /// queued task could otherwise never start).
+  struct State {
+    std::shared_ptr<const Pager> pager;
+    std::mutex mutex;
+    std::size_t maxTasks = 1;
+    std::size_t tasks = 0;         // loading tasks submitted and not yet returned
+    std::condition_variable done;  // waiters: a ticket, the queue drained, a load finished
+    std::priority_queue<Item, std::vector<Item>, ItemOrder> queue;
+    std::unordered_map<Ticket, std::size_t> pending;  // ticket → patches not yet finished
+    std::size_t busy = 0;                             // loads in progress
+    bool stopping = false;
+    Ticket nextTicket = 1;
+    std::uint64_t nextSequence = 0;
+    PrefetchStats stats;
+    std::string lastError;
+    std::function<void(const PatchKey&)> onLoaded;
+  };
   /// Drains the queue (a task on the executor).
-  void work();
-  /// Submits loading tasks for the queue, up to maxTasks_ running (lock held on entry and
+  static void work(const std::shared_ptr<State>& state);
+  /// Loads the queue's top item (lock held on entry and on return; released while loading).
+  static void loadTop(State& s, std::unique_lock<std::mutex>& lock);
+  /// Queues the patches covering `windows` under a new ticket (none: 0) and starts tasks.
+  Ticket enqueue(std::string_view grid, const std::vector<LevelWindow>& windows, int priority);
+  /// Submits loading tasks for the queue, up to maxTasks running (lock held on entry and
   /// on return; released while submitting).
   void startTasks(std::unique_lock<std::mutex>& lock);
 
-  std::shared_ptr<const Pager> pager_;
-  mutable std::mutex mutex_;
-  std::size_t maxTasks_ = 1;
-  std::size_t tasks_ = 0;         // loading tasks submitted and not yet returned
-  std::condition_variable done_;  // waiters: a ticket, the queue drained, a task returned
-  std::priority_queue<Item, std::vector<Item>, ItemOrder> queue_;
-  std::unordered_map<Ticket, std::size_t> pending_;  // ticket → patches not yet finished
-  std::unordered_map<Ticket, bool> cancelled_;
-  std::size_t busy_ = 0;
-  bool stopping_ = false;
-  Ticket nextTicket_ = 1;
-  std::uint64_t nextSequence_ = 0;
-  PrefetchStats stats_;
-  std::string lastError_;
-  std::function<void(const PatchKey&)> onLoaded_;
+  std::shared_ptr<State> state_;
   /// Last, so that a pool of the prefetcher's own is joined before anything else goes.
   std::shared_ptr<core::Executor> executor_;
 };

@@ -141,6 +141,12 @@ class SampleSource {
   /// Windows are clipped to the grid. Returns at once; never fails (a load that fails here is the
   /// later read's to report). Default: nothing (samples in memory).
   virtual void prefetch(std::span<const Window> windows) const noexcept { (void)windows; }
+  /// Makes `windows` resident before the caller reads them (a renderer's window it needs
+  /// now): a paged source loads them through its loader (a store's pyramid: its Prefetcher,
+  /// ahead of every hint, the caller taking part; not windows over half its cache) and
+  /// returns when each is loaded or failed. Windows are clipped to the grid. Never fails (the
+  /// read reports a load that failed). Default: nothing (samples in memory).
+  virtual void load(std::span<const Window> windows) const noexcept { (void)windows; }
   /// A process-unique id, never reused, so per-thread query state can tell sources apart
   /// even when one is destroyed and another is allocated at the same address.
   [[nodiscard]] std::uint64_t id() const noexcept { return id_; }
