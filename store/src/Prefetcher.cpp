@@ -71,8 +71,8 @@ void Prefetcher::load(std::string_view grid, const std::vector<LevelWindow>& win
   const Ticket ticket = enqueue(grid, windows, kNow);
   State& s = *state_;
   std::unique_lock lock(s.mutex);
-  // Load the ticket's patches while they are at the front of the queue (the executor's
-  // tasks take them too), then wait for the ones a task is loading.
+  // The caller loads the ticket's patches (at the front of the queue, where the executor's
+  // tasks leave them: they load hints only), then the tasks go on with the hints.
   while (s.pending.contains(ticket)) {
     if (!s.stopping && !s.queue.empty() && s.queue.top().ticket == ticket) {
       loadTop(s, lock);
@@ -83,6 +83,7 @@ void Prefetcher::load(std::string_view grid, const std::vector<LevelWindow>& win
       });
     }
   }
+  if (!s.stopping) startTasks(lock);
 }
 
 Prefetcher::Ticket Prefetcher::enqueue(std::string_view grid,
@@ -213,7 +214,10 @@ void Prefetcher::loadTop(State& s, std::unique_lock<std::mutex>& lock) {
 void Prefetcher::work(const std::shared_ptr<State>& state) {
   State& s = *state;
   std::unique_lock lock(s.mutex);
-  while (!s.stopping && !s.queue.empty()) loadTop(s, lock);
+  // A load()'s patches (priority kNow) are its caller's: a task leaves them, so the loads
+  // a renderer waits for run on its own thread as before and the task's thread keeps to
+  // the hints (loading both on two threads made more loads and slower frames: docs/paging.md).
+  while (!s.stopping && !s.queue.empty() && s.queue.top().priority != kNow) loadTop(s, lock);
   --s.tasks;
   s.done.notify_all();
 }

@@ -327,3 +327,21 @@ TEST(Prefetcher, ALevelLeavesWindowsOfOverHalfItsCacheToTheReads) {
   EXPECT_EQ(small->stats().loads, 1U);
   EXPECT_TRUE(small->contains(pager.keyOf("dem", 0, 0, 0)));
 }
+
+TEST(Prefetcher, LoadsPatchesALoadAsksForOnTheCallersThreadOnly) {
+  // The executor's tasks leave a load()'s patches to its caller (they keep to the
+  // requests), so the loads a renderer waits for run where they ran before the Prefetcher
+  // took them: every patch of the window is loaded on this thread.
+  Opened o = openFixture();
+  Prefetcher pf(sharedPager(o), 2);
+  std::mutex m;
+  std::vector<std::thread::id> threads;
+  pf.setOnLoaded([&](const PatchKey&) {
+    const std::lock_guard lock(m);
+    threads.push_back(std::this_thread::get_id());
+  });
+  pf.load("dem", {{0, 100, 200, 300, 400}});
+  const std::lock_guard lock(m);
+  ASSERT_EQ(threads.size(), 16U);
+  for (const std::thread::id id : threads) EXPECT_EQ(id, std::this_thread::get_id());
+}

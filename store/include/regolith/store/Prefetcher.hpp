@@ -71,11 +71,11 @@ class Prefetcher {
                                                       std::size_t col, std::size_t radius,
                                                       std::size_t finestLevel = 0) const;
   /// Makes the patches covering the windows of `grid` resident now (a renderer's window it
-  /// is about to read): queues them ahead of every request, loads them on the calling
-  /// thread as well as on the executor, and returns when each is loaded or failed (a
-  /// failure is counted and kept in lastError(); the read that follows reports it). The
-  /// caller takes part, so a call from a task on the executor's only worker cannot wait for
-  /// a task queued behind it. Throws StoreError for an unknown grid or level.
+  /// is about to read): queues them ahead of every request and loads them on the calling
+  /// thread (the executor's tasks leave them and go on with the requests), returning when
+  /// each is loaded or failed (a failure is counted and kept in lastError(); the read that
+  /// follows reports it). So a call from a task on the executor's only worker cannot wait
+  /// for a task queued behind it. Throws StoreError for an unknown grid or level.
   void load(std::string_view grid, const std::vector<LevelWindow>& windows);
   /// Drops the ticket's queued patches (loads in progress finish).
   void cancel(Ticket ticket);

@@ -143,7 +143,7 @@ class SampleSource {
   virtual void prefetch(std::span<const Window> windows) const noexcept { (void)windows; }
   /// Makes `windows` resident before the caller reads them (a renderer's window it needs
   /// now): a paged source loads them through its loader (a store's pyramid: its Prefetcher,
-  /// ahead of every hint, the caller taking part; not windows over half its cache) and
+  /// ahead of every hint, on the calling thread; not windows over half its cache) and
   /// returns when each is loaded or failed. Windows are clipped to the grid. Never fails (the
   /// read reports a load that failed). Default: nothing (samples in memory).
   virtual void load(std::span<const Window> windows) const noexcept { (void)windows; }
