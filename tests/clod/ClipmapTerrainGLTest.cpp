@@ -509,17 +509,23 @@ class HintedSource final : public topo::SampleSource {
   mutable std::size_t reads_ = 0, readsNotLoaded_ = 0;
 };
 
-TEST(ClipmapTerrainGLTest, TheLoaderHasEachLevelsWindowLoadedByItsSourceBeforeReadingIt) {
-  test::glContext();
+/// The 2049² hills pyramid, each level's source wrapped in a HintedSource (in `sources`).
+std::shared_ptr<const HeightPyramid> hintedHills(
+    std::vector<std::shared_ptr<const HintedSource>>& sources) {
   const auto grid = test::centredGrid(2049, 2049, 1.0);
   const auto plain = test::planePyramid(grid, test::hills);
   std::vector<HeightPyramid::Level> levels;
-  std::vector<std::shared_ptr<const HintedSource>> sources;
   for (std::size_t k = 0; k < plain->levelCount(); ++k) {
     sources.push_back(std::make_shared<const HintedSource>(plain->level(k).source));
     levels.push_back({plain->level(k).grid, sources.back()});
   }
-  const auto pyramid = std::make_shared<const HeightPyramid>(levels, SurfaceKind::Plane);
+  return std::make_shared<const HeightPyramid>(levels, SurfaceKind::Plane);
+}
+
+TEST(ClipmapTerrainGLTest, TheLoaderHasEachLevelsWindowLoadedByItsSourceBeforeReadingIt) {
+  test::glContext();
+  std::vector<std::shared_ptr<const HintedSource>> sources;
+  const auto pyramid = hintedHills(sources);
   ClipmapOptions opt;
   opt.size = 127;
   ClipmapTerrain terrain(pyramid, opt);
@@ -557,15 +563,8 @@ TEST(ClipmapTerrainGLTest, TheLoaderHasEachLevelsWindowLoadedByItsSourceBeforeRe
 
 TEST(ClipmapTerrainGLTest, TheLoaderHintsTheRingAroundEachLevelsWindowToItsSource) {
   test::glContext();
-  const auto grid = test::centredGrid(2049, 2049, 1.0);
-  const auto plain = test::planePyramid(grid, test::hills);
-  std::vector<HeightPyramid::Level> levels;
   std::vector<std::shared_ptr<const HintedSource>> sources;
-  for (std::size_t k = 0; k < plain->levelCount(); ++k) {
-    sources.push_back(std::make_shared<const HintedSource>(plain->level(k).source));
-    levels.push_back({plain->level(k).grid, sources.back()});
-  }
-  const auto pyramid = std::make_shared<const HeightPyramid>(levels, SurfaceKind::Plane);
+  const auto pyramid = hintedHills(sources);
   ClipmapOptions opt;
   opt.size = 127;
   opt.prefetchMargin = 32;

@@ -23,6 +23,16 @@ namespace {
 std::shared_ptr<const Pager> sharedPager(Opened& o) {
   return std::make_shared<const Pager>(o.store, o.cache);
 }
+/// How many of the 4 × 4 patches of level 0 rows 100…399, cols 200…599 (patch rows 0…3,
+/// cols 1…4 of 128) are resident.
+std::size_t residentOfWindow(const PatchCache& cache, const Pager& pager) {
+  std::size_t n = 0;
+  for (std::size_t r = 0; r < 4; ++r) {
+    for (std::size_t c = 1; c <= 4; ++c)
+      n += cache.contains(pager.keyOf("dem", 0, r * 128, c * 128)) ? 1U : 0U;
+  }
+  return n;
+}
 }  // namespace
 
 TEST(Prefetcher, LoadsEveryPatchOfTheRequestedWindows) {
@@ -164,12 +174,8 @@ TEST(Prefetcher, APyramidsLevelsLoadTheWindowsTheyAreHintedInTheBackground) {
   const topo::SampleSource::Window hint[] = {{100, 200, 300, 400}, {650, 850, 500, 500}};
   pyramid.levels[0].source->prefetch(hint);
   const auto resident = [&] {
-    std::size_t n = 0;
-    for (std::size_t r = 0; r < 4; ++r) {
-      for (std::size_t c = 1; c <= 4; ++c)
-        n += o.cache->contains(o.pager.keyOf("dem", 0, r * 128, c * 128)) ? 1U : 0U;
-    }
-    return n + (o.cache->contains(o.pager.keyOf("dem", 0, 699, 899)) ? 1U : 0U);
+    return residentOfWindow(*o.cache, o.pager) +
+           (o.cache->contains(o.pager.keyOf("dem", 0, 699, 899)) ? 1U : 0U);
   };
   // The loads happen on the pyramid's own loader thread: wait for them (bounded).
   for (int i = 0; i < 6000 && resident() < 17; ++i) {
@@ -222,14 +228,7 @@ TEST(Prefetcher, APyramidGivenAnExecutorLoadsItsHintsThereAndMakesNoThread) {
   EXPECT_EQ(executor->submitted, 0) << "exporting submits nothing";
   const topo::SampleSource::Window hint[] = {{100, 200, 300, 400}};  // 4 × 4 patches
   pyramid.levels[0].source->prefetch(hint);
-  const auto resident = [&] {
-    std::size_t n = 0;
-    for (std::size_t r = 0; r < 4; ++r) {
-      for (std::size_t c = 1; c <= 4; ++c)
-        n += o.cache->contains(o.pager.keyOf("dem", 0, r * 128, c * 128)) ? 1U : 0U;
-    }
-    return n;
-  };
+  const auto resident = [&] { return residentOfWindow(*o.cache, o.pager); };
   for (int i = 0; i < 6000 && resident() < 16; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
@@ -281,10 +280,7 @@ TEST(Prefetcher, LoadIsAheadOfQueuedRequestsAndTheCallerLoadsWhileTheExecutorIsB
   // other patches: the load returns with its patches resident though no task could run.
   const auto queued = pf.request("dem", {{0, 512, 0, 256, 256}});
   pf.load("dem", {{0, 100, 200, 300, 400}, {0, 150, 250, 10, 10}});  // the second inside the first
-  for (std::size_t r = 0; r < 4; ++r) {
-    for (std::size_t c = 1; c <= 4; ++c)
-      EXPECT_TRUE(o.cache->contains(pager->keyOf("dem", 0, r * 128, c * 128)));
-  }
+  EXPECT_EQ(residentOfWindow(*o.cache, *pager), 16U);
   EXPECT_FALSE(o.cache->contains(pager->keyOf("dem", 0, 512, 0))) << "the request waits";
   EXPECT_EQ(pf.stats().loaded, 16U) << "each patch once, though the windows overlap";
   gate.set_value();
@@ -300,10 +296,7 @@ TEST(Prefetcher, APyramidsLevelLoadsAWindowBeforeReturningAndAPagerSourceLoadsNo
   const topo::GridPyramid pyramid = o.pager.pyramid("dem");
   const topo::SampleSource::Window window[] = {{100, 200, 300, 400}};
   pyramid.levels[0].source->load(window);
-  for (std::size_t r = 0; r < 4; ++r) {
-    for (std::size_t c = 1; c <= 4; ++c)
-      EXPECT_TRUE(o.cache->contains(o.pager.keyOf("dem", 0, r * 128, c * 128)));
-  }
+  EXPECT_EQ(residentOfWindow(*o.cache, o.pager), 16U);
   const auto loads = o.cache->stats().loads;
   std::vector<float> out(300 * 400);
   pyramid.levels[0].source->readWindow(100, 200, 300, 400, out);
