@@ -188,7 +188,7 @@ std::size_t ClipmapLevel::Plan::texels() const noexcept {
 
 void ClipmapLevel::fetch(Plan& p) const {
   // Lat/lon and plane lattices read runs of samples: the source makes them resident first
-  // (a store's pyramid loads them through its prefetcher, this thread taking part). A polar
+  // (a store's pyramid loads them through its prefetcher, on this thread). A polar
   // lattice interpolates between samples anywhere: it reads as it goes.
   if (p.polar == 0) {
     std::vector<topo::SampleSource::Window> windows;

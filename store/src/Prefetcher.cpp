@@ -61,35 +61,22 @@ void Prefetcher::startTasks(std::unique_lock<std::mutex>& lock) {
   lock.lock();
 }
 
-Prefetcher::Ticket Prefetcher::request(std::string_view grid,
-                                       const std::vector<LevelWindow>& windows, int priority) {
-  if (priority == kNow) --priority;  // kNow is load()'s: a request never passes it
-  return enqueue(grid, windows, priority);
-}
-
 void Prefetcher::load(std::string_view grid, const std::vector<LevelWindow>& windows) {
-  const Ticket ticket = enqueue(grid, windows, kNow);
+  // Loaded here, not queued: ahead of every request by construction, on the thread that
+  // waits for them (loading them on the tasks' thread too made more loads and slower
+  // frames: docs/architecture.md), and never behind a task that cannot start.
   State& s = *state_;
   std::unique_lock lock(s.mutex);
-  // The caller loads the ticket's patches (at the front of the queue, where the executor's
-  // tasks leave them: they load hints only), then the tasks go on with the hints.
-  while (s.pending.contains(ticket)) {
-    if (!s.stopping && !s.queue.empty() && s.queue.top().ticket == ticket) {
-      loadTop(s, lock);
-    } else {
-      s.done.wait(lock, [&] {
-        return !s.pending.contains(ticket) ||
-               (!s.stopping && !s.queue.empty() && s.queue.top().ticket == ticket);
-      });
-    }
+  for (const Item& item : itemsOf(grid, windows, 0)) {
+    if (s.stopping) break;
+    loadItem(s, lock, item);
   }
-  if (!s.stopping) startTasks(lock);
 }
 
-Prefetcher::Ticket Prefetcher::enqueue(std::string_view grid,
-                                       const std::vector<LevelWindow>& windows, int priority) {
-  State& s = *state_;
-  const Pager& pager = *s.pager;
+std::vector<Prefetcher::Item> Prefetcher::itemsOf(std::string_view grid,
+                                                  const std::vector<LevelWindow>& windows,
+                                                  int priority) const {
+  const Pager& pager = *state_->pager;
   const GridInfo& info = pager.grid(grid);  // throws StoreError for unknown grids
   std::vector<Item> items;
   for (const LevelWindow& w : windows) {
@@ -107,6 +94,13 @@ Prefetcher::Ticket Prefetcher::enqueue(std::string_view grid,
   // Each patch once, though windows overlap (a renderer's runs of rows share patches).
   std::unordered_set<PatchKey, PatchKeyHash> seen;
   std::erase_if(items, [&](const Item& it) { return !seen.insert(it.key).second; });
+  return items;
+}
+
+Prefetcher::Ticket Prefetcher::request(std::string_view grid,
+                                       const std::vector<LevelWindow>& windows, int priority) {
+  std::vector<Item> items = itemsOf(grid, windows, priority);
+  State& s = *state_;
   std::unique_lock lock(s.mutex);
   const Ticket ticket = s.nextTicket++;
   for (Item& it : items) {
@@ -184,9 +178,7 @@ void Prefetcher::setOnLoaded(std::function<void(const PatchKey&)> fn) {
   state_->onLoaded = std::move(fn);
 }
 
-void Prefetcher::loadTop(State& s, std::unique_lock<std::mutex>& lock) {
-  const Item item = s.queue.top();
-  s.queue.pop();
+void Prefetcher::loadItem(State& s, std::unique_lock<std::mutex>& lock, const Item& item) {
   ++s.busy;
   const auto onLoaded = s.onLoaded;
   lock.unlock();
@@ -214,10 +206,11 @@ void Prefetcher::loadTop(State& s, std::unique_lock<std::mutex>& lock) {
 void Prefetcher::work(const std::shared_ptr<State>& state) {
   State& s = *state;
   std::unique_lock lock(s.mutex);
-  // A load()'s patches (priority kNow) are its caller's: a task leaves them, so the loads
-  // a renderer waits for run on its own thread as before and the task's thread keeps to
-  // the hints (loading both on two threads made more loads and slower frames: docs/paging.md).
-  while (!s.stopping && !s.queue.empty() && s.queue.top().priority != kNow) loadTop(s, lock);
+  while (!s.stopping && !s.queue.empty()) {
+    const Item item = s.queue.top();
+    s.queue.pop();
+    loadItem(s, lock, item);
+  }
   --s.tasks;
   s.done.notify_all();
 }

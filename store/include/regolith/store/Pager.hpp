@@ -82,9 +82,10 @@ class Pager {
   /// store (clod::HeightPyramid) without knowing the store. A DEM's levels are planar (x
   /// east, y north, metres; no body); a planet grid's are longitude/latitude on its body.
   /// Rendering pages patches into this pager's cache, so memory stays within its budget;
-  /// the sources keep the store and the cache alive. The levels share one background
-  /// loader for the windows a renderer hints (topo::SampleSource::prefetch(), one patch
-  /// at a time, coarser levels first): on `loader` if given (the renderer's own executor,
+  /// the sources keep the store and the cache alive. The levels share one loader, a
+  /// store::Prefetcher: the windows a renderer needs now (topo::SampleSource::load()) on
+  /// the renderer's thread; those it hints (prefetch(), one patch at a time, coarser levels
+  /// first) in the background, on `loader` if given (the renderer's own executor,
   /// say), else on a thread the pyramid makes at its first hint. Throws StoreError for an
   /// unknown grid.
   [[nodiscard]] topo::GridPyramid pyramid(std::string_view grid,

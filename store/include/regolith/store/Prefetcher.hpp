@@ -8,7 +8,6 @@
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
-#include <limits>
 #include <memory>
 #include <mutex>
 #include <queue>
@@ -71,10 +70,9 @@ class Prefetcher {
                                                       std::size_t col, std::size_t radius,
                                                       std::size_t finestLevel = 0) const;
   /// Makes the patches covering the windows of `grid` resident now (a renderer's window it
-  /// is about to read): queues them ahead of every request and loads them on the calling
-  /// thread (the executor's tasks leave them and go on with the requests), returning when
-  /// each is loaded or failed (a failure is counted and kept in lastError(); the read that
-  /// follows reports it). So a call from a task on the executor's only worker cannot wait
+  /// is about to read): loads them on the calling thread, ahead of every queued request,
+  /// returning when each is loaded or failed (a failure is counted and kept in lastError(); the
+  /// read that follows reports it). So a call from a task on the executor's only worker cannot wait
   /// for a task queued behind it. Throws StoreError for an unknown grid or level.
   void load(std::string_view grid, const std::vector<LevelWindow>& windows);
   /// Drops the ticket's queued patches (loads in progress finish).
@@ -101,8 +99,6 @@ class Prefetcher {
   struct ItemOrder {
     bool operator()(const Item& a, const Item& b) const noexcept;
   };
-  /// load()'s priority, above any request()'s (a request asking for it gets one less).
-  static constexpr int kNow = std::numeric_limits<int>::max();
   /// What the loading tasks read, shared with them: a task the executor starts after the
   /// prefetcher is gone (queued behind other work) finds `stopping` and returns, touching
   /// only this. So the destructor waits only for loads in progress, never for a task still
@@ -126,10 +122,12 @@ class Prefetcher {
   };
   /// Drains the queue (a task on the executor).
   static void work(const std::shared_ptr<State>& state);
-  /// Loads the queue's top item (lock held on entry and on return; released while loading).
-  static void loadTop(State& s, std::unique_lock<std::mutex>& lock);
-  /// Queues the patches covering `windows` under a new ticket (none: 0) and starts tasks.
-  Ticket enqueue(std::string_view grid, const std::vector<LevelWindow>& windows, int priority);
+  /// Loads one item and counts it (lock held on entry and on return; released while loading).
+  static void loadItem(State& s, std::unique_lock<std::mutex>& lock, const Item& item);
+  /// The patches covering `windows`, each once (StoreError for an unknown grid or level).
+  [[nodiscard]] std::vector<Item> itemsOf(std::string_view grid,
+                                          const std::vector<LevelWindow>& windows,
+                                          int priority) const;
   /// Submits loading tasks for the queue, up to maxTasks running (lock held on entry and
   /// on return; released while submitting).
   void startTasks(std::unique_lock<std::mutex>& lock);
