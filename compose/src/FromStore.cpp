@@ -19,13 +19,14 @@
 namespace regolith::compose {
 
 std::shared_ptr<const Dataset> datasetFromStore(const store::Pager& pager, std::string_view grid,
-                                                DatasetOptions options) {
+                                                DatasetOptions options,
+                                                std::shared_ptr<core::Executor> loader) {
   const store::GridInfo& info = pager.grid(grid);
   if (options.name.empty()) options.name = info.name;
   if (!options.heightRange && info.statistics && info.statistics->validSamples > 0) {
     options.heightRange = std::array<double, 2>{info.statistics->min, info.statistics->max};
   }
-  const topo::GridPyramid pyramid = pager.pyramid(grid);
+  const topo::GridPyramid pyramid = pager.pyramid(grid, std::move(loader));
   if (info.kind == store::GridKind::Planet) return Dataset::planet(pyramid, std::move(options));
   return Dataset::dem(pyramid, store::placementOf(info), std::move(options));
 }

@@ -53,6 +53,7 @@ struct Scene::Impl {
   SceneDescription d;
   SceneOptions options;
   std::shared_ptr<store::PatchCache> cache;
+  std::shared_ptr<core::Executor> loader;  // SceneOptions::loader, or one of the scene's
   std::map<std::string, std::shared_ptr<const store::Pager>> pagers;  // by resolved path
   scenegraph::SceneGraph graph{"root"};
 
@@ -103,7 +104,7 @@ struct Scene::Impl {
     const store::Pager& pg = pager(s.store);
     Grid g;
     g.info = pg.grid(s.grid);
-    g.pyramid = std::make_shared<const clod::HeightPyramid>(pg.pyramid(s.grid));
+    g.pyramid = std::make_shared<const clod::HeightPyramid>(pg.pyramid(s.grid, loader));
     g.samples = pg.source(s.grid);
     g.pager = pagers[d.resolve(s.store).string()];
     return g;
@@ -256,12 +257,8 @@ struct Scene::Impl {
   /// A body's frame in the root's: Body::pose (translation, then the obliquity about x, then
   /// the spin about the pole).
   static scenegraph::Pose bodyPose(const Body& b) {
-    scenegraph::Pose p;
-    if (!b.pose) return p;
-    p.translation = vec(b.pose->position);
-    p.rotation = glm::angleAxis(b.pose->obliquity * kDeg, glm::dvec3(1.0, 0.0, 0.0)) *
-                 glm::angleAxis(b.pose->spin * kDeg, glm::dvec3(0.0, 0.0, 1.0));
-    return p;
+    if (!b.pose) return scenegraph::Pose::identity();
+    return scenegraph::bodyPose(vec(b.pose->position), b.pose->obliquity, b.pose->spin);
   }
 
   void buildBody(std::size_t i) {
@@ -341,7 +338,7 @@ struct Scene::Impl {
             o.mask = compose::featherMask(store::topoGridOf(pg.grid(s.grid)), *pg.source(s.grid),
                                           s.featherNodataSamples);
           }
-          catalogue->add(compose::datasetFromStore(pg, s.grid, o));
+          catalogue->add(compose::datasetFromStore(pg, s.grid, o, loader));
         } else {
           const Grid g = generated(s, 0.0);
           o.name = g.info.name;
@@ -486,6 +483,7 @@ struct Scene::Impl {
     for (std::size_t i = 0; i < d.dems.size(); ++i) buildDem(i);
     for (std::size_t i = 0; i < d.bodies.size(); ++i) composeBody(i);
     for (std::size_t i = 0; i < d.objects.size(); ++i) buildObject(i);
+    for (Terrain& t : terrains) t.options.executor = loader;
     for (const Camera& c : d.cameras) {
       cameras[c.name] = graph.add(graph.at(c.frame), c.name,
                                   scenegraph::Pose::lookAt(vec(c.eye), vec(c.lookAt), vec(c.up)),
@@ -518,6 +516,9 @@ Scene::Scene(SceneDescription description, const SceneOptions& options)
   impl_->d = std::move(description);
   impl_->options = options;
   impl_->cache = std::make_shared<store::PatchCache>(options.cacheBytes);
+  impl_->loader =
+      options.loader ? options.loader
+                     : std::make_shared<core::ThreadPool>(std::max(1U, core::availableCores() - 1));
   impl_->build();
 }
 
@@ -570,6 +571,7 @@ scenegraph::NodeId Scene::cameraNode(const std::string& camera) const {
 }
 
 std::shared_ptr<const store::PatchCache> Scene::cache() const noexcept { return impl_->cache; }
+std::shared_ptr<core::Executor> Scene::loader() const noexcept { return impl_->loader; }
 
 double Scene::demHeight(const std::string& dem, double x, double y) const {
   for (const Impl::Terrain& t : impl_->terrains)

@@ -10,18 +10,26 @@
 #include <regolith/scene/Scene.hpp>
 #include <regolith/scene/SceneDescription.hpp>
 #include <regolith/scenegraph/Pose.hpp>
+#include <regolith/store/Generate.hpp>
 
 #include "gl/GlContext.hpp"
+#include "support/CountingExecutor.hpp"
 #include "support/StoreScratch.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <mutex>
 #include <numbers>
 #include <string>
+#include <thread>
+#include <vector>
 
 namespace regolith::scene {
 namespace {
@@ -387,4 +395,63 @@ TEST(SceneGL, TheRenderersFarFieldDrawsThePlanetWholeInEachViewSlot) {
 }
 
 }  // namespace
+TEST(SceneGL, EveryTerrainLoadsOnTheScenesOneLoader) {
+  test::glContext();
+  // Mars and Victoria as stores: every pyramid's hints and loads and every clipmap's reads
+  // run on one executor, the one SceneOptions gives, not on threads of their own.
+  const std::filesystem::path dir = test::scratchFile("scene_loader", "stores");
+  std::filesystem::create_directories(dir);
+  store::MarsPlanetOptions mo;
+  mo.rows = 180;
+  mo.seed = 3;
+  store::MarsPlanetGenerator(mo).write(dir / "mars.h5");
+  store::VictoriaOptions vo;
+  vo.size = 301;
+  vo.spacing = 4.0;
+  vo.seed = 3;
+  store::VictoriaGenerator(vo).write(dir / "victoria.h5");
+  constexpr const char* kStores = R"({
+    "version": 1,
+    "bodies": [{"name": "mars", "heights": [{"store": "mars.h5", "grid": "mars"}]}],
+    "dems": [{"name": "victoria", "body": "mars",
+              "heights": {"store": "victoria.h5", "grid": "victoria"},
+              "placement": {"lat": -2.05, "lon": -5.5, "height": "surface"}}],
+    "cameras": [{"name": "view", "frame": "victoria", "eye": [60, -470, 30],
+                 "lookAt": [0, -380, 0], "up": [0, 0, 1], "width": 160, "height": 120}]
+  })";
+  const SceneDescription d = parseScene(kStores, "stores.json", dir.string());
+
+  const Scene own(d);
+  ASSERT_NE(own.loader(), nullptr);
+  for (const SceneTerrain& t : own.terrains())
+    EXPECT_EQ(t.options.executor, own.loader()) << t.name << ": the scene's loader";
+
+  SceneOptions options;
+  const auto loader = std::make_shared<test::CountingExecutor>();
+  options.loader = loader;
+  const Scene s(d, options);
+  EXPECT_EQ(s.loader(), loader);
+  const std::vector<SceneTerrain> terrains = s.terrains();
+  ASSERT_EQ(terrains.size(), 2U);
+  for (const SceneTerrain& t : terrains)
+    EXPECT_EQ(t.options.executor, loader) << t.name << ": the given loader";
+  const int built = loader->submitted;
+  const gl::RgbaImage image = s.render("view");
+  test::savePng("scene_loader_view", image);
+  EXPECT_FALSE(image.is(80, 100, 5, 5, 10)) << "the ground is drawn, not the sky";
+  EXPECT_GE(loader->submitted - built, 2) << "each clipmap read its windows on the loader";
+  EXPECT_GT(s.cache()->stats().loads, 0U);
+
+  // A pyramid's hint is loaded there too (its Prefetcher's tasks).
+  const int before = loader->submitted;
+  const topo::SampleSource::Window hint[] = {{0, 0, 180, 360}};
+  s.terrain("mars").level(0).source->prefetch(hint);
+  for (int i = 0; i < 6000 && loader->submitted == before; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  EXPECT_GT(loader->submitted, before) << "the planet's hint is a task on the loader";
+  const std::lock_guard lock(loader->m);
+  ASSERT_FALSE(loader->ran.empty());
+  for (const std::thread::id id : loader->ran) EXPECT_NE(id, std::this_thread::get_id());
+}
+
 }  // namespace regolith::scene

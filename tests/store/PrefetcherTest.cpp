@@ -4,6 +4,7 @@
 #include <regolith/store/Prefetcher.hpp>
 
 #include "store/PagerFixture.hpp"
+#include "support/CountingExecutor.hpp"
 
 #include <gtest/gtest.h>
 
@@ -195,31 +196,6 @@ TEST(Prefetcher, APyramidsLevelsLoadTheWindowsTheyAreHintedInTheBackground) {
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   EXPECT_EQ(o.cache->stats().residentBytes, 0U);
 }
-
-namespace {
-/// A real executor (a one-worker core::ThreadPool) that counts the tasks it is given and
-/// the threads that ran them.
-class CountingExecutor final : public core::Executor {
- public:
-  void submit(std::function<void()> task) override {
-    ++submitted;
-    pool_.submit([this, task = std::move(task)] {
-      {
-        const std::lock_guard lock(m);
-        ran.push_back(std::this_thread::get_id());
-      }
-      task();
-    });
-  }
-  [[nodiscard]] unsigned concurrency() const noexcept override { return 1; }
-  std::atomic<int> submitted{0};
-  std::mutex m;
-  std::vector<std::thread::id> ran;
-
- private:
-  core::ThreadPool pool_{1};
-};
-}  // namespace
 
 TEST(Prefetcher, APyramidGivenAnExecutorLoadsItsHintsThereAndMakesNoThread) {
   Opened o = openFixture();

@@ -1,5 +1,6 @@
 #include "ViewScene.hpp"
 
+#include <regolith/core/Executor.hpp>
 #include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/scene/Scene.hpp>
 #include <regolith/scene/SceneParts.hpp>
@@ -53,7 +54,9 @@ ViewScene storeScene(const std::string& path, const std::string& grid, std::size
   const std::string name = chooseGrid(*store, grid, "view");
   auto cache = std::make_shared<store::PatchCache>(cacheBytes);
   auto pager = std::make_shared<const store::Pager>(store, cache);
-  auto pyramid = std::make_shared<const clod::HeightPyramid>(pager->pyramid(name));
+  // One loader for the pyramid's hints and loads and the clipmap's windows, not a thread each.
+  auto loader = std::make_shared<core::ThreadPool>(1);
+  auto pyramid = std::make_shared<const clod::HeightPyramid>(pager->pyramid(name, loader));
   const bool planet = pyramid->kind() == clod::SurfaceKind::Planet;
   v.title = name + " of " + path;
   v.graph = std::make_shared<scenegraph::SceneGraph>(planet ? "body" : "map");
@@ -63,6 +66,7 @@ ViewScene storeScene(const std::string& path, const std::string& grid, std::size
                         scenegraph::NodeKind::Terrain, 0);
   t.pyramid = pyramid;
   t.options.size = clipmapSize;
+  t.options.executor = loader;
   t.options.effects = declaredEffects(*pyramid, planet || pyramid->placement().has_value());
   ViewObject o{name, t.node, pyramid, 1.0};
   OpeningView open;

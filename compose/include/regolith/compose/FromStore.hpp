@@ -6,6 +6,7 @@
 #include <regolith/compose/Catalogue.hpp>
 #include <regolith/compose/ComposedSurface.hpp>
 #include <regolith/compose/Dataset.hpp>
+#include <regolith/core/Executor.hpp>
 #include <regolith/store/Pager.hpp>
 
 #include <cstddef>
@@ -20,10 +21,11 @@ namespace regolith::compose {
 /// A dataset of one grid of a store, paged through `pager` (its levels as the pager's
 /// pyramid, its placement as the store records it, its height range from the store's
 /// statistics when recorded). The options' name defaults to the grid's. Throws StoreError
-/// for an unknown grid and InvalidArgument for bad options (Dataset's checks).
-[[nodiscard]] std::shared_ptr<const Dataset> datasetFromStore(const store::Pager& pager,
-                                                              std::string_view grid,
-                                                              DatasetOptions options = {});
+/// for an unknown grid and InvalidArgument for bad options (Dataset's checks). The pyramid's
+/// hints and loads run on `loader` if given (store::Pager::pyramid()).
+[[nodiscard]] std::shared_ptr<const Dataset> datasetFromStore(
+    const store::Pager& pager, std::string_view grid, DatasetOptions options = {},
+    std::shared_ptr<core::Executor> loader = nullptr);
 
 /// A catalogue file, read: its body (from its first dataset), its rules, and its datasets
 /// in file order, every store paged through one patch cache.

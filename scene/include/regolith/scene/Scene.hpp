@@ -6,6 +6,7 @@
 #include <regolith/clod/ClipmapTerrain.hpp>
 #include <regolith/clod/HeightPyramid.hpp>
 #include <regolith/compose/ComposedSurface.hpp>
+#include <regolith/core/Executor.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/gl/Image.hpp>
 #include <regolith/render/SceneRenderer.hpp>
@@ -72,6 +73,12 @@ struct SceneOptions {
   /// name is no object with a traverse, or if its DEM declares tracks and `tracks` gives that
   /// DEM no layer.
   std::map<std::string, rover::ChassisPose> driven;
+  /// Where the scene's terrains load in the background: every store pyramid's hints and the
+  /// windows its clipmap levels read (store::Pager::pyramid()), and each clipmap's moving
+  /// windows, texture layers and probes (ClipmapOptions::executor). Null: the scene makes one
+  /// core::ThreadPool of availableCores() − 1 threads (at least 1), shared by all its
+  /// terrains, so a scene of N terrains loads on that pool and not on 2N threads of its own.
+  std::shared_ptr<core::Executor> loader;
 };
 
 /// A built scene. Building needs no GL; render() does (and makes an EGL context if none is
@@ -103,6 +110,8 @@ class Scene {
   [[nodiscard]] scenegraph::NodeId cameraNode(const std::string& camera) const;
   /// The patch cache every store of the scene is paged through.
   [[nodiscard]] std::shared_ptr<const store::PatchCache> cache() const noexcept;
+  /// The executor every terrain of the scene loads on (SceneOptions::loader, or the scene's).
+  [[nodiscard]] std::shared_ptr<core::Executor> loader() const noexcept;
   /// The heights drawn for a body or DEM (composed for a body with several datasets).
   [[nodiscard]] const clod::HeightPyramid& terrain(const std::string& name) const;
   /// The clipmap options render() registers for a body or DEM (effects included).
