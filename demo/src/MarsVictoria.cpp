@@ -454,8 +454,8 @@ scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
     victoria.heights.spacing = options.demSpacing;
     victoria.heights.seed = options.seed;
     victoria.placement =
-        scene::Dem::Placement{store::VictoriaGenerator::kOriginLatDeg,
-                              store::VictoriaGenerator::kOriginLonDeg, 0.0, true, 0.0};
+        scene::Dem::Placement{layout.victoriaOrigin.latDeg, layout.victoriaOrigin.lonDeg, 0.0, true,
+                              layout.victoriaHeadingDeg};
   } else {
     victoria.heights.store = options.victoriaStore.string();
     victoria.heights.grid = options.victoriaGrid;

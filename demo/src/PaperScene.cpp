@@ -1,9 +1,12 @@
+#include <regolith/core/Assert.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/demo/MarsVictoria.hpp>
 #include <regolith/demo/PaperScene.hpp>
-#include <regolith/topo/Projection.hpp>
 
 #include <cmath>
+#include <cstddef>
 #include <numbers>
+#include <vector>
 
 namespace regolith::demo {
 
@@ -17,12 +20,6 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-Pose rotationAbout(const glm::dvec3& axis, double degrees) {
-  Pose p;
-  p.rotation = glm::angleAxis(degrees * kDeg, glm::normalize(axis));
-  return p;
-}
-
 }  // namespace
 
 glm::dvec3 heliocentric(double distance, double longitudeDeg) {
@@ -35,47 +32,40 @@ PaperSceneNodes buildPaperScene(SceneGraph& graph, const PaperSceneLayout& layou
                           " nodes, expected an empty graph (its root only)");
   PaperSceneNodes n;
   n.sun = graph.root();
-  // Heliocentric frame: the ecliptic is the x-y plane.
-  const auto orbitPose = [](double distance, double longitudeDeg) {
-    Pose p;
-    p.translation = heliocentric(distance, longitudeDeg);
-    return p;
-  };
-  Pose earth = orbitPose(layout.earthDistance, layout.earthLongitudeDeg) *
-               rotationAbout({1.0, 0.0, 0.0}, layout.earthObliquityDeg);
-  n.earth = graph.add(n.sun, "earth", earth, NodeKind::Terrain, kDrawEarth);
-  // Mars body-fixed frame: tilted by the obliquity, turned by its spin angle.
-  const Pose mars = orbitPose(layout.marsDistance, layout.marsLongitudeDeg) *
-                    rotationAbout({1.0, 0.0, 0.0}, layout.marsObliquityDeg) *
-                    rotationAbout({0.0, 0.0, 1.0}, layout.marsSpinDeg);
+  // Heliocentric frame: the ecliptic is the x-y plane. A body's pose is the scene file's
+  // (scenegraph::bodyPose(), as scene::Scene places bodies): tilted by its obliquity, turned
+  // by its spin about its pole.
+  n.earth =
+      graph.add(n.sun, "earth",
+                scenegraph::bodyPose(heliocentric(layout.earthDistance, layout.earthLongitudeDeg),
+                                     layout.earthObliquityDeg, 0.0),
+                NodeKind::Terrain, kDrawEarth);
+  const Pose mars = scenegraph::bodyPose(heliocentric(layout.marsDistance, layout.marsLongitudeDeg),
+                                         layout.marsObliquityDeg, layout.marsSpinDeg);
   n.mars = graph.add(n.sun, "mars", mars, NodeKind::Terrain, kDrawMars);
-  n.victoria =
-      graph.add(n.mars, "victoria",
-                tangentPlanePose(layout.mars, layout.victoriaOrigin, layout.victoriaHeadingDeg),
-                NodeKind::Terrain, kDrawVictoria);
+  const Pose victoria =
+      tangentPlanePose(layout.mars, layout.victoriaOrigin, layout.victoriaHeadingDeg);
+  n.victoria = graph.add(n.mars, "victoria", victoria, NodeKind::Terrain, kDrawVictoria);
   if (layout.secondDem)
     n.secondDem =
         graph.add(n.mars, "second_dem", tangentPlanePose(layout.mars, layout.secondDemOrigin, 0.0),
                   NodeKind::Terrain, kDrawSecondDem);
   n.rover = graph.add(n.victoria, "rover", roverPose(layout.roverInDem, layout.roverHeadingDeg),
                       NodeKind::Object, kDrawRover);
-  // Rover frame: x forward, y left, z up. Mast camera 2.1 m up, just ahead of the mast head
-  // of render::roverMesh(), looking 15° down ahead.
-  n.mastCamera =
-      graph.add(n.rover, "mast_camera",
-                Pose::lookAt({0.85, 0.0, 2.1},
-                             {0.85 + std::cos(15.0 * kDeg), 0.0, 2.1 - std::sin(15.0 * kDeg)},
-                             {0.0, 0.0, 1.0}),
-                NodeKind::Camera);
-  n.chaseCamera =
-      graph.add(n.rover, "chase_camera",
-                Pose::lookAt({-8.0, 0.0, 3.0}, {0.0, 0.0, 0.5}, {0.0, 0.0, 1.0}), NodeKind::Camera);
-  // Orbit camera: 20 km above Victoria, looking straight down, north up in the image.
-  const topo::LocalTangentPlane site(layout.mars, layout.victoriaOrigin, 0.0);
-  const glm::dvec3 above = site.toBodyFixed({0.0, 0.0, 20e3});
+  // The cameras the scene file declares (paperCameras(): orbit, mast, chase, in that order):
+  // the mast and chase cameras in the rover's frame, the orbit camera in Victoria's, hung
+  // here from Mars through the DEM's pose.
+  const std::vector<scene::Camera> cameras = paperCameras();
+  const auto pose = [&](std::size_t i, [[maybe_unused]] const char* name) {
+    const scene::Camera& c = cameras.at(i);
+    REGOLITH_ASSERT(c.name == name, "paperCameras(): orbit, mast, chase");
+    return Pose::lookAt({c.eye[0], c.eye[1], c.eye[2]}, {c.lookAt[0], c.lookAt[1], c.lookAt[2]},
+                        {c.up[0], c.up[1], c.up[2]});
+  };
+  n.mastCamera = graph.add(n.rover, "mast_camera", pose(1, "mast_camera"), NodeKind::Camera);
+  n.chaseCamera = graph.add(n.rover, "chase_camera", pose(2, "chase_camera"), NodeKind::Camera);
   n.orbitCamera =
-      graph.add(n.mars, "orbit_camera", Pose::lookAt(above, site.originBodyFixed(), site.yAxis()),
-                NodeKind::Camera);
+      graph.add(n.mars, "orbit_camera", victoria * pose(0, "orbit_camera"), NodeKind::Camera);
   return n;
 }
 

@@ -6,6 +6,15 @@
 
 namespace regolith::scenegraph {
 
+Pose bodyPose(const glm::dvec3& position, double obliquityDeg, double spinDeg) {
+  constexpr double deg = std::numbers::pi / 180.0;
+  Pose p;
+  p.translation = position;
+  p.rotation = glm::angleAxis(obliquityDeg * deg, glm::dvec3(1.0, 0.0, 0.0)) *
+               glm::angleAxis(spinDeg * deg, glm::dvec3(0.0, 0.0, 1.0));
+  return p;
+}
+
 Pose tangentPlanePose(const topo::Body& body, const topo::Geodetic& origin, double headingDeg) {
   const topo::LocalTangentPlane plane(body, origin, headingDeg);
   return Pose::fromAxes(plane.originBodyFixed(), plane.xAxis(), plane.yAxis(), plane.zAxis());

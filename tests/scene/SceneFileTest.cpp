@@ -405,8 +405,9 @@ TEST(Scene, ABodysPoseIsItsFrameInTheRootsAndABodyWithoutReliefIsItsEllipsoid) {
 }
 
 TEST(Scene, TheDemoSceneDeclaresEarthWhereThePapersLayoutPutsIt) {
-  // demo::sceneDescription() against demo::buildPaperScene(), the paper's layout written as
-  // a scene graph by other code: Earth and Mars where the layout puts them.
+  // demo::sceneDescription() against demo::buildPaperScene(), the paper's layout as a bare
+  // scene graph (both from demo::PaperSceneLayout through scenegraph::bodyPose()): Earth and
+  // Mars where the layout puts them, and Mars's axes against the rotations written out here.
   demo::MarsVictoriaOptions o;
   o.planetRows = 90;
   o.demSize = 101;
@@ -431,6 +432,25 @@ TEST(Scene, TheDemoSceneDeclaresEarthWhereThePapersLayoutPutsIt) {
                 0.0, 1e-15)
         << name;
   }
+  // Mars's frame, analytically: its pole tilted by the obliquity ε about the ecliptic's x
+  // axis, (0, −sin ε, cos ε); its prime meridian turned by the spin σ about that pole, then
+  // tilted, (cos σ, sin σ cos ε, sin σ sin ε); its centre at the heliocentric distance and
+  // longitude.
+  const demo::PaperSceneLayout layout;
+  const double eps = layout.marsObliquityDeg * std::numbers::pi / 180.0;
+  const double spin = layout.marsSpinDeg * std::numbers::pi / 180.0;
+  const double lon = layout.marsLongitudeDeg * std::numbers::pi / 180.0;
+  const scenegraph::Pose mars = g.inRoot(g.at("mars"));
+  EXPECT_NEAR(glm::length(mars.applyVector({0.0, 0.0, 1.0}) -
+                          glm::dvec3(0.0, -std::sin(eps), std::cos(eps))),
+              0.0, 1e-15);
+  EXPECT_NEAR(glm::length(mars.applyVector({1.0, 0.0, 0.0}) -
+                          glm::dvec3(std::cos(spin), std::sin(spin) * std::cos(eps),
+                                     std::sin(spin) * std::sin(eps))),
+              0.0, 1e-15);
+  EXPECT_NEAR(glm::length(mars.translation -
+                          layout.marsDistance * glm::dvec3(std::cos(lon), std::sin(lon), 0.0)),
+              0.0, 1e-3);
   // Earth seen from Mars, through the root: ~1.0e11 m away, as in the paper's graph.
   const glm::dvec3 fromMars = g.relative(g.at("mars"), g.at("earth")).translation;
   const glm::dvec3 paperFromMars = paper.relative(n.mars, n.earth).translation;
@@ -506,7 +526,8 @@ TEST(Scene, TraverseStopsAtItsEndAndPressesTracks) {
 
 TEST(Scene, TheDemoScenesCamerasAreThePapersLayouts) {
   // The paper's cameras declared in demo::sceneDescription(), against demo::buildPaperScene()
-  // (which places them in C++ of its own): each in the frame it follows, the same pose.
+  // (which takes them from demo::paperCameras() too, the orbit camera hung from Mars through
+  // Victoria's pose): each in the frame it follows, the same pose, through the two graphs.
   demo::MarsVictoriaOptions o;
   o.planetRows = 90;
   o.demSize = 101;

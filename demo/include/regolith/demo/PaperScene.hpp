@@ -46,9 +46,10 @@ struct PaperSceneLayout {
 /// The nodes of a built paper scene.
 struct PaperSceneNodes {
   scenegraph::NodeId sun = 0, earth = 0, mars = 0, victoria = 0, secondDem = 0, rover = 0;
-  /// Cameras: one 20 km over Victoria looking down (child of Mars), the rover's mast camera
-  /// (child of the rover, 2.1 m up in front of the mast head, looking ahead and 15° down), a chase
-  /// camera behind the rover.
+  /// Cameras, as demo::paperCameras() declares them for the scene file: one 20 km over
+  /// Victoria's origin looking down, the DEM's +y up in the image (north at heading 0; a
+  /// child of Mars), the rover's mast camera (child of the rover, 2.1 m up in front of the
+  /// mast head, looking ahead and 15° down), a chase camera behind the rover.
   scenegraph::NodeId orbitCamera = 0, mastCamera = 0, chaseCamera = 0;
 };
 
@@ -58,7 +59,9 @@ struct PaperSceneNodes {
 
 /// Builds the scene into an empty graph (whose root is taken as the Sun): Sun → Earth,
 /// Sun → Mars → Victoria → rover (→ mast and chase cameras), Mars → orbit camera,
-/// Mars → second DEM if asked. Throws InvalidArgument if the graph is not empty.
+/// Mars → second DEM if asked. The bodies' poses are scenegraph::bodyPose()'s and the
+/// cameras paperCameras()', as a scene file of demo::sceneDescription() gives them. Throws
+/// InvalidArgument if the graph is not empty.
 PaperSceneNodes buildPaperScene(scenegraph::SceneGraph& graph, const PaperSceneLayout& layout = {});
 
 }  // namespace regolith::demo

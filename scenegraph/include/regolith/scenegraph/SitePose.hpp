@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Poses of things placed on a body: a DEM's local tangent plane and a rover on a DEM.
+/// Poses of placed things: a body in its parent's frame, a DEM's local tangent plane on a
+/// body, and a rover on a DEM.
 
 #include <regolith/scenegraph/Pose.hpp>
 #include <regolith/topo/Body.hpp>
@@ -8,6 +9,11 @@
 #include <glm/vec3.hpp>
 
 namespace regolith::scenegraph {
+
+/// The pose (body-fixed frame → parent) of a body whose centre is at `position` in its
+/// parent's frame, tilted by `obliquityDeg` about the parent's x axis, then turned by
+/// `spinDeg` about its own pole (z): the scene file's Body::pose (docs/scene-format.md).
+[[nodiscard]] Pose bodyPose(const glm::dvec3& position, double obliquityDeg, double spinDeg);
 
 /// The pose (DEM frame → body-fixed) of a DEM whose local tangent plane has this
 /// planetodetic origin and heading.
