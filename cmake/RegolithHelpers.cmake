@@ -55,6 +55,12 @@ function(regolith_add_library module)
   # No implicit GLM conversions inside the libraries (a vec3 from a scalar, a dvec3 from a
   # vec3): every one is spelled out. Private, so consumers keep GLM's defaults.
   target_compile_definitions(${target} PRIVATE GLM_FORCE_EXPLICIT_CTOR)
+  # A file whose file-local names clash with another's in one batch (a unity build shares
+  # one anonymous namespace) says so in its module's CMakeLists.txt with
+  # SKIP_UNITY_BUILD_INCLUSION.
+  if(REGOLITH_UNITY_LIBRARIES)
+    set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 16)
+  endif()
   if(REGOLITH_FORCE_ASSERTS)
     target_compile_definitions(${target} PUBLIC REGOLITH_FORCE_ASSERTS)
   endif()

@@ -40,7 +40,7 @@ configure_and_build() {
       "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O2 -g1" \
       -DREGOLITH_FUZZ=ON -DREGOLITH_BUILD_TESTS=OFF -DREGOLITH_BUILD_BENCH=OFF \
       -DREGOLITH_BUILD_PYTHON=OFF -DREGOLITH_BUILD_EXAMPLES=OFF -DREGOLITH_BUILD_TOOLS=OFF \
-      "${launcher[@]}" >/dev/null
+      -DREGOLITH_UNITY_LIBRARIES=ON "${launcher[@]}" >/dev/null
   fi
   cmake --build "$build" -j"${FUZZ_JOBS:-2}" --target fuzz_targets
 }

@@ -53,7 +53,7 @@ bash scripts/check-format.sh
 section "Release build with -Werror ($build_dir)"
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DREGOLITH_WERROR=ON \
   -DREGOLITH_SANITIZE= -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=ON \
-  -DREGOLITH_BUILD_BENCH=ON "${extra_args[@]}"
+  -DREGOLITH_BUILD_BENCH=ON -DREGOLITH_UNITY_LIBRARIES=OFF "${extra_args[@]}"
 cmake --build "$build_dir" -j"$jobs"
 
 section "clang-tidy (scripts/run-clang-tidy.sh $build_dir)"
@@ -118,8 +118,19 @@ run_shards() {
 # took 9.5 of CI's 28 minutes (2026-12-01, 2 cores). REGOLITH_FULL_CHECKS=1 sanitizes and
 # tests everything (and runs clang-tidy's analyzer everywhere).
 full=${REGOLITH_FULL_CHECKS:-0}
+# The sanitizer and fuzz builds compile each library in unity batches
+# (REGOLITH_UNITY_LIBRARIES: the headers a batch's files share are parsed once): they check
+# what the code does when it runs. How each file compiles on its own is the Release build's
+# (and clang-tidy's, over its compile database). Measured in docs/ci.md.
+unity=(-DREGOLITH_UNITY_LIBRARIES=ON)
+# REGOLITH_TEST_WORK_SCALE (tests/support/WorkScale.hpp): under a sanitizer the longest
+# store tests (the paged queries under eviction from several threads, the huge procedural
+# planet) keep every thread, path and assertion over a quarter of their points; the Release
+# run does all of them. Those tests took 250 of the TSan run's 430 and 210 of the ASan run's
+# 390 test-seconds (2026-12-04, cold CI machine).
+work_scale=REGOLITH_TEST_WORK_SCALE=0.25
 asan_env=(ASAN_OPTIONS=halt_on_error=1:print_stacktrace=1:detect_leaks=1
-  UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1)
+  UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 "$work_scale")
 
 # Debug for the clearest reports, with -g1 (line tables: reports keep their file:line, and
 # the build is a tenth faster than with -g). -Werror stays with the Release build: GCC's
@@ -129,14 +140,14 @@ if [[ $full == 1 ]]; then
   cmake -S . -B "$asan_dir" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-g1 \
     -DCMAKE_C_FLAGS_DEBUG=-g1 -DREGOLITH_WERROR=OFF -DREGOLITH_SANITIZE=address,undefined \
     -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=ON -DREGOLITH_BUILD_EXAMPLES=ON \
-    -DREGOLITH_BUILD_PYTHON=ON -DREGOLITH_BUILD_BENCH=OFF "${extra_args[@]}"
+    -DREGOLITH_BUILD_PYTHON=ON -DREGOLITH_BUILD_BENCH=OFF "${unity[@]}" "${extra_args[@]}"
   cmake --build "$asan_dir" -j"$jobs"
   env "${asan_env[@]}" ctest --test-dir "$asan_dir" --output-on-failure --no-tests=error -j"$jobs"
 else
   cmake -S . -B "$asan_dir" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-g1 \
     -DCMAKE_C_FLAGS_DEBUG=-g1 -DREGOLITH_WERROR=OFF -DREGOLITH_SANITIZE=address,undefined \
     -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=OFF -DREGOLITH_BUILD_EXAMPLES=OFF \
-    -DREGOLITH_BUILD_PYTHON=OFF -DREGOLITH_BUILD_BENCH=OFF "${extra_args[@]}"
+    -DREGOLITH_BUILD_PYTHON=OFF -DREGOLITH_BUILD_BENCH=OFF "${unity[@]}" "${extra_args[@]}"
   cmake --build "$asan_dir" -j"$jobs" --target topo_tests store_tests rover_tests compose_tests
   run_shards "ASan+UBSan topo_tests" "$asan_dir/tests/topo_tests" "${asan_env[@]}"
   run_shards "ASan+UBSan store_tests" "$asan_dir/tests/store/store_tests" "${asan_env[@]}"
@@ -154,9 +165,9 @@ cmake -S . -B "$tsan_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DREGOLITH_WERROR=OFF \
   -DREGOLITH_SANITIZE=thread -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=OFF \
   -DREGOLITH_BUILD_EXAMPLES=OFF -DREGOLITH_BUILD_PYTHON=OFF -DREGOLITH_BUILD_BENCH=OFF \
-  "${extra_args[@]}"
+  "${unity[@]}" "${extra_args[@]}"
 cmake --build "$tsan_dir" -j"$jobs" --target store_tests
-run_shards "TSan store_tests" "$tsan_dir/tests/store/store_tests" \
+run_shards "TSan store_tests" "$tsan_dir/tests/store/store_tests" "$work_scale" \
   "TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$root/tests/tsan.supp"
 
 # The fuzz targets (docs/reliability.md, "Fuzzing"): store open and reads, raster import,

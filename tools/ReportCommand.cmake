@@ -42,6 +42,6 @@ if(REGOLITH_BUILD_TESTS AND REGOLITH_BUILD_BENCH AND _report_python)
                    --regolith $<TARGET_FILE:regolith>
                    --out ${CMAKE_CURRENT_BINARY_DIR}/report-quick-test
                    --replot ${CMAKE_CURRENT_BINARY_DIR}/report-quick-test-replot)
-  set_tests_properties(regolith_report_quick PROPERTIES TIMEOUT 400
+  set_tests_properties(regolith_report_quick PROPERTIES COST 60 TIMEOUT 400
     ENVIRONMENT "ASAN_OPTIONS=halt_on_error=1:detect_leaks=0")
 endif()

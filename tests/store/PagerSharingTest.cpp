@@ -7,6 +7,7 @@
 #include <regolith/store/Pager.hpp>
 
 #include "store/PagerFixture.hpp"
+#include "support/WorkScale.hpp"
 
 #include <gtest/gtest.h>
 
@@ -260,7 +261,8 @@ TEST(PagerSharing, EightThreadsOnTwoPagersOfOneFileUnderEvictionGetTheInMemoryAn
   const Opened b = openPath(hardLinkToFixture(), std::make_shared<PatchCache>(budget));
   const TopoDem da = a.pager.dem("dem"), db = b.pager.dem("dem");
   const TopoDem mem = inMemoryDem();
-  std::vector<double> xs(3000), ys(3000), want(3000);
+  const std::size_t n = test::scaledWork(3000);
+  std::vector<double> xs(n), ys(n), want(n);
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> x(-499.0, 398.0), y(-298.0, 399.0);
   for (std::size_t i = 0; i < xs.size(); ++i) {

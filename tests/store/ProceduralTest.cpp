@@ -11,6 +11,7 @@
 #include <regolith/topo/TopoPlanet.hpp>
 
 #include "support/StoreScratch.hpp"
+#include "support/WorkScale.hpp"
 
 #include <glm/vec3.hpp>
 #include <gtest/gtest.h>
@@ -325,7 +326,8 @@ TEST(Procedural, HugePlanetAnswersAnywhereWithinItsCacheBudget) {
                                                            {rows - 2, cols - 1}};
   std::mt19937_64 rng(20);
   std::uniform_int_distribution<std::size_t> row(0, rows - 1), col(0, cols - 1);
-  for (int i = 0; i < 300; ++i) samples.emplace_back(row(rng), col(rng));
+  for (std::size_t i = 0, n = test::scaledWork(300); i < n; ++i)
+    samples.emplace_back(row(rng), col(rng));
   std::size_t peak = 0;
   for (const auto& [r, c] : samples) {
     ASSERT_EQ(src->sample(r, c), static_cast<float>(oracle(gen, info, r, c))) << r << ", " << c;
@@ -355,7 +357,8 @@ TEST(Procedural, HugePlanetAnswersAnywhereWithinItsCacheBudget) {
       {-45.0, -180.0},          {10.0, 180.0 - 0.5 * dx}, {89.9, 179.9999999},
       {-89.9, -179.9999999},    {90.0 - 1.5 * dx, 17.0},  {-90.0 + 1.5 * dx, -17.0}};
   std::uniform_real_distribution<double> lat(-89.99, 89.99), lon(-180.0, 180.0);
-  for (int i = 0; i < 200; ++i) points.push_back({lat(rng), lon(rng)});
+  for (std::size_t i = 0, n = test::scaledWork(200); i < n; ++i)
+    points.push_back({lat(rng), lon(rng)});
   for (const topo::LatLon& ll : points) {
     const auto h = planet.height(ll);
     ASSERT_TRUE(h.valid());
