@@ -74,10 +74,20 @@ python3 "$root/scripts/tidy-key.py" strip-pch "$db" "$tidy_db"
 # always is, checks only the files that changed since that run: any change to a source, a
 # header it includes (system headers too), a .clang-tidy or the clang-tidy version changes
 # its key. Without this, a cold tidy of every file took 17 of CI's minutes on 2 cores.
+#
+# Each file has two keys over the same inputs: the fast one (`tidy-key.py deps-keys`: the
+# files the compiler read for it, from the build's `ninja -t deps`, all files at once in
+# seconds) and, where the build holds no valid dependencies for its object, the slow one
+# (its preprocessed text, a second or two of the compiler per file; before stop 38 the only
+# key, which took CI's tidy step 2.7 minutes on a fresh machine with every key recorded).
+# A file is clean if either key is recorded; --record writes the fast key where there is one.
 cache_dir=""
+: >"$tidy_db/keys.tsv"
 if [[ ${REGOLITH_TIDY_CACHE:-1} == 1 && ${REGOLITH_FULL_CHECKS:-0} != 1 ]]; then
   cache_dir=${XDG_CACHE_HOME:-$HOME/.cache}/regolith-tidy
   mkdir -p "$cache_dir"
+  python3 "$root/scripts/tidy-key.py" deps-keys "$db" "$root" "$extra_checks" "$build_dir" \
+    >"$tidy_db/keys.tsv" || : >"$tidy_db/keys.tsv"
 fi
 
 # One clang-tidy per file; each prints its findings in one piece so parallel output does not
@@ -85,19 +95,28 @@ fi
 status=0
 printf '%s\0' "${files[@]}" |
   xargs -0 -n1 -P"$jobs" bash -c '
-    # $0 clang-tidy, $1 compile database folder, $2 extra checks, $3 cache folder (empty: no
-    # cache), $4 repository root, $5 the file (xargs appends it).
-    key=""
+    # $0 clang-tidy, $1 compile database folder (with keys.tsv), $2 extra checks, $3 cache
+    # folder (empty: no cache), $4 repository root, $5 the file (xargs appends it).
+    recorded() {
+      [[ -n $1 ]] && { [[ -f $3/$1 ]] || grep -qxF "$1" "$4/.ci/tidy-clean.txt" 2>/dev/null; }
+    }
+    fast="" key=""
     if [[ -n $3 ]]; then
+      fast=$(awk -F "\t" -v f="$5" "\$1 == f { print \$2 }" "$1/keys.tsv")
+      recorded "$fast" "" "$3" "$4" && exit 0
       key=$(python3 "$4/scripts/tidy-key.py" key "$1/compile_commands.json" "$5" "$4" "$2" || true)
-      [[ -n $key && -f $3/$key ]] && exit 0
-      [[ -n $key && -f $4/.ci/tidy-clean.txt ]] && grep -qxF "$key" "$4/.ci/tidy-clean.txt" && exit 0
+      if recorded "$key" "" "$3" "$4"; then
+        [[ -n $fast ]] && touch "$3/$fast"
+        exit 0
+      fi
     fi
     out=$("$0" -p "$1" --quiet ${2:+"$2"} "$5" 2>&1) && rc=0 || rc=$?
     # Drop the "N warnings generated." chatter; keep diagnostics.
     out=$(printf "%s\n" "$out" | grep -vE "^[0-9]+ (warnings?|errors?)( and [0-9]+ (warnings?|errors?))? generated\.$" || true)
     [[ -n $out ]] && printf "%s\n" "$out"
-    if [[ $rc == 0 && -z $out && -n $key ]]; then touch "$3/$key"; fi
+    if [[ $rc == 0 && -z $out ]]; then
+      for k in "$fast" "$key"; do [[ -n $k ]] && touch "$3/$k"; done
+    fi
     exit "$rc"' "$clang_tidy" "$tidy_db" "$extra_checks" "$cache_dir" "$root" | tee "$log" || status=$?
 
 # Belt and braces: a warning that was somehow not promoted to an error still fails the run.
@@ -109,10 +128,14 @@ fi
 echo "run-clang-tidy: clean"
 
 # --record: write the keys of every checked file to .ci/tidy-clean.txt (after a clean run).
+# The fast key where the build has one, else the slow one.
 if [[ $record == 1 ]]; then
   printf '%s\0' "${files[@]}" |
-    xargs -0 -n1 -P"$jobs" bash -c 'python3 "$0" key "$1" "$4" "$2" "$3"' \
-      "$root/scripts/tidy-key.py" "$tidy_db/compile_commands.json" "$root" "$extra_checks" |
+    xargs -0 -n1 -P"$jobs" bash -c '
+      fast=$(awk -F "\t" -v f="$5" "\$1 == f { print \$2 }" "$4")
+      if [[ -n $fast ]]; then echo "$fast"; else python3 "$0" key "$1" "$5" "$3" "$2"; fi' \
+      "$root/scripts/tidy-key.py" "$tidy_db/compile_commands.json" "$extra_checks" "$root" \
+      "$tidy_db/keys.tsv" |
     sort -u > "$root/.ci/tidy-clean.txt.tmp"
   mv "$root/.ci/tidy-clean.txt.tmp" "$root/.ci/tidy-clean.txt"
   echo "run-clang-tidy: recorded $(wc -l < "$root/.ci/tidy-clean.txt") keys in .ci/tidy-clean.txt"

@@ -53,7 +53,8 @@ bash scripts/check-format.sh
 section "Release build with -Werror ($build_dir)"
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DREGOLITH_WERROR=ON \
   -DREGOLITH_SANITIZE= -DREGOLITH_BUILD_TESTS=ON -DREGOLITH_BUILD_TOOLS=ON \
-  -DREGOLITH_BUILD_BENCH=ON -DREGOLITH_UNITY_LIBRARIES=OFF "${extra_args[@]}"
+  -DREGOLITH_BUILD_BENCH=ON -DREGOLITH_UNITY_LIBRARIES=OFF -DREGOLITH_TEST_PCH=OFF \
+  "${extra_args[@]}"
 cmake --build "$build_dir" -j"$jobs"
 
 section "clang-tidy (scripts/run-clang-tidy.sh $build_dir)"
@@ -119,10 +120,11 @@ run_shards() {
 # tests everything (and runs clang-tidy's analyzer everywhere).
 full=${REGOLITH_FULL_CHECKS:-0}
 # The sanitizer and fuzz builds compile each library in unity batches
-# (REGOLITH_UNITY_LIBRARIES: the headers a batch's files share are parsed once): they check
+# (REGOLITH_UNITY_LIBRARIES: the headers a batch's files share are parsed once), and the
+# sanitized tests with a precompiled header of their common headers (REGOLITH_TEST_PCH): they check
 # what the code does when it runs. How each file compiles on its own is the Release build's
 # (and clang-tidy's, over its compile database). Measured in docs/ci.md.
-unity=(-DREGOLITH_UNITY_LIBRARIES=ON)
+unity=(-DREGOLITH_UNITY_LIBRARIES=ON -DREGOLITH_TEST_PCH=ON)
 # REGOLITH_TEST_WORK_SCALE (tests/support/WorkScale.hpp): under a sanitizer the longest
 # store tests (the paged queries under eviction from several threads, the huge procedural
 # planet) keep every thread, path and assertion over a quarter of their points; the Release
