@@ -77,10 +77,11 @@ python3 "$root/scripts/tidy-key.py" strip-pch "$db" "$tidy_db"
 #
 # Each file has two keys over the same inputs: the fast one (`tidy-key.py deps-keys`: the
 # files the compiler read for it, from the build's `ninja -t deps`, all files at once in
-# seconds) and, where the build holds no valid dependencies for its object, the slow one
-# (its preprocessed text, a second or two of the compiler per file; before stop 38 the only
-# key, which took CI's tidy step 2.7 minutes on a fresh machine with every key recorded).
-# A file is clean if either key is recorded; --record writes the fast key where there is one.
+# seconds; none where the build holds no valid dependencies for the file's object) and the
+# slow one (its preprocessed text, a second or two of the compiler per file), computed only
+# when the fast one is not recorded. Before stop 38 the slow key was the only one: CI's tidy
+# step took 2.7 minutes on a fresh machine with every key recorded. A file is clean if either
+# key is recorded; --record writes the fast key where there is one.
 cache_dir=""
 : >"$tidy_db/keys.tsv"
 if [[ ${REGOLITH_TIDY_CACHE:-1} == 1 && ${REGOLITH_FULL_CHECKS:-0} != 1 ]]; then
@@ -97,15 +98,16 @@ printf '%s\0' "${files[@]}" |
   xargs -0 -n1 -P"$jobs" bash -c '
     # $0 clang-tidy, $1 compile database folder (with keys.tsv), $2 extra checks, $3 cache
     # folder (empty: no cache), $4 repository root, $5 the file (xargs appends it).
+    # recorded KEY CACHE ROOT: a clean run recorded KEY here or in .ci/tidy-clean.txt.
     recorded() {
-      [[ -n $1 ]] && { [[ -f $3/$1 ]] || grep -qxF "$1" "$4/.ci/tidy-clean.txt" 2>/dev/null; }
+      [[ -n $1 ]] && { [[ -f $2/$1 ]] || grep -qxF "$1" "$3/.ci/tidy-clean.txt" 2>/dev/null; }
     }
     fast="" key=""
     if [[ -n $3 ]]; then
       fast=$(awk -F "\t" -v f="$5" "\$1 == f { print \$2 }" "$1/keys.tsv")
-      recorded "$fast" "" "$3" "$4" && exit 0
+      recorded "$fast" "$3" "$4" && exit 0
       key=$(python3 "$4/scripts/tidy-key.py" key "$1/compile_commands.json" "$5" "$4" "$2" || true)
-      if recorded "$key" "" "$3" "$4"; then
+      if recorded "$key" "$3" "$4"; then
         [[ -n $fast ]] && touch "$3/$fast"
         exit 0
       fi
