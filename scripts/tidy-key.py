@@ -76,13 +76,9 @@ def preprocess_args(args):
     return out + ["-E", "-P", "-C", "-o", "-"]
 
 
-def key(db_path, source, root, extra):
-    root = pathlib.Path(root).resolve()
-    source = pathlib.Path(source).resolve()
-    db = json.loads(pathlib.Path(db_path).read_text())
-    entry = next(e for e in db if pathlib.Path(e["directory"], e["file"]).resolve() == source)
-    h = hashlib.sha256()
-    version = subprocess.run(["clang-tidy", "--version"], capture_output=True, text=True).stdout
+def common_inputs(h, root, extra, version):
+    """Hashes what every key shares: the clang-tidy version, every .clang-tidy of the
+    repository (build folders left out) and the extra arguments."""
     h.update(version.encode())
     for cfg in sorted(root.rglob(".clang-tidy")):
         if "build" in cfg.relative_to(root).parts[0]:
@@ -90,6 +86,16 @@ def key(db_path, source, root, extra):
         h.update(str(cfg.relative_to(root)).encode())
         h.update(cfg.read_bytes())
     h.update(extra.encode())
+
+
+def key(db_path, source, root, extra):
+    root = pathlib.Path(root).resolve()
+    source = pathlib.Path(source).resolve()
+    db = json.loads(pathlib.Path(db_path).read_text())
+    entry = next(e for e in db if pathlib.Path(e["directory"], e["file"]).resolve() == source)
+    h = hashlib.sha256()
+    version = subprocess.run(["clang-tidy", "--version"], capture_output=True, text=True).stdout
+    common_inputs(h, root, extra, version)
     h.update(str(source.relative_to(root)).encode())
     pre = subprocess.run(preprocess_args(without_pch(args_of(entry))), cwd=entry["directory"],
                          capture_output=True)
@@ -98,16 +104,6 @@ def key(db_path, source, root, extra):
     # __FILE__ expands to absolute paths: the same checkout in another folder has the same key.
     h.update(pre.stdout.replace(str(root).encode(), b"<root>"))
     return h.hexdigest()
-
-
-def common_inputs(h, root, extra, version):
-    h.update(version.encode())
-    for cfg in sorted(root.rglob(".clang-tidy")):
-        if "build" in cfg.relative_to(root).parts[0]:
-            continue
-        h.update(str(cfg.relative_to(root)).encode())
-        h.update(cfg.read_bytes())
-    h.update(extra.encode())
 
 
 def ninja_deps(build_dir):
