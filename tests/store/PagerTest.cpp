@@ -344,6 +344,7 @@ TEST(Pager, HeightsWithinTheSnapSlackOfACellLineDoNotDependOnWhatIsResident) {
   // Cold: a cache of one patch, new for each point, so a cell across patches is never
   // wholly resident and goes through the generic kernel (every point, or every k-th under
   // test::scaledWork()).
+  ASSERT_FALSE(pts.empty());
   const std::size_t coldStride = pts.size() / test::scaledWork(pts.size());
   for (std::size_t i = 0; i < pts.size(); i += coldStride) {
     Opened cold = openFixture(patchBytes());
