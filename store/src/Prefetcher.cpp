@@ -65,9 +65,10 @@ void Prefetcher::load(std::string_view grid, const std::vector<LevelWindow>& win
   // Loaded here, not queued: ahead of every request by construction, on the thread that
   // waits for them (loading them on the tasks' thread too made more loads and slower
   // frames: docs/architecture.md), and never behind a task that cannot start.
+  const std::vector<Item> items = itemsOf(grid, windows, 0);
   State& s = *state_;
   std::unique_lock lock(s.mutex);
-  for (const Item& item : itemsOf(grid, windows, 0)) {
+  for (const Item& item : items) {
     if (s.stopping) break;
     loadItem(s, lock, item);
   }

@@ -20,15 +20,12 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
-#include <mutex>
 #include <numbers>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace regolith::scene {
@@ -394,7 +391,6 @@ TEST(SceneGL, TheRenderersFarFieldDrawsThePlanetWholeInEachViewSlot) {
             std::string::npos);
 }
 
-}  // namespace
 TEST(SceneGL, EveryTerrainLoadsOnTheScenesOneLoader) {
   test::glContext();
   // Mars and Victoria as stores: every pyramid's hints and loads and every clipmap's reads
@@ -442,16 +438,12 @@ TEST(SceneGL, EveryTerrainLoadsOnTheScenesOneLoader) {
   EXPECT_GE(loader->submitted - built, 2) << "each clipmap read its windows on the loader";
   EXPECT_GT(s.cache()->stats().loads, 0U);
 
-  // A pyramid's hint is loaded there too (its Prefetcher's tasks).
+  // A pyramid's hint is queued there too (its Prefetcher submits the loading task).
   const int before = loader->submitted;
   const topo::SampleSource::Window hint[] = {{0, 0, 180, 360}};
   s.terrain("mars").level(0).source->prefetch(hint);
-  for (int i = 0; i < 6000 && loader->submitted == before; ++i)
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
   EXPECT_GT(loader->submitted, before) << "the planet's hint is a task on the loader";
-  const std::lock_guard lock(loader->m);
-  ASSERT_FALSE(loader->ran.empty());
-  for (const std::thread::id id : loader->ran) EXPECT_NE(id, std::this_thread::get_id());
 }
 
+}  // namespace
 }  // namespace regolith::scene
