@@ -5,7 +5,9 @@ Reads the table between the "layering table" markers of docs/architecture.md. Fo
 source and header file of each module row, it checks that:
   * every `#include <regolith/X/...>` names the module itself or one its row may depend on;
   * no include matches the row's "must not include" list (third-party or system headers);
-  * no include of the form `#include "..."` reaches out of the module's own folder.
+  * no include of the form `#include "..."` reaches out of the module's own folder;
+  * the stateless modules (STATELESS: topo, "no threads, no syscalls, no global state") hold no
+    per-thread or mutable static state: no `thread_local`, no `static std::atomic`/`std::mutex`.
 Prints one line per violation (file:line: what, and the rule) and exits 1 if there is any.
 
     python3 scripts/check-layering.py [repository root]
@@ -16,6 +18,8 @@ import re
 import sys
 
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')
+STATELESS = {"topo"}
+STATE = re.compile(r'\bthread_local\b|\bstatic\s+(?:inline\s+)?std::(?:atomic|mutex)\b')
 SOURCES = {".cpp", ".hpp", ".h", ".cc", ".inl"}
 
 
@@ -83,6 +87,10 @@ def main():
             checked += 1
             rel = path.relative_to(root)
             for n, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
+                code = line.split("//")[0]
+                if self_name in STATELESS and STATE.search(code):
+                    problems.append(f"{rel}:{n}: holds per-thread or static state ({STATE.search(code).group(0)}), "
+                                    f"but {folder} has no global state (docs/architecture.md)")
                 m = INCLUDE.match(line)
                 if not m:
                     continue

@@ -6,6 +6,7 @@
 #include <regolith/compose/ComposedPyramid.hpp>
 #include <regolith/compose/FromStore.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Executor.hpp>
 #include <regolith/core/Message.hpp>
 #include <regolith/render/TerrainImage.hpp>
 #include <regolith/scene/SceneParts.hpp>
@@ -66,6 +67,9 @@ struct Args {
 /// What a render draws: a store's grid, or a catalogue's composed surface over a global
 /// latitude/longitude grid.
 struct Terrain {
+  /// The render's one loader thread: the pyramid's (or the datasets') hints and loads, and
+  /// the clipmap's reads.
+  std::shared_ptr<core::Executor> loader = std::make_shared<core::ThreadPool>(1);
   std::shared_ptr<const clod::HeightPyramid> pyramid;
   bool planet = false;
   topo::TopoGrid g0{1, 1, 0.0, 0.0, 1.0, 1.0};
@@ -108,9 +112,9 @@ Terrain storeTerrain(const Args& a) {
   // Lat/lon lines need a DEM on its body: then it is drawn through its placement
   // (body-fixed), else in its grid frame.
   t.pyramid = !t.planet && namesLatLon(a.effects)
-                  ? std::make_shared<const clod::HeightPyramid>(pager->pyramid(gridName).levels,
-                                                                store::placementOf(info))
-                  : std::make_shared<const clod::HeightPyramid>(pager->pyramid(gridName));
+                  ? std::make_shared<const clod::HeightPyramid>(
+                        pager->pyramid(gridName, t.loader).levels, store::placementOf(info))
+                  : std::make_shared<const clod::HeightPyramid>(pager->pyramid(gridName, t.loader));
   t.g0 = store::topoGridOf(info, 0);
   t.radius = store::bodyOf(info).equatorialRadius();
   t.height = [pager, gridName, &info](double pa, double pb) {
@@ -134,7 +138,7 @@ Terrain storeTerrain(const Args& a) {
 Terrain catalogueTerrain(const Args& a) {
   Terrain t;
   auto file = std::make_shared<compose::CatalogueFile>(
-      compose::readCatalogueFile(a.store, a.cacheMb << 20U));
+      compose::readCatalogueFile(a.store, a.cacheMb << 20U, t.loader));
   const auto snapshot = file->catalogue->snapshot();
   const topo::Body& body = snapshot->body();
   t.radius = body.equatorialRadius();
@@ -275,6 +279,7 @@ void runRender(const Args& a, std::ostream& report) {
     }
   }
   request.clipmap.size = a.clipmapSize;
+  request.clipmap.executor = terrain.loader;
   // Effects (docs/overlays.md): only those --effects names are built.
   EffectTerrain effectTerrain{
       pyramid.get(), terrain.heightRange,

@@ -67,7 +67,8 @@ std::string text(const std::filesystem::path& path, const nlohmann::json& j,
 
 }  // namespace
 
-CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t cacheBytes) {
+CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t cacheBytes,
+                                const std::shared_ptr<core::Executor>& loader) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     throw IoError(core::format({.operation = "compose::readCatalogueFile()",
@@ -190,7 +191,7 @@ CatalogueFile readCatalogueFile(const std::filesystem::path& path, std::size_t c
       const auto& info = pager->grid(grid);
       o.mask = featherMask(store::topoGridOf(info, 0), *pager->source(grid, 0), w, false);
     }
-    datasets.push_back(datasetFromStore(*pager, grid, std::move(o)));
+    datasets.push_back(datasetFromStore(*pager, grid, std::move(o), loader));
   }
   out.catalogue = std::make_shared<Catalogue>(datasets.front()->body());
   const topo::Body& body = datasets.front()->body();

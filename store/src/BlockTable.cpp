@@ -4,6 +4,8 @@
 #include <regolith/core/Message.hpp>
 #include <regolith/store/BlockTable.hpp>
 
+#include "ThreadQueries.hpp"
+
 #include <linux/membarrier.h>
 #include <sys/mman.h>
 #include <sys/syscall.h>
@@ -22,7 +24,7 @@ namespace regolith::store {
 
 namespace {
 
-struct EntryLayout {  // the layout of topo::BlockIndex::Entry, for sizes before it exists
+struct EntryLayout {  // the layout of BlockIndex::Entry, for sizes before it exists
   const void* block;
   const float* hintData;
   std::size_t hintStride;
@@ -35,8 +37,8 @@ std::string describeSizes(std::size_t rows, std::size_t cols, std::size_t blockR
 }
 
 // The table's sizes, checked, and the bytes of its mapping.
-topo::BlockIndex::Geometry checkedGeometry(std::size_t rows, std::size_t cols,
-                                           std::size_t blockRows, std::size_t blockCols) {
+BlockIndex::Geometry checkedGeometry(std::size_t rows, std::size_t cols, std::size_t blockRows,
+                                     std::size_t blockCols) {
   if (rows == 0 || cols == 0 || blockRows == 0 || blockCols == 0) {
     throw InvalidArgument(
         "store::BlockTable(): " + describeSizes(rows, cols, blockRows, blockCols) +
@@ -137,7 +139,7 @@ void BlockTable::countSlot(std::size_t index, bool published) noexcept {
 }
 
 void BlockTable::publish(std::size_t blockRow, std::size_t blockCol,
-                         const topo::PublishedBlock* block) noexcept {
+                         const PublishedBlock* block) noexcept {
   const std::size_t i = blockRow * blocksPerRow() + blockCol;
   Entry& e = entries_[i];
   // Counted before the slot's page is written (the counts are the writers' alone).
@@ -195,7 +197,7 @@ struct ThreadRecords {
         h.rec->inUse.store(false, std::memory_order_release);
       }
     }
-    topo::detail::tlHazard = {};  // a later query in this thread joins anew
+    detail::forgetThreadHazard();  // a later query in this thread joins anew
   }
 };
 thread_local ThreadRecords tlRecords;  // NOLINT
@@ -215,7 +217,7 @@ HazardDomain::~HazardDomain() {
   }
 }
 
-topo::HazardRecord& HazardDomain::threadRecord() {
+HazardRecord& HazardDomain::threadRecord() {
   std::vector<ThreadRecords::Held>& held = tlRecords.held;
   for (const ThreadRecords::Held& h : held) {
     if (h.domain == id_) return *h.rec;
@@ -246,10 +248,11 @@ topo::HazardRecord& HazardDomain::threadRecord() {
   return *rec;
 }
 
-topo::HazardRecord* HazardDomain::lockFreeRecord() {
+HazardRecord* HazardDomain::lockFreeRecord() {
   if (!lockFree()) return nullptr;
   // The thread now reads through this domain: its hazards elsewhere protect nothing it reads
-  // (its queries' thread block was given up when it switched, topo::detail::hazardFor()).
+  // (its queries' thread block was given up when it switched, detail::hazardFor(),
+  // BlockSource.cpp).
   for (const ThreadRecords::Held& h : tlRecords.held) {
     if (h.domain == id_) continue;
     if (const auto d = h.owner.lock()) h.rec->ptr.store(nullptr, std::memory_order_release);

@@ -1,6 +1,7 @@
 #include <regolith/core/Assert.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Message.hpp>
+#include <regolith/store/BlockSource.hpp>
 #include <regolith/store/BlockTable.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Prefetcher.hpp>
@@ -287,13 +288,17 @@ class AheadLoader {
 
 // One level of one grid, paged through the cache. Holds the source and the cache, so it
 // stays usable after the Pager that made it is gone.
-class PagedSource final : public topo::SampleSource {
+class PagedSource final : public BlockSource {
  public:
   PagedSource(const GridInfo& info, std::uint32_t gridId, std::size_t level,
               std::shared_ptr<const PageSource> pages, std::shared_ptr<PatchCache> cache,
               std::shared_ptr<detail::FilePatches> file,
               std::shared_ptr<AheadLoader> ahead = nullptr)
-      : info_(info),
+      // The table of the patches resident in the cache: lock-free hits on them.
+      : BlockSource(cache->blockTable(gridId, static_cast<std::uint32_t>(level),
+                                      info.levelRows(level), info.levelCols(level), info.patchRows,
+                                      info.patchCols)),
+        info_(info),
         rows_(info.levelRows(level)),
         cols_(info.levelCols(level)),
         pr_(info.patchRows),
@@ -303,7 +308,6 @@ class PagedSource final : public topo::SampleSource {
         pages_(std::move(pages)),
         cache_(std::move(cache)),
         file_(std::move(file)),
-        table_(cache_->blockTable(gridId, level_, rows_, cols_, pr_, pc_)),
         loader_([this](const PatchKey& k) { return loadShared(file_.get(), *pages_, info_, k); }),
         ahead_(std::move(ahead)) {}
 
@@ -333,8 +337,6 @@ class PagedSource final : public topo::SampleSource {
       }
     }
   }
-
-  const topo::BlockIndex* blockIndex() const noexcept override { return table_.get(); }
 
   // The pyramid's Prefetcher loads the windows; this level's previous hint is cancelled. A
   // source made by Pager::source() has no loader and ignores hints.
@@ -367,16 +369,12 @@ class PagedSource final : public topo::SampleSource {
     }
   }
 
-  bool block(std::size_t row, std::size_t col, topo::SampleBlock& out) const override {
+  SampleBlock block(std::size_t row, std::size_t col) const override {
     auto p = patchAt(row, col);
-    out.data = p->samples.data();
-    out.row0 = p->key.row * pr_;
-    out.col0 = p->key.col * pc_;
-    out.rows = p->rows;
-    out.cols = p->cols;
-    out.stride = p->cols;
+    SampleBlock out{p->samples.data(), p->key.row * pr_, p->key.col * pc_, p->rows,
+                    p->cols,           p->cols,          nullptr};
     out.owner = std::move(p);
-    return true;
+    return out;
   }
 
  private:
@@ -398,7 +396,6 @@ class PagedSource final : public topo::SampleSource {
   std::shared_ptr<const PageSource> pages_;
   std::shared_ptr<PatchCache> cache_;
   std::shared_ptr<detail::FilePatches> file_;  // null unless paging a Store
-  std::shared_ptr<const BlockTable> table_;    // lock-free hits on resident patches
   PatchCache::Loader loader_;  // made once: a std::function per lookup costs more than a hit
   std::shared_ptr<AheadLoader> ahead_;  // null unless a level of an exported pyramid
   mutable std::mutex aheadMutex_;

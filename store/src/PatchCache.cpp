@@ -18,7 +18,7 @@
 // key and the next first element examined. Keys only grow, so the victim is the one an eager
 // index would choose. Recency: events under the lock take a tick of the cache's clock (its
 // HazardDomain's; exact order); a lock-free hit is stamped with the clock's current value
-// without advancing it (topo::BlockIndex::now()), so lock-free hits between two locked
+// without advancing it (BlockIndex::now()), so lock-free hits between two locked
 // events tie, and
 // ties go to the lower key. Each lock-free hit costs at most one re-rank, so
 // eviction stays O(log n) amortised. DecayingHitCount publishes nothing: its scores are
@@ -50,6 +50,7 @@
 #include <regolith/core/Error.hpp>
 #include <regolith/store/BlockTable.hpp>
 #include <regolith/store/PatchCache.hpp>
+#include <regolith/topo/Bilinear.hpp>
 
 #include <cmath>
 #include <condition_variable>
@@ -138,7 +139,7 @@ struct PatchCache::Impl {
   /// A resident patch. Separately allocated: its address is published in a BlockTable, and
   /// it may outlive its map entry on the retired list.
   struct Resident {
-    topo::PublishedBlock block;  // the patch's samples and geometry, and its live counters
+    PublishedBlock block;  // the patch's samples and geometry, and its live counters
     PatchPtr patch;
     std::uint64_t lockedHits = 0;  // hits taken under the lock
     [[nodiscard]] std::uint64_t hits() const noexcept {
@@ -256,7 +257,7 @@ struct PatchCache::Impl {
   /// Records a hit on a resident entry.
   void touch(Entry& e) {
     constexpr auto relaxed = std::memory_order_relaxed;
-    topo::PublishedBlock& b = e.res->block;
+    PublishedBlock& b = e.res->block;
     ++e.res->lockedHits;
     const std::uint64_t hits = e.res->hits();
     const std::uint64_t now = hazards->tick();
@@ -271,7 +272,7 @@ struct PatchCache::Impl {
   /// The entry's live rank, from its counters (lock-free hits included).
   Rank liveRank(const Entry& e) const {
     constexpr auto relaxed = std::memory_order_relaxed;
-    const topo::PublishedBlock& b = e.res->block;
+    const PublishedBlock& b = e.res->block;
     const double score = policy == CachePolicy::HitCount
                              ? static_cast<double>(e.res->hits())
                              : e.rank->score;  // Lru: 0; Decaying: only locked hits
@@ -320,7 +321,7 @@ struct PatchCache::Impl {
   /// Publishes a resident entry in `table` (which must be its grid level's).
   static void publishIn(BlockTable& table, const PatchKey& key, Entry& e) {
     if (!table.hasBlock(key.row, key.col)) return;  // a key outside the registered level
-    topo::PublishedBlock& b = e.res->block;
+    PublishedBlock& b = e.res->block;
     const Patch& p = *e.res->patch;
     b.data = p.samples.data();
     b.row0 = std::size_t{key.row} * table.blockRows();
@@ -333,7 +334,7 @@ struct PatchCache::Impl {
     b.uHi = d(b.col0 + b.cols) - 1.0;
     b.vLo = d(b.row0);
     b.vHi = d(b.row0 + b.rows) - 1.0;
-    b.origin = topo::originOf(b.data, b.row0, b.col0, b.stride);
+    b.origin = topo::kernel::originOf(b.data, b.row0, b.col0, b.stride);
     table.publish(key.row, key.col, &b);
     e.table = &table;
   }

@@ -8,10 +8,12 @@
 #include "compose/ComposeFixtures.hpp"
 
 #include <gtest/gtest.h>
+#include <support/CountingExecutor.hpp>
 #include <support/StoreScratch.hpp>
 
 #include <cmath>
 #include <fstream>
+#include <memory>
 #include <random>
 #include <string>
 
@@ -112,6 +114,23 @@ TEST(FromStore, CatalogueFileComposesAsTheSameSamplesInMemory) {
     both += a.contributors == 2;
   }
   EXPECT_GT(both, 50);
+}
+
+TEST(FromStore, ACatalogueFilesDatasetsHintOnTheLoaderGiven) {
+  // `regolith render` of a catalogue gives its datasets and its clipmap one loader thread.
+  const auto file = writeText("moon-loader.json", R"({"datasets": [
+      {"store": "moon.h5", "grid": "global"},
+      {"store": "moon.h5", "grid": "site", "feather_m": 3000}]})");
+  const auto loader = std::make_shared<test::CountingExecutor>();
+  const CatalogueFile cf = readCatalogueFile(file, std::size_t{64} << 20, loader);
+  const auto snapshot = cf.catalogue->snapshot();
+  ASSERT_EQ(snapshot->entries().size(), 2U);
+  for (const CatalogueEntry& e : snapshot->entries()) {
+    const int before = loader->submitted;
+    const topo::SampleSource::Window hint[] = {{0, 0, 8, 8}};
+    e.dataset->level(0).source->prefetch(hint);
+    EXPECT_GT(loader->submitted, before) << e.dataset->name() << "'s hint is a task on the loader";
+  }
 }
 
 TEST(FromStore, BadCatalogueFilesNameTheFileAndTheKey) {

@@ -14,7 +14,6 @@
 
 using namespace regolith;
 using namespace regolith::store;
-using topo::PublishedBlock;
 
 namespace {
 // Every sample finds the block of its own (row / blockRows, col / blockCols).
@@ -158,12 +157,12 @@ TEST(Hazard, AThreadProtectsOneBlockUntilItMovesOnOrEnds) {
   PublishedBlock a, b;
   std::atomic<int> step{0};
   std::thread reader([&] {
-    topo::HazardRecord& rec = domain->threadRecord();
+    HazardRecord& rec = domain->threadRecord();
     EXPECT_EQ(&rec, &domain->threadRecord());  // one record per thread and domain
-    topo::protect(rec, &a);
+    protect(rec, &a);
     step = 1;
     while (step != 2) std::this_thread::yield();
-    topo::protect(rec, &b);  // moves on: a is free to go
+    protect(rec, &b);  // moves on: a is free to go
     step = 3;
     while (step != 4) std::this_thread::yield();
   });
@@ -190,10 +189,10 @@ TEST(Hazard, DomainsShareNeitherRecordsNorClocks) {
   EXPECT_NE(one->id(), two->id());
   EXPECT_NE(one->id(), 0U);
   PublishedBlock a;
-  topo::HazardRecord& r1 = one->threadRecord();
-  topo::HazardRecord& r2 = two->threadRecord();
+  HazardRecord& r1 = one->threadRecord();
+  HazardRecord& r2 = two->threadRecord();
   EXPECT_NE(&r1, &r2);
-  topo::protect(r1, &a);
+  protect(r1, &a);
   ASSERT_TRUE(HazardDomain::barrier());
   EXPECT_TRUE(one->isProtected(&a));
   EXPECT_FALSE(two->isProtected(&a));
@@ -213,7 +212,7 @@ TEST(Hazard, DomainsShareNeitherRecordsNorClocks) {
   // joining gives the thread's record of the table's domain.
   if (HazardDomain::lockFree()) {
     EXPECT_EQ(t1.joinDomain(), &r1);
-    topo::protect(r1, &a);
+    protect(r1, &a);
     // Joining the second domain gives up the thread's hazard in the first, so the first
     // cache may free the block the thread read last there.
     EXPECT_EQ(t2.joinDomain(), &r2);
@@ -232,14 +231,14 @@ TEST(Hazard, DomainsShareNeitherRecordsNorClocks) {
 // back when it ends, even for a domain already gone.
 TEST(Hazard, RecordsOfEndedThreadsAreReusedAndDomainsMayGoFirst) {
   const auto domain = std::make_shared<HazardDomain>();
-  topo::HazardRecord* first = nullptr;
+  HazardRecord* first = nullptr;
   std::thread([&] { first = &domain->threadRecord(); }).join();
-  topo::HazardRecord* second = nullptr;
+  HazardRecord* second = nullptr;
   std::thread([&] { second = &domain->threadRecord(); }).join();
   EXPECT_EQ(first, second);  // the ended thread's record, reused
   std::thread([] {
     auto gone = std::make_shared<HazardDomain>();
-    topo::protect(gone->threadRecord(), &gone);
+    protect(gone->threadRecord(), &gone);
     gone.reset();  // the thread ends after its domain: nothing to give back, no crash
   }).join();
 }

@@ -1,6 +1,7 @@
 #pragma once
 // Sample sources that steer a query's path, for tests that compare the fast paths of
 // TopoDem and TopoPlanet with the generic kernel on the same samples.
+#include <regolith/store/BlockSource.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
 #include <algorithm>
@@ -26,9 +27,10 @@ class SampleOnlySource final : public topo::SampleSource {
   std::vector<float> data_;
 };
 
-// Blocks of 7 × 5 samples, as a pager hands out patches: cells straddle block edges on rows
-// 6, 13, … and columns 4, 9, …. Counts its calls (sample(), block()).
-class BlockSource final : public topo::SampleSource {
+// Blocks of 7 × 5 samples, as a pager hands out patches (a store::BlockSource without a
+// block table): cells straddle block edges on rows 6, 13, … and columns 4, 9, …. Counts its
+// calls (sample(), block()).
+class BlockSource final : public store::BlockSource {
  public:
   BlockSource(std::size_t rows, std::size_t cols, std::vector<float> data)
       : rows_(rows), cols_(cols), data_(std::make_shared<std::vector<float>>(std::move(data))) {}
@@ -38,12 +40,11 @@ class BlockSource final : public topo::SampleSource {
     sampleCalls.fetch_add(1, std::memory_order_relaxed);
     return (*data_)[r * cols_ + c];
   }
-  bool block(std::size_t r, std::size_t c, topo::SampleBlock& out) const override {
+  store::SampleBlock block(std::size_t r, std::size_t c) const override {
     blockCalls.fetch_add(1, std::memory_order_relaxed);
     const std::size_t r0 = r / 7 * 7, c0 = c / 5 * 5;
-    out = {data_->data() + r0 * cols_ + c0,      r0,    c0,   std::min<std::size_t>(7, rows_ - r0),
-           std::min<std::size_t>(5, cols_ - c0), cols_, data_};
-    return true;
+    return {data_->data() + r0 * cols_ + c0,      r0,    c0,   std::min<std::size_t>(7, rows_ - r0),
+            std::min<std::size_t>(5, cols_ - c0), cols_, data_};
   }
 
   mutable std::atomic<std::size_t> sampleCalls{0}, blockCalls{0};

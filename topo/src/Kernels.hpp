@@ -2,7 +2,8 @@
 // Interpolation kernels shared by TopoDem and TopoPlanet (private header).
 //
 // Kernels are templates over an accessor so that the in-memory fast path compiles to plain
-// array loads while paged sources go through SampleSource. An accessor provides
+// array loads while paged sources go through their block (PagedQueries::threadBlock()) and
+// SampleSource::sample(). An accessor provides
 //   double operator()(long r, long c)  any integer index, mapped to a sample (wrap, pole,
 //                                      or extrapolation one sample beyond an edge)
 //   bool hasRow(long r), hasCol(long c)  whether the index names a distinct sample
@@ -10,15 +11,14 @@
 // Coordinates u (column) and v (row) are fractional sample indices, already brought into
 // the accessor's range by the caller.
 
+#include <regolith/topo/Bilinear.hpp>
 #include <regolith/topo/Query.hpp>
-#include <regolith/topo/TopoDem.hpp>
 #include <regolith/topo/TopoGrid.hpp>
 
 #include <algorithm>
 #include <climits>
 #include <cmath>
 #include <limits>
-#include <memory>
 
 namespace regolith::topo::detail {
 
@@ -57,56 +57,28 @@ struct MemFetch {
   float operator()(long r, long c) const noexcept { return data[r * cols + c]; }
 };
 
-// Paged sources: loads from the current block when it holds the sample, else asks the
+// Paged sources: loads from a resident block when it holds the sample (a paged source's
+// PagedQueries::threadBlock(); an empty view for a source without blocks), else asks the
 // source (a stencil straddling two blocks).
 struct BlockFetch {
   const SampleSource* src;
-  const ThreadBlock* blk;
+  const kernel::BlockView* blk;
   float operator()(long r, long c) const {
     const auto ur = static_cast<std::size_t>(r), uc = static_cast<std::size_t>(c);
-    if (blk->holds(ur, uc)) {
-      return blk->data[(ur - blk->row0) * blk->stride + (uc - blk->col0)];
+    const float* data = blk->data;  // null for a source without blocks (holds() is false)
+    if (data != nullptr && blk->holds(ur, uc)) {
+      return data[(ur - blk->row0) * blk->stride + (uc - blk->col0)];
     }
     return src->sample(ur, uc);
   }
 };
 
-// Keeps the memory of the calling thread's detail::tlBlock alive.
-inline thread_local std::shared_ptr<const void> tlBlockOwner;  // NOLINT
-
-// The calling thread's block (detail::tlBlock), moved to the one holding sample (r, c) if
-// it does not hold it already (or emptied if the source has no blocks).
-inline const ThreadBlock& acquireBlock(const SampleSource& src, std::size_t r, std::size_t c) {
-  ThreadBlock& tb = tlBlock;
-  if (tb.source != src.id() || !tb.holds(r, c)) {
-    if (const BlockIndex* table = src.blockIndex(); table != nullptr) {
-      if (hazardFor(*table) != nullptr && enterBlock(*table, src.id(), r, c, true) != nullptr) {
-        tlBlockOwner.reset();  // the hazard record protects the block now
-        return tb;
-      }
-    }
-    SampleBlock fresh;
-    if (src.block(r, c, fresh)) {
-      const auto d = [](std::size_t i) { return static_cast<double>(i); };
-      tb = {src.id(),
-            fresh.data,
-            fresh.row0,
-            fresh.col0,
-            fresh.rows,
-            fresh.cols,
-            fresh.stride,
-            d(fresh.col0),
-            d(fresh.col0 + fresh.cols) - 1.0,
-            d(fresh.row0),
-            d(fresh.row0 + fresh.rows) - 1.0,
-            originOf(fresh.data, fresh.row0, fresh.col0, fresh.stride)};
-      tlBlockOwner = std::move(fresh.owner);
-    } else {
-      tb = {};
-      tlBlockOwner.reset();
-    }
-  }
-  return tb;
+// The block of `src` holding sample (r, c) for the calling thread, or an empty view when the
+// source has no blocks.
+inline const kernel::BlockView& blockOf(const SampleSource& src, std::size_t r, std::size_t c) {
+  static constexpr kernel::BlockView kNone{};
+  const PagedQueries* paged = src.paged();
+  return paged != nullptr ? paged->threadBlock(r, c) : kNone;
 }
 
 // Samples beyond a non-periodic edge are extrapolated with Keys' own boundary condition,

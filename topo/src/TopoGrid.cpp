@@ -75,15 +75,6 @@ bool TopoGrid::contains(double x, double y) const noexcept {
          f.y <= static_cast<double>(rows_) - 0.5 + e.y;
 }
 
-SampleSource::SampleSource() {
-  static std::atomic<std::uint64_t> next{1};  // ids only; no state is shared through it
-  id_ = next.fetch_add(1, std::memory_order_relaxed);
-}
-
-bool SampleSource::block(std::size_t /*row*/, std::size_t /*col*/, SampleBlock& /*out*/) const {
-  return false;
-}
-
 void SampleSource::readWindow(std::size_t row0, std::size_t col0, std::size_t nrows,
                               std::size_t ncols, std::span<float> out) const {
   assert(out.size() >= nrows * ncols);

@@ -98,8 +98,7 @@ TopoPlanet::TopoPlanet(TopoGrid grid, Body body, LatitudeType latitudeType,
   southPoleV_ = (grid_.y0() + 90.0) / grid_.spacingY();
   slack_ = grid_.edgeSlack();
   resident_ = samples_->contiguous();
-  table_ = samples_->blockIndex();
-  sourceId_ = samples_->id();
+  paged_ = samples_->paged();
   poles_->mean = std::move(rowMean);
   poles_->north = northCap_ || grid_.y0() >= 90.0;
   poles_->south = southCap_ || lastLat <= -90.0;
@@ -177,8 +176,8 @@ detail::KernelResult planetAccessor(const TopoGrid& g, const SampleSource& src, 
   const long r = std::clamp(detail::floorToLong(v), 0L, rows - 1);
   long c = detail::floorToLong(u);
   c = global ? ((c % cols) + cols) % cols : std::clamp(c, 0L, cols - 1);
-  const detail::ThreadBlock& tb =
-      detail::acquireBlock(src, static_cast<std::size_t>(r), static_cast<std::size_t>(c));
+  const kernel::BlockView& tb =
+      detail::blockOf(src, static_cast<std::size_t>(r), static_cast<std::size_t>(c));
   return fn(detail::PlanetAcc<detail::BlockFetch>{{&src, &tb}, rows, cols, global, rn, rs});
 }
 
@@ -228,7 +227,7 @@ SurfaceSample TopoPlanet::surface(const LatLon& ll, Interpolation interp, Normal
 }
 
 bool TopoPlanet::bilinearFast(double u, double v, bool grad, detail::KernelResult& k) const {
-  detail::ResidentBilinear f;
+  kernel::ResidentBilinear f;
   f.rows = static_cast<long>(grid_.rows());
   f.cols = static_cast<long>(grid_.cols());
   if (f.rows < 2 || f.cols < 2) return false;
@@ -241,13 +240,17 @@ bool TopoPlanet::bilinearFast(double u, double v, bool grad, detail::KernelResul
   f.hasNodata = grid_.nodata().has_value() && !std::isnan(*grid_.nodata());
   f.snapU = 2.0 * slack_.x;
   f.snapV = 2.0 * slack_.y;
-  detail::CellValue cv;
+  kernel::CellValue cv;
   bool ok = false;
   if (resident_ != nullptr) {
     ok = grad ? f.evalResident<true>(u, v, cv) : f.evalResident<false>(u, v, cv);
   } else {
-    ok = grad ? detail::pagedBilinear<true>(f, table_, sourceId_, u, v, cv)
-              : detail::pagedBilinear<false>(f, table_, sourceId_, u, v, cv);
+    if (paged_ != nullptr && grad) {
+      ok = paged_->bilinearSurface(f, u, v, cv);
+    } else if (paged_ != nullptr) {
+      cv.h = paged_->bilinearHeight(f, u, v);
+      ok = cv.h == cv.h;
+    }
   }
   if (!ok) return false;
   k.h = cv.h;
@@ -270,8 +273,8 @@ void TopoPlanet::prefetch(const LatLon& given) const noexcept {
     const float* p = resident_ + r * grid_.cols() + c;
     __builtin_prefetch(p);
     if (r + 1 < grid_.rows()) __builtin_prefetch(p + grid_.cols());
-  } else if (table_ != nullptr) {
-    table_->prefetchCell(r, c);
+  } else if (paged_ != nullptr) {
+    paged_->prefetchCell(r, c);
   }
 }
 
@@ -284,7 +287,7 @@ SurfaceSample TopoPlanet::surfaceImpl(const LatLon& given, Interpolation interp,
   const double nd = detail::nodataOrNan(grid_);
   // Bilinear between the caps, in a cell that is not the seam's: the DEM's fast path (the
   // resident samples, or the thread's block and the lock-free block table of a paged source)
-  // on the cell locate() chose. Same samples, same arithmetic (detail::bilinearPatch), so the
+  // on the cell locate() chose. Same samples, same arithmetic (kernel::bilinearPatch), so the
   // same bits as the generic kernel below, which answers whatever the fast path declines.
   detail::KernelResult k;
   const bool fast =

@@ -3,6 +3,7 @@
 #include <regolith/clod/EffectList.hpp>
 #include <regolith/clod/Render.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/core/Executor.hpp>
 #include <regolith/render/TerrainImage.hpp>
 #include <regolith/rover/TrackLayer.hpp>
 #include <regolith/scene/SceneParts.hpp>
@@ -26,11 +27,13 @@ namespace regolith::python {
 namespace {
 
 /// The renderer's pyramid of a terrain: every stored level of its grid, paged through the
-/// terrain's own cache. DEMs are drawn in their grid frame (x east, y north, z height), or
-/// `placed` on their body (body-fixed, for lat/lon lines); planets body-fixed.
-std::shared_ptr<const clod::HeightPyramid> pyramidOf(const Terrain& t, bool placed) {
+/// terrain's own cache, its hints loaded on `loader` (the clipmap's). DEMs are drawn in their
+/// grid frame (x east, y north, z height), or `placed` on their body (body-fixed, for lat/lon
+/// lines); planets body-fixed.
+std::shared_ptr<const clod::HeightPyramid> pyramidOf(const Terrain& t, bool placed,
+                                                     std::shared_ptr<core::Executor> loader) {
   const store::GridInfo& info = t.store->grid(t.grid);
-  topo::GridPyramid p = store::Pager(t.store, t.cache).pyramid(t.grid);
+  topo::GridPyramid p = store::Pager(t.store, t.cache).pyramid(t.grid, std::move(loader));
   if (placed && info.kind == store::GridKind::Dem) {
     return std::make_shared<const clod::HeightPyramid>(std::move(p.levels),
                                                        store::placementOf(info));
@@ -229,8 +232,11 @@ py::array_t<std::uint8_t> render(const Terrain& t, const std::array<double, 3>& 
                           std::to_string(height) + ", expected 1 to 8192 pixels a side");
   }
   const PyEffects named = parseEffects(effects, heightRange, std::move(tracks));
-  auto pyramid = pyramidOf(t, named.request.latLon);
+  // One loader thread for the render: the pyramid's hints and the clipmap's reads.
+  auto loader = std::make_shared<core::ThreadPool>(1);
+  auto pyramid = pyramidOf(t, named.request.latLon, loader);
   clod::RenderRequest req;
+  req.clipmap.executor = loader;
   req.clipmap.size = clipmapSize;
   req.clipmap.effects = effectsOf(named, t, *pyramid);
   req.legendInImage = legend;

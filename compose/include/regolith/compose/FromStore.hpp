@@ -49,8 +49,10 @@ struct CatalogueFile {
 /// (featherMask(), grids up to 2^28 samples). Every dataset must be on one body. Unknown keys
 /// are refused (a misspelt key would silently change the surface). Throws InvalidArgument
 /// naming the file, the dataset's index and the key for bad content, IoError if the file
-/// cannot be read, StoreError for a bad store.
-[[nodiscard]] CatalogueFile readCatalogueFile(const std::filesystem::path& path,
-                                              std::size_t cacheBytes = std::size_t{256} << 20);
+/// cannot be read, StoreError for a bad store. Every dataset's pyramid hints and loads on
+/// `loader` if given (datasetFromStore()).
+[[nodiscard]] CatalogueFile readCatalogueFile(
+    const std::filesystem::path& path, std::size_t cacheBytes = std::size_t{256} << 20,
+    const std::shared_ptr<core::Executor>& loader = nullptr);
 
 }  // namespace regolith::compose

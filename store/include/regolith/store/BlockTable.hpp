@@ -3,7 +3,8 @@
 /// Lock-free lookup of a paged source's resident blocks, for queries that jump between
 /// blocks (random access) without taking the cache's lock: the tables, the hazard domains
 /// that keep a block alive while a thread reads it, and the recency clock. Queries see a
-/// table through its read side, topo::BlockIndex; only the cache (PatchCache) writes one.
+/// table through its read side, BlockIndex (BlockIndex.hpp); only the cache (PatchCache) writes
+/// one.
 ///
 /// Why hand-written: a query that enters a new block used to go through the cache (mutex,
 /// hash map, policy bookkeeping, shared_ptr reference counts): some 300 instructions and
@@ -15,7 +16,7 @@
 ///
 /// Protocol. The cache publishes each resident block in the table of its source (a release
 /// store) and retracts it before eviction. A reader loads the slot, announces the block in
-/// its thread's hazard record of the table's domain with a plain store (topo::protect()),
+/// its thread's hazard record of the table's domain with a plain store (protect()),
 /// re-reads the slot and uses the block only if it is unchanged. The reclaimer retracts, runs
 /// a process-wide memory barrier (Linux membarrier(2), which makes every running thread
 /// execute a full fence), then frees a retracted block only if no record of its domain names
@@ -30,7 +31,7 @@
 /// its tables) and its recency clock. Two caches share nothing, so one cache's reclaimer
 /// scans only its own readers, and its recency ticks are its own.
 
-#include <regolith/topo/BlockIndex.hpp>
+#include <regolith/store/BlockIndex.hpp>
 
 #include <atomic>
 #include <cstddef>
@@ -56,11 +57,11 @@ class HazardDomain : public std::enable_shared_from_this<HazardDomain> {
   /// The calling thread's record in this domain, registering the thread on first use (a
   /// record of an ended thread is reused). The record is given back when the thread ends.
   /// Requires that the domain is owned by a shared_ptr. Throws std::bad_alloc.
-  [[nodiscard]] topo::HazardRecord& threadRecord();
+  [[nodiscard]] HazardRecord& threadRecord();
   /// threadRecord() where readers may skip the fence (membarrier(2) is registered), else
   /// null: queries then do not use the tables. Clears the thread's
-  /// records in other domains (topo::BlockIndex::joinDomain()).
-  [[nodiscard]] topo::HazardRecord* lockFreeRecord();
+  /// records in other domains (BlockIndex::joinDomain()).
+  [[nodiscard]] HazardRecord* lockFreeRecord();
   /// Whether readers may use the lock-free path in this process (membarrier(2) registered).
   [[nodiscard]] static bool lockFree() noexcept;
 
@@ -79,7 +80,7 @@ class HazardDomain : public std::enable_shared_from_this<HazardDomain> {
   /// A recency tick for an event under the cache's lock (a miss, a locked hit): unique and
   /// increasing across all threads.
   std::uint64_t tick() noexcept { return clock_.fetch_add(1, std::memory_order_relaxed); }
-  /// The stamp of a lock-free hit (topo::BlockIndex::now()): the clock as it is, newer than
+  /// The stamp of a lock-free hit (BlockIndex::now()): the clock as it is, newer than
   /// every tick handed out before it.
   [[nodiscard]] std::uint64_t now() const noexcept {
     return clock_.load(std::memory_order_relaxed);
@@ -88,7 +89,7 @@ class HazardDomain : public std::enable_shared_from_this<HazardDomain> {
   [[nodiscard]] const std::atomic<std::uint64_t>* clock() const noexcept { return &clock_; }
 
   /// A thread's record: the reader's part, and the registry's.
-  struct Record : topo::HazardRecord {
+  struct Record : HazardRecord {
     std::atomic<bool> inUse{false};  // owned by a live thread
     Record* next = nullptr;          // registry list (freed with the domain)
   };
@@ -102,7 +103,7 @@ class HazardDomain : public std::enable_shared_from_this<HazardDomain> {
 };
 
 /// The resident blocks of one source, one slot per aligned blockRows × blockCols block, in
-/// the hazard domain of the cache that publishes them. Readers: the topo::BlockIndex side.
+/// the hazard domain of the cache that publishes them. Readers: the BlockIndex side.
 /// Writers (the cache, under its own lock): publish() and retract().
 ///
 /// Memory: the slots are one anonymous mapping of the whole table, reserved without backing
@@ -117,7 +118,7 @@ class HazardDomain : public std::enable_shared_from_this<HazardDomain> {
 /// mapping whose pages are given back in the same way, tell when a page empties. Why not a radix
 /// tree: its extra dependent loads on every block switch would slow random queries, and the
 /// kernel's lazy zero pages give the same sparseness with none.
-class BlockTable final : public topo::BlockIndex {
+class BlockTable final : public BlockIndex {
  public:
   /// The most bytes of address space one table may reserve (2^40, 1 TiB; the table of a
   /// 2^31 × 2^31 grid in 64 × 64 patches takes 24 GiB).
@@ -136,14 +137,11 @@ class BlockTable final : public topo::BlockIndex {
 
   /// The domain whose records protect this table's blocks.
   [[nodiscard]] HazardDomain& hazards() const noexcept { return *domain_; }
-  [[nodiscard]] topo::HazardRecord* joinDomain() const override {
-    return domain_->lockFreeRecord();
-  }
+  [[nodiscard]] HazardRecord* joinDomain() const override { return domain_->lockFreeRecord(); }
 
   /// Publishes block (blockRow, blockCol), which must be complete (data and geometry).
   /// Writers only (under the owner's lock).
-  void publish(std::size_t blockRow, std::size_t blockCol,
-               const topo::PublishedBlock* block) noexcept;
+  void publish(std::size_t blockRow, std::size_t blockCol, const PublishedBlock* block) noexcept;
   /// Removes block (blockRow, blockCol); readers may still use it until it is reclaimed.
   /// Gives the slot's page back to the kernel when no block of it is published any more.
   /// Writers only (under the owner's lock).

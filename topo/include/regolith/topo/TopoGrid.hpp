@@ -87,27 +87,15 @@ class TopoGrid {
   std::optional<float> nodata_;
 };
 
-class BlockIndex;
-
-/// A resident block of samples: rows × cols samples starting at (row0, col0), row-major
-/// with `stride` floats between rows. `owner` keeps the memory alive (a paged source hands
-/// out its patch), so a block stays valid after the source evicts it.
-struct SampleBlock {
-  const float* data = nullptr;
-  std::size_t row0 = 0, col0 = 0, rows = 0, cols = 0, stride = 0;
-  std::shared_ptr<const void> owner;
-  [[nodiscard]] bool contains(std::size_t r, std::size_t c) const noexcept {
-    return data != nullptr && r >= row0 && c >= col0 && r - row0 < rows && c - col0 < cols;
-  }
-};
+class PagedQueries;
 
 /// Where a grid's samples come from. Implementations: InMemorySamples here; the store's
-/// pager (regolith::store) pages them from HDF5 patch by patch.
+/// pager (regolith::store) pages them from HDF5 patch by patch (store::BlockSource).
 ///
 /// Thread-safety: every const member may be called from several threads at once.
 class SampleSource {
  public:
-  SampleSource();
+  SampleSource() = default;
   SampleSource(const SampleSource&) = delete;
   SampleSource& operator=(const SampleSource&) = delete;
   virtual ~SampleSource() = default;
@@ -122,15 +110,10 @@ class SampleSource {
   /// All samples as one row-major array if they are resident, else nullptr. Queries use
   /// it as their fast path.
   [[nodiscard]] virtual const float* contiguous() const noexcept { return nullptr; }
-  /// The resident block holding (row, col), loading it if needed, or false if the source
-  /// has no blocks (then queries read sample by sample). Queries keep the last block per
-  /// thread, so a run of queries inside one block costs no call at all.
-  virtual bool block(std::size_t row, std::size_t col, SampleBlock& out) const;
-  /// The lock-free table of this source's resident blocks (topo/BlockIndex.hpp; the store's
-  /// pager has one per grid level), or null. Queries entering a new block look there first,
-  /// and call block() only if the table has no block for the point. The table must live as
-  /// long as the source.
-  [[nodiscard]] virtual const BlockIndex* blockIndex() const noexcept { return nullptr; }
+  /// The bilinear fast paths of a source whose samples are resident in blocks (the store's
+  /// pager), or null: queries then read samples through contiguous() or sample(). The
+  /// object lives as long as the source.
+  [[nodiscard]] virtual const PagedQueries* paged() const noexcept { return nullptr; }
   /// A block of samples: rows [row0, row0 + rows), columns [col0, col0 + cols).
   struct Window {
     std::size_t row0 = 0, col0 = 0, rows = 0, cols = 0;
@@ -147,12 +130,6 @@ class SampleSource {
   /// returns when each is loaded or failed. Windows are clipped to the grid. Never fails (the
   /// read reports a load that failed). Default: nothing (samples in memory).
   virtual void load(std::span<const Window> windows) const noexcept { (void)windows; }
-  /// A process-unique id, never reused, so per-thread query state can tell sources apart
-  /// even when one is destroyed and another is allocated at the same address.
-  [[nodiscard]] std::uint64_t id() const noexcept { return id_; }
-
- private:
-  std::uint64_t id_;
 };
 
 /// Samples held in one row-major float array.

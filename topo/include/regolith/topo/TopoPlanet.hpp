@@ -33,7 +33,6 @@ inline constexpr double kPoleOverhangPixels = 0.01;
 /// |lat| > 90 and NaN/inf throw InvalidArgument.
 ///
 /// Thread-safety: as TopoDem.
-class BlockIndex;
 namespace detail {
 struct KernelResult;
 }
@@ -141,10 +140,9 @@ class TopoPlanet {
   glm::dvec2 slack_{0.0};  // grid_.edgeSlack()
   std::shared_ptr<Poles> poles_;
   // The bilinear fast path (TopoPlanet.cpp, bilinearFast): the samples when resident, else
-  // the paged source's block table and unique id, as the source gives them; cached.
+  // the paged source's fast paths, as the source gives them; cached.
   const float* resident_ = nullptr;
-  const BlockIndex* table_ = nullptr;
-  std::uint64_t sourceId_ = 0;
+  const PagedQueries* paged_ = nullptr;
 };
 
 }  // namespace regolith::topo

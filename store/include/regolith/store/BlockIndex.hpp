@@ -4,26 +4,18 @@
 /// resident block without a lock (random access), and nothing more.
 ///
 /// The tables themselves (their memory), the hazard domains that keep a block alive while a
-/// thread reads it, the reclaimer's process-wide barrier and the recency clock belong to the
-/// store (store/BlockTable.hpp, which describes the protocol and why it is hand-written).
-/// This header makes no system call and holds no process-wide state: a reader loads a slot,
-/// announces the block in its thread's hazard record of the table's domain with a plain
-/// store (protect()), re-reads the slot, and uses the block only if it is unchanged.
+/// thread reads it, the reclaimer's process-wide barrier and the recency clock are
+/// BlockTable.hpp's, which describes the protocol and why it is hand-written. This header
+/// makes no system call and holds no process-wide state: a reader loads a slot, announces
+/// the block in its thread's hazard record of the table's domain with a plain store
+/// (protect()), re-reads the slot, and uses the block only if it is unchanged. The readers
+/// are the queries of a BlockSource (BlockSource.cpp).
 
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
 
-namespace regolith::topo {
-
-/// The address sample (0, 0) of the grid would have if a block's rows extended back to it,
-/// in integer arithmetic (as a pointer it could lie outside any object): a query then finds
-/// sample (r, c) at origin + (r·stride + c)·sizeof(float) with no subtraction of the
-/// block's first row and column (fewer instructions on the random-access path).
-[[nodiscard]] inline std::uintptr_t originOf(const float* data, std::size_t row0, std::size_t col0,
-                                             std::size_t stride) noexcept {
-  return reinterpret_cast<std::uintptr_t>(data) - (row0 * stride + col0) * sizeof(float);
-}
+namespace regolith::store {
 
 /// A block as published in a BlockIndex. Its samples and geometry are immutable while it is
 /// published and until its reclaimer frees it. The counters are the cache's per-block hit
@@ -32,23 +24,25 @@ namespace regolith::topo {
 struct PublishedBlock {
   const float* data = nullptr;
   std::size_t row0 = 0, col0 = 0, rows = 0, cols = 0, stride = 0;
-  /// Fractional (u, v) whose whole bilinear cell lies in the block (as in a ThreadBlock).
+  /// Fractional (u, v) whose whole bilinear cell lies in the block (as in a
+  /// topo::kernel::BlockView).
   double uLo = 0.0, uHi = 0.0, vLo = 0.0, vHi = 0.0;
-  /// originOf(data, row0, col0, stride): sample (r, c) is at origin + (r·stride + c)·4.
+  /// topo::kernel::originOf(data, row0, col0, stride): sample (r, c) is at
+  /// origin + (r·stride + c)·4.
   std::uintptr_t origin = 0;
   mutable std::atomic<std::uint64_t> fastHits{0};  // hits taken through the table
   mutable std::atomic<std::uint64_t> lastUse{0};   // the domain's clock at the last hit
 };
 
 /// One reader thread's announcement in a hazard domain: the block it may be reading. The
-/// domain (store::HazardDomain) owns the records and hands one to each thread that joins it.
+/// domain (HazardDomain) owns the records and hands one to each thread that joins it.
 struct HazardRecord {
   std::atomic<const void*> ptr{nullptr};
 };
 
 /// Announces that this thread is about to read `p` (then re-check that p is still
 /// published before using it). No fence: the reclaimer's process-wide barrier
-/// (store::HazardDomain::barrier(), membarrier(2)) pairs with it, which is why a domain hands
+/// (HazardDomain::barrier(), membarrier(2)) pairs with it, which is why a domain hands
 /// out records for the lock-free path only where that barrier exists. The same code runs
 /// under ThreadSanitizer: the release store is what gives the reclaimer's acquire loads their
 /// happens-before edge to the reads of the block that came before it, and membarrier(2)
@@ -60,8 +54,8 @@ inline void protect(HazardRecord& rec, const void* p) noexcept {
 
 /// The resident blocks of one source as readers see them: one slot per aligned
 /// blockRows × blockCols block, its hazard domain and that domain's recency clock. Made and
-/// written only by the store (store::BlockTable), which also documents the memory behind the
-/// slots. Thread-safety: every const member may be called from any thread.
+/// written only by BlockTable, which also documents the memory behind the slots. Thread-safety:
+/// every const member may be called from any thread.
 class BlockIndex {
  public:
   /// The sizes of a table: samples and blocks (all > 0; the store checks them).
@@ -131,7 +125,7 @@ class BlockIndex {
   /// not pair with protect()): queries then enter new blocks through the source's block().
   /// Joining clears the thread's records in other domains (a thread reads through one domain
   /// at a time), so that their caches may free the blocks those named. Out of line and rare:
-  /// queries keep the record per thread (detail::tlHazard). May throw (allocation).
+  /// queries keep the record per thread (BlockSource.cpp). May throw (allocation).
   [[nodiscard]] virtual HazardRecord* joinDomain() const = 0;
 
  protected:
@@ -185,20 +179,4 @@ class BlockIndex {
   const std::atomic<std::uint64_t>* clock_;
 };
 
-namespace detail {
-/// The calling thread's hazard record for one domain (the last it joined), kept beside the
-/// thread's block (TopoDem.hpp) so that entering a block costs no call: a reader uses rec
-/// only for tables of that domain (detail::hazardFor() in TopoDem.hpp switches it). domain 0
-/// (no domain) when the thread has none, or its domain gave no record for the lock-free
-/// path. Trivially destructible, like the thread's block. The store clears it when the
-/// thread's records are given back at thread exit.
-struct ThreadHazard {
-  std::uint64_t domain = 0;
-  HazardRecord* rec = nullptr;
-};
-inline thread_local ThreadHazard
-    tlHazard;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
-
-}  // namespace detail
-
-}  // namespace regolith::topo
+}  // namespace regolith::store
