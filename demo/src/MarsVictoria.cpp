@@ -398,6 +398,10 @@ scene::SceneDescription sceneDescription(const MarsVictoriaOptions& options,
   };
   scene::SceneDescription d;
   d.folder = std::filesystem::current_path();
+  // The root is the Sun, as in buildPaperScene(): the bodies' poses are heliocentric. The
+  // light stays Victoria's morning sun below (a direction chosen for the pictures), not
+  // `"from": "sun"`, the Sun's direction in this layout.
+  d.root = "sun";
   scene::Body mars;
   mars.name = "mars";
   scene::DataSource planet;

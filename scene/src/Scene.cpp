@@ -85,6 +85,19 @@ struct Scene::Impl {
   std::size_t traversesDriven = 0;
   scenegraph::NodeId lightFrame = 0;
   glm::dvec3 lightDirection{0.0, 0.0, 1.0};
+  bool lightFromOrigin = false;  // Light::from: the light is at lightFrame's origin
+
+  /// The direction towards the light in `frame`: a direction given in the light's frame,
+  /// or towards the origin of the light's frame (a sun: as far as a heliocentric scene's
+  /// Sun, the direction varies by 2e-5 rad across Mars, so the frame's origin stands for
+  /// every point of it).
+  [[nodiscard]] glm::dvec3 lightIn(scenegraph::NodeId frame) const {
+    const scenegraph::Pose p = graph.relative(frame, lightFrame);
+    if (!lightFromOrigin) return p.applyVector(lightDirection);
+    const glm::dvec3 towards = p.apply(glm::dvec3(0.0));
+    if (!(glm::length(towards) > 0.0)) return lightDirection;  // the frame is the light's own
+    return glm::normalize(towards);
+  }
 
   [[noreturn]] void fail(const std::string& ptr, const std::string& what) const {
     throw InvalidArgument("Scene: " + ptr + ": " + what);
@@ -489,10 +502,12 @@ struct Scene::Impl {
                                   scenegraph::Pose::lookAt(vec(c.eye), vec(c.lookAt), vec(c.up)),
                                   scenegraph::NodeKind::Camera);
     }
-    const std::string lightFrameName = !d.light.frame.empty() ? d.light.frame
-                                       : !d.dems.empty()      ? d.dems.front().name
-                                                              : d.bodies.front().name;
+    const std::string lightFrameName = !d.light.from.empty()    ? d.light.from
+                                       : !d.light.frame.empty() ? d.light.frame
+                                       : !d.dems.empty()        ? d.dems.front().name
+                                                                : d.bodies.front().name;
     lightFrame = graph.at(lightFrameName);
+    lightFromOrigin = !d.light.from.empty();
     if (d.light.direction) {
       lightDirection = glm::normalize(vec(*d.light.direction));
     } else {
@@ -514,6 +529,7 @@ struct Scene::Impl {
 Scene::Scene(SceneDescription description, const SceneOptions& options)
     : impl_(std::make_unique<Impl>()) {
   impl_->d = std::move(description);
+  impl_->graph = scenegraph::SceneGraph(impl_->d.root);
   impl_->options = options;
   impl_->cache = std::make_shared<store::PatchCache>(options.cacheBytes);
   impl_->loader =
@@ -586,8 +602,7 @@ glm::dvec4 Scene::objectPose(const std::string& object) const {
 }
 
 glm::dvec3 Scene::lightIn(const std::string& frame) const {
-  return impl_->graph.relative(impl_->graph.at(frame), impl_->lightFrame)
-      .applyVector(impl_->lightDirection);
+  return impl_->lightIn(impl_->graph.at(frame));
 }
 
 std::size_t Scene::traversesDriven() const noexcept { return impl_->traversesDriven; }
@@ -645,7 +660,7 @@ gl::RgbaImage Scene::render(scenegraph::NodeId camera, scenegraph::NodeId focus,
     render::SceneRenderer renderer;
     registerWith(renderer);
     gl::RenderTarget target(width, height);
-    view.lightInFocus = s.graph.relative(focus, s.lightFrame).applyVector(s.lightDirection);
+    view.lightInFocus = s.lightIn(focus);
     target.clear({0.02F, 0.02F, 0.04F, 1.0F});
     const scenegraph::RenderList list = s.graph.renderList(focus, camera);
     renderer.prepare(list, view);        // waits: the headless frame does not depend on read speed

@@ -337,7 +337,9 @@ class Reader {
   SceneDescription scene(const json& doc) const {
     SceneDescription s;
     s.folder = folder_;
-    object(doc, "", {"version", "bodies", "dems", "objects", "cameras", "light"});
+    object(doc, "", {"version", "root", "bodies", "dems", "objects", "cameras", "light"});
+    s.root = string(doc, "", "root", false);
+    if (s.root.empty()) s.root = "root";
     s.version = static_cast<int>(integer(doc, "", "version", -1, kSceneVersion, kSceneVersion));
     if (s.version < 0) fail("/version", "missing, expected " + std::to_string(kSceneVersion));
     const json& bodies = array(doc, "", "bodies", true);
@@ -507,8 +509,12 @@ class Reader {
       s.cameras.push_back(std::move(cam));
     }
     if (const json* l = member(doc, "light")) {
-      object(*l, "/light", {"frame", "elevation", "azimuth", "direction"});
+      object(*l, "/light", {"frame", "elevation", "azimuth", "direction", "from"});
       s.light.frame = string(*l, "/light", "frame", false);
+      s.light.from = string(*l, "/light", "from", false);
+      if (l->contains("from") && l->size() > 1)
+        fail("/light",
+             "expected \"from\" alone (a light at a frame's origin has no direction of its own)");
       if (l->contains("direction") && (l->contains("elevation") || l->contains("azimuth")))
         fail("/light", "expected \"direction\" or \"elevation\" and \"azimuth\", not both");
       s.light.elevation = number(*l, "/light", "elevation", 35.0, {-90.0, 90.0});
@@ -538,6 +544,7 @@ class Reader {
       if (!fresh) fail(ptr, "\"" + name + "\" is already the name of " + it->second);
     };
     std::vector<std::string> bodies, terrains, frames, cameras;
+    unique(s.root, "/root");
     for (std::size_t i = 0; i < s.bodies.size(); ++i) {
       unique(s.bodies[i].name, "/bodies/" + std::to_string(i) + "/name");
       bodies.push_back(s.bodies[i].name);
@@ -574,6 +581,9 @@ class Reader {
               "body or DEM");
     }
     if (!s.light.frame.empty()) known(s.light.frame, frames, "/light/frame", "body, DEM or object");
+    frames.insert(frames.begin(), s.root);
+    if (!s.light.from.empty())
+      known(s.light.from, frames, "/light/from", "root, body, DEM or object");
   }
 
   fs::path resolve(const std::string& store) const {
@@ -664,6 +674,7 @@ json toJson(const SceneDescription& s, const fs::path& to) {
   const fs::path& from = s.folder;
   json doc;
   doc["version"] = s.version;
+  if (s.root != "root") doc["root"] = s.root;
   doc["bodies"] = json::array();
   for (const Body& b : s.bodies) {
     json j;
@@ -723,8 +734,10 @@ json toJson(const SceneDescription& s, const fs::path& to) {
     doc["cameras"].push_back(std::move(j));
   }
   json light = json::object();
-  if (!s.light.frame.empty()) light["frame"] = s.light.frame;
-  if (s.light.direction) {
+  if (!s.light.frame.empty() && s.light.from.empty()) light["frame"] = s.light.frame;
+  if (!s.light.from.empty()) {
+    light["from"] = s.light.from;
+  } else if (s.light.direction) {
     light["direction"] = *s.light.direction;
   } else {
     light["elevation"] = s.light.elevation;

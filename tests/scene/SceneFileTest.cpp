@@ -344,6 +344,73 @@ TEST(SceneFile, BadBodyPosesAndBodiesWithoutHeightsAreNamed) {
             "their equatorial radii)");
 }
 
+TEST(SceneFile, TheRootIsNamedAndALightMayComeFromIt) {
+  json j = withEarth();
+  j["root"] = "sun";
+  j["light"] = {{"from", "sun"}};
+  const SceneDescription s = parse(j);
+  EXPECT_EQ(s.root, "sun");
+  EXPECT_EQ(s.light.from, "sun");
+  EXPECT_EQ(parse(withEarth()).root, "root") << "unnamed, the root is \"root\"";
+  const json w = json::parse(sceneJson(s, "/nowhere"));
+  EXPECT_EQ(w["root"], "sun");
+  EXPECT_EQ(w["light"], json({{"from", "sun"}}));
+  EXPECT_FALSE(json::parse(sceneJson(parse(withEarth()), "/nowhere")).contains("root"));
+  EXPECT_EQ(parseScene(sceneJson(s, "/nowhere"), "t.json", "/nowhere"), s);
+
+  json bad = j;
+  bad["light"]["elevation"] = 10;
+  EXPECT_EQ(errorOf(bad),
+            "t.json: /light: expected \"from\" alone (a light at a frame's origin has no "
+            "direction of its own)");
+  bad = j;
+  bad["light"] = {{"from", "moon"}};
+  EXPECT_EQ(errorOf(bad),
+            "t.json: /light/from: \"moon\" names no root, body, DEM or object (there are: sun, "
+            "mars, earth, victoria, rover)");
+  bad = j;
+  bad["root"] = "mars";
+  EXPECT_EQ(errorOf(bad), "t.json: /bodies/0/name: \"mars\" is already the name of /root");
+  bad = j;
+  bad["root"] = "";
+  EXPECT_EQ(errorOf(bad), "t.json: /root: empty, expected a non-empty string");
+}
+
+TEST(Scene, ALightFromTheSunComesFromTheRootsOriginInEveryFrame) {
+  json j = withEarth();
+  j["root"] = "sun";
+  j["light"] = {{"from", "sun"}};
+  j["bodies"][0]["pose"] = {
+      {"position", {2.0e11, 1.0e11, 0.0}}, {"obliquity", 25.19}, {"spin", 120}};
+  const Scene s(parse(j));
+  EXPECT_EQ(s.graph().at("sun"), s.graph().root());
+  // Towards the Sun from a body at p, in the body's frame, worked by hand:
+  // Rz(spin)ᵀ Rx(obliquity)ᵀ (−p / |p|).
+  constexpr double kDeg = std::numbers::pi / 180.0;
+  const auto towardsSun = [&](glm::dvec3 p, double obliquity, double spin) {
+    const glm::dvec3 d = -glm::normalize(p);
+    const double ob = obliquity * kDeg, sp = spin * kDeg;
+    const glm::dvec3 t{d.x, std::cos(ob) * d.y + std::sin(ob) * d.z,
+                       -std::sin(ob) * d.y + std::cos(ob) * d.z};
+    return glm::dvec3{std::cos(sp) * t.x + std::sin(sp) * t.y,
+                      -std::sin(sp) * t.x + std::cos(sp) * t.y, t.z};
+  };
+  const glm::dvec3 mars = towardsSun({2.0e11, 1.0e11, 0.0}, 25.19, 120.0);
+  const glm::dvec3 earth = towardsSun({1.0e11, -1.1e11, 2.5e9}, 23.44, 40.0);
+  EXPECT_NEAR(glm::length(s.lightIn("mars") - mars), 0.0, 1e-15);
+  EXPECT_NEAR(glm::length(s.lightIn("earth") - earth), 0.0, 1e-15);
+  // Victoria sees the Sun from its own origin, 3.4e6 m from Mars's centre: within
+  // 3.4e6 / 2.2e11 = 1.5e-5 rad of the direction at the centre, and not the same bits.
+  const scenegraph::SceneGraph& g = s.graph();
+  const glm::dvec3 atCentre = g.relative(g.at("victoria"), g.at("mars")).applyVector(mars);
+  const double apart = glm::length(s.lightIn("victoria") - atCentre);
+  EXPECT_LT(apart, 1.6e-5);
+  EXPECT_GT(apart, 1e-9);
+  // The same scene lit by a direction in Mars's frame instead: that direction, unchanged.
+  j["light"] = {{"frame", "mars"}, {"direction", {0.0, 0.0, 1.0}}};
+  EXPECT_EQ(Scene(parse(j)).lightIn("mars"), glm::dvec3(0.0, 0.0, 1.0));
+}
+
 TEST(Scene, ABodyInsideAnotherIsRefusedWhenBuilt) {
   // Mars's radii come from its generator: only building knows them.
   json j = withEarth();

@@ -82,9 +82,10 @@ struct SceneOptions {
 };
 
 /// A built scene. Building needs no GL; render() does (and makes an EGL context if none is
-/// current). Node names are the description's (bodies, DEMs, objects, cameras) under a root
-/// frame "root"; each body's frame is body-fixed, each DEM's its local tangent plane (x east,
-/// y north at heading 0, z up), each rover's x forward, y left, z up.
+/// current). Node names are the description's (bodies, DEMs, objects, cameras) under the
+/// root frame (SceneDescription::root, "root" unless the file names it); each body's frame is
+/// body-fixed, each DEM's its local tangent plane (x east, y north at heading 0, z up), each
+/// rover's x forward, y left, z up.
 ///
 /// Not thread-safe; render() from the thread that owns the GL context.
 class Scene {
@@ -123,7 +124,8 @@ class Scene {
   [[nodiscard]] glm::dvec4 objectPose(const std::string& object) const;
   /// How many traverses building the scene drove (those not given by SceneOptions::driven).
   [[nodiscard]] std::size_t traversesDriven() const noexcept;
-  /// The direction towards the light in the frame of node `frame` (unit).
+  /// The direction towards the light in the frame of node `frame` (unit): the light's
+  /// direction, or, for a light `from` a frame (a sun), towards that frame's origin.
   [[nodiscard]] glm::dvec3 lightIn(const std::string& frame) const;
   /// The render list's focus for a camera (its `focus`, or its frame's terrain).
   [[nodiscard]] std::string focusOf(const std::string& camera) const;

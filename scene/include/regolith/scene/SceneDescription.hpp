@@ -200,11 +200,15 @@ struct Camera {
 };
 
 /// The light: a direction in a named frame, as elevation above its x-y plane and azimuth
-/// clockwise from +y (for a DEM: above the horizon, clockwise from north), or as a vector.
+/// clockwise from +y (for a DEM: above the horizon, clockwise from north), or as a vector;
+/// or the direction of a frame's origin (`from`: a sun).
 struct Light {
   std::string frame;  ///< empty: the first DEM, else the first body
   double elevation = 35.0, azimuth = 90.0;
   std::optional<std::array<double, 3>> direction;
+  /// A light at the origin of this frame (the root: the Sun of a heliocentric scene), far
+  /// away: in every frame the light comes from that origin. Excludes the other keys.
+  std::string from;
   bool operator==(const Light&) const = default;
 };
 
@@ -212,6 +216,9 @@ struct Light {
 /// not written to the file).
 struct SceneDescription {
   int version = 1;
+  /// The name of the root frame, the one the bodies' poses are given in ("sun" in a
+  /// heliocentric scene, where a light may come `from` it).
+  std::string root = "root";
   std::vector<Body> bodies;
   std::vector<Dem> dems;
   std::vector<Object> objects;
