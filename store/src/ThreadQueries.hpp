@@ -33,9 +33,7 @@ struct ThreadBlock {
 // resident patches ran 40 % slower than when this state was topo's, inlined into the caller.
 // The cost: the Python module, loaded with dlopen(), takes these 112 bytes from glibc's
 // static TLS reserve (rtld.optional_static_tls, 512 bytes by default).
-#define REGOLITH_TLS_FAST \
-  [[gnu::tls_model("initial-exec")]]  // NOLINT(cppcoreguidelines-macro-usage)
-REGOLITH_TLS_FAST inline thread_local ThreadBlock
+[[gnu::tls_model("initial-exec")]] inline thread_local ThreadBlock
     tlBlock;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
 // Keeps the memory of the calling thread's block alive when the source handed it out.
 inline thread_local std::shared_ptr<const void> tlBlockOwner;  // NOLINT
@@ -50,7 +48,7 @@ struct ThreadHazard {
   std::uint64_t domain = 0;
   HazardRecord* rec = nullptr;
 };
-REGOLITH_TLS_FAST inline thread_local ThreadHazard
+[[gnu::tls_model("initial-exec")]] inline thread_local ThreadHazard  // as tlBlock
     tlHazard;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
 
 /// Forgets the calling thread's hazard record (its domain gave the records back).
