@@ -71,11 +71,10 @@ std::uint64_t nextSourceId() noexcept {
 // queries. Heights come back in a register (NaN: not answered).
 constexpr double kNotAnswered = std::numeric_limits<double>::quiet_NaN();
 
-template <bool Grad>
-[[gnu::noinline]] bool tableQuery(const BlockIndex* table, std::uint64_t source,
-                                  const topo::kernel::ResidentBilinear& grid, double u, double v,
-                                  topo::kernel::CellValue& out) noexcept {
-  return detail::tableBilinear<Grad>(grid, table, source, u, v, out);
+[[gnu::noinline]] bool tableSurface(const BlockIndex* table, std::uint64_t source,
+                                    const topo::kernel::ResidentBilinear& grid, double u, double v,
+                                    topo::kernel::CellValue& out) noexcept {
+  return detail::tableBilinear<true>(grid, table, source, u, v, out);
 }
 
 [[gnu::noinline]] double tableHeight(const BlockIndex* table, std::uint64_t source,
@@ -103,7 +102,7 @@ bool BlockSource::bilinearSurface(const topo::kernel::ResidentBilinear& grid, do
   const detail::ThreadBlock& tb = detail::tlBlock;
   if (tb.source == id_ && topo::kernel::blockBilinear<true>(tb.view, grid, u, v, out)) [[likely]]
     return true;
-  return tableQuery<true>(table_.get(), id_, grid, u, v, out);
+  return tableSurface(table_.get(), id_, grid, u, v, out);
 }
 
 void BlockSource::bilinearHeights(const topo::kernel::DemIndexer& m,
