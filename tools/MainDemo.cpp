@@ -426,7 +426,8 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
       << std::setprecision(1) << flyover.endDistance
       << " m from the rover, focus Mars → Victoria at frame " << flyover.focusSwitchFrame << ")\n";
   out << "  far field: PGM drew Mars beyond the clipmaps in " << flyover.farFieldFrames
-      << " frames, the impostor in " << flyover.impostorFrames << " (docs/far-field.md)\n";
+      << " frames, the impostor in " << flyover.impostorFrames << "; the clipmaps filled "
+      << flyover.coveredFrames << " (docs/far-field.md)\n";
   if (!flyover.datasetsPerFrame.empty()) {
     const auto [lo, hi] =
         std::minmax_element(flyover.datasetsPerFrame.begin(), flyover.datasetsPerFrame.end());

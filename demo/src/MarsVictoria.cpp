@@ -352,6 +352,7 @@ FlyoverSummary renderFlyover(scene::Scene& s, const FlyoverOptions& options) {
       const render::SceneFrame frame = renderer.draw(list, view, &target);
       summary.farFieldFrames += frame.farFieldsPgm > 0 ? 1 : 0;
       summary.impostorFrames += frame.farFieldsImpostor > 0 ? 1 : 0;
+      summary.coveredFrames += frame.farFieldsCovered > 0 ? 1 : 0;
       const gl::RgbaImage image = target.readColor();
       renderSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
       const auto path = framePath(options.outputDir, i);

@@ -75,6 +75,16 @@ FarFieldFrame FarField::draw(const gl::RenderTarget& target, const clod::Camera&
   const double relief = std::max(std::abs(layers_->minHeight()), std::abs(layers_->maxHeight()));
   frame.reliefPixels = d > pgm_.maxRadius() ? relief / (d - pgm_.maxRadius()) * camera.focalPixels()
                                             : std::numeric_limits<double>::infinity();
+  // (A camera not of the target's size goes on to PGM, which refuses it.)
+  if (keepDrawn && camera.width == target.width() && camera.height == target.height() &&
+      !emptyTest_.anyEmpty(target)) {
+    // The near field drew every pixel: nothing to fill in. PGM's lagged primary sphere
+    // would come from a view long past when it next draws, so it starts again from the
+    // lowest radius.
+    pgm_.restart();
+    frame.mode = FarFieldMode::Covered;
+    return frame;
+  }
   const double limit = pgm_.options().impostorReliefPixels;
   if (!(limit > 0.0 && frame.reliefPixels <= limit)) {
     frame.pgm = pgm_.draw(target, camera, sun, keepDrawn);

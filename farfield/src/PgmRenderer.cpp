@@ -132,6 +132,15 @@ PgmRenderer::~PgmRenderer() {
   }
 }
 
+void PgmRenderer::restart() noexcept {
+  primary_ = minRadius_;
+  for (void*& f : fences_) {
+    if (f != nullptr) glDeleteSync(static_cast<GLsync>(f));
+    f = nullptr;
+  }
+  frameIndex_ = 0;
+}
+
 void PgmRenderer::setFrameUniforms(const clod::Camera& camera, const ReferenceSpheres& s,
                                    const SamplingCamera& sc, const glm::dvec3& sun) const {
   const gl::Program& g = grid_;

@@ -596,6 +596,8 @@ void SceneRenderer::drawFarFields(const scenegraph::RenderList& list, const Scen
           static_cast<std::size_t>(ff.pgm.gridWidth) * static_cast<std::size_t>(ff.pgm.gridHeight);
     } else if (ff.mode == farfield::FarFieldMode::Impostor) {
       ++frame.farFieldsImpostor;
+    } else if (ff.mode == farfield::FarFieldMode::Covered) {
+      ++frame.farFieldsCovered;
     }
   }
 }

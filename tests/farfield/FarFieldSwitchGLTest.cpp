@@ -10,6 +10,8 @@
 #include <regolith/farfield/FarField.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/farfield/PgmRenderer.hpp>
+#include <regolith/gl/Gl.hpp>
+#include <regolith/gl/Image.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Body.hpp>
 
@@ -205,6 +207,74 @@ TEST(FarFieldGL, TheEarlyImpostorIsWithinTheReliefInPixels) {
   EXPECT_GT(both, 20000);
   EXPECT_EQ(outsideBand, 0);
   EXPECT_LE(worst, reliefPx + 0.01);
+}
+
+// The near field covering the whole target (a close view whose clipmap fills the screen)
+// leaves the far field nothing to do: FarField draws nothing (mode Covered), changes no
+// pixel, and PGM's primary sphere, measured on earlier frames, starts again from the lowest
+// radius. One empty pixel where the body is brings PGM back, and it fills that pixel only.
+TEST(FarFieldGL, ACoveredTargetIsLeftAsItIsAndPgmStartsAgainLow) {
+  test::glContext();
+  const topo::Body mars = topo::Body::marsEllipsoid();
+  const double a = mars.equatorialRadius();
+  const glm::dvec3 sun = glm::normalize(glm::dvec3(1.0, 0.4, 0.5));
+  // 300 km up, looking down a little off the nadir: the ground fills the view.
+  const glm::dvec3 eye = glm::normalize(glm::dvec3(1.0, 0.3, 0.4)) * (a + 300.0e3);
+  const clod::Camera cam = camera(eye, 0.9 * eye + glm::dvec3(0.0, 0.0, 5.0e4), 64, 40.0);
+  PgmOptions po;
+  po.gridWidth = po.gridHeight = 64;  // the default read-back: lagged by a frame
+  FarField field(marsLayers(), po);
+  PgmRenderer& pgm = field.pgm();
+
+  gl::RenderTarget target(cam.width, cam.height);
+  for (int frame = 0; frame < 4; ++frame) {
+    target.clear({0.0F, 0.0F, 0.0F, 1.0F});
+    ASSERT_EQ(field.draw(target, cam, sun, true).mode, FarFieldMode::Pgm) << frame;
+    glFinish();  // the lagged read-back's fence has passed by the next frame
+  }
+  // The ground seen from here lies well above the body's lowest radius.
+  ASSERT_GT(pgm.primaryRadius(), pgm.minRadius() + 100.0);
+
+  // Every pixel drawn (at a depth in front of the ground, in a colour PGM never draws).
+  const float drawn = 0.9F;
+  target.clear({1.0F, 0.0F, 1.0F, 1.0F});
+  glClearNamedFramebufferfv(target.framebuffer(), GL_DEPTH, 0, &drawn);
+  const gl::RgbaImage before = target.readColor();
+  const FarFieldFrame covered = field.draw(target, cam, sun, true);
+  EXPECT_EQ(covered.mode, FarFieldMode::Covered);
+  EXPECT_FALSE(covered.pgm.drawn);
+  EXPECT_EQ(target.readColor().rgba, before.rgba);
+  EXPECT_EQ(pgm.primaryRadius(), pgm.minRadius());
+
+  // One pixel at the centre left empty: PGM draws it, and only it.
+  const float empty = 0.0F;
+  glEnable(GL_SCISSOR_TEST);
+  glScissor(cam.width / 2, cam.height / 2, 1, 1);
+  glClearNamedFramebufferfv(target.framebuffer(), GL_DEPTH, 0, &empty);
+  glDisable(GL_SCISSOR_TEST);
+  const FarFieldFrame filled = field.draw(target, cam, sun, true);
+  EXPECT_EQ(filled.mode, FarFieldMode::Pgm);
+  const gl::RgbaImage after = target.readColor();
+  const gl::DepthImage depth = target.readDepth();
+  int changed = 0;
+  for (int y = 0; y < cam.height; ++y) {
+    for (int x = 0; x < cam.width; ++x) {
+      const bool centre = x == cam.width / 2 && y == cam.height - 1 - cam.height / 2;
+      const bool same = after.is(x, y, 255, 0, 255);
+      if (!same) ++changed;
+      if (centre) {
+        EXPECT_FALSE(same) << "the empty pixel was not filled";
+        EXPECT_GT(depth.at(x, y), 0.0F);
+        EXPECT_LT(depth.at(x, y), drawn);
+      }
+    }
+  }
+  EXPECT_EQ(changed, 1);
+
+  // Without keepDrawn there is no test: PGM draws over the target by the depth test.
+  target.clear({1.0F, 0.0F, 1.0F, 1.0F});
+  glClearNamedFramebufferfv(target.framebuffer(), GL_DEPTH, 0, &drawn);
+  EXPECT_EQ(field.draw(target, cam, sun, false).mode, FarFieldMode::Pgm);
 }
 
 }  // namespace

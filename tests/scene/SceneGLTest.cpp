@@ -360,6 +360,31 @@ TEST(SceneGL, TheRenderersFarFieldDrawsThePlanetWholeInEachViewSlot) {
   const gl::RgbaImage alone = secondFrame(false), interleaved = secondFrame(true);
   EXPECT_TRUE(alone.rgba == interleaved.rgba);
 
+  // Straight down from 200 km the clipmap fills the view: the far field has no pixel to
+  // fill and draws nothing (counted as covered); the image is the clipmap's alone.
+  const double up = 3396190.0 + 200.0e3;
+  const Scene low(withCamera("mars", {up, 0.0, 0.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, 1.0}));
+  const scenegraph::RenderList lowList =
+      low.graph().renderList(low.graph().at("mars"), low.cameraNode("view"));
+  render::SceneView lowView = view;
+  lowView.lightInFocus = low.lightIn("mars");
+  const auto lowFrame = [&](const gl::RenderTarget* t) {
+    render::SceneRenderer r;
+    low.registerWith(r);
+    target.clear({0.02F, 0.02F, 0.04F, 1.0F});
+    r.prepare(lowList, lowView);
+    const render::SceneFrame f = r.draw(lowList, lowView, t, 0);
+    return std::pair{f, target.readColor()};
+  };
+  const auto [lowNear, lowNearImage] = lowFrame(nullptr);
+  const auto [lowBoth, lowBothImage] = lowFrame(&target);
+  EXPECT_EQ(planetPixels(lowNearImage), view.width * view.height);
+  EXPECT_EQ(lowBoth.farFieldsCovered, 1U);
+  EXPECT_EQ(lowBoth.farFieldsPgm + lowBoth.farFieldsImpostor, 0U);
+  EXPECT_EQ(lowBoth.vertices, lowNear.vertices);
+  EXPECT_TRUE(lowBothImage.rgba == lowNearImage.rgba);
+  EXPECT_EQ(withTarget.farFieldsCovered, 0U);  // the whole planet: the rim was empty
+
   // Refused, naming the call and what was expected.
   render::SceneRenderer r;
   s.registerWith(r);

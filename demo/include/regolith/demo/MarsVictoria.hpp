@@ -119,9 +119,11 @@ struct FlyoverSummary {
   /// Camera distance to the rover at the first and last frame (m).
   double startDistance = 0.0, endDistance = 0.0;
   /// Frames in which the far field drew Mars by PGM around the clipmaps (options.scene.
-  /// farField), and by the impostor (too far for PGM).
+  /// farField), by the impostor (too far for PGM), and frames in which it drew nothing
+  /// because the clipmaps had filled the view (farfield::FarFieldMode::Covered).
   int farFieldFrames = 0;
   int impostorFrames = 0;
+  int coveredFrames = 0;
 };
 
 /// Builds the demo scene (buildScene(options.scene) with the rover at options.rover) and

@@ -7,6 +7,7 @@
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/farfield/PgmRenderer.hpp>
 #include <regolith/farfield/RayCastGlobe.hpp>
+#include <regolith/gl/EmptyPixels.hpp>
 #include <regolith/gl/GlObjects.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 
@@ -17,7 +18,14 @@
 namespace regolith::farfield {
 
 /// What drew the body in one FarField::draw().
-enum class FarFieldMode { Pgm, Impostor, None };
+enum class FarFieldMode {
+  Pgm,
+  Impostor,
+  /// Nothing to draw: with keepDrawn, the target had no empty pixel (the near field covered
+  /// it), and neither PGM nor the impostor ran.
+  Covered,
+  None
+};
 
 /// What one FarField::draw() did.
 struct FarFieldFrame {
@@ -34,8 +42,10 @@ struct FarFieldFrame {
 /// A body's far field: draws it by PGM while the view has a secondary sphere (r_s > 0) and
 /// hands over to the ray-cast impostor beyond (or sooner, once the relief spans at most
 /// PgmOptions::impostorReliefPixels), filling in around what the target already
-/// shows (the near-field clipmaps drawn first). The camera is body-fixed (the body's centre
-/// at the origin). Needs a current GL 4.5 context; belongs to its thread.
+/// shows (the near-field clipmaps drawn first). Where the target has no empty pixel left
+/// (a near view whose clipmap fills the screen), it draws nothing and costs one depth-only
+/// pass (FarFieldMode::Covered). The camera is body-fixed (the body's centre at the origin).
+/// Needs a current GL 4.5 context; belongs to its thread.
 ///
 /// The impostor is the body's ellipsoid (RayCastGlobe, polygon proxy) textured with PGM's
 /// own albedo of the equirectangular layer (the height ramp or the flat albedo of
@@ -54,7 +64,9 @@ class FarField {
   [[nodiscard]] RayCastGlobe& globe() noexcept { return globe_; }
 
   /// Draws the body into `target` where it has no depth yet (keepDrawn) or over it by the
-  /// depth test. `sun`: unit direction towards the light, body-fixed.
+  /// depth test. `sun`: unit direction towards the light, body-fixed. With keepDrawn and no
+  /// empty pixel in the target, draws nothing (mode Covered; PGM then restarts its primary
+  /// sphere when it next draws, PgmRenderer::restart()).
   FarFieldFrame draw(const gl::RenderTarget& target, const clod::Camera& camera,
                      const glm::dvec3& sun, bool keepDrawn = true);
 
@@ -63,6 +75,7 @@ class FarField {
   PgmRenderer pgm_;
   RayCastGlobe globe_;
   gl::Texture albedo_;
+  gl::EmptyPixelTest emptyTest_;
   gl::Texture drawnDepth_{0};
   int depthWidth_ = 0, depthHeight_ = 0;
 };

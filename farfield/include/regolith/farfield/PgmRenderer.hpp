@@ -121,6 +121,11 @@ class PgmRenderer {
   [[nodiscard]] double maxRadius() const noexcept { return maxRadius_; }
   /// The primary radius the next draw() will use.
   [[nodiscard]] double primaryRadius() const noexcept { return primary_; }
+  /// Forgets what earlier frames measured: the next draw() takes the lowest radius as its
+  /// primary sphere, as the first one does, and a read-back still in flight is dropped. For
+  /// a caller that skips frames (FarField, while the near field covers the target): the
+  /// minimum visible radius of a view long past may lie above the ground seen now.
+  void restart() noexcept;
 
   /// Draws into `target` (which the caller cleared) with depth test and depth writes. The
   /// camera must have the target's size (InvalidArgument otherwise). `sun` is the unit

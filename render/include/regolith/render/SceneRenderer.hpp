@@ -89,6 +89,9 @@ struct SceneFrame {
   std::size_t vertices = 0;           ///< the far fields' PGM grids (as drawn) included
   std::size_t farFieldsPgm = 0;       ///< far fields drawn by PGM
   std::size_t farFieldsImpostor = 0;  ///< far fields drawn by the ray-cast impostor
+  /// Far fields with nothing to draw: the near field had covered the target
+  /// (farfield::FarFieldMode::Covered; one depth-only pass each).
+  std::size_t farFieldsCovered = 0;
 };
 
 /// Draws render lists (scenegraph::SceneGraph::renderList). Each item is drawn in its own frame:
