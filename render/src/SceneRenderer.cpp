@@ -166,7 +166,11 @@ struct SceneRenderer::Skirt {
 
 struct SceneRenderer::Terrain {
   std::shared_ptr<const HeightPyramid> pyramid;
-  std::unique_ptr<ClipmapTerrain> clipmap;
+  // One clipmap per view slot, each with its own windows and textures: views drawn in turn
+  // (split viewports) would otherwise move one clipmap's windows back and forth every frame
+  // and reload them. [0] is made by addTerrain(); a slot's other clipmaps on its first
+  // prepare().
+  std::vector<std::unique_ptr<ClipmapTerrain>> clipmaps;
   ClipmapOptions options;
   std::vector<int> cutBy;  // planets: the DEMs that win over them
   // DEMs that cut a planet: the finest level's cell mask and border skirt.
@@ -184,7 +188,7 @@ struct SceneRenderer::Terrain {
   // read yet, one per clipmap level, on the executor.
   void startProbe(const glm::dvec3& origin) {
     std::vector<PlanetCell> missing;
-    for (std::size_t k = 0; k < clipmap->levelCount(); ++k) {
+    for (std::size_t k = 0; k < clipmaps.front()->levelCount(); ++k) {
       const PlanetCell c = planetCellUnder(*pyramid, k, origin);
       if (underDems.count(c) == 0) missing.push_back(c);
     }
@@ -213,6 +217,16 @@ struct SceneRenderer::Terrain {
       }
       for (const auto& [cell, h] : probe.get()) underDems.emplace(cell, h);
     }
+  }
+  // The clipmap of view slot `slot`, made now if the slot has none.
+  ClipmapTerrain& clipmapOf(std::size_t slot) {
+    if (clipmaps.size() <= slot) clipmaps.resize(slot + 1);
+    if (!clipmaps[slot]) clipmaps[slot] = std::make_unique<ClipmapTerrain>(pyramid, options);
+    return *clipmaps[slot];
+  }
+  // The clipmap of view slot `slot`, or null if no prepare() made it.
+  [[nodiscard]] ClipmapTerrain* preparedClipmap(std::size_t slot) const {
+    return slot < clipmaps.size() ? clipmaps[slot].get() : nullptr;
   }
 };
 
@@ -245,7 +259,7 @@ void SceneRenderer::addTerrain(int drawable, std::shared_ptr<const HeightPyramid
   auto t = std::make_unique<Terrain>();
   t->pyramid = pyramid;
   t->options = options;
-  t->clipmap = std::make_unique<ClipmapTerrain>(std::move(pyramid), options);
+  t->clipmaps.push_back(std::make_unique<ClipmapTerrain>(std::move(pyramid), options));
   terrains_.emplace(drawable, std::move(t));
 }
 
@@ -288,9 +302,11 @@ void SceneRenderer::addCutOut(int planet, int dem) {
                           " already has " + std::to_string(clod::kMaxClipmapCutOuts) + " DEMs");
   p->second->cutBy.push_back(dem);
   if (!p->second->options.cutOuts) {
-    // The planet's program gains the cut-out test (only planets that DEMs cut carry it).
+    // The planet's program gains the cut-out test (only planets that DEMs cut carry it): its
+    // clipmaps are made again, slot 0 now and the others on their next prepare().
     p->second->options.cutOuts = true;
-    p->second->clipmap = std::make_unique<ClipmapTerrain>(p->second->pyramid, p->second->options);
+    p->second->clipmaps.clear();
+    p->second->clipmapOf(0);
   }
   if (t.mask) return;  // already cuts another planet
 
@@ -370,10 +386,19 @@ void SceneRenderer::addFarField(int planet, std::shared_ptr<const farfield::Heig
 
 const ClipmapTerrain* SceneRenderer::terrain(int drawable) const {
   const auto it = terrains_.find(drawable);
-  return it == terrains_.end() ? nullptr : it->second->clipmap.get();
+  return it == terrains_.end() ? nullptr : it->second->clipmaps.front().get();
 }
 
 namespace {
+
+void checkSlot(const char* op, std::size_t slot) {
+  if (slot >= SceneRenderer::kMaxSlots)
+    throw InvalidArgument(
+        core::format({.operation = op,
+                      .field = "slot",
+                      .value = core::number(slot),
+                      .expected = "a view slot below " + core::number(SceneRenderer::kMaxSlots)}));
+}
 
 void checkView(const char* op, const SceneView& view) {
   if (view.width < 1 || view.height < 1 || !(view.near > 0.0) ||
@@ -392,8 +417,9 @@ glm::dvec3 demOrigin(const scenegraph::RenderItem& planet, const scenegraph::Ren
 }  // namespace
 
 std::size_t SceneRenderer::prepare(const scenegraph::RenderList& list, const SceneView& view,
-                                   Loading loading) {
+                                   Loading loading, std::size_t slot) {
   checkView("SceneRenderer::prepare()", view);
+  checkSlot("SceneRenderer::prepare()", slot);
   // Every terrain asks first, so their executors read side by side; then each uploads.
   std::vector<ClipmapTerrain*> asked;
   for (const scenegraph::RenderItem& item : list.items) {
@@ -403,8 +429,9 @@ std::size_t SceneRenderer::prepare(const scenegraph::RenderList& list, const Sce
     const glm::dvec3 centre = view.clipmapCentreInFocus
                                   ? item.inFocus.inverse().apply(*view.clipmapCentreInFocus)
                                   : cameraInItem(item.cameraInItem(), view).position;
-    t.clipmap->requestFocus(focusFor(*t.pyramid, centre));
-    asked.push_back(t.clipmap.get());
+    ClipmapTerrain& clipmap = t.clipmapOf(slot);
+    clipmap.requestFocus(focusFor(*t.pyramid, centre));
+    asked.push_back(&clipmap);
   }
   std::size_t count = 0;
   for (ClipmapTerrain* c : asked)
@@ -429,6 +456,7 @@ std::size_t SceneRenderer::prepare(const scenegraph::RenderList& list, const Sce
 SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneView& view,
                                const gl::RenderTarget* target, std::size_t slot) {
   checkView("SceneRenderer::draw()", view);
+  checkSlot("SceneRenderer::draw()", slot);
   if (target != nullptr && !farFields_.empty() &&
       (view.x != 0 || view.y != 0 || view.width != target->width() ||
        view.height != target->height()))
@@ -451,10 +479,12 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
       continue;
     }
     Terrain& t = *it->second;
+    ClipmapTerrain* const clipmap = t.preparedClipmap(slot);
+    if (clipmap == nullptr) continue;  // never prepared in this slot: nothing to draw
     const Camera cam = cameraInItem(item.cameraInItem(), view);
     ClipmapOptions opts = t.options;
     opts.lightDirection = lightIn(item.inFocus, view.lightInFocus);
-    t.clipmap->setOptions(opts);
+    clipmap->setOptions(opts);
 
     // Cut-outs: for every DEM over this planet that is in the list, eye → DEM mask cell.
     if (t.options.cutOuts) {
@@ -469,9 +499,9 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
             {dt.mask.get(), cutOutTransform(planetToDem, glm::transpose(cam.rotation()),
                                             cam.position, dt.pyramid->level(dt.maskLevel).grid)});
       }
-      t.clipmap->setCutOuts(cuts, {view.x, view.y});
+      clipmap->setCutOuts(cuts, {view.x, view.y});
     }
-    const ClipmapFrame cf = t.clipmap->draw(cam);
+    const ClipmapFrame cf = clipmap->draw(cam);
     frame.vertices += cf.vertices;
     ++frame.terrainsDrawn;
   }
@@ -484,6 +514,8 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
     const auto it = terrains_.find(item.drawable);
     if (!skirts_ || it == terrains_.end() || !it->second->skirt) continue;
     Terrain& t = *it->second;
+    const ClipmapTerrain* const demClipmap = t.preparedClipmap(slot);
+    if (demClipmap == nullptr) continue;
     std::vector<PlanetUnderDem> under;
     bool known = true;  // every planet's sample under this DEM has been read
     for (auto& [key, planet] : terrains_) {
@@ -493,9 +525,14 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
       const scenegraph::RenderItem* pi = list.findDrawable(key);
       if (pi == nullptr) continue;
       // The planet level drawn finest for this camera: its sample under the DEM's origin.
+      const ClipmapTerrain* const planetClipmap = planet->preparedClipmap(slot);
+      if (planetClipmap == nullptr) {  // the planet is not drawn in this slot
+        known = false;
+        break;
+      }
       const Camera pc = cameraInItem(pi->cameraInItem(), view);
-      const auto [first, count] = planet->clipmap->activeLevels(pc);
-      const std::size_t k = count == 0 ? planet->clipmap->levelCount() - 1 : first;
+      const auto [first, count] = planetClipmap->activeLevels(pc);
+      const std::size_t k = count == 0 ? planetClipmap->levelCount() - 1 : first;
       const glm::dvec3 origin = demOrigin(*pi, item);
       const PlanetCell cell = planetCellUnder(*planet->pyramid, k, origin);
       if (planet->underDems.count(cell) == 0) planet->collectProbes(false);
@@ -516,8 +553,8 @@ SceneFrame SceneRenderer::draw(const scenegraph::RenderList& list, const SceneVi
     }
     if (!known) continue;
     const Camera cam = cameraInItem(item.cameraInItem(), view);
-    const auto [first, count] = t.clipmap->activeLevels(cam);
-    const std::size_t coarsest = count == 0 ? t.clipmap->levelCount() - 1 : first + count - 1;
+    const auto [first, count] = demClipmap->activeLevels(cam);
+    const std::size_t coarsest = count == 0 ? demClipmap->levelCount() - 1 : first + count - 1;
     const SkirtDrop drop =
         skirtDrop(t.skirt->border, under, t.pyramid->level(coarsest).grid.spacingX(),
                   t.pyramid->level(t.maskLevel).grid.spacingX(), t.maskLevel > 0);

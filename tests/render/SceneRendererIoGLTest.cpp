@@ -5,6 +5,7 @@
 // the real in-memory samples and notes which thread read them; a gate holds the reads back
 // to show that a background prepare() does not wait for them.
 #include <regolith/clod/ClipmapTerrain.hpp>
+#include <regolith/core/Error.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/render/SceneRenderer.hpp>
 #include <regolith/scenegraph/SceneGraph.hpp>
@@ -23,6 +24,7 @@
 #include <memory>
 #include <mutex>
 #include <span>
+#include <string>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -292,6 +294,76 @@ TEST(SceneRendererIoGLTest, BackgroundPrepareDoesNotWaitAndEndsAtTheWaitingFrame
   EXPECT_EQ(texels, waited.texels);
   EXPECT_EQ(last.image.rgba, waited.image.rgba);
   EXPECT_EQ(reads.late, 0U);
+}
+
+// Views drawn in turn (the viewer's split viewports) each take a view slot with clipmaps of
+// their own: preparing slot 1 for a camera 1000 km away moves none of slot 0's windows, so
+// slot 0's view prepared again reads and uploads nothing and draws the same image. A slot
+// never prepared draws no terrain; a slot out of range is refused by name.
+TEST(SceneRendererIoGLTest, EachViewSlotKeepsItsOwnClipmaps) {
+  test::glContext();
+  Reads reads;
+  World w(reads);
+  const auto r = w.renderer();
+  gl::RenderTarget target(w.view.width, w.view.height);
+  const scenegraph::Pose nearPose = World::lookFrom({-400.0, -500.0, 250.0});
+  const scenegraph::Pose farPose = World::lookFrom({-400.0e3, -500.0e3, 250.0e3});
+  const auto frame = [&](const scenegraph::Pose& pose, std::size_t slot, std::size_t& texels,
+                         std::size_t& readsMade) {
+    w.g.setLocal(w.cam, pose);
+    const scenegraph::RenderList list = w.g.renderList(w.demNode, w.cam);
+    reads.reset();
+    texels = r->prepare(list, w.view, Loading::Wait, slot);
+    readsMade = reads.all();
+    target.clear({1.0F, 0.0F, 1.0F, 1.0F});
+    const SceneFrame f = r->draw(list, w.view, nullptr, slot);
+    EXPECT_EQ(f.terrainsDrawn, 2U) << "slot " << slot;
+    return target.readColor();
+  };
+  std::size_t texels = 0, readsMade = 0;
+  const gl::RgbaImage nearImage = frame(nearPose, 0, texels, readsMade);
+  EXPECT_GT(texels, 0U);
+  const gl::RgbaImage farImage = frame(farPose, 1, texels, readsMade);
+  EXPECT_GT(texels, 0U);  // slot 1's own windows, filled for its own camera
+  EXPECT_GT(readsMade, 0U);
+  EXPECT_NE(farImage.rgba, nearImage.rgba);
+  const gl::RgbaImage nearAgain = frame(nearPose, 0, texels, readsMade);
+  EXPECT_EQ(texels, 0U);
+  EXPECT_EQ(readsMade, 0U);
+  EXPECT_EQ(nearAgain.rgba, nearImage.rgba);
+  const gl::RgbaImage farAgain = frame(farPose, 1, texels, readsMade);
+  EXPECT_EQ(texels, 0U);
+  EXPECT_EQ(farAgain.rgba, farImage.rgba);
+
+  // Slot 2 was never prepared: nothing of it is drawn.
+  const scenegraph::RenderList list = w.g.renderList(w.demNode, w.cam);
+  target.clear({1.0F, 0.0F, 1.0F, 1.0F});
+  EXPECT_EQ(r->draw(list, w.view, nullptr, 2).terrainsDrawn, 0U);
+  const gl::RgbaImage untouched = target.readColor();
+  std::size_t cleared = 0;
+  for (int y = 0; y < untouched.height; ++y)
+    for (int x = 0; x < untouched.width; ++x) cleared += untouched.is(x, y, 255, 0, 255) ? 1U : 0U;
+  EXPECT_EQ(cleared, static_cast<std::size_t>(untouched.width * untouched.height));
+
+  const auto refused = [&](auto&& call) {
+    try {
+      call();
+    } catch (const InvalidArgument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string expected = "slot is " + std::to_string(SceneRenderer::kMaxSlots) +
+                               ", expected a view slot below " +
+                               std::to_string(SceneRenderer::kMaxSlots);
+  EXPECT_NE(refused([&] {
+              (void)r->prepare(list, w.view, Loading::Wait, SceneRenderer::kMaxSlots);
+            }).find("SceneRenderer::prepare(): " + expected),
+            std::string::npos);
+  EXPECT_NE(refused([&] {
+              (void)r->draw(list, w.view, nullptr, SceneRenderer::kMaxSlots);
+            }).find("SceneRenderer::draw(): " + expected),
+            std::string::npos);
 }
 
 }  // namespace

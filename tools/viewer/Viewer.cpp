@@ -490,7 +490,8 @@ void Viewer::draw(int width, int height) {
     const render::SceneView view = viewOf(k);
     v.target->clear(kSpace);
     const scenegraph::RenderList list = scene_.graph->renderList(focus, camera);
-    renderer_->prepare(list, view, split_ ? render::Loading::Wait : loading_);
+    // Each viewport in its own slot: its own clipmaps, which the other's camera never moves.
+    renderer_->prepare(list, view, loading_, k);
     // The far fields too (their PGM grids counted in the vertices), in this viewport's slot.
     const render::SceneFrame frame = renderer_->draw(list, view, v.target.get(), k);
     vertices_ += frame.vertices;

@@ -133,26 +133,36 @@ class SceneRenderer {
   void addFarField(int planet, std::shared_ptr<const farfield::HeightLayers> layers,
                    const farfield::PgmOptions& options);
 
-  /// Loads what draw() needs for `list` seen through `view`: moves each terrain's clipmap to
-  /// its focus (view.clipmapCentreInFocus or else the camera's position, in the terrain's
-  /// frame, clamped onto a plane DEM's grid), reads on the executors as `loading` says, uploads
-  /// what has arrived, and starts reading the planet samples under the DEMs that cut it (the border
-  /// skirts' depth). Call it before each draw() of a list whose camera or items moved. Returns the
-  /// texels uploaded. A read error of the loader (a store I/O error) is rethrown here. Throws
-  /// InvalidArgument for a view draw() would refuse.
+  /// Views drawn in turn each take a slot below this (prepare(), draw()).
+  static constexpr std::size_t kMaxSlots = 16;
+
+  /// Loads what draw() needs for `list` seen through `view` in view slot `slot`: moves each
+  /// terrain's clipmap of that slot to its focus (view.clipmapCentreInFocus or else the
+  /// camera's position, in the terrain's frame, clamped onto a plane DEM's grid), reads on
+  /// the executors as `loading` says, uploads what has arrived, and starts reading the planet
+  /// samples under the DEMs that cut it (the border skirts' depth). Call it before each
+  /// draw() of a list whose camera or items moved. Returns the texels uploaded. A read error
+  /// of the loader (a store I/O error) is rethrown here. Throws InvalidArgument for a view
+  /// draw() would refuse, or a slot of kMaxSlots or more.
+  ///
+  /// Each slot has clipmaps of its own (made on its first prepare(); slot 0's by
+  /// addTerrain()), so views drawn in turn, such as split viewports, do not move one
+  /// another's clipmap windows and reload them every frame.
   std::size_t prepare(const scenegraph::RenderList& list, const SceneView& view,
-                      Loading loading = Loading::Wait);
+                      Loading loading = Loading::Wait, std::size_t slot = 0);
   /// Draws `list` into the bound framebuffer within view's viewport (depth state: reversed
   /// Z, as RenderTarget sets it), with what prepare() left resident: draw() reads no terrain
   /// source, moves no clipmap and waits for no read (a terrain never prepared draws nothing;
   /// a DEM's border skirt waits for a frame in which the planet's sample under it is in).
   ///
-  /// With `target` (the render target bound, which the view must cover whole: PGM's passes
-  /// are the target's size), draw() then draws the far fields (addFarField) of the list's
-  /// planets. Each view `slot` has far fields of its own: PGM's primary sphere comes from the
-  /// previous frame of the same view, so views drawn in turn (viewports, cameras) each take a
-  /// slot. Without `target` no far field is drawn. Throws InvalidArgument for a view draw()
-  /// cannot draw (a far field's view not covering the target included).
+  /// The clipmaps drawn are those of view `slot` (prepare()); a slot never prepared draws no
+  /// terrain. With `target` (the render target bound, which the view must cover whole: PGM's
+  /// passes are the target's size), draw() then draws the far fields (addFarField) of the
+  /// list's planets. Each slot has far fields of its own too: PGM's primary sphere comes from
+  /// the previous frame of the same view, so views drawn in turn (viewports, cameras) each
+  /// take a slot. Without `target` no far field is drawn. Throws InvalidArgument for a view
+  /// draw() cannot draw (a far field's view not covering the target included) or a slot of
+  /// kMaxSlots or more.
   SceneFrame draw(const scenegraph::RenderList& list, const SceneView& view,
                   const gl::RenderTarget* target = nullptr, std::size_t slot = 0);
 
@@ -160,7 +170,7 @@ class SceneRenderer {
   /// planet's cut edge and the DEM's border then leave gaps wherever their heights differ.
   void setBorderSkirts(bool on) noexcept { skirts_ = on; }
 
-  /// The clipmap of a terrain key (nullptr if none).
+  /// The clipmap of a terrain key in view slot 0 (nullptr if none).
   [[nodiscard]] const clod::ClipmapTerrain* terrain(int drawable) const;
 
  private:
