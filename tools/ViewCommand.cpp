@@ -10,6 +10,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include <malloc.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -32,9 +34,22 @@ struct Args {
   int clipmapSize = 127;  // a quarter of render's vertices: interactive on llvmpipe
 };
 
+// Keeps freed heap for reuse rather than handing it back to the kernel: glibc trims the top of
+// its heap once more than M_TRIM_THRESHOLD is free there (a threshold that otherwise follows
+// the largest mapped block freed, a few MiB), and a frame's large transient buffers then
+// came back as fresh zeroed pages every frame. The demo scene in split viewports spent
+// half its frame in those page faults: 157-175 ms a frame with glibc's default, 77-85 ms
+// with 64 MiB (docs/viewer.md, "Frame time"). A viewer holds its working set anyway.
+void keepFreedHeap() {
+#ifdef __GLIBC__
+  (void)mallopt(M_TRIM_THRESHOLD, 64 << 20);
+#endif
+}
+
 void runView(const Args& a) {
   if (a.demo == !a.store.empty())
     throw InvalidArgument("view: give a store, a scene file or --demo (one of them)");
+  keepFreedHeap();
   // Scene data first, so a bad store fails before a window opens.
   std::vector<viewer::ScriptStep> script;
   if (!a.script.empty()) script = viewer::parseScript(a.script);
