@@ -9,7 +9,6 @@
 #include "viewer/Viewer.hpp"
 
 #include <CLI/CLI.hpp>
-
 #include <malloc.h>
 
 #include <algorithm>

@@ -9,6 +9,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
+#include <vector>
 
 namespace regolith::clod {
 
@@ -92,6 +94,82 @@ glm::dvec3 ClipmapLevel::centre() const {
   const glm::dvec2 p =
       lattice(static_cast<double>(row0_ + half), static_cast<double>(col0_ + half));
   return pyramid_.position(p.x, p.y, 0.0);
+}
+
+ClipmapLevel::Bound ClipmapLevel::bound(double below) const {
+  const double lo = static_cast<double>(minH_) - below, hi = static_cast<double>(maxH_);
+  const double half = 0.5 * static_cast<double>(n_ - 1);
+  const auto r0 = static_cast<double>(row0_), c0 = static_cast<double>(col0_);
+  const double last = static_cast<double>(n_ - 1);
+  Bound b;
+  if (pyramid_.kind() == SurfaceKind::Planet) {
+    const topo::Body& body = *pyramid_.body();
+    const double a = body.equatorialRadius(), polarR = body.polarRadius();
+    // The window's angular radius about its centre sample: every vertex's direction lies
+    // within theta of the centre's. On a lat/lon lattice a meridian step then a parallel
+    // step reach any sample, so theta <= half the latitude span + half the longitude span
+    // (rows past a pole and columns past the seam are the same points continued), plus
+    // twice the largest geodetic-geocentric latitude difference (about the flattening).
+    double theta = 0.0;
+    const double flattening = (a - polarR) / a;
+    if (polar_ == 0) {
+      theta = half * (spacingX() + spacingY()) * std::numbers::pi / 180.0;
+    } else {
+      // A stereographic square: the largest angle to its border, sampled finely, plus two
+      // lattice steps' angle.
+      const glm::dvec3 c = glm::normalize(centre());
+      const auto dir = [&](double vr, double vc) {
+        const glm::dvec2 g = lattice(vr, vc);
+        return glm::normalize(pyramid_.position(g.x, g.y, 0.0));
+      };
+      constexpr int kEdge = 32;
+      for (int e = 0; e <= kEdge; ++e) {
+        const double t = last * e / kEdge;
+        for (const glm::dvec3& d :
+             {dir(r0, c0 + t), dir(r0 + last, c0 + t), dir(r0 + t, c0), dir(r0 + t, c0 + last)})
+          theta = std::max(theta, std::acos(std::clamp(glm::dot(c, d), -1.0, 1.0)));
+      }
+      theta += 2.0 * polarStep_ / polarR;
+    }
+    theta = std::min(theta + 2.0 * flattening + 1e-9, std::numbers::pi);
+    // |P − c| ≤ ||P| − |c|| + 2|c|·sin(θ/2) for P within θ of c's direction.
+    // A vertex at height h lies between polarR + min(h, 0) and a + max(h, 0) from the centre.
+    b.centre = centre();
+    const double rc = glm::length(b.centre);
+    const double nearest = polarR + std::min(lo, 0.0), farthest = a + std::max(hi, 0.0);
+    b.radius = std::max(farthest - rc, rc - nearest) + 2.0 * rc * std::sin(0.5 * theta);
+    b.radius = b.radius * (1.0 + 1e-9) + 1e-3;
+    return b;
+  }
+  // A plane's window is the rectangle of its lattice; a placed one is sampled on a 9 × 9
+  // lattice over it at both heights, with the largest step between neighbours as margin for
+  // what bends between them.
+  constexpr std::size_t kSteps = 8;
+  std::vector<glm::dvec3> pts;
+  pts.reserve(2 * (kSteps + 1) * (kSteps + 1));
+  double step = 0.0;
+  for (std::size_t i = 0; i <= kSteps; ++i) {
+    for (std::size_t j = 0; j <= kSteps; ++j) {
+      const glm::dvec2 g = lattice(r0 + last * static_cast<double>(i) / kSteps,
+                                   c0 + last * static_cast<double>(j) / kSteps);
+      for (const double h : {lo, hi}) pts.push_back(pyramid_.position(g.x, g.y, h));
+      if (j > 0) step = std::max(step, glm::length(pts[pts.size() - 1] - pts[pts.size() - 3]));
+      if (i > 0) {
+        const std::size_t above = pts.size() - 1 - 2 * (kSteps + 1);
+        step = std::max(step, glm::length(pts.back() - pts[above]));
+      }
+    }
+  }
+  glm::dvec3 lower(std::numeric_limits<double>::infinity()), upper(-lower);
+  for (const glm::dvec3& p : pts) {
+    lower = glm::min(lower, p);
+    upper = glm::max(upper, p);
+  }
+  b.centre = 0.5 * (lower + upper);
+  for (const glm::dvec3& p : pts) b.radius = std::max(b.radius, glm::length(p - b.centre));
+  if (pyramid_.placement()) b.radius += step;
+  b.radius = b.radius * (1.0 + 1e-9) + 1e-3;
+  return b;
 }
 
 double ClipmapLevel::cellMetres() const {

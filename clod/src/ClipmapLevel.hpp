@@ -79,6 +79,15 @@ class ClipmapLevel {
   [[nodiscard]] double spacingY() const noexcept { return grid().spacingY(); }
   /// Largest distance in metres between neighbouring samples near the window centre.
   [[nodiscard]] double cellMetres() const;
+  /// A sphere holding every vertex the level can draw: its window's samples from `below`
+  /// metres under the lowest height (the skirts) up to the highest, in scene coordinates.
+  /// Conservative (the window's angular extent about its centre on a planet, its rectangle
+  /// on a plane, sampled through a placement); for culling whole levels.
+  struct Bound {
+    glm::dvec3 centre{0.0};
+    double radius = 0.0;
+  };
+  [[nodiscard]] Bound bound(double below) const;
   /// Lowest and highest valid height in the window (0, 0 if none is valid).
   [[nodiscard]] float minHeight() const noexcept { return minH_; }
   [[nodiscard]] float maxHeight() const noexcept { return maxH_; }

@@ -27,6 +27,61 @@
 
 namespace regolith::clod {
 
+namespace {
+
+// What a camera can see, for whole-level culling (ClipmapOptions::cullLevels): its frustum's
+// near and four side planes (infinite far plane), and on a planet the sphere that hides what
+// lies behind the horizon.
+class LevelCull {
+ public:
+  LevelCull(const Camera& camera, double occluderRadius) : eye_(camera.position) {
+    const glm::dmat3 rot = camera.rotation();  // rows: right, up, -forward
+    const glm::dvec3 right(rot[0][0], rot[1][0], rot[2][0]);
+    const glm::dvec3 up(rot[0][1], rot[1][1], rot[2][1]);
+    forward_ = -glm::dvec3(rot[0][2], rot[1][2], rot[2][2]);
+    near_ = camera.near;
+    const double ty = std::tan(0.5 * camera.fovYDegrees * std::numbers::pi / 180.0);
+    const double tx = ty * static_cast<double>(camera.width) / static_cast<double>(camera.height);
+    // A direction f + x·right + y·up is in view for |x| ≤ tx, |y| ≤ ty: inward normals.
+    sides_ = {glm::normalize(right + tx * forward_), glm::normalize(-right + tx * forward_),
+              glm::normalize(up + ty * forward_), glm::normalize(-up + ty * forward_)};
+    const double d = glm::length(eye_);
+    if (occluderRadius > 0.0 && d > occluderRadius) {
+      horizon_ = true;
+      toEye_ = eye_ / d;
+      horizonPlane_ = occluderRadius * occluderRadius / d;
+      coneHalfAngle_ = std::asin(occluderRadius / d);
+    }
+  }
+
+  // True if nothing within `radius` of `centre` can be seen.
+  [[nodiscard]] bool hidden(const glm::dvec3& centre, double radius) const {
+    const glm::dvec3 v = centre - eye_;
+    if (glm::dot(v, forward_) - near_ < -radius) return true;
+    for (const glm::dvec3& n : sides_)
+      if (glm::dot(v, n) < -radius) return true;
+    if (!horizon_) return false;
+    // Wholly beyond the plane of the horizon circle and wholly inside the cone of rays that
+    // meet the occluder: every ray to it enters the occluder first (the occluder's near cap
+    // lies in front of that plane).
+    if (glm::dot(centre, toEye_) + radius >= horizonPlane_) return false;
+    const double dist = glm::length(v);
+    if (dist <= radius) return false;
+    const double toCentre = std::acos(std::clamp(glm::dot(v, -toEye_) / dist, -1.0, 1.0));
+    return toCentre + std::asin(radius / dist) <= coneHalfAngle_;
+  }
+
+ private:
+  glm::dvec3 eye_, forward_{0.0};
+  double near_ = 0.0;
+  std::array<glm::dvec3, 4> sides_{};
+  bool horizon_ = false;
+  glm::dvec3 toEye_{0.0};
+  double horizonPlane_ = 0.0, coneHalfAngle_ = 0.0;
+};
+
+}  // namespace
+
 gl::ShaderSources ClipmapTerrain::bareSources() {
   return gl::ShaderSources{shaders::kClipmapVertex, shaders::kDropNodataGeometry,
                            shaders::kLitFragment};
@@ -386,6 +441,20 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
   if (options_.cutOuts) setCutOutUniforms(camera);
   glBindVertexArray(vao_.id());
   glDisable(GL_CULL_FACE);
+  // The occluder on a planet: a sphere under every height the levels hold (and the body's
+  // polar radius), lowered by 0.5 % of the radius for the other terrains drawn with it.
+  std::optional<LevelCull> cull;
+  if (options_.cullLevels) {
+    double occluder = 0.0;
+    if (pyramid_->kind() == SurfaceKind::Planet) {
+      double lowest = 0.0;
+      for (const auto& l : levels_)
+        if (l->valid()) lowest = std::min(lowest, static_cast<double>(l->minHeight()));
+      const double polar = pyramid_->body()->polarRadius();
+      occluder = std::max(polar + lowest - 0.005 * polar, 0.0);
+    }
+    cull.emplace(camera, occluder);
+  }
   for (std::size_t k = first; k < first + count; ++k) {
     const auto& l = *levels_[k];
     if (!l.valid()) continue;
@@ -404,6 +473,14 @@ ClipmapFrame ClipmapTerrain::draw(const Camera& camera) const {
       sag = c2 * c2 / (8.0 * pyramid_->body()->polarRadius());
     }
     const double skirt = static_cast<double>(hi - lo) + sag + 0.1 * cell;
+    if (cull) {
+      // The skirt hangs `skirt` metres below each sample (radially on a planet).
+      const ClipmapLevel::Bound b = l.bound(skirt);
+      if (cull->hidden(b.centre, b.radius)) {
+        ++frame.levelsCulled;
+        continue;
+      }
+    }
     program_.set("uOrigin", glm::ivec2(l.texelX(0), l.texelY(0)));
     program_.set("uAnchorRel", glm::vec3(l.anchor() - camera.position));
     program_.set("uAnchorFromCentre", glm::vec3(l.anchor()));

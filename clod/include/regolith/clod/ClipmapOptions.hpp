@@ -46,6 +46,12 @@ struct ClipmapOptions {
   /// have data (SceneRenderer::addCutOut() rebuilds the planet's terrain with it). Inert until
   /// ClipmapTerrain::setCutOuts() names a DEM; fixed at construction like the effects.
   bool cutOuts = false;
+  /// Leave out the levels the camera cannot see: a level whose bounding sphere (its window
+  /// from the skirts' depth to its highest sample) lies outside the view frustum or, on a
+  /// planet, wholly behind the body's horizon (hidden by a sphere below every height the
+  /// clipmap holds). Culled triangles would have drawn no pixel; off draws them anyway, for
+  /// the test that shows culling changes no pixel and for the benchmark of what it saves.
+  bool cullLevels = true;
   /// Tracks: relative darkening of the albedo inside a rut (compacted soil).
   float trackDarkening = 0.15F;
   /// Where background reads run (requestFocus(): the levels' windows, one at a time,

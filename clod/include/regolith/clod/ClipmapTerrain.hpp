@@ -34,6 +34,7 @@ struct ClipmapCutOut {
 struct ClipmapFrame {
   std::size_t firstLevel = 0;    ///< innermost level drawn (it draws its centre)
   std::size_t levelsDrawn = 0;   ///< levels drawn, from firstLevel outward
+  std::size_t levelsCulled = 0;  ///< active levels left out as out of view (cullLevels)
   std::size_t vertices = 0;      ///< vertices submitted (indices drawn)
   std::size_t textureBinds = 0;  ///< glBindTextureUnit calls (one per level without effects)
 };
