@@ -26,7 +26,6 @@
 #include <cstddef>
 #include <cstdio>
 #include <memory>
-#include <numbers>
 #include <string>
 #include <vector>
 
@@ -35,23 +34,12 @@ namespace {
 
 const double kR = 3396190.0;
 
-glm::dvec3 unit(double latDeg, double lonDeg) {
-  const double la = latDeg * std::numbers::pi / 180.0, lo = lonDeg * std::numbers::pi / 180.0;
-  return {std::cos(la) * std::cos(lo), std::cos(la) * std::sin(lo), std::sin(la)};
-}
+glm::dvec3 unit(double latDeg, double lonDeg) { return test::unitDirection(latDeg, lonDeg); }
 
 std::shared_ptr<const HeightPyramid> marsPyramid(std::size_t rows) {
-  const std::size_t cols = 2 * rows;
-  const double d = 180.0 / static_cast<double>(rows);
-  const topo::TopoGrid grid(rows, cols, -180.0 + 0.5 * d, 90.0 - 0.5 * d, d, d);
-  auto samples = topo::InMemorySamples::fromFunction(rows, cols, [&](std::size_t r, std::size_t c) {
-    const auto p = grid.sampleCentre(static_cast<double>(r), static_cast<double>(c));
-    const glm::dvec3 u = unit(p.y, p.x);
-    return static_cast<float>(4000.0 * std::sin(7.0 * u.x) * std::cos(5.0 * u.y) +
-                              2000.0 * std::sin(4.0 * u.z));
+  return test::spherePyramid(rows, [](const glm::dvec3& u) {
+    return 4000.0 * std::sin(7.0 * u.x) * std::cos(5.0 * u.y) + 2000.0 * std::sin(4.0 * u.z);
   });
-  return std::make_shared<const HeightPyramid>(
-      HeightPyramid::fromSamples(grid, samples, SurfaceKind::Planet, topo::Body::marsSphere()));
 }
 
 struct View {

@@ -5,6 +5,7 @@
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Body.hpp>
 
+#include "TerrainFixtures.hpp"
 #include "gl/GlContext.hpp"
 
 #include <glm/geometric.hpp>
@@ -34,21 +35,10 @@ double relief(const glm::dvec3& u) {
          400.0 * std::sin(40.0 * u.x + 30.0 * u.z);
 }
 
-glm::dvec3 unit(double latDeg, double lonDeg) {
-  const double la = latDeg * M_PI / 180.0, lo = lonDeg * M_PI / 180.0;
-  return {std::cos(la) * std::cos(lo), std::cos(la) * std::sin(lo), std::sin(la)};
-}
+glm::dvec3 unit(double latDeg, double lonDeg) { return test::unitDirection(latDeg, lonDeg); }
 
 std::shared_ptr<const HeightPyramid> marsPyramid(std::size_t rows) {
-  const std::size_t cols = 2 * rows;
-  const double d = 180.0 / static_cast<double>(rows);
-  const topo::TopoGrid grid(rows, cols, -180.0 + 0.5 * d, 90.0 - 0.5 * d, d, d);
-  auto samples = topo::InMemorySamples::fromFunction(rows, cols, [&](std::size_t r, std::size_t c) {
-    const auto p = grid.sampleCentre(static_cast<double>(r), static_cast<double>(c));
-    return static_cast<float>(relief(unit(p.y, p.x)));
-  });
-  return std::make_shared<const HeightPyramid>(
-      HeightPyramid::fromSamples(grid, samples, SurfaceKind::Planet, topo::Body::marsSphere()));
+  return test::spherePyramid(rows, relief);
 }
 
 struct Check {

@@ -1,13 +1,18 @@
 #pragma once
-// Analytic terrains for the clod image tests: a plane DEM on a grid centred at (0, 0).
+// Analytic terrains for the clod image tests: a plane DEM on a grid centred at (0, 0), and a
+// global latitude/longitude grid on the Mars sphere.
 
 #include <regolith/clod/HeightPyramid.hpp>
+#include <regolith/topo/Body.hpp>
 #include <regolith/topo/TopoGrid.hpp>
+
+#include <glm/vec3.hpp>
 
 #include <cmath>
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <numbers>
 
 namespace regolith::test {
 
@@ -27,6 +32,28 @@ inline std::shared_ptr<const clod::HeightPyramid> planePyramid(
       });
   return std::make_shared<const clod::HeightPyramid>(
       clod::HeightPyramid::fromSamples(grid, samples, clod::SurfaceKind::Plane));
+}
+
+/// The unit body-fixed direction of (latitude, longitude), degrees.
+inline glm::dvec3 unitDirection(double latDeg, double lonDeg) {
+  const double la = latDeg * std::numbers::pi / 180.0, lo = lonDeg * std::numbers::pi / 180.0;
+  return {std::cos(la) * std::cos(lo), std::cos(la) * std::sin(lo), std::sin(la)};
+}
+
+/// A global latitude/longitude planet pyramid on the Mars sphere, rows × 2·rows samples,
+/// whose sample at unit direction u is relief(u): continuous across the seam and over the
+/// poles by construction.
+inline std::shared_ptr<const clod::HeightPyramid> spherePyramid(
+    std::size_t rows, const std::function<double(const glm::dvec3&)>& relief) {
+  const std::size_t cols = 2 * rows;
+  const double d = 180.0 / static_cast<double>(rows);
+  const topo::TopoGrid grid(rows, cols, -180.0 + 0.5 * d, 90.0 - 0.5 * d, d, d);
+  auto samples = topo::InMemorySamples::fromFunction(rows, cols, [&](std::size_t r, std::size_t c) {
+    const auto p = grid.sampleCentre(static_cast<double>(r), static_cast<double>(c));
+    return static_cast<float>(relief(unitDirection(p.y, p.x)));
+  });
+  return std::make_shared<const clod::HeightPyramid>(clod::HeightPyramid::fromSamples(
+      grid, samples, clod::SurfaceKind::Planet, topo::Body::marsSphere()));
 }
 
 /// A simple crater: a parabolic bowl of the given depth below the rim crest inside radius

@@ -25,7 +25,7 @@ class EmptyPixelTest {
 
   /// True if any pixel of `target` has depth 0. Binds `target` and waits for the GPU to
   /// finish drawing into it (the query's result). Leaves the reversed-Z depth state
-  /// (useReversedZ()) and colour writes on.
+  /// (useReversedZ()) and colour writes on; blending, face culling and the scissor test off.
   [[nodiscard]] bool anyEmpty(const RenderTarget& target) const;
 
  private:
