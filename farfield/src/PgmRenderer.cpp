@@ -3,6 +3,7 @@
 #include <regolith/farfield/PgmRenderer.hpp>
 #include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
+#include <regolith/gl/Program.hpp>
 
 #include "Checks.hpp"
 #include "PgmShaders.hpp"
@@ -88,7 +89,7 @@ PgmRenderer::PgmRenderer(const HeightLayers& layers, PgmOptions options)
       b_(layers.body().polarRadius()),
       minHeight_(layers.minHeight()),
       maxHeight_(layers.maxHeight()),
-      grid_("farfield PGM grid pass", {shaders::kFullScreenVertex, {}, shaders::kGridFragment}),
+      grid_("farfield PGM grid pass", {gl::kFullScreenTriangle, {}, shaders::kGridFragment}),
       mesh_("farfield PGM mesh pass", {shaders::kMeshVertex, {}, shaders::kMeshFragment}),
       reduce_(gl::Program::compute("farfield PGM radius reduction", shaders::kReduceCompute)) {
   requireRange("gridWidth", options.gridWidth, 8, 4096);

@@ -4,13 +4,6 @@
 
 namespace regolith::farfield::shaders {
 
-inline constexpr const char* kFullScreenVertex = R"(#version 450 core
-void main() {
-  vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
-  gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
-}
-)";
-
 /// One fragment per grid point: eye ray, normal angle, sphere normal, height, displaced point.
 inline constexpr const char* kGridFragment = R"(#version 450 core
 layout(location = 0) out vec4 outPos;  // displaced point - eye (body axes), radius - r_p

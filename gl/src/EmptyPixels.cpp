@@ -1,28 +1,23 @@
 #include <regolith/gl/EmptyPixels.hpp>
 #include <regolith/gl/Gl.hpp>
+#include <regolith/gl/Program.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 
 namespace regolith::gl {
 
 namespace {
 
-// A triangle covering the viewport at window depth 0 (clip z 0 under glClipControl's
-// zero-to-one depth), which the depth test GL_EQUAL passes only where the target's depth is
-// still the clear value.
-constexpr const char* kVertex = R"(#version 450 core
-void main() {
-  vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
-  gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
-}
-)";
-
+// The full-screen triangle lies at window depth 0 (clip z 0 under glClipControl's zero-to-one
+// depth), which the depth test GL_EQUAL passes only where the target's depth is still the
+// clear value.
 constexpr const char* kFragment = R"(#version 450 core
 void main() {}
 )";
 
 }  // namespace
 
-EmptyPixelTest::EmptyPixelTest() : program_("gl::EmptyPixelTest", {kVertex, {}, kFragment}) {
+EmptyPixelTest::EmptyPixelTest()
+    : program_("gl::EmptyPixelTest", {kFullScreenTriangle, {}, kFragment}) {
   glCreateQueries(GL_ANY_SAMPLES_PASSED, 1, &query_);
   checkGl("gl::EmptyPixelTest()");
 }

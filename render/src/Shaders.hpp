@@ -6,14 +6,6 @@ namespace regolith::render::shaders {
 
 inline constexpr const char* kVersion = "#version 450 core\n";
 
-/// One triangle that covers the screen (no vertex buffer: gl_VertexID).
-inline constexpr const char* kFullScreenVertex = R"(#version 450 core
-void main() {
-  vec2 p = vec2(float((gl_VertexID & 1) * 4 - 1), float((gl_VertexID >> 1) * 4 - 1));
-  gl_Position = vec4(p, 0.0, 1.0);
-}
-)";
-
 /// One dataset's accumulation pass. Every quantity that would lose precision in float as an
 /// absolute value (latitude, longitude, map coordinates, heights) is formed as a difference
 /// from the dataset's reference point R, whose own values the CPU computed in double.

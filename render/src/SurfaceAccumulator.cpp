@@ -2,6 +2,7 @@
 #include <regolith/core/Message.hpp>
 #include <regolith/gl/Gl.hpp>
 #include <regolith/gl/GlError.hpp>
+#include <regolith/gl/Program.hpp>
 #include <regolith/render/SurfaceAccumulator.hpp>
 #include <regolith/topo/TopoPlanet.hpp>
 
@@ -94,17 +95,17 @@ struct SurfaceAccumulator::Pass {
 SurfaceAccumulator::SurfaceAccumulator(AccumulatorOptions options)
     : options_(options),
       geodetic_("surface geodetic pass",
-                gl::ShaderSources{shaders::kFullScreenVertex,
+                gl::ShaderSources{gl::kFullScreenTriangle,
                                   {},
                                   std::string(shaders::kVersion) + shaders::kHelpers +
                                       shaders::kGeodeticFragment}),
       accumulate_("surface accumulation",
-                  gl::ShaderSources{shaders::kFullScreenVertex,
+                  gl::ShaderSources{gl::kFullScreenTriangle,
                                     {},
                                     std::string(shaders::kVersion) + shaders::kHelpers +
                                         shaders::kAccumulateFragment}),
       normalise_("surface normalisation",
-                 gl::ShaderSources{shaders::kFullScreenVertex, {}, shaders::kNormaliseFragment}) {
+                 gl::ShaderSources{gl::kFullScreenTriangle, {}, shaders::kNormaliseFragment}) {
   constexpr const char* op = "render::SurfaceAccumulator()";
   auto bad = [&](const char* field, const std::string& value, const char* expected) {
     throw InvalidArgument(

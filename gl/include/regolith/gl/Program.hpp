@@ -16,6 +16,15 @@
 
 namespace regolith::gl {
 
+/// The vertex shader of a full-screen pass: one triangle covering the viewport, at clip
+/// depth 0, made from gl_VertexID alone (draw 3 vertices with any vertex array bound).
+inline constexpr const char* kFullScreenTriangle = R"(#version 450 core
+void main() {
+  vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
+  gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
+}
+)";
+
 /// GLSL sources of one program; empty stages are left out.
 struct ShaderSources {
   std::string vertex, geometry, fragment;
