@@ -4,7 +4,8 @@
 // - Covering/N: one catalogue point query among N scattered DEMs (O(log N)).
 // - PlainPaged vs Composed/k: a height at random points of a paged planet grid, straight
 //   through TopoPlanet and through the composition with k covering datasets; PlainEach/k, the
-//   k plain heights at each point that Composed/k reads, without the composition.
+//   k plain heights at each point that Composed/k reads, without the composition;
+//   SoleHeight, the one dataset's own query that Composed/1 makes after its cell look-up.
 // - PlainBatch vs ComposedBatch: the same per point through the batch calls (64 points a
 //   call, items_per_second), where the processor may overlap one point's work with the next.
 // - ComposedWindow/N: composing one clipmap level window (255 × 255 samples, what a frame's
@@ -203,6 +204,19 @@ void Composed(benchmark::State& state) {
   }
 }
 BENCHMARK(Composed)->Arg(1)->Arg(2)->Arg(3);
+
+// Dataset::soleHeight() alone (what Composed/1 runs after its cell look-up): the dataset's
+// own locate and its grid's query, against PlainPaged.
+void SoleHeight(benchmark::State& state) {
+  const auto d = compose::datasetFromStore(*paged().pager, "global");
+  const Points pts(1 << 16);
+  std::size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(d->soleHeight(pts.lat[i], pts.lon[i], 0));
+    i = (i + 1) & (pts.lat.size() - 1);
+  }
+}
+BENCHMARK(SoleHeight);
 
 // Batches of 64 points, one dataset: the per-point cost where the processor may overlap
 // queries (a rover's wheels are a batch). `query` writes the heights of a batch.

@@ -6,6 +6,7 @@
 #include <glm/vec3.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -76,11 +77,13 @@ Snapshot::Snapshot(topo::Body body, std::vector<CatalogueEntry> entries, std::ui
 /// build one cell at once keep the first list and free the second. (Hand-written: no Debian
 /// library offers a lock-free, grow-only table, and a mutex here would serialise queries.)
 struct Snapshot::CellTable {
-  using List = std::vector<std::uint32_t>;
-  std::unique_ptr<std::atomic<const List*>[]> lists {
-    new std::atomic<const List*>[ static_cast<std::size_t>(kLatCells) * kLonCells ]()
-  };
-  CellTable() = default;
+  // Inline (the table is allocated whole): a look-up reads its cell's pointer at a fixed
+  // offset from the table, no pointer to the array between.
+  // Mutable: cells are built on first look-up behind a const query, each published once.
+  mutable std::array<std::atomic<const Cell*>, static_cast<std::size_t>(kLatCells) * kLonCells>
+      lists{};
+  Role role;
+  explicit CellTable(Role r) : role(r) {}
   CellTable(const CellTable&) = delete;
   CellTable& operator=(const CellTable&) = delete;
   CellTable(CellTable&&) = delete;
@@ -140,9 +143,21 @@ std::vector<std::uint32_t> Snapshot::cellList(int latCell, int lonCell, Role rol
   return out;
 }
 
-std::span<const std::uint32_t> Snapshot::cellCandidates(double latDeg, double lonDeg,
-                                                        Role role) const {
-  if (nodes_.empty() || !std::isfinite(latDeg) || !std::isfinite(lonDeg)) return {};
+const Snapshot::CellTable& Snapshot::cellTable(Role role) const {
+  std::atomic<CellTable*>& slot = cells_[static_cast<std::size_t>(role) % kRoles];
+  CellTable* table = slot.load(std::memory_order_acquire);
+  if (table == nullptr) {
+    auto fresh = std::make_unique<CellTable>(role);
+    if (slot.compare_exchange_strong(table, fresh.get(), std::memory_order_acq_rel)) {
+      table = fresh.release();
+    }
+  }
+  return *table;
+}
+
+const Snapshot::Cell& Snapshot::cell(const CellTable& table, double latDeg, double lonDeg) const {
+  static const Cell kEmpty;
+  if (nodes_.empty() || !std::isfinite(latDeg) || !std::isfinite(lonDeg)) return kEmpty;
   // [-180, 180): most points are there already (and a division is a tenth of the look-up).
   const double lon = lonDeg >= -180.0 && lonDeg < 180.0
                          ? lonDeg
@@ -156,37 +171,27 @@ std::span<const std::uint32_t> Snapshot::cellCandidates(double latDeg, double lo
   const int lonCell = cellOf(lon + 180.0, kLonCells);
   const std::size_t index =
       static_cast<std::size_t>(latCell) * kLonCells + static_cast<std::size_t>(lonCell);
-  // The common case, a built list, without a call or a saved register.
-  if (const CellTable* table =
-          cells_[static_cast<std::size_t>(role) % kRoles].load(std::memory_order_acquire)) {
-    if (const CellTable::List* list = table->lists[index].load(std::memory_order_acquire))
-        [[likely]] {
-      return *list;
-    }
+  // The common case, a built cell, without a call or a saved register.
+  if (const Cell* built = table.lists[index].load(std::memory_order_acquire)) [[likely]] {
+    return *built;
   }
-  return buildCell(latCell, lonCell, role);
+  return buildCell(table, latCell, lonCell);
 }
 
-std::span<const std::uint32_t> Snapshot::buildCell(int latCell, int lonCell, Role role) const {
-  std::atomic<CellTable*>& slot = cells_[static_cast<std::size_t>(role) % kRoles];
-  CellTable* table = slot.load(std::memory_order_acquire);
-  if (table == nullptr) {
-    auto fresh = std::make_unique<CellTable>();
-    if (slot.compare_exchange_strong(table, fresh.get(), std::memory_order_acq_rel)) {
-      table = fresh.release();
+const Snapshot::Cell& Snapshot::buildCell(const CellTable& table, int latCell, int lonCell) const {
+  std::atomic<const Cell*>& slot =
+      table
+          .lists[static_cast<std::size_t>(latCell) * kLonCells + static_cast<std::size_t>(lonCell)];
+  const Cell* built = slot.load(std::memory_order_acquire);
+  if (built == nullptr) {
+    auto fresh = std::make_unique<Cell>();
+    fresh->candidates = cellList(latCell, lonCell, table.role);
+    if (fresh->candidates.size() == 1) fresh->sole = entries_[fresh->candidates[0]].dataset.get();
+    if (slot.compare_exchange_strong(built, fresh.get(), std::memory_order_acq_rel)) {
+      built = fresh.release();
     }
   }
-  std::atomic<const CellTable::List*>& cell =
-      table->lists[static_cast<std::size_t>(latCell) * kLonCells +
-                   static_cast<std::size_t>(lonCell)];
-  const CellTable::List* list = cell.load(std::memory_order_acquire);
-  if (list == nullptr) {
-    auto fresh = std::make_unique<const CellTable::List>(cellList(latCell, lonCell, role));
-    if (cell.compare_exchange_strong(list, fresh.get(), std::memory_order_acq_rel)) {
-      list = fresh.release();
-    }
-  }
-  return *list;
+  return *built;
 }
 
 std::uint32_t Snapshot::build(std::uint32_t first, std::uint32_t count) {

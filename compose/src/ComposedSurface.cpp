@@ -103,6 +103,7 @@ ComposedSurface::ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules
                                         .value = "null",
                                         .expected = "a catalogue snapshot"}));
   }
+  heightCells_ = &snapshot_->cellTable(Role::Height);
   if (!(rules_.tierRatio >= 1.0)) {  // +inf allowed: one tier per priority
     throw InvalidArgument(core::format({.operation = "compose::ComposedSurface()",
                                         .field = "rules.tierRatio",
@@ -121,33 +122,27 @@ ComposedSurface::ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules
 // of one whose height composeGeneral() keeps exactly (the common case away from dataset
 // borders). Nested data (a dataset covering the point fully over coarser ones) is
 // composeGeneral()'s, which reads the top tier only.
-bool ComposedSurface::fastHeight(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
-                                 double metres, double& height) const {
-  if (cell.size() != 1) return false;
-  const Dataset& d = *snapshot_->entries()[cell.front()].dataset;
-  return d.soleHeight(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, height);
+std::optional<double> ComposedSurface::fastHeight(const Snapshot::Cell& cell, double latDeg,
+                                                  double lonDeg, double metres) const {
+  const Dataset* d = cell.sole;
+  if (d == nullptr) return std::nullopt;
+  return d->soleHeight(latDeg, lonDeg, metres > 0.0 ? d->levelFor(metres) : 0);
 }
 
-topo::HeightSample ComposedSurface::heightOf(double latDeg, double lonDeg, double metres) const {
-  const std::span<const std::uint32_t> cell = snapshot_->cellCandidates(latDeg, lonDeg);
-  double h = 0.0;
-  if (fastHeight(cell, latDeg, lonDeg, metres, h)) return {h, QueryStatus::Ok};
-  const ComposedSample c = composeGeneral(cell, latDeg, lonDeg, metres, false, nullptr);
-  return {c.height, c.status};
-}
-
-ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, double metres,
-                                        bool wantNormal, std::vector<Share>* shares) const {
-  const std::span<const std::uint32_t> cell = snapshot_->cellCandidates(latDeg, lonDeg);
-  double h = 0.0;
-  if (!wantNormal && shares == nullptr && fastHeight(cell, latDeg, lonDeg, metres, h)) {
-    ComposedSample out;
-    out.height = h;
-    out.status = QueryStatus::Ok;
-    out.contributors = 1;
-    return out;
+ComposedSurface::CountedHeight ComposedSurface::heightOf(double latDeg, double lonDeg,
+                                                         double metres) const {
+  const Snapshot::Cell& cell = snapshot_->cell(*heightCells_, latDeg, lonDeg);
+  if (const std::optional<double> h = fastHeight(cell, latDeg, lonDeg, metres)) {
+    return {*h, QueryStatus::Ok, 1};
   }
-  return composeGeneral(cell, latDeg, lonDeg, metres, wantNormal, shares);
+  const ComposedSample c = composeGeneral(cell.candidates, latDeg, lonDeg, metres, false, nullptr);
+  return {c.height, c.status, c.contributors};
+}
+
+ComposedSample ComposedSurface::compose(double latDeg, double lonDeg, bool wantNormal,
+                                        std::vector<Share>* shares) const {
+  const Snapshot::Cell& cell = snapshot_->cell(*heightCells_, latDeg, lonDeg);
+  return composeGeneral(cell.candidates, latDeg, lonDeg, 0.0, wantNormal, shares);
 }
 
 ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> cell, double latDeg,
@@ -467,18 +462,20 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
 
 topo::HeightSample ComposedSurface::height(double latDeg, double lonDeg) const {
   checkPoint(latDeg, lonDeg, "compose::ComposedSurface::height()");
-  return heightOf(latDeg, lonDeg, 0.0);
+  const CountedHeight h = heightOf(latDeg, lonDeg, 0.0);
+  return {h.height, h.status};
 }
 
 topo::HeightSample ComposedSurface::heightAt(double latDeg, double lonDeg, double metres) const {
   checkPoint(latDeg, lonDeg, "compose::ComposedSurface::heightAt()");
-  return heightOf(latDeg, lonDeg, metres);
+  const CountedHeight h = heightOf(latDeg, lonDeg, metres);
+  return {h.height, h.status};
 }
 
 ComposedSample ComposedSurface::surface(double latDeg, double lonDeg,
                                         topo::NormalFrame frame) const {
   checkPoint(latDeg, lonDeg, "compose::ComposedSurface::surface()");
-  ComposedSample c = compose(latDeg, lonDeg, 0.0, true, nullptr);
+  ComposedSample c = compose(latDeg, lonDeg, true, nullptr);
   if (frame == topo::NormalFrame::BodyFixed && c.normalStatus == QueryStatus::Ok) {
     c.normal = body().enuFrame(latDeg, lonDeg) * c.normal;
   }
@@ -488,7 +485,7 @@ ComposedSample ComposedSurface::surface(double latDeg, double lonDeg,
 std::vector<Share> ComposedSurface::weights(double latDeg, double lonDeg) const {
   checkPoint(latDeg, lonDeg, "compose::ComposedSurface::weights()");
   std::vector<Share> shares;
-  (void)compose(latDeg, lonDeg, 0.0, false, &shares);
+  (void)compose(latDeg, lonDeg, false, &shares);
   return shares;
 }
 
@@ -506,11 +503,11 @@ void ComposedSurface::heights(std::span<const double> latsDeg, std::span<const d
                       .expected = "equal (status empty or equal too)"}));
   }
   for (std::size_t i = 0; i < n; ++i) {
-    ComposedSample c;
-    if (pointOk(latsDeg[i], lonsDeg[i])) c = compose(latsDeg[i], lonsDeg[i], 0.0, false, nullptr);
-    out[i] = c.height;
-    if (!status.empty()) status[i] = c.status;
-    if (!contributors.empty()) contributors[i] = c.contributors;
+    CountedHeight h{std::numeric_limits<double>::quiet_NaN(), QueryStatus::OutsideGrid, 0};
+    if (pointOk(latsDeg[i], lonsDeg[i])) h = heightOf(latsDeg[i], lonsDeg[i], 0.0);
+    out[i] = h.height;
+    if (!status.empty()) status[i] = h.status;
+    if (!contributors.empty()) contributors[i] = h.contributors;
   }
 }
 

@@ -175,6 +175,7 @@ Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement
     // planetocentricFromPlanetodetic() is the identity on a sphere.
     frame_.sameLatitude = latType_ == topo::LatitudeType::Planetodetic || body_.isSphere();
     plainPlanet_ = !options_.mask && !(options_.featherMetres > 0.0);
+    planet0_ = levels_.front().planet;
     const double r = (2.0 * body_.equatorialRadius() + body_.polarRadius()) / 3.0;
     groundSpacing_ = r * kDeg * std::sqrt(g0.spacingX() * g0.spacingY());
     // A planet grid's nominal pixel is its size on the equator.
@@ -205,7 +206,12 @@ Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement
   computeBounds();
 }
 
-Dataset::GridPoint Dataset::locatePlanet(double latDeg, double lonDeg) const noexcept {
+// Inlined into its callers: called, it returned its point through memory, written field by
+// field and read back by soleHeight() as one 16-byte pair, a store-forwarding stall that
+// serialised consecutive queries (soleHeight() took 2.2× TopoPlanet's own query; 1.0× inlined,
+// compose_bench's SoleHeight against PlainPaged).
+[[gnu::always_inline]] inline Dataset::GridPoint Dataset::locatePlanet(
+    double latDeg, double lonDeg) const noexcept {
   GridPoint p;
   const PlanetFrame& f = frame_;
   // The longitude in the turn nearest the grid's centre, so a grid spanning ±180° or
@@ -427,23 +433,21 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, 
   return out;
 }
 
-bool Dataset::soleHeight(double latDeg, double lonDeg, std::size_t level, double& height) const {
+std::optional<double> Dataset::soleHeight(double latDeg, double lonDeg, std::size_t level) const {
   if (plainPlanet_) {
     // evaluateInto()'s planet path with coverageAt() = 1 inside the grid.
     const GridPoint g = locatePlanet(latDeg, lonDeg);
-    if (!g.inside) return false;
-    const Level& lv = levels_[std::min(level, levels_.size() - 1)];
-    const topo::HeightSample h =
-        lv.planet->heightUnchecked({g.y, g.x}, topo::Interpolation::Bilinear);
-    if (!h.valid()) return false;
-    height = h.height + options_.heightOffset;
-    return true;
+    if (!g.inside) return std::nullopt;
+    const topo::TopoPlanet& planet =
+        level == 0 ? *planet0_ : *levels_[std::min(level, levels_.size() - 1)].planet;
+    const topo::HeightSample h = planet.heightUnchecked({g.y, g.x}, topo::Interpolation::Bilinear);
+    if (!h.valid()) return std::nullopt;
+    return h.height + options_.heightOffset;
   }
   Contribution c;
   evaluateInto(latDeg, lonDeg, level, false, false, c);
-  if (c.status != topo::QueryStatus::Ok || !(c.coverage > 0.0)) return false;
-  height = c.height;
-  return true;
+  if (c.status != topo::QueryStatus::Ok || !(c.coverage > 0.0)) return std::nullopt;
+  return c.height;
 }
 
 void Dataset::evaluateInto(double latDeg, double lonDeg, std::size_t level, bool wantSlope,

@@ -84,7 +84,9 @@ TEST(Catalogue, CoveringFindsEveryDatasetThatContainsThePoint) {
 // point, every dataset covering() returns there and so every dataset that contains it:
 // checked at random points, at cell corners and edges, at the poles and across the ±180°
 // seam (longitudes given as -180, 180 and beyond), from four threads at once, with each
-// cell's list built by whichever thread asks first.
+// cell's list built by whichever thread asks first. A cell of exactly one candidate names
+// that dataset as its sole one (a composed query's shortcut), any other cell none; a look-up
+// in the table taken once gives the very cell the plain look-up does.
 TEST(Catalogue, CellCandidatesHoldEveryCoveringDataset) {
   Catalogue cat(kMars);
   auto dems = scatteredDems(300, 23);
@@ -138,11 +140,18 @@ TEST(Catalogue, CellCandidatesHoldEveryCoveringDataset) {
     }
   }
   std::atomic<std::size_t> missing{0}, missingExact{0}, contained{0}, longest{0};
+  std::atomic<std::size_t> badSole{0}, soles{0}, otherCell{0};
   auto check = [&](std::size_t begin, std::size_t step) {
     std::vector<std::uint32_t> found;
     for (std::size_t i = begin; i < points.size(); i += step) {
       const auto [lat, lon] = points[i];
       const auto cell = snap->cellCandidates(lat, lon);
+      const Snapshot::Cell& whole = snap->cell(snap->cellTable(Role::Height), lat, lon);
+      otherCell += whole.candidates.data() != cell.data() ? 1U : 0U;
+      const Dataset* sole =
+          cell.size() == 1 ? snap->entries()[cell.front()].dataset.get() : nullptr;
+      badSole += whole.sole != sole ? 1U : 0U;
+      soles += sole != nullptr ? 1U : 0U;
       found.clear();
       snap->covering(lat, lon, found);
       for (const std::uint32_t e : found) {
@@ -166,6 +175,10 @@ TEST(Catalogue, CellCandidatesHoldEveryCoveringDataset) {
   for (auto& t : threads) t.join();
   EXPECT_EQ(missing.load(), 0U);
   EXPECT_EQ(missingExact.load(), 0U);
+  EXPECT_EQ(badSole.load(), 0U);
+  EXPECT_EQ(otherCell.load(), 0U);
+  EXPECT_GT(soles.load(), 100U);  // both kinds of cell were seen
+  EXPECT_GT(points.size() - soles.load(), 100U);
   EXPECT_GT(contained.load(), 2000U);  // the points do land in datasets
   // The lists stay short: a cell holds the few datasets near it, not the catalogue.
   EXPECT_LE(longest.load(), 12U);

@@ -64,7 +64,27 @@ class Snapshot {
   /// and its trigonometry, for composed point queries (ComposedSurface). Each cell's list is
   /// built on its first query and kept for the snapshot's life (lock-free; any thread).
   [[nodiscard]] std::span<const std::uint32_t> cellCandidates(double latDeg, double lonDeg,
-                                                              Role role = Role::Height) const;
+                                                              Role role = Role::Height) const {
+    return cell(latDeg, lonDeg, role).candidates;
+  }
+  /// One 1° cell of cellCandidates()'s table.
+  struct Cell {
+    std::vector<std::uint32_t> candidates;  ///< indices into entries(), ascending
+    /// The dataset when `candidates` holds exactly one (else null): a composed query's
+    /// common case reaches it without the list and the entry (fewer dependent loads).
+    const Dataset* sole = nullptr;
+  };
+  /// cellCandidates() with the cell's sole dataset. The reference lives as long as the
+  /// snapshot. An empty catalogue or a non-finite point gives an empty cell.
+  [[nodiscard]] const Cell& cell(double latDeg, double lonDeg, Role role = Role::Height) const {
+    return cell(cellTable(role), latDeg, lonDeg);
+  }
+  /// One role's table of cells (opaque), made on first use and kept for the snapshot's life.
+  struct CellTable;
+  [[nodiscard]] const CellTable& cellTable(Role role) const;
+  /// cell() in a table taken once: a caller that looks up cells at a high rate (a composed
+  /// query) keeps the table and saves a dependent load per look-up.
+  [[nodiscard]] const Cell& cell(const CellTable& table, double latDeg, double lonDeg) const;
   /// Appends the indices of the datasets whose bounds are not wholly outside one of the
   /// `planes` (a, b, c, d: a·x + b·y + c·z + d ≥ 0 inside, body-fixed metres): "which
   /// datasets can this view see", for a view frustum's six planes. Returns the number of
@@ -79,11 +99,10 @@ class Snapshot {
   };
   std::uint32_t build(std::uint32_t first, std::uint32_t count);
   [[nodiscard]] std::vector<std::uint32_t> cellList(int latCell, int lonCell, Role role) const;
-  /// cellCandidates() where the cell's list (or the role's table) is not built yet.
-  [[nodiscard]] std::span<const std::uint32_t> buildCell(int latCell, int lonCell, Role role) const;
+  /// cell() where the cell (or the role's table) is not built yet.
+  [[nodiscard]] const Cell& buildCell(const CellTable& table, int latCell, int lonCell) const;
 
-  /// cellCandidates()'s tables, one per role, each 180 × 360 lists (null until built).
-  struct CellTable;
+  /// cellCandidates()'s tables, one per role, each 180 × 360 cells (null until built).
   static constexpr std::size_t kRoles = 3;
   mutable std::array<std::atomic<CellTable*>, kRoles> cells_{};
 

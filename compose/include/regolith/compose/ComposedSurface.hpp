@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -109,19 +110,29 @@ class ComposedSurface {
   [[nodiscard]] std::vector<Share> weights(double latDeg, double lonDeg) const;
 
  private:
-  ComposedSample compose(double latDeg, double lonDeg, double metres, bool wantNormal,
+  /// The general path for a normal or the shares (composeGeneral() at the point's cell).
+  ComposedSample compose(double latDeg, double lonDeg, bool wantNormal,
                          std::vector<Share>* shares) const;
-  /// height() and heightAt() past their checks: fastHeight(), else the general path.
-  [[nodiscard]] topo::HeightSample heightOf(double latDeg, double lonDeg, double metres) const;
-  /// A height where the point's cell has one candidate and it answers (else false):
+  /// A height, its status and its contributor count: 16 bytes, returned in registers.
+  struct CountedHeight {
+    double height;
+    topo::QueryStatus status;
+    std::uint32_t contributors;
+  };
+  /// height(), heightAt() and heights() past their checks: fastHeight(), else the general
+  /// path.
+  [[nodiscard]] CountedHeight heightOf(double latDeg, double lonDeg, double metres) const;
+  /// A height where the point's cell has one candidate and it answers (else none):
   /// Dataset::soleHeight(), out of composeGeneral()'s large frame.
-  bool fastHeight(std::span<const std::uint32_t> cell, double latDeg, double lonDeg, double metres,
-                  double& height) const;
+  [[nodiscard]] std::optional<double> fastHeight(const Snapshot::Cell& cell, double latDeg,
+                                                 double lonDeg, double metres) const;
   /// compose() past its shortcuts, given the point's cell candidates.
   ComposedSample composeGeneral(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
                                 double metres, bool wantNormal, std::vector<Share>* shares) const;
 
   std::shared_ptr<const Snapshot> snapshot_;
+  /// The snapshot's table of height cells, taken once (Snapshot::cell(table, ...)).
+  const Snapshot::CellTable* heightCells_ = nullptr;
   Rules rules_;
 };
 

@@ -144,13 +144,14 @@ class Dataset {
   /// ten cycles per piece on the composition's path).
   void evaluateInto(double latDeg, double lonDeg, std::size_t level, bool wantSlope,
                     bool wantQuality, Contribution& out) const;
-  /// The height evaluate() gives at a point where it answers Ok with coverage > 0 (then
-  /// true), else false: a composition's query where the dataset is the only candidate.
-  /// A planet grid without feather or mask (coverage 1 wherever it answers) skips the
-  /// contribution's other fields and, the point being checked, the grid's argument checks.
-  /// Requires finite coordinates with |lat| <= 90.
-  [[nodiscard]] bool soleHeight(double latDeg, double lonDeg, std::size_t level,
-                                double& height) const;
+  /// The height evaluate() gives at a point where it answers Ok with coverage > 0, else
+  /// none: a composition's query where the dataset is the only candidate. A planet grid
+  /// without feather or mask (coverage 1 wherever it answers) skips the contribution's
+  /// other fields and, the point being checked, the grid's argument checks. Returned in
+  /// registers (a height written through a reference was read back from memory on the
+  /// query's critical path). Requires finite coordinates with |lat| <= 90.
+  [[nodiscard]] std::optional<double> soleHeight(double latDeg, double lonDeg,
+                                                 std::size_t level) const;
   /// Asks the processor to fetch the samples evaluate() would read at a point of level
   /// `level` into its cache (topo::TopoPlanet::prefetch()): a hint, never failing, so that a
   /// composition overlaps the memory misses of its datasets. Planet grids only (a DEM's
@@ -210,6 +211,9 @@ class Dataset {
   } frame_;
   /// soleHeight()'s shortcut applies: a planet grid without feather or mask.
   bool plainPlanet_ = false;
+  /// Level 0's grid again, inside the dataset (a planet grid): soleHeight()'s query reads
+  /// its fields one dependent load sooner than through levels_.
+  std::optional<topo::TopoPlanet> planet0_;
   double groundSpacing_ = 0.0;
   double planetNominal_ = 0.0;  // a planet grid's pixel on the equator, metres (geometric mean)
   std::array<double, 2> heightRange_{0.0, 0.0};
