@@ -243,6 +243,10 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
   glViewport(0, 0, gw, gh);
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_BLEND);
+  // Both passes draw into two colour buffers, which Mesa refuses while any blend factor is
+  // dual-source (GL_SRC1_COLOR), blending on or off: whatever the context's last renderer
+  // left, the default factors.
+  glBlendFunc(GL_ONE, GL_ZERO);
   glBindTextureUnit(0, equirect_.id());
   glBindTextureUnit(1, north_.id());
   glBindTextureUnit(2, south_.id());

@@ -694,6 +694,7 @@ AccumulationFrame SurfaceAccumulator::accumulate(const gl::RenderTarget& target,
   glDisable(GL_SCISSOR_TEST);
   glDisablei(GL_BLEND, 0);
   glDisablei(GL_BLEND, 1);
+  glBlendFunc(GL_ONE, GL_ZERO);  // the defaults, for every buffer
   glBindVertexArray(0);
   target.bind();
   gl::checkGl(op);
@@ -726,6 +727,10 @@ void SurfaceAccumulator::normalise(const gl::RenderTarget& target) const {
   glDrawArrays(GL_TRIANGLES, 0, 3);
   glBindVertexArray(0);
   glDisable(GL_BLEND);
+  // The GL's default factors again: Mesa refuses any later draw into more than one colour
+  // buffer (the far field's passes) while a blend factor is dual-source (GL_SRC1_COLOR),
+  // blending on or off (GL_INVALID_OPERATION at the draw).
+  glBlendFunc(GL_ONE, GL_ZERO);
   target.bind();
   gl::checkGl(op);
 }

@@ -7,6 +7,7 @@
 #include <regolith/farfield/FarField.hpp>
 #include <regolith/farfield/HeightLayers.hpp>
 #include <regolith/farfield/PgmRenderer.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/topo/Body.hpp>
 
@@ -146,6 +147,19 @@ TEST(PgmRendererGL, GlobalViewMatchesTheSphere) {
   EXPECT_EQ(c.coverageMisses, 0);
   EXPECT_EQ(c.nonFinite, 0);
   EXPECT_LT(c.screenError, 0.25);
+}
+
+// Whatever blend state the context's last renderer left: here a dual-source factor, which
+// Mesa holds against any draw into two colour buffers (both of PGM's passes), blending on or
+// off. Without the renderer's own reset the draw failed with GL_INVALID_OPERATION.
+TEST(PgmRendererGL, DrawsWhateverBlendFactorsTheContextWasLeftWith) {
+  test::glContext();
+  glBlendFunc(GL_ONE, GL_SRC1_COLOR);
+  const clod::Camera cam = looking({3.0 * kMars, 0.0, 0.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, 1.0});
+  const Comparison c = renderAndCompare("after_dual_source_blend", cam, kMars, kMars, 0.0);
+  glBlendFunc(GL_ONE, GL_ZERO);
+  EXPECT_GT(c.bodyPixels, 10000);
+  EXPECT_EQ(c.coverageMisses, 0);
 }
 
 TEST(PgmRendererGL, EllipsoidFromAboveThePoleAndAcrossTheSeam) {

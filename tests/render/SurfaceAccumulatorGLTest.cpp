@@ -11,6 +11,7 @@
 #include <regolith/compose/Catalogue.hpp>
 #include <regolith/compose/Dataset.hpp>
 #include <regolith/core/Error.hpp>
+#include <regolith/gl/Gl.hpp>
 #include <regolith/gl/RenderTarget.hpp>
 #include <regolith/render/SurfaceAccumulator.hpp>
 
@@ -607,6 +608,13 @@ TEST(SurfaceAccumulatorGLTest, APolarCapMapIsExactAtItsPole) {
   ASSERT_EQ(acc.accumulate(*s.target, cam, *snap).drawn, 2U);
   const std::vector<glm::vec4> gpu = acc.readAccumulation();
   acc.normalise(*s.target);
+  // The context is left with the GL's default blend factors: with the normalising pass's
+  // dual-source one (GL_SRC1_COLOR) Mesa refused the far field's next draw into two buffers.
+  GLint src = 0, dst = 0;
+  glGetIntegerv(GL_BLEND_SRC_RGB, &src);
+  glGetIntegerv(GL_BLEND_DST_RGB, &dst);
+  EXPECT_EQ(src, GL_ONE);
+  EXPECT_EQ(dst, GL_ZERO);
   test::savePng("accumulation_pole", s.target->readColor());
   const Expected e =
       cpuRule(s, *snap, std::log(compose::kQualityN), [](int i) { return i == 0 ? 0.6 : 0.3; });
