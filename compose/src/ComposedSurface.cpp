@@ -79,6 +79,17 @@ bool pointOk(double latDeg, double lonDeg) noexcept {
                                       .expected = "within -90 .. 90"}));
 }
 
+/// The composition's tier order of candidates (entry indices): higher priority first, then
+/// finer spacing, then the lower index.
+bool tierBefore(std::span<const CatalogueEntry> entries, std::uint32_t ia, std::uint32_t ib) {
+  const Dataset& a = *entries[ia].dataset;
+  const Dataset& b = *entries[ib].dataset;
+  if (a.options().priority != b.options().priority)
+    return a.options().priority > b.options().priority;
+  if (a.groundSpacing() != b.groundSpacing()) return a.groundSpacing() < b.groundSpacing();
+  return ia < ib;
+}
+
 /// One test on a query's path, the messages out of line.
 inline void checkPoint(double latDeg, double lonDeg, const char* op) {
   if (!pointOk(latDeg, lonDeg)) [[unlikely]]
@@ -120,13 +131,42 @@ ComposedSurface::ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules
 
 // A height where the point's cell has one candidate that answers: it is the surface, a tier
 // of one whose height composeGeneral() keeps exactly (the common case away from dataset
-// borders). Nested data (a dataset covering the point fully over coarser ones) is
-// composeGeneral()'s, which reads the top tier only.
+// borders). Nested data is nestedHeight()'s.
 std::optional<double> ComposedSurface::fastHeight(const Snapshot::Cell& cell, double latDeg,
                                                   double lonDeg, double metres) const {
   const Dataset* d = cell.sole;
-  if (d == nullptr) return std::nullopt;
+  if (d == nullptr) return nestedHeight(cell.candidates, latDeg, lonDeg, metres);
   return d->soleHeight(latDeg, lonDeg, metres > 0.0 ? d->levelFor(metres) : 0);
+}
+
+// Nested data: the first candidate in tier order, alone in its tier and covering the point
+// fully. composeGeneral() would read it and find its tier complete and full: its α is 1, so
+// the composite keeps its height exactly, whatever it reads below (nothing, unless a
+// lower-priority dataset is finer), and no member below has a share (one contributor).
+// Without the general path's scratch, sort, members and tiers, a HiRISE-class DEM inside a
+// CTX-class one over a global grid costs about its own query. The cell's candidates hold every
+// dataset the exact catalogue query returns (a superset), so the same holds where the general
+// path would ask that query.
+std::optional<double> ComposedSurface::nestedHeight(std::span<const std::uint32_t> candidates,
+                                                    double latDeg, double lonDeg,
+                                                    double metres) const {
+  if (candidates.size() < 2) return std::nullopt;
+  const auto entries = snapshot_->entries();
+  std::uint32_t top = candidates.front();
+  for (const std::uint32_t e : candidates.subspan(1)) {
+    if (tierBefore(entries, e, top)) top = e;
+  }
+  const Dataset& d = *entries[top].dataset;
+  const double ratio = rules_.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules_.tierRatio;
+  for (const std::uint32_t e : candidates) {
+    if (e == top) continue;
+    const Dataset& o = *entries[e].dataset;
+    // Another candidate in its tier: a blend, the general path's.
+    if (o.options().priority == d.options().priority &&
+        o.groundSpacing() <= d.groundSpacing() * ratio)
+      return std::nullopt;
+  }
+  return d.soleHeight(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, true);
 }
 
 ComposedSurface::CountedHeight ComposedSurface::heightOf(double latDeg, double lonDeg,
@@ -171,12 +211,7 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
   const auto evaluateAll = [&](std::span<const std::uint32_t> candidates) {
     s.ranked.assign(candidates.begin(), candidates.end());
     std::sort(s.ranked.begin(), s.ranked.end(), [&entries](std::uint32_t ia, std::uint32_t ib) {
-      const Dataset& a = *entries[ia].dataset;
-      const Dataset& b = *entries[ib].dataset;
-      if (a.options().priority != b.options().priority)
-        return a.options().priority > b.options().priority;
-      if (a.groundSpacing() != b.groundSpacing()) return a.groundSpacing() < b.groundSpacing();
-      return ia < ib;
+      return tierBefore(entries, ia, ib);
     });
     // The first candidate's memory miss overlaps those of the others, fetched meanwhile:
     // for a height, those of the first one's tier only (if the first covers the point fully,

@@ -433,7 +433,8 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, 
   return out;
 }
 
-std::optional<double> Dataset::soleHeight(double latDeg, double lonDeg, std::size_t level) const {
+std::optional<double> Dataset::soleHeight(double latDeg, double lonDeg, std::size_t level,
+                                          bool full) const {
   if (plainPlanet_) {
     // evaluateInto()'s planet path with coverageAt() = 1 inside the grid.
     const GridPoint g = locatePlanet(latDeg, lonDeg);
@@ -446,7 +447,9 @@ std::optional<double> Dataset::soleHeight(double latDeg, double lonDeg, std::siz
   }
   Contribution c;
   evaluateInto(latDeg, lonDeg, level, false, false, c);
-  if (c.status != topo::QueryStatus::Ok || !(c.coverage > 0.0)) return std::nullopt;
+  if (c.status != topo::QueryStatus::Ok || !(full ? c.coverage == 1.0 : c.coverage > 0.0)) {
+    return std::nullopt;
+  }
   return c.height;
 }
 

@@ -122,10 +122,16 @@ class ComposedSurface {
   /// height(), heightAt() and heights() past their checks: fastHeight(), else the general
   /// path.
   [[nodiscard]] CountedHeight heightOf(double latDeg, double lonDeg, double metres) const;
-  /// A height where the point's cell has one candidate and it answers (else none):
-  /// Dataset::soleHeight(), out of composeGeneral()'s large frame.
+  /// A height where one dataset alone is the surface at the point (else none): the cell's
+  /// sole candidate (Dataset::soleHeight()) or nestedHeight(), out of composeGeneral()'s
+  /// large frame.
   [[nodiscard]] std::optional<double> fastHeight(const Snapshot::Cell& cell, double latDeg,
                                                  double lonDeg, double metres) const;
+  /// The first of several candidates in tier order where it is alone in its tier and covers
+  /// the point fully (else none): composeGeneral()'s height there.
+  [[nodiscard]] std::optional<double> nestedHeight(std::span<const std::uint32_t> candidates,
+                                                   double latDeg, double lonDeg,
+                                                   double metres) const;
   /// compose() past its shortcuts, given the point's cell candidates.
   ComposedSample composeGeneral(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
                                 double metres, bool wantNormal, std::vector<Share>* shares) const;

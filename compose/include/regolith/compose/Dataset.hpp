@@ -149,9 +149,10 @@ class Dataset {
   /// without feather or mask (coverage 1 wherever it answers) skips the contribution's
   /// other fields and, the point being checked, the grid's argument checks. Returned in
   /// registers (a height written through a reference was read back from memory on the
-  /// query's critical path). Requires finite coordinates with |lat| <= 90.
-  [[nodiscard]] std::optional<double> soleHeight(double latDeg, double lonDeg,
-                                                 std::size_t level) const;
+  /// query's critical path). Requires finite coordinates with |lat| <= 90. With `full`,
+  /// only where the coverage is exactly 1 (a dataset that hides every tier below it).
+  [[nodiscard]] std::optional<double> soleHeight(double latDeg, double lonDeg, std::size_t level,
+                                                 bool full = false) const;
   /// Asks the processor to fetch the samples evaluate() would read at a point of level
   /// `level` into its cache (topo::TopoPlanet::prefetch()): a hint, never failing, so that a
   /// composition overlaps the memory misses of its datasets. Planet grids only (a DEM's
