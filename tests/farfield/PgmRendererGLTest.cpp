@@ -154,10 +154,16 @@ TEST(PgmRendererGL, GlobalViewMatchesTheSphere) {
 // off. Without the renderer's own reset the draw failed with GL_INVALID_OPERATION.
 TEST(PgmRendererGL, DrawsWhateverBlendFactorsTheContextWasLeftWith) {
   test::glContext();
+  // The defaults again when the test ends, passed or thrown, for the tests after it.
+  struct DefaultFactorsAtExit {
+    DefaultFactorsAtExit() = default;
+    DefaultFactorsAtExit(const DefaultFactorsAtExit&) = delete;
+    DefaultFactorsAtExit& operator=(const DefaultFactorsAtExit&) = delete;
+    ~DefaultFactorsAtExit() { glBlendFunc(GL_ONE, GL_ZERO); }
+  } restore;
   glBlendFunc(GL_ONE, GL_SRC1_COLOR);
   const clod::Camera cam = looking({3.0 * kMars, 0.0, 0.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, 1.0});
   const Comparison c = renderAndCompare("after_dual_source_blend", cam, kMars, kMars, 0.0);
-  glBlendFunc(GL_ONE, GL_ZERO);
   EXPECT_GT(c.bodyPixels, 10000);
   EXPECT_EQ(c.coverageMisses, 0);
 }
