@@ -53,6 +53,16 @@ bool boxOutsidePlane(const glm::dvec3& lo, const glm::dvec3& hi, const glm::dvec
 }
 }  // namespace
 
+bool tierBefore(std::span<const CatalogueEntry> entries, std::uint32_t ia,
+                std::uint32_t ib) noexcept {
+  const Dataset& a = *entries[ia].dataset;
+  const Dataset& b = *entries[ib].dataset;
+  if (a.options().priority != b.options().priority)
+    return a.options().priority > b.options().priority;
+  if (a.groundSpacing() != b.groundSpacing()) return a.groundSpacing() < b.groundSpacing();
+  return ia < ib;
+}
+
 Snapshot::Snapshot(topo::Body body, std::vector<CatalogueEntry> entries, std::uint64_t version)
     : body_(std::move(body)), entries_(std::move(entries)), version_(version) {
   order_.resize(entries_.size());
@@ -155,9 +165,14 @@ const Snapshot::CellTable& Snapshot::cellTable(Role role) const {
   return *table;
 }
 
+namespace {
+// At namespace scope: a function's static with a destructor costs every call a test of its
+// guard (and the call a stack frame).
+const Snapshot::Cell kEmptyCell;
+}  // namespace
+
 const Snapshot::Cell& Snapshot::cell(const CellTable& table, double latDeg, double lonDeg) const {
-  static const Cell kEmpty;
-  if (nodes_.empty() || !std::isfinite(latDeg) || !std::isfinite(lonDeg)) return kEmpty;
+  if (nodes_.empty() || !std::isfinite(latDeg) || !std::isfinite(lonDeg)) return kEmptyCell;
   // [-180, 180): most points are there already (and a division is a tenth of the look-up).
   const double lon = lonDeg >= -180.0 && lonDeg < 180.0
                          ? lonDeg
@@ -187,6 +202,14 @@ const Snapshot::Cell& Snapshot::buildCell(const CellTable& table, int latCell, i
     auto fresh = std::make_unique<Cell>();
     fresh->candidates = cellList(latCell, lonCell, table.role);
     if (fresh->candidates.size() == 1) fresh->sole = entries_[fresh->candidates[0]].dataset.get();
+    if (!fresh->candidates.empty()) {
+      std::uint32_t top = fresh->candidates.front();
+      for (const std::uint32_t e : fresh->candidates) {
+        if (tierBefore(entries_, e, top)) top = e;
+      }
+      fresh->top = entries_[top].dataset.get();
+      fresh->topEntry = top;
+    }
     if (slot.compare_exchange_strong(built, fresh.get(), std::memory_order_acq_rel)) {
       built = fresh.release();
     }

@@ -79,17 +79,6 @@ bool pointOk(double latDeg, double lonDeg) noexcept {
                                       .expected = "within -90 .. 90"}));
 }
 
-/// The composition's tier order of candidates (entry indices): higher priority first, then
-/// finer spacing, then the lower index.
-bool tierBefore(std::span<const CatalogueEntry> entries, std::uint32_t ia, std::uint32_t ib) {
-  const Dataset& a = *entries[ia].dataset;
-  const Dataset& b = *entries[ib].dataset;
-  if (a.options().priority != b.options().priority)
-    return a.options().priority > b.options().priority;
-  if (a.groundSpacing() != b.groundSpacing()) return a.groundSpacing() < b.groundSpacing();
-  return ia < ib;
-}
-
 /// One test on a query's path, the messages out of line.
 inline void checkPoint(double latDeg, double lonDeg, const char* op) {
   if (!pointOk(latDeg, lonDeg)) [[unlikely]]
@@ -135,7 +124,7 @@ ComposedSurface::ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules
 std::optional<double> ComposedSurface::fastHeight(const Snapshot::Cell& cell, double latDeg,
                                                   double lonDeg, double metres) const {
   const Dataset* d = cell.sole;
-  if (d == nullptr) return nestedHeight(cell.candidates, latDeg, lonDeg, metres);
+  if (d == nullptr) return nestedHeight(cell, latDeg, lonDeg, metres);
   return d->soleHeight(latDeg, lonDeg, metres > 0.0 ? d->levelFor(metres) : 0);
 }
 
@@ -147,19 +136,16 @@ std::optional<double> ComposedSurface::fastHeight(const Snapshot::Cell& cell, do
 // CTX-class one over a global grid costs about its own query. The cell's candidates hold every
 // dataset the exact catalogue query returns (a superset), so the same holds where the general
 // path would ask that query.
-std::optional<double> ComposedSurface::nestedHeight(std::span<const std::uint32_t> candidates,
-                                                    double latDeg, double lonDeg,
-                                                    double metres) const {
-  if (candidates.size() < 2) return std::nullopt;
+std::optional<double> ComposedSurface::nestedHeight(const Snapshot::Cell& cell, double latDeg,
+                                                    double lonDeg, double metres) const {
+  // Only a top whose coverage is 1 wherever it answers: in a feather's band the general path
+  // would read it again (inside a 10° grid with a 2° feather, 27 % slower).
+  if (cell.top == nullptr || !cell.top->unfeathered()) return std::nullopt;
+  const Dataset& d = *cell.top;
   const auto entries = snapshot_->entries();
-  std::uint32_t top = candidates.front();
-  for (const std::uint32_t e : candidates.subspan(1)) {
-    if (tierBefore(entries, e, top)) top = e;
-  }
-  const Dataset& d = *entries[top].dataset;
   const double ratio = rules_.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules_.tierRatio;
-  for (const std::uint32_t e : candidates) {
-    if (e == top) continue;
+  for (const std::uint32_t e : cell.candidates) {
+    if (e == cell.topEntry) continue;
     const Dataset& o = *entries[e].dataset;
     // Another candidate in its tier: a blend, the general path's.
     if (o.options().priority == d.options().priority &&

@@ -174,7 +174,7 @@ Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement
     frame_.north = g0.north() + 1e-9;
     // planetocentricFromPlanetodetic() is the identity on a sphere.
     frame_.sameLatitude = latType_ == topo::LatitudeType::Planetodetic || body_.isSphere();
-    plainPlanet_ = !options_.mask && !(options_.featherMetres > 0.0);
+    plainPlanet_ = unfeathered();
     planet0_ = levels_.front().planet;
     const double r = (2.0 * body_.equatorialRadius() + body_.polarRadius()) / 3.0;
     groundSpacing_ = r * kDeg * std::sqrt(g0.spacingX() * g0.spacingY());

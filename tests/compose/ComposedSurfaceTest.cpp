@@ -94,6 +94,14 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
       Dataset::planet(planetPyramid(kMoon, 4.95, -4.95, 0.1, 100, 100,
                                     [](double lat, double lon) { return 180.0 + lat * lon; }),
                       named("fine", 40e3)));
+  // Nested grids without feathers (a 0.1° grid in a 0.5° one in the global grid): the top
+  // tier's one member covers fully where it answers, so height() answers from it alone.
+  TwoPlanets nested([](double lat, double lon) { return 100.0 + 3.0 * lat - 0.7 * lon; },
+                    [](double lat, double lon) { return 250.0 - 2.0 * lat + 1.3 * lon; });
+  nested.catalogue.add(
+      Dataset::planet(planetPyramid(kMoon, 4.95, -4.95, 0.1, 100, 100,
+                                    [](double lat, double lon) { return 180.0 + lat * lon; }),
+                      named("fine")));
   Catalogue only(kMoon);
   only.add(Dataset::planet(
       planetPyramid(kMoon, 9.75, -9.75, 0.5, 40, 40, [](double lat, double) { return 10.0 * lat; }),
@@ -125,12 +133,15 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
   // (composeGeneral()): the fine grid's interior, and (FinestWins: one tier per spacing) the
   // regional grid's.
   std::size_t single = 0, several = 0, threeTiers = 0, topAlone = 0;
-  for (const auto& [snapshot, policy] : {std::pair{t.catalogue.snapshot(), Policy::Weighted},
-                                         std::pair{only.snapshot(), Policy::Weighted},
-                                         std::pair{three.catalogue.snapshot(), Policy::Weighted},
-                                         std::pair{t.catalogue.snapshot(), Policy::FinestWins},
-                                         std::pair{three.catalogue.snapshot(), Policy::FinestWins},
-                                         std::pair{priority.snapshot(), Policy::Weighted}}) {
+  for (const auto& [snapshot, policy] :
+       {std::pair{t.catalogue.snapshot(), Policy::Weighted},
+        std::pair{only.snapshot(), Policy::Weighted},
+        std::pair{three.catalogue.snapshot(), Policy::Weighted},
+        std::pair{t.catalogue.snapshot(), Policy::FinestWins},
+        std::pair{three.catalogue.snapshot(), Policy::FinestWins},
+        std::pair{priority.snapshot(), Policy::Weighted},
+        std::pair{nested.catalogue.snapshot(), Policy::Weighted},
+        std::pair{nested.catalogue.snapshot(), Policy::FinestWins}}) {
     const ComposedSurface s(snapshot, Rules{policy, 2.0});
     for (int i = 0; i < 3000; ++i) {
       const double la = lat(rng), lo = lon(rng);

@@ -28,6 +28,11 @@ struct CatalogueEntry {
   std::shared_ptr<const Dataset> dataset;
 };
 
+/// The composition's tier order of entries `ia` and `ib` (indices into `entries`): higher
+/// priority first, then finer ground spacing, then the lower index.
+[[nodiscard]] bool tierBefore(std::span<const CatalogueEntry> entries, std::uint32_t ia,
+                              std::uint32_t ib) noexcept;
+
 /// An immutable state of a catalogue: its datasets and a BVH over their bounds. Queries
 /// are O(log N + k) for N datasets of which k answer (a BVH whose boxes overlap little:
 /// datasets far apart on the body). Thread-safe (immutable).
@@ -73,6 +78,10 @@ class Snapshot {
     /// The dataset when `candidates` holds exactly one (else null): a composed query's
     /// common case reaches it without the list and the entry (fewer dependent loads).
     const Dataset* sole = nullptr;
+    /// The first candidate in tier order (tierBefore()) and its index into entries(); null
+    /// when there is none.
+    const Dataset* top = nullptr;
+    std::uint32_t topEntry = 0;
   };
   /// cellCandidates() with the cell's sole dataset. The reference lives as long as the
   /// snapshot. An empty catalogue or a non-finite point gives an empty cell.

@@ -129,9 +129,8 @@ class ComposedSurface {
                                                  double lonDeg, double metres) const;
   /// The first of several candidates in tier order where it is alone in its tier and covers
   /// the point fully (else none): composeGeneral()'s height there.
-  [[nodiscard]] std::optional<double> nestedHeight(std::span<const std::uint32_t> candidates,
-                                                   double latDeg, double lonDeg,
-                                                   double metres) const;
+  [[nodiscard]] std::optional<double> nestedHeight(const Snapshot::Cell& cell, double latDeg,
+                                                   double lonDeg, double metres) const;
   /// compose() past its shortcuts, given the point's cell candidates.
   ComposedSample composeGeneral(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
                                 double metres, bool wantNormal, std::vector<Share>* shares) const;

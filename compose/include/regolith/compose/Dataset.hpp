@@ -102,6 +102,10 @@ class Dataset {
   [[nodiscard]] const std::string& name() const noexcept { return options_.name; }
   [[nodiscard]] const topo::Body& body() const noexcept { return body_; }
   [[nodiscard]] bool isPlanet() const noexcept { return !placement_.has_value(); }
+  /// No feather and no mask: the coverage is 1 wherever the dataset answers.
+  [[nodiscard]] bool unfeathered() const noexcept {
+    return !options_.mask && !(options_.featherMetres > 0.0);
+  }
   [[nodiscard]] const std::optional<topo::Placement>& placement() const noexcept {
     return placement_;
   }
@@ -212,9 +216,6 @@ class Dataset {
   } frame_;
   /// soleHeight()'s shortcut applies: a planet grid without feather or mask.
   bool plainPlanet_ = false;
-  /// Level 0's grid again, inside the dataset (a planet grid): soleHeight()'s query reads
-  /// its fields one dependent load sooner than through levels_.
-  std::optional<topo::TopoPlanet> planet0_;
   double groundSpacing_ = 0.0;
   double planetNominal_ = 0.0;  // a planet grid's pixel on the equator, metres (geometric mean)
   std::array<double, 2> heightRange_{0.0, 0.0};
@@ -225,6 +226,10 @@ class Dataset {
   /// evaluating the Jacobian at each query would cost six projections. Planet grids compute
   /// theirs exactly (two trigonometric calls).
   std::vector<double> quality_;
+  /// Level 0's grid again, inside the dataset (a planet grid): soleHeight()'s query reads
+  /// its fields one dependent load sooner than through levels_. Last, so that the members
+  /// the general path reads keep their cache lines.
+  std::optional<topo::TopoPlanet> planet0_;
 };
 
 /// Lattice points per side of Dataset's quality table.
