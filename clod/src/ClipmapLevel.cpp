@@ -144,19 +144,20 @@ ClipmapLevel::Bound ClipmapLevel::bound(double below) const {
   // A plane's window is the rectangle of its lattice; a placed one is sampled on a 9 × 9
   // lattice over it at both heights, with the largest step between neighbours as margin for
   // what bends between them.
+  // On the stack: draw() asks every level for its bound every frame.
   constexpr std::size_t kSteps = 8;
-  std::vector<glm::dvec3> pts;
-  pts.reserve(2 * (kSteps + 1) * (kSteps + 1));
+  std::array<glm::dvec3, 2 * (kSteps + 1) * (kSteps + 1)> pts;
+  std::size_t count = 0;
   double step = 0.0;
   for (std::size_t i = 0; i <= kSteps; ++i) {
     for (std::size_t j = 0; j <= kSteps; ++j) {
       const glm::dvec2 g = lattice(r0 + last * static_cast<double>(i) / kSteps,
                                    c0 + last * static_cast<double>(j) / kSteps);
-      for (const double h : {lo, hi}) pts.push_back(pyramid_.position(g.x, g.y, h));
-      if (j > 0) step = std::max(step, glm::length(pts[pts.size() - 1] - pts[pts.size() - 3]));
+      for (const double h : {lo, hi}) pts[count++] = pyramid_.position(g.x, g.y, h);
+      if (j > 0) step = std::max(step, glm::length(pts[count - 1] - pts[count - 3]));
       if (i > 0) {
-        const std::size_t above = pts.size() - 1 - 2 * (kSteps + 1);
-        step = std::max(step, glm::length(pts.back() - pts[above]));
+        const std::size_t above = count - 1 - 2 * (kSteps + 1);
+        step = std::max(step, glm::length(pts[count - 1] - pts[above]));
       }
     }
   }

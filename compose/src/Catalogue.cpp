@@ -201,7 +201,6 @@ const Snapshot::Cell& Snapshot::buildCell(const CellTable& table, int latCell, i
   if (built == nullptr) {
     auto fresh = std::make_unique<Cell>();
     fresh->candidates = cellList(latCell, lonCell, table.role);
-    if (fresh->candidates.size() == 1) fresh->sole = entries_[fresh->candidates[0]].dataset.get();
     if (!fresh->candidates.empty()) {
       std::uint32_t top = fresh->candidates.front();
       for (const std::uint32_t e : fresh->candidates) {

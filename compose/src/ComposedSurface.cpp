@@ -123,8 +123,8 @@ ComposedSurface::ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules
 // borders). Nested data is nestedHeight()'s.
 std::optional<double> ComposedSurface::fastHeight(const Snapshot::Cell& cell, double latDeg,
                                                   double lonDeg, double metres) const {
-  const Dataset* d = cell.sole;
-  if (d == nullptr) return nestedHeight(cell, latDeg, lonDeg, metres);
+  if (cell.candidates.size() != 1) return nestedHeight(cell, latDeg, lonDeg, metres);
+  const Dataset* d = cell.top;
   return d->soleHeight(latDeg, lonDeg, metres > 0.0 ? d->levelFor(metres) : 0);
 }
 

@@ -16,6 +16,7 @@
 #include <random>
 #include <set>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 namespace regolith::compose {
@@ -84,9 +85,10 @@ TEST(Catalogue, CoveringFindsEveryDatasetThatContainsThePoint) {
 // point, every dataset covering() returns there and so every dataset that contains it:
 // checked at random points, at cell corners and edges, at the poles and across the ±180°
 // seam (longitudes given as -180, 180 and beyond), from four threads at once, with each
-// cell's list built by whichever thread asks first. A cell of exactly one candidate names
-// that dataset as its sole one (a composed query's shortcut), any other cell none; a look-up
-// in the table taken once gives the very cell the plain look-up does.
+// cell's list built by whichever thread asks first. A cell names its first candidate in tier
+// order (higher priority, then finer spacing, then the lower index; a composed query's
+// shortcut), an empty cell none; a look-up in the table taken once gives the very cell the
+// plain look-up does.
 TEST(Catalogue, CellCandidatesHoldEveryCoveringDataset) {
   Catalogue cat(kMars);
   auto dems = scatteredDems(300, 23);
@@ -119,6 +121,16 @@ TEST(Catalogue, CellCandidatesHoldEveryCoveringDataset) {
           {90.0 - 4.0 * std::abs(u(rng)), 180.0 * u(rng)});  // to its corners and beyond
     }
   }
+  // Last (the highest index), a coarse DEM of priority 1 on the north pole: the first in tier
+  // order in every cell it reaches, before the finer and earlier DEMs there.
+  {
+    DatasetOptions o = named("priority");
+    o.priority = 1;
+    o.heightRange = std::array<double, 2>{0.0, 1.0};
+    dems.push_back(
+        Dataset::dem(demPyramid(2000.0, 41, 41, [](double, double) { return 0.0; }),
+                     topo::Placement(topo::LocalTangentPlane(kMars, {90.0, 0.0, 0.0}, 0.0)), o));
+  }
   // A tangent plane's point on the far side of the body is not in the DEM, though its foot
   // on the plane is (the north pole's foot on a south-polar plane is the plane's origin).
   EXPECT_TRUE(dems[302]->contains(-89.99, 45.0));
@@ -140,7 +152,7 @@ TEST(Catalogue, CellCandidatesHoldEveryCoveringDataset) {
     }
   }
   std::atomic<std::size_t> missing{0}, missingExact{0}, contained{0}, longest{0};
-  std::atomic<std::size_t> badSole{0}, soles{0}, otherCell{0};
+  std::atomic<std::size_t> badTop{0}, soles{0}, otherCell{0};
   auto check = [&](std::size_t begin, std::size_t step) {
     std::vector<std::uint32_t> found;
     for (std::size_t i = begin; i < points.size(); i += step) {
@@ -148,10 +160,16 @@ TEST(Catalogue, CellCandidatesHoldEveryCoveringDataset) {
       const auto cell = snap->cellCandidates(lat, lon);
       const Snapshot::Cell& whole = snap->cell(snap->cellTable(Role::Height), lat, lon);
       otherCell += whole.candidates.data() != cell.data() ? 1U : 0U;
-      const Dataset* sole =
-          cell.size() == 1 ? snap->entries()[cell.front()].dataset.get() : nullptr;
-      badSole += whole.sole != sole ? 1U : 0U;
-      soles += sole != nullptr ? 1U : 0U;
+      const auto first =
+          std::min_element(cell.begin(), cell.end(), [&](std::uint32_t ia, std::uint32_t ib) {
+            const Dataset& a = *snap->entries()[ia].dataset;
+            const Dataset& b = *snap->entries()[ib].dataset;
+            return std::tuple(-a.options().priority, a.groundSpacing(), ia) <
+                   std::tuple(-b.options().priority, b.groundSpacing(), ib);
+          });
+      const Dataset* top = first == cell.end() ? nullptr : snap->entries()[*first].dataset.get();
+      badTop += whole.top != top || (top != nullptr && whole.topEntry != *first) ? 1U : 0U;
+      soles += cell.size() == 1 ? 1U : 0U;
       found.clear();
       snap->covering(lat, lon, found);
       for (const std::uint32_t e : found) {
@@ -175,7 +193,7 @@ TEST(Catalogue, CellCandidatesHoldEveryCoveringDataset) {
   for (auto& t : threads) t.join();
   EXPECT_EQ(missing.load(), 0U);
   EXPECT_EQ(missingExact.load(), 0U);
-  EXPECT_EQ(badSole.load(), 0U);
+  EXPECT_EQ(badTop.load(), 0U);
   EXPECT_EQ(otherCell.load(), 0U);
   EXPECT_GT(soles.load(), 100U);  // both kinds of cell were seen
   EXPECT_GT(points.size() - soles.load(), 100U);

@@ -75,15 +75,13 @@ class Snapshot {
   /// One 1° cell of cellCandidates()'s table.
   struct Cell {
     std::vector<std::uint32_t> candidates;  ///< indices into entries(), ascending
-    /// The dataset when `candidates` holds exactly one (else null): a composed query's
-    /// common case reaches it without the list and the entry (fewer dependent loads).
-    const Dataset* sole = nullptr;
     /// The first candidate in tier order (tierBefore()) and its index into entries(); null
-    /// when there is none.
+    /// when there is none. A composed query's common case, a cell of one candidate, reaches
+    /// its dataset here without the list and the entry (fewer dependent loads).
     const Dataset* top = nullptr;
     std::uint32_t topEntry = 0;
   };
-  /// cellCandidates() with the cell's sole dataset. The reference lives as long as the
+  /// cellCandidates() with the cell's first dataset. The reference lives as long as the
   /// snapshot. An empty catalogue or a non-finite point gives an empty cell.
   [[nodiscard]] const Cell& cell(double latDeg, double lonDeg, Role role = Role::Height) const {
     return cell(cellTable(role), latDeg, lonDeg);
