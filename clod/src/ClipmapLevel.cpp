@@ -146,7 +146,7 @@ ClipmapLevel::Bound ClipmapLevel::bound(double below) const {
   // what bends between them.
   // On the stack: draw() asks every level for its bound every frame.
   constexpr std::size_t kSteps = 8;
-  std::array<glm::dvec3, 2 * (kSteps + 1) * (kSteps + 1)> pts;
+  std::array<glm::dvec3, 2 * (kSteps + 1) * (kSteps + 1)> pts{};
   std::size_t count = 0;
   double step = 0.0;
   for (std::size_t i = 0; i <= kSteps; ++i) {
