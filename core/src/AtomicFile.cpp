@@ -55,6 +55,10 @@ class Temporary {
 
 }  // namespace
 
+void syncFile(const fs::path& file, std::string_view operation) {
+  syncPath(file, false, operation);
+}
+
 fs::path temporaryPathFor(const fs::path& target) {
   static std::atomic<unsigned long long> counter{0};
   return target.string() + ".tmp-" + std::to_string(::getpid()) + "-" +
@@ -62,7 +66,7 @@ fs::path temporaryPathFor(const fs::path& target) {
 }
 
 void writeFileAtomically(const fs::path& target, const std::function<void(const fs::path&)>& write,
-                         std::string_view operation) {
+                         std::string_view operation, Durability durability) {
   fs::path dir = target.parent_path();
   if (dir.empty()) dir = ".";
   std::error_code ec;
@@ -76,14 +80,15 @@ void writeFileAtomically(const fs::path& target, const std::function<void(const 
     fail(operation, tmp.path(), "the writer did not create the temporary file");
   }
   // Durable before visible: the data reach the disk, then the rename publishes them, then the
-  // folder entry itself is synced.
-  syncPath(tmp.path(), false, operation);
+  // folder entry itself is synced. A scratch file is only renamed.
+  const bool durable = durability == Durability::Durable;
+  if (durable) syncPath(tmp.path(), false, operation);
   fs::rename(tmp.path(), target, ec);
   if (ec)
     fail(operation, target,
          "cannot rename " + tmp.path().string() + " into place: " + ec.message());
   tmp.commit();
-  syncPath(dir, true, operation);
+  if (durable) syncPath(dir, true, operation);
 }
 
 void writeStreamAtomically(const fs::path& target, const std::function<void(std::ostream&)>& write,

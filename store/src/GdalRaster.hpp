@@ -136,8 +136,9 @@ class Raster final : public topo::SampleSource {
   /// and its data file, ...) with sizes and SHA-256 digests read through GDAL's virtual file
   /// layer (so /vsizip/ paths work), GDAL's driver and version, the label's map projection
   /// group (PDS3 IMAGE_MAP_PROJECTION, ISIS3 Mapping), the geotransform and the CRS.
-  /// Throws ImportError if a file cannot be read.
-  [[nodiscard]] std::string provenance() const;
+  /// Without `digests`, the files' sizes only (nothing read). Throws ImportError if a file
+  /// cannot be read.
+  [[nodiscard]] std::string provenance(bool digests) const;
   /// The path opened and every file GDAL reads for it (a label and its data file, ...).
   [[nodiscard]] std::vector<std::filesystem::path> files() const;
 

@@ -145,6 +145,11 @@ GridInfo describeRaster(const std::filesystem::path& raster, const ImportOptions
   return r.layout().info;
 }
 
+std::string rasterProvenance(const std::filesystem::path& raster, const ImportOptions& options) {
+  const gdal::Raster r(raster, options, "store::rasterProvenance()");
+  return r.provenance(options.digestSources);
+}
+
 ImportReport inspectRaster(const std::filesystem::path& raster, const ImportOptions& options) {
   const gdal::Raster r(raster, options, "store::inspectRaster()");
   return reportOf(r);
@@ -157,7 +162,7 @@ ImportReport importRaster(const std::filesystem::path& raster, const std::filesy
   auto r = std::make_shared<gdal::Raster>(raster, options, op);
   refuseOverwritingSources({r}, store, op);
   ImportReport rep = reportOf(*r);
-  rep.info.provenance = r->provenance();
+  rep.info.provenance = r->provenance(options.digestSources);
   const Checked checked({r}, options);
   const std::vector<GridSource> grids{GridSource{rep.info, checked.sources.front(), {}}};
   writeStore(store, grids, writeOptionsOf(options));
@@ -257,13 +262,13 @@ ImportReport importTiles(std::span<const std::filesystem::path> tiles,
                                          std::to_string(tiles.size() - 1) + " more tile(s)");
   // Provenance: the first tile's, with every tile's files.
   CPLJSONDocument doc;
-  if (!doc.LoadMemory(rasters.front()->provenance())) {
+  if (!doc.LoadMemory(rasters.front()->provenance(options.digestSources))) {
     throw ImportError(op + ": " + store.string() + ": cannot record the tiles' provenance");
   }
   CPLJSONArray files = doc.GetRoot().GetArray("sources");
   for (std::size_t i = 1; i < rasters.size(); ++i) {
     CPLJSONDocument t;
-    if (!t.LoadMemory(rasters[i]->provenance())) continue;
+    if (!t.LoadMemory(rasters[i]->provenance(options.digestSources))) continue;
     const CPLJSONArray more = t.GetRoot().GetArray("sources");
     for (int k = 0; k < more.Size(); ++k) files.Add(more[k]);
   }

@@ -258,9 +258,9 @@ void writeStore(const std::filesystem::path& path, std::span<const GridSource> g
     checkCancel(options, ctx);
   };
   // core::writeFileAtomically: a unique temporary beside the target, synced, renamed into
-  // place, then the folder synced (durable before visible).
+  // place, then the folder synced (durable before visible; a scratch file only renamed).
   try {
-    core::writeFileAtomically(path, write, "store::writeStore()");
+    core::writeFileAtomically(path, write, "store::writeStore()", options.durability);
   } catch (const IoError& e) {
     throw StoreError(e.what());
   }

@@ -1,10 +1,12 @@
 #include <regolith/core/AtomicFile.hpp>
 #include <regolith/core/Error.hpp>
 
+#include <dlfcn.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -13,7 +15,23 @@
 #include <thread>
 #include <vector>
 
+// Every fsync() of this test program, counted, then done by the C library's own (interposed:
+// the executable's definition binds the static core library's calls; the syscall still runs).
+namespace {
+std::atomic<int> gFsyncCalls{0};
+}  // namespace
+
+extern "C" int fsync(int fd) {
+  using Fn = int (*)(int);
+  static const auto real =
+      reinterpret_cast<Fn>(  // NOLINT(cppcoreguidelines-pro-type-reinterpret-cast)
+          dlsym(RTLD_NEXT, "fsync"));
+  gFsyncCalls.fetch_add(1);
+  return real(fd);
+}
+
 namespace fs = std::filesystem;
+using regolith::core::Durability;
 using regolith::core::temporaryPathFor;
 using regolith::core::writeFileAtomically;
 using regolith::core::writeStreamAtomically;
@@ -53,6 +71,25 @@ TEST(AtomicFile, WritesTheContentUnderTheTargetAndLeavesNoTemporary) {
       p, [](std::ostream& o) { o << "second, longer"; }, "test()");
   EXPECT_EQ(bytes(p), "second, longer");
   EXPECT_EQ(siblings(p), std::vector<std::string>{"a.txt"});
+}
+
+TEST(AtomicFile, ADurableWriteSyncsTheFileAndTheFolderAndAScratchWriteNeither) {
+  const fs::path target = scratch("durability.bin");
+  const auto writeText = [](const std::string& text) {
+    return [text](const fs::path& tmp) { std::ofstream(tmp, std::ios::binary) << text; };
+  };
+  int before = gFsyncCalls.load();
+  writeFileAtomically(target, writeText("durable"), "test");
+  EXPECT_EQ(gFsyncCalls.load() - before, 2);  // the temporary, then the folder
+  EXPECT_EQ(bytes(target), "durable");
+
+  before = gFsyncCalls.load();
+  writeFileAtomically(target, writeText("scratch"), "test", Durability::Scratch);
+  EXPECT_EQ(gFsyncCalls.load() - before, 0);
+  // Still renamed into place whole, with no temporary left.
+  EXPECT_EQ(bytes(target), "scratch");
+  EXPECT_EQ(siblings(target), std::vector<std::string>{"durability.bin"});
+  fs::remove(target);
 }
 
 TEST(AtomicFile, AWriterThatThrowsLeavesThePreviousContentAndNoTemporary) {

@@ -414,6 +414,69 @@ TEST(Import, VestaSpecialPixelsAreMissingAndRadiiBecomeHeights) {
   EXPECT_GT(hrs, 0U);
 }
 
+namespace {
+
+/// Bytes this process has read through read() and pread() so far (/proc/self/io, rchar).
+std::uint64_t bytesRead() {
+  std::ifstream in("/proc/self/io");
+  std::string key;
+  std::uint64_t value = 0;
+  while (in >> key >> value) {
+    if (key == "rchar:") return value;
+  }
+  return 0;
+}
+
+}  // namespace
+
+TEST(Import, TheLookForRadiiReadsAFewTilesOfATiledRaster) {
+  // A 2048² float GeoTIFF in 64² tiles (16 KiB each) holding radii of Mars's sphere, with
+  // nodata in its first tile row. The look for radii used to read a tile per sample of its
+  // 16×16 look (256 tiles, 4 MiB; 64 MiB of an 8192² file in 256² tiles, 0.3 s at each open);
+  // it now reads at most 16 tiles and still finds the radii.
+  GDALAllRegister();
+  const fs::path p = scratch("tiled_radii.tif");
+  constexpr int kSide = 2048, kTile = 64;
+  {
+    const char* opts[] = {"TILED=YES", "BLOCKXSIZE=64", "BLOCKYSIZE=64", nullptr};
+    DatasetPtr ds(GDALCreate(GDALGetDriverByName("GTiff"), p.c_str(), kSide, kSide, 1, GDT_Float32,
+                             const_cast<char**>(opts)));  // NOLINT
+    ASSERT_TRUE(ds);
+    std::vector<float> v(std::size_t{kSide} * kSide);
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      v[i] = i < std::size_t{kSide} * kTile ? -32768.0F
+                                            : 3396190.0F + static_cast<float>(i % 4093) * 0.5F;
+    }
+    ASSERT_EQ(GDALRasterIO(GDALGetRasterBand(ds.get(), 1), GF_Write, 0, 0, kSide, kSide, v.data(),
+                           kSide, kSide, GDT_Float32, 0, 0),
+              CE_None);
+    const double gt[6] = {10.0, 0.001, 0.0, 5.0, 0.0, -0.001};
+    GDALSetGeoTransform(ds.get(), const_cast<double*>(gt));  // NOLINT
+    OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+    OSRSetFromUserInput(srs, "+proj=longlat +R=3396190 +no_defs");
+    GDALSetSpatialRef(ds.get(), srs);
+    OSRDestroySpatialReference(srs);
+    GDALSetRasterNoDataValue(GDALGetRasterBand(ds.get(), 1), -32768.0);
+  }
+  const std::uint64_t before = bytesRead();
+  const ImportReport rep = inspectRaster(p);
+  const std::uint64_t read = bytesRead() - before;
+  std::cout << "[ measured ] the look for radii of a 2048² raster in 64² tiles read " << read
+            << " bytes\n";
+  EXPECT_EQ(rep.radiusReference, 3396190.0);  // found below the nodata tile row
+  // 16 tiles of 16 KiB and the file's header and tile index (8 KiB each way); 256 tiles
+  // were 4 MiB.
+  EXPECT_LT(read, std::uint64_t{1} << 20);
+  // The heights: the radii less the sphere's, as GDAL reads them.
+  const ImportReport imported = importRaster(p, scratch("tiled_radii.h5"), smallPatches());
+  const Store s = Store::open(scratch("tiled_radii.h5"));
+  EXPECT_EQ(imported.radiusReference, 3396190.0);
+  float h = 0.0F;
+  s.readWindow(imported.info.name, 0, 100, 7, 1, 1, std::span<float>(&h, 1));
+  const float radius = 3396190.0F + static_cast<float>((100 * kSide + 7) % 4093) * 0.5F;
+  EXPECT_EQ(h, static_cast<float>(static_cast<double>(radius) - 3396190.0));
+}
+
 TEST(Import, HiriseDtmIsAnEquirectangularDemInMetres) {
   Expect e{GridKind::Dem, PlacementInfo::Kind::Equirectangular, 0.0, false, 0.0, true};
   checkFixture("Ares4_Marth_Crater_3557E_126N_ngate_03_lowres.cub", e);
@@ -1437,6 +1500,31 @@ TEST(ImportProvenance, TheStoreRecordsSourceFilesDigestsGdalAndTheDecidingLabelF
   for (int i = 0; i < 6; ++i) EXPECT_EQ(gt[i].ToDouble(), o.gt[static_cast<std::size_t>(i)]);
   EXPECT_NE(root.GetString("crs_wkt").find("3396000"), std::string::npos);  // the sphere
   EXPECT_EQ(Store::open(scratch("provenance.h5")).formatVersion(), (std::array<int, 2>{1, 4}));
+}
+
+TEST(ImportProvenance, WithoutDigestsTheSourcesKeepTheirSizesAndRasterProvenanceAddsThem) {
+  const fs::path src = fixture("megt90n000cb.lbl");
+  ImportOptions o = smallPatches();
+  o.digestSources = false;
+  o.window = SampleWindow{10, 20, 64, 96};  // the provenance does not depend on a window
+  const ImportReport rep = importRaster(src, scratch("undigested.h5"), o);
+  const std::string text = Store::open(scratch("undigested.h5")).grid(rep.info.name).provenance;
+  CPLJSONDocument undigested;
+  ASSERT_TRUE(undigested.LoadMemory(text)) << text;
+  const CPLJSONArray files = undigested.GetRoot().GetArray("sources");
+  ASSERT_EQ(files.Size(), 2);
+  for (int i = 0; i < files.Size(); ++i) {
+    const std::string file = files[i].GetString("file");
+    EXPECT_FALSE(files[i].GetObj("sha256").IsValid()) << file;
+    EXPECT_EQ(files[i].GetLong("bytes"), static_cast<GInt64>(fs::file_size(fixture(file))));
+  }
+  // rasterProvenance(): the import's provenance to the byte, with digests or without them.
+  EXPECT_EQ(rasterProvenance(src, o), text);
+  const ImportReport full = importRaster(src, scratch("digested.h5"), smallPatches());
+  EXPECT_EQ(rasterProvenance(src, smallPatches()),
+            Store::open(scratch("digested.h5")).grid(full.info.name).provenance);
+  EXPECT_NE(rasterProvenance(src, smallPatches()), text);
+  EXPECT_THROW((void)rasterProvenance(fixture("no_such_file.tif")), ImportError);
 }
 
 // ---- the writer's memory budget (WriteOptions::memoryBudgetBytes) ---------------------------

@@ -206,6 +206,32 @@ def test_a_killed_rank_fails_the_job_and_leaves_nothing(sources, tmp_path, rank)
     assert list(tmp_path.iterdir()) == [], list(tmp_path.iterdir())
 
 
+def test_one_raster_is_digested_once_by_the_last_rank_beside_the_join(sources, tmp_path):
+    # The parts record no digests; the last rank digests the source while rank 0 joins, and
+    # the store's provenance carries the digest the single-process import records (the
+    # bit-for-bit tests compare every attribute). Here the digest itself is checked against
+    # Python's hashlib, and a failing digest fails the job and leaves nothing behind.
+    import hashlib
+    import json
+    _, big, _, _ = sources
+    store = tmp_path / "digested.h5"
+    r = mpirun(2, ["import", str(big), "--out", str(store), "--patch", "64"])
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "digests:        on rank 1 beside the join" in r.stdout, r.stdout
+    with h5py.File(store, "r") as f:
+        prov = json.loads(f["grids"]["big"].attrs["provenance"])
+    [src] = prov["sources"]
+    assert src["sha256"] == hashlib.sha256(big.read_bytes()).hexdigest()
+    assert src["bytes"] == big.stat().st_size
+    store.unlink()
+
+    r = mpirun(2, ["import", str(big), "--out", str(store), "--patch", "64"],
+               env={"REGOLITH_MPI_TEST_DIGEST_FAILS": "1"})
+    assert r.returncode != 0
+    assert f"the digests of {big} on rank 1 failed: test: the digests fail" in r.stderr, r.stderr
+    assert list(tmp_path.iterdir()) == [], list(tmp_path.iterdir())
+
+
 def test_a_global_mosaic_is_imported_whole_and_equal(tmp_path):
     # Geographic tiles 180 degrees high: importTiles() snaps the geometry of the whole mosaic
     # only, so regolith-mpi does not split it (one part, on rank 0) and the store is the same.

@@ -221,6 +221,7 @@ std::filesystem::path writeCoarseLevels(const Assembly& a) {
   o.levels = a.levels - top;
   o.threads = a.threads;
   o.memoryBudgetBytes = 0;
+  o.durability = core::Durability::Scratch;  // deleted once joined
   // Codec and level: the first part's level datasets carry them; read them back from it.
   const Id f = file(H5Fopen(a.parts.front().c_str(), H5F_ACC_RDONLY, H5P_DEFAULT),
                     "cannot open " + a.parts.front().string());
@@ -355,6 +356,13 @@ void assemble(const Assembly& a) {
                                levelSide(a.cols, k));
         copyChunks(s.get(), d.get(), 0, from + " of " + coarse.string());
       }
+    }
+    if (a.lateProvenance) {
+      // The chunks reach the disk while the provenance is awaited; the sync after the rename
+      // then writes little more than the attribute.
+      check(H5Fflush(out.get(), H5F_SCOPE_GLOBAL), "cannot flush " + tmp.string());
+      core::syncFile(tmp, "regolith-mpi import");
+      setText(g.get(), "provenance", a.lateProvenance(), what);
     }
     check(H5Fflush(out.get(), H5F_SCOPE_GLOBAL), "cannot flush " + tmp.string());
   };

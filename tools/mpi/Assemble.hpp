@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,10 @@ struct Assembly {
   std::vector<store::BlockStatistics> blocks;
   /// The grid's provenance (tiled grids); empty: the first part's.
   std::string provenance;
+  /// If set: called once every chunk is copied, and its result is the grid's provenance
+  /// (a single raster: another rank takes the source's digests meanwhile). May throw; the
+  /// store is then not written.
+  std::function<std::string()> lateProvenance;
   /// Threads for the coarse levels (0: all).
   unsigned threads = 0;
 };

@@ -96,6 +96,35 @@ std::vector<std::string> gather(const std::string& mine, int rank, int size) {
   return out;
 }
 
+/// Completes `request` without spinning: OpenMPI's blocking calls poll, which would take a
+/// core from the ranks still working when ranks share a node.
+void waitGently(MPI_Request& request) {
+  for (int done = 0; MPI_Test(&request, &done, MPI_STATUS_IGNORE) == MPI_SUCCESS && done == 0;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+/// Sends `text` to `to` (tag `tag`) and waits for it gently.
+void sendString(const std::string& text, int to, int tag) {
+  MPI_Request r = MPI_REQUEST_NULL;
+  MPI_Isend(text.data(), static_cast<int>(text.size()), MPI_CHAR, to, tag, MPI_COMM_WORLD, &r);
+  waitGently(r);
+}
+
+/// Receives a string from `from` (tag `tag`), waiting for it gently.
+std::string receiveString(int from, int tag) {
+  MPI_Status status{};
+  for (int flag = 0;
+       MPI_Iprobe(from, tag, MPI_COMM_WORLD, &flag, &status) == MPI_SUCCESS && flag == 0;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  int n = 0;
+  MPI_Get_count(&status, MPI_CHAR, &n);
+  std::string text(static_cast<std::size_t>(std::max(n, 0)), '\0');
+  MPI_Recv(text.data(), n, MPI_CHAR, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  return text;
+}
+
 int broadcastInt(int v) {
   MPI_Bcast(&v, 1, MPI_INT, 0, MPI_COMM_WORLD);
   return v;
@@ -304,6 +333,9 @@ std::vector<store::BlockStatistics> importPart(const Args& a, const store::Impor
                                                const fs::path& path) {
   std::vector<store::BlockStatistics> blocks;
   store::ImportOptions o = base;
+  o.durability = core::Durability::Scratch;  // deleted once joined
+  // One raster: its digests are taken once, on the digesting rank, beside the join.
+  o.digestSources = !l.tiles.empty();
   o.levels = l.plan.partTop + 1;
   o.gridName = l.grid;
   o.blockStatistics = [&blocks](std::string_view, const store::BlockStatistics& b) {
@@ -400,18 +432,43 @@ int run(const Args& a, int rank, int size) {
     if (error.empty()) error = "failed";
   }
   const double partSeconds = seconds(tParts);
-  // Wait for the slowest rank without spinning: OpenMPI's blocking collectives poll, which
-  // would take a core from the ranks still working when ranks share a node.
+  // Wait for the slowest rank.
   MPI_Request arrived = MPI_REQUEST_NULL;
   MPI_Ibarrier(MPI_COMM_WORLD, &arrived);
-  for (int done = 0; MPI_Test(&arrived, &done, MPI_STATUS_IGNORE) == MPI_SUCCESS && done == 0;) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
+  waitGently(arrived);
   std::ostringstream slow;
   slow << partSeconds << " " << cpuSeconds();
   const std::vector<std::string> errors = gather(error, rank, size);
   const std::vector<std::string> stats = gather(blocks, rank, size);
   const std::vector<std::string> times = gather(slow.str(), rank, size);
+
+  // One raster split into parts: the last rank takes the source's digests (reading all of
+  // it) while rank 0 joins the parts, and sends rank 0 the grid's provenance (docs/scale.md,
+  // "Stop 42"). Its first line is "ok <seconds>" or "error", then the provenance or the reason.
+  const bool digestApart = parts > 1 && l.tiles.empty();
+  const int digester = size - 1;
+  constexpr int kProvenanceTag = 42;
+  int partsOk = 1;
+  if (rank == 0) {
+    partsOk = std::all_of(errors.begin(), errors.end(), [](const auto& e) { return e.empty(); });
+  }
+  partsOk = broadcastInt(partsOk);
+  if (digestApart && partsOk != 0 && rank == digester) {
+    const auto tDigest = std::chrono::steady_clock::now();
+    std::string reply;
+    try {
+      if (std::getenv("REGOLITH_MPI_TEST_DIGEST_FAILS") != nullptr) {
+        throw store::ImportError("test: the digests fail (REGOLITH_MPI_TEST_DIGEST_FAILS)");
+      }
+      const std::string provenance = store::rasterProvenance(a.sources.front(), o);
+      std::ostringstream head;
+      head << "ok " << seconds(tDigest) << "\n";
+      reply = head.str() + provenance;
+    } catch (const std::exception& e) {
+      reply = std::string("error\n") + e.what();
+    }
+    sendString(reply, 0, kProvenanceTag);
+  }
 
   int status = 0;
   if (rank == 0) {
@@ -428,6 +485,7 @@ int run(const Args& a, int rank, int size) {
     }
     if (status == 0 && parts > 1) {
       const auto tJoin = std::chrono::steady_clock::now();
+      std::string reply, digestSeconds;
       try {
         Assembly as;
         as.out = out;
@@ -446,12 +504,28 @@ int run(const Args& a, int rank, int size) {
         for (std::size_t i = 0; i < parts; ++i) appendBlocks(stats[i], as.blocks);
         if (!l.tiles.empty()) as.provenance = mergedProvenance(l, as.parts, a.sources);
         as.threads = a.threads;
+        if (digestApart) {
+          as.lateProvenance = [&]() {
+            reply = receiveString(digester, kProvenanceTag);
+            const std::size_t eol = reply.find('\n');
+            const std::string head = reply.substr(0, eol);
+            if (head.rfind("ok ", 0) != 0) {
+              throw store::StoreError("the digests of " + a.sources.front() + " on rank " +
+                                      std::to_string(digester) +
+                                      " failed: " + reply.substr(std::min(eol + 1, reply.size())));
+            }
+            digestSeconds = head.substr(3);
+            return reply.substr(eol + 1);
+          };
+        }
         assemble(as);
       } catch (const std::exception& e) {
         status = 1;
         std::cerr << "regolith-mpi import: rank 0 (assembling " << out.string()
                   << ") failed: " << e.what() << "\n";
       }
+      // The digesting rank's reply is taken even when the join failed before asking for it.
+      if (digestApart && reply.empty()) (void)receiveString(digester, kProvenanceTag);
       if (status == 0) {
         double slowest = 0.0;
         std::ostringstream ranks;
@@ -475,6 +549,10 @@ int run(const Args& a, int rank, int size) {
         std::cout << "\n  seconds:        " << seconds(t0) << " (parts " << slowest
                   << " on the slowest rank, joining " << seconds(tJoin) << ")\n";
         std::cout << "  ranks:          " << ranks.str() << " (rank 0's CPU before the join)\n";
+        if (digestApart) {
+          std::cout << "  digests:        on rank " << digester << " beside the join, "
+                    << digestSeconds << " s\n";
+        }
       }
     } else if (status == 0) {
       std::cout << "Wrote " << out.string() << ": grid '" << l.grid << "', one part ("

@@ -2,6 +2,7 @@
 /// \file
 /// HDF5 terrain stores: reading grids by hyperslab, and writing them crash-safely.
 
+#include <regolith/core/AtomicFile.hpp>
 #include <regolith/core/Error.hpp>
 #include <regolith/core/Executor.hpp>
 #include <regolith/store/GridInfo.hpp>
@@ -206,6 +207,10 @@ struct WriteOptions {
   /// above 4096²). 0: no bound. Not counted: the source's own caches (GDAL_CACHEMAX), HDF5's
   /// metadata cache, the code and libraries.
   std::size_t memoryBudgetBytes = kDefaultMemoryBudget;
+  /// Durable: the file is synced before it is renamed into place, and its folder after.
+  /// Scratch: a file that its job deletes before it ends (regolith-mpi's part stores),
+  /// renamed into place unsynced; a crash may leave it incomplete (core::Durability).
+  core::Durability durability = core::Durability::Durable;
 };
 
 /// How writeStore() builds one grid's pyramid within WriteOptions::memoryBudgetBytes
