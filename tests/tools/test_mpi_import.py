@@ -225,6 +225,17 @@ def test_one_raster_is_digested_once_by_the_last_rank_beside_the_join(sources, t
     assert src["bytes"] == big.stat().st_size
     store.unlink()
 
+    # Five ranks, four parts: the fifth rank has no part and digests while the others import.
+    single = tmp_path / "single.h5"
+    regolith(["import", str(big), "--out", str(single), "--patch", "64"])
+    r = mpirun(5, ["import", str(big), "--out", str(store), "--patch", "64"])
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "parts:          4" in r.stdout, r.stdout
+    assert "digests:        on rank 4 beside the parts" in r.stdout, r.stdout
+    assert_same_store(single, store)
+    store.unlink()
+    single.unlink()
+
     r = mpirun(2, ["import", str(big), "--out", str(store), "--patch", "64"],
                env={"REGOLITH_MPI_TEST_DIGEST_FAILS": "1"})
     assert r.returncode != 0

@@ -325,6 +325,11 @@ void appendBlocks(const std::string& s, std::vector<store::BlockStatistics>& out
   if (n > 0) std::memcpy(out.data() + at, s.data(), n * sizeof(store::BlockStatistics));
 }
 
+/// Part p's store in the parts' folder.
+fs::path partPath(const fs::path& dir, std::size_t p) {
+  return dir / ("part-" + std::to_string(p) + ".h5");
+}
+
 /// The part store of part p: levels 0 … partTop of its rows (a window of the one raster, or its
 /// tiles), written with the ordinary import. Returns its level-0 blocks' statistics as the
 /// writer summed them (none for tiles written with one level, as the writer).
@@ -351,6 +356,23 @@ std::vector<store::BlockStatistics> importPart(const Args& a, const store::Impor
     (void)store::importTiles(tiles, path, o);
   }
   return blocks;
+}
+
+/// The digesting rank's reply to rank 0: "ok <seconds>" and the single raster's provenance
+/// with its digests (store::rasterProvenance()), or "error" and the reason, a line each.
+std::string digestSource(const Args& a, const store::ImportOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    if (std::getenv("REGOLITH_MPI_TEST_DIGEST_FAILS") != nullptr) {
+      throw store::ImportError("test: the digests fail (REGOLITH_MPI_TEST_DIGEST_FAILS)");
+    }
+    const std::string provenance = store::rasterProvenance(a.sources.front(), o);
+    std::ostringstream head;
+    head << "ok " << seconds(t0) << "\n";
+    return head.str() + provenance;
+  } catch (const std::exception& e) {
+    return std::string("error\n") + e.what();
+  }
 }
 
 int run(const Args& a, int rank, int size) {
@@ -403,6 +425,17 @@ int run(const Args& a, int rank, int size) {
   (void)std::signal(SIGTERM, onTerminate);
   (void)std::signal(SIGINT, onTerminate);
 
+  // One raster split into parts: its digests (reading all of it) are taken once, by the last
+  // rank: while rank 0 joins the parts, or at once when that rank has no part. It sends rank 0
+  // the grid's provenance (docs/scale.md, "Stop 42").
+  const bool digestApart = parts > 1 && l.tiles.empty();
+  const int digester = size - 1;
+  constexpr int kProvenanceTag = 42;
+  std::string digestReply;
+  if (digestApart && rank == digester && static_cast<std::size_t>(rank) >= parts) {
+    digestReply = digestSource(a, o);
+  }
+
   std::string error, blocks;
   const auto tParts = std::chrono::steady_clock::now();
   const auto p = static_cast<std::size_t>(rank);
@@ -420,7 +453,7 @@ int run(const Args& a, int rank, int size) {
       }
     } else if (p < parts) {
       fs::create_directories(dir);
-      const fs::path part = dir / ("part-" + std::to_string(p) + ".h5");
+      const fs::path part = partPath(dir, p);
       blocks = encodeBlocks(importPart(a, o, l, p, part));
       if (const char* kill = std::getenv("REGOLITH_MPI_TEST_KILL_RANK");
           kill != nullptr && std::to_string(rank) == kill) {
@@ -442,32 +475,14 @@ int run(const Args& a, int rank, int size) {
   const std::vector<std::string> stats = gather(blocks, rank, size);
   const std::vector<std::string> times = gather(slow.str(), rank, size);
 
-  // One raster split into parts: the last rank takes the source's digests (reading all of
-  // it) while rank 0 joins the parts, and sends rank 0 the grid's provenance (docs/scale.md,
-  // "Stop 42"). Its first line is "ok <seconds>" or "error", then the provenance or the reason.
-  const bool digestApart = parts > 1 && l.tiles.empty();
-  const int digester = size - 1;
-  constexpr int kProvenanceTag = 42;
   int partsOk = 1;
   if (rank == 0) {
     partsOk = std::all_of(errors.begin(), errors.end(), [](const auto& e) { return e.empty(); });
   }
   partsOk = broadcastInt(partsOk);
-  if (digestApart && partsOk != 0 && rank == digester) {
-    const auto tDigest = std::chrono::steady_clock::now();
-    std::string reply;
-    try {
-      if (std::getenv("REGOLITH_MPI_TEST_DIGEST_FAILS") != nullptr) {
-        throw store::ImportError("test: the digests fail (REGOLITH_MPI_TEST_DIGEST_FAILS)");
-      }
-      const std::string provenance = store::rasterProvenance(a.sources.front(), o);
-      std::ostringstream head;
-      head << "ok " << seconds(tDigest) << "\n";
-      reply = head.str() + provenance;
-    } catch (const std::exception& e) {
-      reply = std::string("error\n") + e.what();
-    }
-    sendString(reply, 0, kProvenanceTag);
+  if (digestApart && rank == digester) {
+    if (digestReply.empty() && partsOk != 0) digestReply = digestSource(a, o);
+    if (partsOk != 0) sendString(digestReply, 0, kProvenanceTag);
   }
 
   int status = 0;
@@ -492,7 +507,7 @@ int run(const Args& a, int rank, int size) {
         as.scratch = dir;
         as.grid = l.grid;
         for (std::size_t i = 0; i < parts; ++i) {
-          as.parts.push_back(dir / ("part-" + std::to_string(i) + ".h5"));
+          as.parts.push_back(partPath(dir, i));
         }
         as.plan = l.plan;
         as.rows = l.rows;
@@ -550,7 +565,9 @@ int run(const Args& a, int rank, int size) {
                   << " on the slowest rank, joining " << seconds(tJoin) << ")\n";
         std::cout << "  ranks:          " << ranks.str() << " (rank 0's CPU before the join)\n";
         if (digestApart) {
-          std::cout << "  digests:        on rank " << digester << " beside the join, "
+          std::cout << "  digests:        on rank " << digester
+                    << (static_cast<std::size_t>(digester) < parts ? " beside the join, "
+                                                                   : " beside the parts, ")
                     << digestSeconds << " s\n";
         }
       }
@@ -560,10 +577,17 @@ int run(const Args& a, int rank, int size) {
                                       : l.onePart)
                 << "), on rank 0 alone, " << seconds(t0) << " seconds\n";
     }
-    std::error_code ec;
-    fs::remove_all(dir, ec);
   }
-  return broadcastInt(status);
+  status = broadcastInt(status);
+  // Each rank removes its own part at once (freeing a part's pages takes a while), then
+  // rank 0 the folder with whatever is left in it.
+  std::error_code ec;
+  if (parts > 1 && p < parts) fs::remove(partPath(dir, p), ec);
+  MPI_Request removed = MPI_REQUEST_NULL;
+  MPI_Ibarrier(MPI_COMM_WORLD, &removed);
+  waitGently(removed);
+  if (rank == 0) fs::remove_all(dir, ec);
+  return status;
 }
 
 }  // namespace
