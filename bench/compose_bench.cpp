@@ -6,6 +6,8 @@
 //   through TopoPlanet and through the composition with k covering datasets; PlainEach/k, the
 //   k plain heights at each point that Composed/k reads, without the composition;
 //   SoleHeight, the one dataset's own query that Composed/1 makes after its cell look-up.
+//   Composed/3 blends two 0.01° twins over the global grid; ComposedMixed blends a 0.01° and
+//   a 0.015° grid (weights with the projection quality), against PlainEachMixed.
 // - PlainBatch vs ComposedBatch: the same per point through the batch calls (64 points a
 //   call, items_per_second), where the processor may overlap one point's work with the next.
 // - ComposedWindow/N: composing one clipmap level window (255 × 255 samples, what a frame's
@@ -30,6 +32,7 @@
 #include <filesystem>
 #include <memory>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -122,7 +125,8 @@ struct PagedPlanet {
     };
     const store::GridSource grids[] = {grid("global", 0.05, -179.975, 89.975, 3600, 7200, 0.0),
                                        grid("regional1", 0.01, 0.005, 9.995, 1000, 1000, 10.0),
-                                       grid("regional2", 0.01, 0.005, 9.995, 1000, 1000, 20.0)};
+                                       grid("regional2", 0.01, 0.005, 9.995, 1000, 1000, 20.0),
+                                       grid("regional3", 0.015, 0.0075, 9.9925, 667, 667, 30.0)};
     store::WriteOptions w;
     w.patchRows = w.patchCols = 256;
     store::writeStore(path, grids, w);
@@ -175,11 +179,9 @@ BENCHMARK(PlainRegional);
 // each of the first k grids in turn, straight through TopoPlanet (so the thread's block
 // changes grid at every query, as in the composition). Composed/k − PlainEach/k is what the
 // composition itself costs.
-void PlainEach(benchmark::State& state) {
-  const auto k = static_cast<std::size_t>(state.range(0));
-  const char* names[] = {"global", "regional1", "regional2"};
+void plainEach(benchmark::State& state, std::span<const char* const> names) {
   std::vector<topo::TopoPlanet> planets;
-  for (std::size_t j = 0; j < k; ++j) planets.push_back(paged().pager->planet(names[j]));
+  for (const char* name : names) planets.push_back(paged().pager->planet(name));
   const Points pts(1 << 16);
   std::size_t i = 0;
   for (auto _ : state) {
@@ -188,13 +190,21 @@ void PlainEach(benchmark::State& state) {
     i = (i + 1) & (pts.lat.size() - 1);
   }
 }
+void PlainEach(benchmark::State& state) {
+  const char* const names[] = {"global", "regional1", "regional2"};
+  plainEach(state, std::span(names).first(static_cast<std::size_t>(state.range(0))));
+}
 BENCHMARK(PlainEach)->Arg(1)->Arg(2)->Arg(3);
 
-void Composed(benchmark::State& state) {
-  const auto k = static_cast<std::size_t>(state.range(0));
+void PlainEachMixed(benchmark::State& state) {
+  const char* const names[] = {"global", "regional1", "regional3"};
+  plainEach(state, names);
+}
+BENCHMARK(PlainEachMixed);
+
+void composed(benchmark::State& state, std::span<const char* const> names) {
   compose::Catalogue cat(kMars);
-  const char* names[] = {"global", "regional1", "regional2"};
-  for (std::size_t j = 0; j < k; ++j) cat.add(compose::datasetFromStore(*paged().pager, names[j]));
+  for (const char* name : names) cat.add(compose::datasetFromStore(*paged().pager, name));
   const compose::ComposedSurface s(cat.snapshot(), compose::Rules{compose::Policy::Weighted, 2.0});
   const Points pts(1 << 16);
   std::size_t i = 0;
@@ -203,7 +213,17 @@ void Composed(benchmark::State& state) {
     i = (i + 1) & (pts.lat.size() - 1);
   }
 }
+void Composed(benchmark::State& state) {
+  const char* const names[] = {"global", "regional1", "regional2"};
+  composed(state, std::span(names).first(static_cast<std::size_t>(state.range(0))));
+}
 BENCHMARK(Composed)->Arg(1)->Arg(2)->Arg(3);
+
+void ComposedMixed(benchmark::State& state) {
+  const char* const names[] = {"global", "regional1", "regional3"};
+  composed(state, names);
+}
+BENCHMARK(ComposedMixed);
 
 // Dataset::soleHeight() alone (what Composed/1 runs after its cell look-up): the dataset's
 // own locate and its grid's query, against PlainPaged.

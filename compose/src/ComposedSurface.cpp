@@ -7,6 +7,7 @@
 #include <glm/vec2.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <deque>
 #include <string>
@@ -155,12 +156,100 @@ std::optional<double> ComposedSurface::nestedHeight(const Snapshot::Cell& cell, 
   return d.soleHeight(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, true);
 }
 
+// Blended data: two to four planet grids of one tier, each without feather or mask and
+// answering at the point (coverage 1), with no finer candidate below. composeGeneral() would
+// read the tier, find it complete and full, and read nothing below: the height is the tier's
+// weighted mean Σ w·h / Σ w, w = coverage (1) × quality × resolution, with the qualities
+// evaluated and shared as it does and the sums formed in its (tier) order, so the bits are
+// its own. Without its scratch, sort, members and tiers, each blended grid costs about its
+// own query (docs/composition.md, "Stop 42").
+std::optional<ComposedSurface::CountedHeight> ComposedSurface::blendHeight(
+    const Snapshot::Cell& cell, double latDeg, double lonDeg, double metres) const {
+  constexpr std::size_t kBlendAtMost = 4;
+  const std::size_t n = cell.candidates.size();
+  if (n < 2 || n > kBlendAtMost || cell.top == nullptr) return std::nullopt;
+  const auto entries = snapshot_->entries();
+  const Dataset& top = *cell.top;
+  const double ratio = rules_.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules_.tierRatio;
+  const int priority = top.options().priority;
+  const double finest = top.groundSpacing();  // the first in tier order: the tier's finest
+  std::array<std::uint32_t, kBlendAtMost> tier{};
+  std::size_t k = 0;
+  for (const std::uint32_t e : cell.candidates) {
+    const Dataset& d = *entries[e].dataset;
+    if (d.options().priority == priority && d.groundSpacing() <= finest * ratio) {
+      // A DEM's quality comes from its located point in the general path: that one's.
+      if (!d.isPlanet() || !d.unfeathered()) return std::nullopt;
+      // Insertion in tier order (a handful of entries).
+      std::size_t at = k++;
+      for (; at > 0 && tierBefore(entries, e, tier[at - 1]); --at) tier[at] = tier[at - 1];
+      tier[at] = e;
+    } else if (d.groundSpacing() < finest) {
+      return std::nullopt;  // a finer one below: the general path reads on
+    }
+  }
+  if (k < 2) return std::nullopt;
+  std::array<double, kBlendAtMost> h{};
+  for (std::size_t i = 0; i < k; ++i) {
+    const Dataset& d = *entries[tier[i]].dataset;
+    const std::optional<double> v =
+        d.soleHeight(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, true);
+    if (!v) return std::nullopt;
+    h[i] = *v;
+  }
+  // Twins (one planet quality and one spacing: overlapping products of one kind) weigh the
+  // same: the plain mean, as composeGeneral() takes it for equal weights (each at least
+  // kMinQuality × 1 > 0), without the quality.
+  const Dataset& lead = *entries[tier[0]].dataset;
+  bool twins = true;
+  for (std::size_t i = 1; i < k; ++i) {
+    const Dataset& d = *entries[tier[i]].dataset;
+    twins = twins && d.samePlanetQuality(lead) && d.groundSpacing() == lead.groundSpacing();
+  }
+  if (twins) {
+    double sumH = 0.0;
+    for (std::size_t i = 0; i < k; ++i) sumH += h[i];
+    return CountedHeight{sumH / static_cast<double>(k), QueryStatus::Ok,
+                         static_cast<std::uint32_t>(k)};
+  }
+  double sumW = 0.0, sumWH = 0.0, sumH = 0.0, w0 = 0.0;
+  bool equal = true;
+  std::uint32_t contributors = 0;
+  const Dataset* last = nullptr;
+  double lastQuality = 0.0;
+  for (std::size_t i = 0; i < k; ++i) {
+    const Dataset& d = *entries[tier[i]].dataset;
+    const double relative = finest / d.groundSpacing();
+    const double resolution = rules_.resolutionPower == 2.0
+                                  ? relative * relative
+                                  : std::pow(relative, rules_.resolutionPower);
+    double quality = 0.0;
+    if (last != nullptr && d.samePlanetQuality(*last)) {
+      quality = lastQuality;
+    } else {
+      quality = d.qualityInside(latDeg, lonDeg);  // it answered: quality()'s value
+      last = &d;
+      lastQuality = quality;
+    }
+    const double w = 1.0 * quality * resolution;  // coverage × quality × resolution
+    if (i == 0) w0 = w;
+    equal = equal && w == w0;
+    sumW += w;
+    sumWH += w * h[i];
+    sumH += h[i];
+    contributors += w > 0.0 ? 1U : 0U;
+  }
+  const double height = equal && w0 > 0.0 ? sumH / static_cast<double>(k) : sumWH / sumW;
+  return CountedHeight{height, QueryStatus::Ok, contributors};
+}
+
 ComposedSurface::CountedHeight ComposedSurface::heightOf(double latDeg, double lonDeg,
                                                          double metres) const {
   const Snapshot::Cell& cell = snapshot_->cell(*heightCells_, latDeg, lonDeg);
   if (const std::optional<double> h = fastHeight(cell, latDeg, lonDeg, metres)) {
     return {*h, QueryStatus::Ok, 1};
   }
+  if (const std::optional<CountedHeight> b = blendHeight(cell, latDeg, lonDeg, metres)) return *b;
   const ComposedSample c = composeGeneral(cell.candidates, latDeg, lonDeg, metres, false, nullptr);
   return {c.height, c.status, c.contributors};
 }
@@ -383,16 +472,24 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
   while (end > 0) {
     std::size_t begin = end - 1;
     while (begin > 0 && sameTier(member(begin - 1), member(end - 1))) --begin;
-    double sumW = 0.0, sumWH = 0.0, keep = 1.0;
+    double sumW = 0.0, sumWH = 0.0, sumH = 0.0, keep = 1.0;
+    const Member& first = member(begin);
+    const double w0 = first.c.coverage * first.c.quality * first.resolution;
+    bool equal = w0 > 0.0;
     for (std::size_t i = begin; i < end; ++i) {
       const Member& m = member(i);
       const double w = m.c.coverage * m.c.quality * m.resolution;
       sumW += w;
       sumWH += w * m.c.height;
+      sumH += m.c.height;
+      equal = equal && w == w0;
       keep *= 1.0 - m.c.coverage;
     }
-    // A tier of one keeps its member's height exactly (w·h/w may round).
-    const double ht = end - begin == 1 ? member(begin).c.height : sumWH / sumW;
+    // A tier of one keeps its member's height exactly (w·h/w may round). Equal weights give
+    // the plain mean, which blendHeight() forms without the weights (twin grids).
+    const double ht = end - begin == 1 ? first.c.height
+                      : equal          ? sumH / static_cast<double>(end - begin)
+                                       : sumWH / sumW;
     const double alpha = bottom ? 1.0 : 1.0 - keep;
     glm::dvec2 gradHt(0.0), gradAlpha(0.0);
     if (wantNormal) {

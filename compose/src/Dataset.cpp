@@ -420,6 +420,10 @@ double Dataset::quality(double latDeg, double lonDeg) const {
   return isPlanet() ? planetQuality(latDeg) : qualityAt(g);
 }
 
+double Dataset::qualityInside(double latDeg, double lonDeg) const {
+  return isPlanet() ? planetQuality(latDeg) : qualityAt(locate(latDeg, lonDeg));
+}
+
 void Dataset::prefetch(double latDeg, double lonDeg, std::size_t level) const noexcept {
   if (!isPlanet()) return;
   const GridPoint g = locate(latDeg, lonDeg);

@@ -129,10 +129,33 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
       Dataset::planet(planetPyramid(kMoon, 19.85, -19.85, 0.3, 133, 133,
                                     [](double la, double lo) { return 10.0 * std::sin(la) * lo; }),
                       named("fine below")));
+  // Blends without feathers (ComposedSurface::blendHeight()): two regional grids of 0.5° and
+  // 0.7° that overlap each other, a 0.5° twin of the first over part of it (one quality
+  // serves both) and the 1° global grid, one tier (ratio 2: 1° <= 2 · 0.5°) of two to four
+  // members; and (FinestWins) tiers of equal spacings. A coarse grid of higher priority
+  // over part of it puts a tier of one above them.
+  Catalogue blend(kMoon);
+  blend.add(Dataset::planet(
+      globalPlanet(kMoon, 1.0, [](double la, double lo) { return 30.0 + 0.4 * la - 0.2 * lo; }),
+      named("base")));
+  blend.add(
+      Dataset::planet(planetPyramid(kMoon, 14.75, -19.75, 0.5, 60, 60,
+                                    [](double la, double lo) { return 80.0 + la * 0.3 * lo; }),
+                      named("half")));
+  blend.add(Dataset::planet(planetPyramid(kMoon, 4.65, -4.65, 0.7, 40, 50,
+                                          [](double la, double lo) { return 55.0 - la + lo; }),
+                            named("seven tenths")));
+  blend.add(Dataset::planet(planetPyramid(kMoon, 9.75, -9.75, 0.5, 30, 30,
+                                          [](double la, double lo) { return 66.0 + la * la - lo; }),
+                            named("half twin")));
+  blend.add(Dataset::planet(planetPyramid(kMoon, 24.5, 15.5, 1.0, 20, 20,
+                                          [](double la, double lo) { return 5.0 * la - lo; }),
+                            named("priority", 0.0, 2)));
   // Where a complete tier covers the point fully, a height reads no dataset below it
   // (composeGeneral()): the fine grid's interior, and (FinestWins: one tier per spacing) the
   // regional grid's.
-  std::size_t single = 0, several = 0, threeTiers = 0, topAlone = 0;
+  std::size_t single = 0, several = 0, threeTiers = 0, topAlone = 0, blended = 0, twinned = 0;
+  const std::shared_ptr<const Snapshot> blendSnapshot = blend.snapshot();
   for (const auto& [snapshot, policy] :
        {std::pair{t.catalogue.snapshot(), Policy::Weighted},
         std::pair{only.snapshot(), Policy::Weighted},
@@ -141,7 +164,8 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
         std::pair{three.catalogue.snapshot(), Policy::FinestWins},
         std::pair{priority.snapshot(), Policy::Weighted},
         std::pair{nested.catalogue.snapshot(), Policy::Weighted},
-        std::pair{nested.catalogue.snapshot(), Policy::FinestWins}}) {
+        std::pair{nested.catalogue.snapshot(), Policy::FinestWins},
+        std::pair{blendSnapshot, Policy::Weighted}, std::pair{blendSnapshot, Policy::FinestWins}}) {
     const ComposedSurface s(snapshot, Rules{policy, 2.0});
     for (int i = 0; i < 3000; ++i) {
       const double la = lat(rng), lo = lon(rng);
@@ -162,6 +186,8 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
       const bool one = snapshot->cellCandidates(la, lo).size() == 1;
       ++(one ? single : several);
       threeTiers += g.contributors == 3 ? 1U : 0U;
+      blended += snapshot == blendSnapshot && policy == Policy::Weighted && g.contributors >= 2;
+      twinned += snapshot == blendSnapshot && policy == Policy::FinestWins && g.contributors == 2;
       topAlone += !one && g.contributors == 1 ? 1U : 0U;
     }
   }
@@ -169,6 +195,8 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
   EXPECT_GT(several, 100U);
   EXPECT_GT(threeTiers, 10U);  // points in the fine grid's feather, where all three blend
   EXPECT_GT(topAlone, 100U);
+  EXPECT_GT(blended, 300U);  // points where blendHeight() answers
+  EXPECT_GT(twinned, 100U);  // of those, the twins' plain mean (one spacing per tier)
 }
 
 TEST(ComposedSurface, WeightedBlendFollowsResolutionAndQuality) {

@@ -131,6 +131,11 @@ class ComposedSurface {
   /// the point fully (else none): composeGeneral()'s height there.
   [[nodiscard]] std::optional<double> nestedHeight(const Snapshot::Cell& cell, double latDeg,
                                                    double lonDeg, double metres) const;
+  /// Where the first tier holds two to four candidates, each a planet grid without feather or
+  /// mask that answers at the point, and nothing below it is finer (else none):
+  /// composeGeneral()'s height there, their weighted mean, to the bit.
+  [[nodiscard]] std::optional<CountedHeight> blendHeight(const Snapshot::Cell& cell, double latDeg,
+                                                         double lonDeg, double metres) const;
   /// compose() past its shortcuts, given the point's cell candidates.
   ComposedSample composeGeneral(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
                                 double metres, bool wantNormal, std::vector<Share>* shares) const;

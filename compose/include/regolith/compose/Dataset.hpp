@@ -167,6 +167,9 @@ class Dataset {
   [[nodiscard]] bool samePlanetQuality(const Dataset& other) const noexcept;
   /// The projection quality alone at a point of the pixel extent (kMinQuality outside it).
   [[nodiscard]] double quality(double latDeg, double lonDeg) const;
+  /// quality() at a point known to lie in the pixel extent (the dataset answered there): a
+  /// planet grid's without locating the point again.
+  [[nodiscard]] double qualityInside(double latDeg, double lonDeg) const;
   /// Coverage and quality only (no height read): the weight's spatial terms {c, q}, for
   /// their gradients. Coverage is 0 outside the grid or where the mask is 0.
   [[nodiscard]] std::array<double, 2> coverageQuality(double latDeg, double lonDeg) const;
