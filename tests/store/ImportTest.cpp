@@ -416,6 +416,17 @@ TEST(Import, VestaSpecialPixelsAreMissingAndRadiiBecomeHeights) {
 
 namespace {
 
+/// Gives a GDAL raster made by a test its geotransform, a geographic CRS on Mars's sphere
+/// and nodata -32768.
+void placeOnMarsSphere(GDALDatasetH ds, std::array<double, 6> gt) {
+  GDALSetGeoTransform(ds, gt.data());
+  OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+  OSRSetFromUserInput(srs, "+proj=longlat +R=3396190 +no_defs");
+  GDALSetSpatialRef(ds, srs);
+  OSRDestroySpatialReference(srs);
+  GDALSetRasterNoDataValue(GDALGetRasterBand(ds, 1), -32768.0);
+}
+
 /// Bytes this process has read through read() and pread() so far (/proc/self/io, rchar).
 std::uint64_t bytesRead() {
   std::ifstream in("/proc/self/io");
@@ -450,13 +461,7 @@ TEST(Import, TheLookForRadiiReadsAFewTilesOfATiledRaster) {
     ASSERT_EQ(GDALRasterIO(GDALGetRasterBand(ds.get(), 1), GF_Write, 0, 0, kSide, kSide, v.data(),
                            kSide, kSide, GDT_Float32, 0, 0),
               CE_None);
-    const double gt[6] = {10.0, 0.001, 0.0, 5.0, 0.0, -0.001};
-    GDALSetGeoTransform(ds.get(), const_cast<double*>(gt));  // NOLINT
-    OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
-    OSRSetFromUserInput(srs, "+proj=longlat +R=3396190 +no_defs");
-    GDALSetSpatialRef(ds.get(), srs);
-    OSRDestroySpatialReference(srs);
-    GDALSetRasterNoDataValue(GDALGetRasterBand(ds.get(), 1), -32768.0);
+    placeOnMarsSphere(ds.get(), {10.0, 0.001, 0.0, 5.0, 0.0, -0.001});
   }
   const std::uint64_t before = bytesRead();
   const ImportReport rep = inspectRaster(p);
@@ -870,13 +875,8 @@ TEST(ImportErrors, RowsBeyondAPoleOfAVeryWideRasterAreCheckedInBoundedMemory) {
     DatasetPtr ds(GDALCreate(GDALGetDriverByName("GTiff"), p.c_str(), kCols, kRows, 1, GDT_Float32,
                              const_cast<char**>(opts)));  // NOLINT
     ASSERT_TRUE(ds);
-    const double gt[6] = {-180.0, dx, 0.0, 90.0 + dx, 0.0, -dx};  // row 0 half a pixel beyond
-    GDALSetGeoTransform(ds.get(), const_cast<double*>(gt));       // NOLINT
-    OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
-    OSRSetFromUserInput(srs, "+proj=longlat +R=3396190 +no_defs");
-    GDALSetSpatialRef(ds.get(), srs);
-    OSRDestroySpatialReference(srs);
-    GDALSetRasterNoDataValue(GDALGetRasterBand(ds.get(), 1), -32768.0);
+    // Row 0 half a pixel beyond the pole.
+    placeOnMarsSphere(ds.get(), {-180.0, dx, 0.0, 90.0 + dx, 0.0, -dx});
   }
   ASSERT_LT(fs::file_size(p), std::uintmax_t{64} << 20);
   // GDAL's own block cache (5 % of RAM by default) would fill with the sparse tiles read:
