@@ -65,7 +65,7 @@ ComposedSamples::ComposedSamples(std::shared_ptr<const ComposedSurface> surface,
   // No dataset of own's tier or above may overlap it (docs/composition.md "Tiers"): then
   // wherever own's coverage is 1, the layers below it are hidden and it is the surface.
   const Rules& rules = surface_->rules();
-  const double ratio = rules.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules.tierRatio;
+  const double ratio = rules.spacingRatio();
   const auto& b = own->bounds();
   for (const auto& e : surface_->snapshot().entries()) {
     const Dataset& d = *e.dataset;

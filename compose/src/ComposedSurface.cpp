@@ -33,6 +33,10 @@ struct Member {
   glm::dvec2 gradC{0.0}, gradQ{0.0};  // ∂/∂east, ∂/∂north of coverage and quality
 };
 
+/// The most candidates of a point's 1° cell that a composition reads from the cell; beyond
+/// it, the exact catalogue query (fewer evaluations). So also the most a blend may hold.
+constexpr std::size_t kCellCandidatesAtMost = 4;
+
 /// Per-thread scratch, so a query allocates nothing once warm.
 struct Scratch {
   std::vector<std::uint32_t> candidates;
@@ -121,80 +125,95 @@ ComposedSurface::ComposedSurface(std::shared_ptr<const Snapshot> snapshot, Rules
 
 // A height where the point's cell has one candidate that answers: it is the surface, a tier
 // of one whose height composeGeneral() keeps exactly (the common case away from dataset
-// borders). Nested data is nestedHeight()'s.
-std::optional<double> ComposedSurface::fastHeight(const Snapshot::Cell& cell, double latDeg,
-                                                  double lonDeg, double metres) const {
-  if (cell.candidates.size() != 1) return nestedHeight(cell, latDeg, lonDeg, metres);
+// borders). Several candidates: topTierHeight().
+ComposedSurface::CountedHeight ComposedSurface::fastHeight(const Snapshot::Cell& cell,
+                                                           double latDeg, double lonDeg,
+                                                           double metres) const {
+  if (cell.candidates.size() != 1) return topTierHeight(cell, latDeg, lonDeg, metres);
   const Dataset* d = cell.top;
-  return d->soleHeight(latDeg, lonDeg, metres > 0.0 ? d->levelFor(metres) : 0);
-}
-
-// Nested data: the first candidate in tier order, alone in its tier and covering the point
-// fully. composeGeneral() would read it and find its tier complete and full: its α is 1, so
-// the composite keeps its height exactly, whatever it reads below (nothing, unless a
-// lower-priority dataset is finer), and no member below has a share (one contributor).
-// Without the general path's scratch, sort, members and tiers, a HiRISE-class DEM inside a
-// CTX-class one over a global grid costs about its own query. The cell's candidates hold every
-// dataset the exact catalogue query returns (a superset), so the same holds where the general
-// path would ask that query.
-std::optional<double> ComposedSurface::nestedHeight(const Snapshot::Cell& cell, double latDeg,
-                                                    double lonDeg, double metres) const {
-  // Only a top whose coverage is 1 wherever it answers: in a feather's band the general path
-  // would read it again (inside a 10° grid with a 2° feather, 27 % slower).
-  if (cell.top == nullptr || !cell.top->unfeathered()) return std::nullopt;
-  const Dataset& d = *cell.top;
-  const auto entries = snapshot_->entries();
-  const double ratio = rules_.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules_.tierRatio;
-  for (const std::uint32_t e : cell.candidates) {
-    if (e == cell.topEntry) continue;
-    const Dataset& o = *entries[e].dataset;
-    // Another candidate in its tier: a blend, the general path's.
-    if (o.options().priority == d.options().priority &&
-        o.groundSpacing() <= d.groundSpacing() * ratio)
-      return std::nullopt;
+  if (const std::optional<double> h =
+          d->soleHeight(latDeg, lonDeg, metres > 0.0 ? d->levelFor(metres) : 0)) {
+    return CountedHeight{*h, QueryStatus::Ok, 1};
   }
-  return d.soleHeight(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, true);
+  return kNoFastHeight;
 }
 
-// Blended data: two to four planet grids of one tier, each without feather or mask and
-// answering at the point (coverage 1), with no finer candidate below. composeGeneral() would
-// read the tier, find it complete and full, and read nothing below: the height is the tier's
-// weighted mean Σ w·h / Σ w, w = coverage (1) × quality × resolution, with the qualities
-// evaluated and shared as it does and the sums formed in its (tier) order, so the bits are
-// its own. Without its scratch, sort, members and tiers, each blended grid costs about its
-// own query (docs/composition.md, "Stop 42").
-std::optional<ComposedSurface::CountedHeight> ComposedSurface::blendHeight(
-    const Snapshot::Cell& cell, double latDeg, double lonDeg, double metres) const {
-  constexpr std::size_t kBlendAtMost = 4;
-  const std::size_t n = cell.candidates.size();
-  if (n < 2 || n > kBlendAtMost || cell.top == nullptr) return std::nullopt;
+// One pass over the cell's candidates finds the first tier (the candidates of the top's
+// priority within the spacing ratio of its spacing, the tier's finest) in tier order.
+//
+// Nested data: the top alone in its tier and covering the point fully. composeGeneral()
+// would read it and find its tier complete and full: its α is 1, so the composite keeps its
+// height exactly, whatever it reads below (nothing, unless a lower-priority dataset is
+// finer), and no member below has a share (one contributor). Without the general path's
+// scratch, sort, members and tiers, a HiRISE-class DEM inside a CTX-class one over a global
+// grid costs about its own query. Only a top whose coverage is 1 wherever it answers: in a
+// feather's band the general path would read it again (inside a 10° grid with a 2° feather,
+// 27 % slower).
+//
+// Blended data: two to four planet grids, each without feather or mask, and no finer
+// candidate below: blendHeight(). A DEM's quality comes from its located point in the general
+// path, and a finer dataset below changes the resolution weights (relative to the finest
+// member read), so those stay the general path's; so do cells of more than four candidates,
+// where it asks the exact catalogue query.
+//
+// The cell's candidates hold every dataset the exact catalogue query returns (a superset),
+// so the same holds where the general path would ask that query.
+ComposedSurface::CountedHeight ComposedSurface::topTierHeight(const Snapshot::Cell& cell,
+                                                              double latDeg, double lonDeg,
+                                                              double metres) const {
+  if (cell.top == nullptr) return kNoFastHeight;
   const auto entries = snapshot_->entries();
   const Dataset& top = *cell.top;
-  const double ratio = rules_.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules_.tierRatio;
+  const double ratio = rules_.spacingRatio();
   const int priority = top.options().priority;
   const double finest = top.groundSpacing();  // the first in tier order: the tier's finest
-  std::array<std::uint32_t, kBlendAtMost> tier{};
+  std::array<std::uint32_t, kCellCandidatesAtMost> tier{};
   std::size_t k = 0;
+  bool blendable = cell.candidates.size() <= kCellCandidatesAtMost;
   for (const std::uint32_t e : cell.candidates) {
     const Dataset& d = *entries[e].dataset;
     if (d.options().priority == priority && d.groundSpacing() <= finest * ratio) {
-      // A DEM's quality comes from its located point in the general path: that one's.
-      if (!d.isPlanet() || !d.unfeathered()) return std::nullopt;
-      // Insertion in tier order (a handful of entries).
-      std::size_t at = k++;
-      for (; at > 0 && tierBefore(entries, e, tier[at - 1]); --at) tier[at] = tier[at - 1];
-      tier[at] = e;
-    } else if (d.groundSpacing() < finest) {
-      return std::nullopt;  // a finer one below: the general path reads on
+      blendable = blendable && d.isPlanet() && d.unfeathered();
+      if (k < kCellCandidatesAtMost) {  // insertion in tier order (a handful of entries)
+        std::size_t at = k;
+        for (; at > 0 && tierBefore(entries, e, tier[at - 1]); --at) tier[at] = tier[at - 1];
+        tier[at] = e;
+      }
+      ++k;
+    } else {
+      blendable = blendable && !(d.groundSpacing() < finest);
     }
   }
-  if (k < 2) return std::nullopt;
-  std::array<double, kBlendAtMost> h{};
+  if (k == 1) {
+    if (!top.unfeathered()) return kNoFastHeight;
+    if (const std::optional<double> h =
+            top.soleHeight(latDeg, lonDeg, metres > 0.0 ? top.levelFor(metres) : 0, true)) {
+      return CountedHeight{*h, QueryStatus::Ok, 1};
+    }
+    return kNoFastHeight;
+  }
+  if (!blendable) return kNoFastHeight;
+  return blendHeight(std::span(tier).first(k), latDeg, lonDeg, metres);
+}
+
+// A blend of planet grids without feather or mask that all answer (coverage 1):
+// composeGeneral() would read the tier, find it complete and full, and read nothing below.
+// The height is the tier's weighted mean Σ w·h / Σ w, w = coverage (1) × quality ×
+// resolution, with the qualities evaluated and shared as it does and the sums formed in its
+// (tier) order, so the bits are its own. Without its scratch, sort, members and tiers, each
+// blended grid costs about its own query (docs/composition.md, "Stop 42").
+ComposedSurface::CountedHeight ComposedSurface::blendHeight(std::span<const std::uint32_t> tier,
+                                                            double latDeg, double lonDeg,
+                                                            double metres) const {
+  const auto entries = snapshot_->entries();
+  const std::size_t k = tier.size();
+  const double finest = entries[tier[0]].dataset->groundSpacing();
+  std::array<double, kCellCandidatesAtMost> h{};
   for (std::size_t i = 0; i < k; ++i) {
     const Dataset& d = *entries[tier[i]].dataset;
     const std::optional<double> v =
         d.soleHeight(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, true);
-    if (!v) return std::nullopt;
+    if (!v) return kNoFastHeight;
     h[i] = *v;
   }
   // Twins (one planet quality and one spacing: overlapping products of one kind) weigh the
@@ -246,10 +265,9 @@ std::optional<ComposedSurface::CountedHeight> ComposedSurface::blendHeight(
 ComposedSurface::CountedHeight ComposedSurface::heightOf(double latDeg, double lonDeg,
                                                          double metres) const {
   const Snapshot::Cell& cell = snapshot_->cell(*heightCells_, latDeg, lonDeg);
-  if (const std::optional<double> h = fastHeight(cell, latDeg, lonDeg, metres)) {
-    return {*h, QueryStatus::Ok, 1};
+  if (const CountedHeight h = fastHeight(cell, latDeg, lonDeg, metres); h.contributors != 0) {
+    return h;
   }
-  if (const std::optional<CountedHeight> b = blendHeight(cell, latDeg, lonDeg, metres)) return *b;
   const ComposedSample c = composeGeneral(cell.candidates, latDeg, lonDeg, metres, false, nullptr);
   return {c.height, c.status, c.contributors};
 }
@@ -281,7 +299,7 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
   // coverage has α = 1 and hides every tier below exactly (acc = its height, see below), so
   // the candidates after it are not read, provided none is finer than the finest member so
   // far (the resolution weights are relative to the finest member).
-  const double ratio = rules_.policy == Policy::FinestWins ? 1.0 + 1e-9 : rules_.tierRatio;
+  const double ratio = rules_.spacingRatio();
   const bool heightOnly = !wantNormal && shares == nullptr;
   const auto evaluateAll = [&](std::span<const std::uint32_t> candidates) {
     s.ranked.assign(candidates.begin(), candidates.end());
@@ -355,7 +373,6 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
   // OutsideGrid and is skipped, so the composition is the same as from the exact catalogue
   // query, which takes a walk of the index and a sine and cosine per angle. Many
   // candidates: the exact query, fewer evaluations.
-  constexpr std::size_t kCellCandidatesAtMost = 4;
   const bool fromCell = cell.size() <= kCellCandidatesAtMost;
   evaluateAll(fromCell ? cell : exactCandidates());
   if (s.members.empty() && fromCell && !cell.empty()) {

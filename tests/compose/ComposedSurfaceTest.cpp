@@ -129,9 +129,9 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
       Dataset::planet(planetPyramid(kMoon, 19.85, -19.85, 0.3, 133, 133,
                                     [](double la, double lo) { return 10.0 * std::sin(la) * lo; }),
                       named("fine below")));
-  // Blends without feathers (ComposedSurface::blendHeight()): two regional grids of 0.5° and
-  // 0.7° that overlap each other, a 0.5° twin of the first over part of it (one quality
-  // serves both) and the 1° global grid, one tier (ratio 2: 1° <= 2 · 0.5°) of two to four
+  // Blends without feathers (ComposedSurface::topTierHeight() and blendHeight()): two regional
+  // grids of 0.5° and 0.7° that overlap each other, a 0.5° twin of the first over part of it (one
+  // quality serves both) and the 1° global grid, one tier (ratio 2: 1° <= 2 · 0.5°) of two to four
   // members; and (FinestWins) tiers of equal spacings. A coarse grid of higher priority
   // over part of it puts a tier of one above them.
   Catalogue blend(kMoon);

@@ -43,6 +43,11 @@ struct Rules {
   /// squeeze a 1 m DEM's feather against the planet to a cliff). ≥ 1; infinity for one
   /// tier per priority.
   double tierRatio = 4.0;
+  /// The spacing ratio within which datasets of one priority share a tier: tierRatio, or
+  /// equal spacings only (to 1e-9) under FinestWins.
+  [[nodiscard]] double spacingRatio() const noexcept {
+    return policy == Policy::FinestWins ? 1.0 + 1e-9 : tierRatio;
+  }
 };
 
 /// A composed height and normal at one point, with the number of datasets that contributed.
@@ -119,23 +124,28 @@ class ComposedSurface {
     topo::QueryStatus status;
     std::uint32_t contributors;
   };
+  /// fastHeight()'s "the general path answers" (a real answer has a contributor).
+  static constexpr CountedHeight kNoFastHeight{std::numeric_limits<double>::quiet_NaN(),
+                                               topo::QueryStatus::OutsideGrid, 0};
   /// height(), heightAt() and heights() past their checks: fastHeight(), else the general
   /// path.
   [[nodiscard]] CountedHeight heightOf(double latDeg, double lonDeg, double metres) const;
-  /// A height where one dataset alone is the surface at the point (else none): the cell's
-  /// sole candidate (Dataset::soleHeight()) or nestedHeight(), out of composeGeneral()'s
-  /// large frame.
-  [[nodiscard]] std::optional<double> fastHeight(const Snapshot::Cell& cell, double latDeg,
-                                                 double lonDeg, double metres) const;
-  /// The first of several candidates in tier order where it is alone in its tier and covers
-  /// the point fully (else none): composeGeneral()'s height there.
-  [[nodiscard]] std::optional<double> nestedHeight(const Snapshot::Cell& cell, double latDeg,
-                                                   double lonDeg, double metres) const;
-  /// Where the first tier holds two to four candidates, each a planet grid without feather or
-  /// mask that answers at the point, and nothing below it is finer (else none):
-  /// composeGeneral()'s height there, their weighted mean, to the bit.
-  [[nodiscard]] std::optional<CountedHeight> blendHeight(const Snapshot::Cell& cell, double latDeg,
-                                                         double lonDeg, double metres) const;
+  /// A height without composeGeneral()'s large frame, or contributors 0 where the general
+  /// path must answer (a real answer has at least one; in registers, as an optional's 24
+  /// bytes would not be): the cell's sole candidate (Dataset::soleHeight()), else
+  /// topTierHeight().
+  [[nodiscard]] CountedHeight fastHeight(const Snapshot::Cell& cell, double latDeg, double lonDeg,
+                                         double metres) const;
+  /// One pass over several candidates for their first tier. Its one member alone, covering
+  /// the point fully (nested data), or two to four planet grids without feather or mask
+  /// that all answer, with nothing finer below (blendHeight()): composeGeneral()'s height
+  /// and contributors there, to the bit. Else contributors 0.
+  [[nodiscard]] CountedHeight topTierHeight(const Snapshot::Cell& cell, double latDeg,
+                                            double lonDeg, double metres) const;
+  /// The weighted mean of a blend's members `tier` (entries, in tier order, the first the
+  /// finest), as composeGeneral() forms it; contributors 0 where one does not answer.
+  [[nodiscard]] CountedHeight blendHeight(std::span<const std::uint32_t> tier, double latDeg,
+                                          double lonDeg, double metres) const;
   /// compose() past its shortcuts, given the point's cell candidates.
   ComposedSample composeGeneral(std::span<const std::uint32_t> cell, double latDeg, double lonDeg,
                                 double metres, bool wantNormal, std::vector<Share>* shares) const;
