@@ -272,8 +272,10 @@ void printProvenance(const ordered_json& p, std::ostream& out) {
   const char* label = "  sources:        ";
   if (p.contains("sources") && p["sources"].is_array()) {
     for (const auto& s : p["sources"]) {
-      out << label << fieldText(s, "file") << ", " << fieldText(s, "bytes") << " bytes, sha256 "
-          << fieldText(s, "sha256") << "\n";
+      // The digest is absent where the import was told not to take it (digestSources).
+      const std::string sha = fieldText(s, "sha256");
+      out << label << fieldText(s, "file") << ", " << fieldText(s, "bytes") << " bytes, "
+          << (sha.empty() ? std::string("no digest recorded") : "sha256 " + sha) << "\n";
       label = "                  ";
     }
   }

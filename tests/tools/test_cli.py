@@ -955,6 +955,18 @@ def test_info_statistics_corners_and_ground_size(work):
     assert (f"  sources:        Shoemaker_1k.tif, {len(data)} bytes, sha256 "
             f"{hashlib.sha256(data).hexdigest()}\n") in text
     assert f"  made with:      GDAL {gdal.VersionInfo('RELEASE_NAME')}, driver GTiff\n" in text
+    # An import told not to digest its sources (ImportOptions::digestSources, as regolith-mpi's
+    # parts) records sizes only: a copy of the store with the digest taken out of its
+    # provenance says so.
+    bare = work / "no-digest.h5"
+    bare.write_bytes(out.read_bytes())
+    with h5py.File(bare, "r+") as f:
+        grid = f["grids"][g["name"]]
+        p = json.loads(grid.attrs["provenance"])
+        del p["sources"][0]["sha256"]
+        grid.attrs["provenance"] = json.dumps(p)
+    assert (f"  sources:        Shoemaker_1k.tif, {len(data)} bytes, no digest recorded\n"
+            in run("info", bare).stdout)
     # A store written without statistics (before format 1.3) still opens, and says so.
     old = work / "no-stats.h5"
     run("generate", "victoria", "--out", old, "--size", 64)
