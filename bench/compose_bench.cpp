@@ -202,9 +202,15 @@ void PlainEachMixed(benchmark::State& state) {
 }
 BENCHMARK(PlainEachMixed);
 
-void composed(benchmark::State& state, std::span<const char* const> names) {
+// Heights through a composition of `names`, the last one feathered over `featherLast` metres.
+void composed(benchmark::State& state, std::span<const char* const> names,
+              double featherLast = 0.0) {
   compose::Catalogue cat(kMars);
-  for (const char* name : names) cat.add(compose::datasetFromStore(*paged().pager, name));
+  for (const char* name : names) {
+    compose::DatasetOptions o;
+    if (name == names.back()) o.featherMetres = featherLast;
+    cat.add(compose::datasetFromStore(*paged().pager, name, o));
+  }
   const compose::ComposedSurface s(cat.snapshot(), compose::Rules{compose::Policy::Weighted, 2.0});
   const Points pts(1 << 16);
   std::size_t i = 0;
@@ -224,6 +230,15 @@ void ComposedMixed(benchmark::State& state) {
   composed(state, names);
 }
 BENCHMARK(ComposedMixed);
+
+// Composed/2 with a 120 km (about 2°) feather on the regional grid: 56 % of the points lie
+// in its band, where the two blend by coverage (ComposedSurface::featheredTopHeight()), the
+// rest inside it (coverage 1). Against PlainEach/2.
+void ComposedFeathered(benchmark::State& state) {
+  const char* const names[] = {"global", "regional1"};
+  composed(state, names, 120e3);
+}
+BENCHMARK(ComposedFeathered);
 
 // Dataset::soleHeight() alone (what Composed/1 runs after its cell look-up): the dataset's
 // own locate and its grid's query, against PlainPaged.

@@ -87,12 +87,15 @@ const char* roleName(Role role) noexcept {
 namespace {
 // projectionQuality() given log(n) (n > 1): the compositions of several datasets ask for a
 // quality per dataset and query, with n = kQualityN every time.
-double qualityGivenLogN(double groundX, double groundY, double nominal, double logN) noexcept {
-  if (!(groundX > 0.0 && groundY > 0.0 && nominal > 0.0)) return kMinQuality;
-  const double anisotropy = std::abs(std::log(groundX / groundY));
-  const double distortion = std::abs(std::log(std::sqrt(groundX * groundY) / nominal));
+// α = 1 − max(|log anisotropy|, |log distortion|) / log n, clamped.
+double qualityFromLogs(double anisotropy, double distortion, double logN) noexcept {
   const double alpha = 1.0 - std::max(anisotropy, distortion) / logN;
   return std::clamp(alpha, kMinQuality, 1.0);
+}
+double qualityGivenLogN(double groundX, double groundY, double nominal, double logN) noexcept {
+  if (!(groundX > 0.0 && groundY > 0.0 && nominal > 0.0)) return kMinQuality;
+  return qualityFromLogs(std::abs(std::log(groundX / groundY)),
+                         std::abs(std::log(std::sqrt(groundX * groundY) / nominal)), logN);
 }
 // A function, not a global: a Dataset may be built during another file's static
 // initialisation.
@@ -178,9 +181,10 @@ Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement
     planet0_ = levels_.front().planet;
     const double r = (2.0 * body_.equatorialRadius() + body_.polarRadius()) / 3.0;
     groundSpacing_ = r * kDeg * std::sqrt(g0.spacingX() * g0.spacingY());
-    // A planet grid's nominal pixel is its size on the equator.
-    planetNominal_ = std::sqrt(body_.equatorialRadius() * g0.spacingX() * kDeg *
-                               body_.meridianRadius(0.0) * g0.spacingY() * kDeg);
+    // planetQuality()'s constants: the pixel's shape, and the body's radii on the equator
+    // (the nominal pixel is the pixel's size there).
+    planetAspect_ = g0.spacingX() / g0.spacingY();
+    planetEquator_ = body_.equatorialRadius() * body_.meridianRadius(0.0);
   } else {
     groundSpacing_ = std::sqrt(g0.spacingX() * g0.spacingY());
   }
@@ -279,12 +283,18 @@ double Dataset::coverageAt(const GridPoint& g, double latDeg) const {
   return c;
 }
 
+// A pixel of sx by sy degrees measures gx = p·sx and gy = m·sy (radians; p the parallel's
+// radius, m the meridian's), and the nominal pixel √(a·sx · m₀·sy) (its size on the
+// equator). So gx / gy = (p / m)·(sx / sy) and √(gx·gy) / nominal = √(p·m / (a·m₀)): the
+// quality depends on the pixel's shape, not its size, and grids of one body and one pixel
+// shape have one quality at a latitude, bit for bit (samePlanetQuality()).
 double Dataset::planetQuality(double latDeg) const {
-  const topo::TopoGrid& grid = levels_.front().level.grid;
   const double lat = std::clamp(latDeg, -90.0, 90.0);
-  const double gx = body_.primeVerticalRadius(lat) * std::cos(lat * kDeg) * grid.spacingX() * kDeg;
-  const double gy = body_.meridianRadius(lat) * grid.spacingY() * kDeg;
-  return qualityGivenLogN(gx, gy, planetNominal_, logQualityN());
+  const double p = body_.primeVerticalRadius(lat) * std::cos(lat * kDeg);
+  const double m = body_.meridianRadius(lat);
+  if (!(p > 0.0)) return kMinQuality;  // a pole: the pixel is a sliver
+  return qualityFromLogs(std::abs(std::log(p / m * planetAspect_)),
+                         0.5 * std::abs(std::log(p * m / planetEquator_)), logQualityN());
 }
 
 double Dataset::qualityAt(const GridPoint& g) const {
@@ -404,12 +414,10 @@ std::size_t Dataset::levelFor(double metres) const noexcept {
 
 bool Dataset::samePlanetQuality(const Dataset& other) const noexcept {
   if (!isPlanet() || !other.isPlanet()) return false;
-  const topo::TopoGrid& a = levels_.front().level.grid;
-  const topo::TopoGrid& b = other.levels_.front().level.grid;
-  // planetQuality()'s inputs: the radii, the spacings and the nominal pixel made of them.
+  // planetQuality()'s inputs: the radii and the pixel's shape (not its size).
   return body_.equatorialRadius() == other.body_.equatorialRadius() &&
-         body_.polarRadius() == other.body_.polarRadius() && a.spacingX() == b.spacingX() &&
-         a.spacingY() == b.spacingY() && planetNominal_ == other.planetNominal_;
+         body_.polarRadius() == other.body_.polarRadius() && planetAspect_ == other.planetAspect_ &&
+         planetEquator_ == other.planetEquator_;
 }
 
 double Dataset::quality(double latDeg, double lonDeg) const {

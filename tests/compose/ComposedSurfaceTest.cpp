@@ -107,7 +107,7 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
       planetPyramid(kMoon, 9.75, -9.75, 0.5, 40, 40, [](double lat, double) { return 10.0 * lat; }),
       named("only")));
   std::mt19937 rng(31);
-  std::uniform_real_distribution<double> lat(-30.0, 30.0), lon(-40.0, 40.0);
+  std::uniform_real_distribution<double> lat(-30.0, 30.0), lon(-40.0, 40.0), unit(0.0, 1.0);
   // Two coarse grids of priority 1 that share a tier over a finer one of priority 0: the
   // top tier covers fully, but the weights are relative to the finest member, so the fine
   // grid below must still be read (spacings not a power of 2 apart: the weights' scale
@@ -148,27 +148,37 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
   blend.add(Dataset::planet(planetPyramid(kMoon, 9.75, -9.75, 0.5, 30, 30,
                                           [](double la, double lo) { return 66.0 + la * la - lo; }),
                             named("half twin")));
+  // Pixels of another shape (0.8° by 0.5°): another quality, which the blend evaluates
+  // (members of one pixel shape leave theirs out of the weights).
+  topo::GridPyramid oblong = planetPyramid(
+      kMoon, 0.0, 0.0, 0.5, 16, 9, [](double la, double lo) { return 44.0 + la - 2.0 * lo; });
+  oblong.levels[0].grid = topo::TopoGrid(16, 9, -12.0, -6.25, 0.8, 0.5);
+  blend.add(Dataset::planet(oblong, named("oblong")));
   blend.add(Dataset::planet(planetPyramid(kMoon, 24.5, 15.5, 1.0, 20, 20,
                                           [](double la, double lo) { return 5.0 * la - lo; }),
                             named("priority", 0.0, 2)));
   // Where a complete tier covers the point fully, a height reads no dataset below it
   // (composeGeneral()): the fine grid's interior, and (FinestWins: one tier per spacing) the
   // regional grid's.
-  std::size_t single = 0, several = 0, threeTiers = 0, topAlone = 0, blended = 0, twinned = 0;
+  std::size_t single = 0, several = 0, threeTiers = 0, topAlone = 0, blended = 0, twinned = 0,
+              shapes = 0, band = 0;
   const std::shared_ptr<const Snapshot> blendSnapshot = blend.snapshot();
+  const std::shared_ptr<const Snapshot> tSnapshot = t.catalogue.snapshot();
   for (const auto& [snapshot, policy] :
-       {std::pair{t.catalogue.snapshot(), Policy::Weighted},
-        std::pair{only.snapshot(), Policy::Weighted},
+       {std::pair{tSnapshot, Policy::Weighted}, std::pair{only.snapshot(), Policy::Weighted},
         std::pair{three.catalogue.snapshot(), Policy::Weighted},
-        std::pair{t.catalogue.snapshot(), Policy::FinestWins},
+        std::pair{tSnapshot, Policy::FinestWins},
         std::pair{three.catalogue.snapshot(), Policy::FinestWins},
         std::pair{priority.snapshot(), Policy::Weighted},
         std::pair{nested.catalogue.snapshot(), Policy::Weighted},
         std::pair{nested.catalogue.snapshot(), Policy::FinestWins},
         std::pair{blendSnapshot, Policy::Weighted}, std::pair{blendSnapshot, Policy::FinestWins}}) {
     const ComposedSurface s(snapshot, Rules{policy, 2.0});
-    for (int i = 0; i < 3000; ++i) {
-      const double la = lat(rng), lo = lon(rng);
+    for (int i = 0; i < 3600; ++i) {
+      // Every sixth point in the oblong grid.
+      const bool inOblong = i % 6 == 0;
+      const double la = inOblong ? -14.0 + 8.0 * unit(rng) : lat(rng);
+      const double lo = inOblong ? -12.4 + 7.2 * unit(rng) : lon(rng);
       const topo::HeightSample h = s.height(la, lo);
       const ComposedSample g = s.surface(la, lo, topo::NormalFrame::BodyFixed);
       ASSERT_EQ(h.status, g.status) << la << ", " << lo;
@@ -188,6 +198,11 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
       threeTiers += g.contributors == 3 ? 1U : 0U;
       blended += snapshot == blendSnapshot && policy == Policy::Weighted && g.contributors >= 2;
       twinned += snapshot == blendSnapshot && policy == Policy::FinestWins && g.contributors == 2;
+      // In the feathered regional grid's band over the global grid (two tiers of one).
+      band += snapshot == tSnapshot && g.contributors == 2;
+      // In the oblong grid (-12.4…-5.2° east, -14…-6° north), with "half" and "base".
+      shapes += snapshot == blendSnapshot && policy == Policy::Weighted && g.contributors >= 2 &&
+                lo > -12.4 && lo < -5.2 && la > -14.0 && la < -6.0;
       topAlone += !one && g.contributors == 1 ? 1U : 0U;
     }
   }
@@ -197,6 +212,8 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
   EXPECT_GT(topAlone, 100U);
   EXPECT_GT(blended, 300U);  // points where blendHeight() answers
   EXPECT_GT(twinned, 100U);  // of those, the twins' plain mean (one spacing per tier)
+  EXPECT_GT(shapes, 100U);   // blends of two qualities, weighed by them
+  EXPECT_GT(band, 100U);     // a feathered top composited over the grid below
 }
 
 TEST(ComposedSurface, WeightedBlendFollowsResolutionAndQuality) {

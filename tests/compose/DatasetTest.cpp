@@ -171,10 +171,12 @@ TEST(Dataset, SoleHeightIsEvaluatesHeightWhereItAnswersWithCoverage) {
   }
 }
 
-TEST(Dataset, PlanetGridsOfOneBodyAndSpacingShareTheirQuality) {
-  // samePlanetQuality() (the composition computes such grids' quality once per point): true
-  // exactly for planet grids of one body and level-0 spacing, whatever their extent, and then
-  // quality() is equal at every point inside both.
+TEST(Dataset, PlanetGridsOfOneBodyAndPixelShapeShareTheirQuality) {
+  // samePlanetQuality() (the composition leaves such grids' shared quality out of their
+  // weights): true exactly for planet grids of one body and level-0 pixel shape, whatever
+  // their extent and pixel size, and then quality() is equal, bit for bit, at every point
+  // inside both. Kooima's quality of a latitude/longitude pixel, from its two sides on the
+  // ellipsoid in double, is the oracle for each grid's value.
   const auto f = [](double, double) { return 0.0; };
   const auto global = Dataset::planet(globalPlanet(kMars, 0.5, f), named("global"));
   const auto part = Dataset::planet(testing::planetPyramid(kMars, 59.75, 10.25, 0.5, 100, 80, f),
@@ -192,7 +194,8 @@ TEST(Dataset, PlanetGridsOfOneBodyAndSpacingShareTheirQuality) {
   EXPECT_TRUE(global->samePlanetQuality(*part));
   EXPECT_TRUE(part->samePlanetQuality(*global));
   EXPECT_TRUE(global->samePlanetQuality(*global));
-  EXPECT_FALSE(global->samePlanetQuality(*finer));
+  EXPECT_TRUE(global->samePlanetQuality(*finer));
+  EXPECT_TRUE(finer->samePlanetQuality(*part));
   EXPECT_FALSE(global->samePlanetQuality(*wider));
   EXPECT_FALSE(global->samePlanetQuality(*moon));
   EXPECT_FALSE(global->samePlanetQuality(*dem));
@@ -202,6 +205,25 @@ TEST(Dataset, PlanetGridsOfOneBodyAndSpacingShareTheirQuality) {
   for (int i = 0; i < 500; ++i) {
     const double la = lat(rng), lo = lon(rng);
     ASSERT_EQ(global->quality(la, lo), part->quality(la, lo)) << la << ", " << lo;
+    if (la > 35.0 && lo < 30.0) {  // inside the finer grid
+      ASSERT_EQ(global->quality(la, lo), finer->quality(la, lo)) << la << ", " << lo;
+    }
+  }
+  // Each grid's quality against the rule from its own pixel (spacings sx × sy degrees):
+  // sides gx = N·cos φ·sx and gy = M·sy, the nominal pixel the same on the equator.
+  const auto kooima = [](double phi, double sx, double sy) {
+    const double d = kDeg;
+    const double gx = kMars.primeVerticalRadius(phi) * std::cos(phi * d) * sx * d;
+    const double gy = kMars.meridianRadius(phi) * sy * d;
+    const double nominal =
+        std::sqrt(kMars.equatorialRadius() * sx * d * kMars.meridianRadius(0.0) * sy * d);
+    return projectionQuality(gx, gy, nominal, kQualityN);
+  };
+  for (const double la : {35.5, 40.0, 47.0, 52.25, 59.5}) {
+    EXPECT_NEAR(global->quality(la, 20.0), kooima(la, 0.5, 0.5), 1e-12) << la;
+    EXPECT_NEAR(finer->quality(la, 20.0), kooima(la, 0.25, 0.25), 1e-12) << la;
+    EXPECT_NEAR(wider->quality(la, 20.0), kooima(la, 0.5, 0.25), 1e-12) << la;
+    EXPECT_NE(wider->quality(la, 20.0), global->quality(la, 20.0)) << la;
   }
 }
 

@@ -137,11 +137,17 @@ class ComposedSurface {
   [[nodiscard]] CountedHeight fastHeight(const Snapshot::Cell& cell, double latDeg, double lonDeg,
                                          double metres) const;
   /// One pass over several candidates for their first tier. Its one member alone, covering
-  /// the point fully (nested data), or two to four planet grids without feather or mask
-  /// that all answer, with nothing finer below (blendHeight()): composeGeneral()'s height
-  /// and contributors there, to the bit. Else contributors 0.
+  /// the point fully (nested data; featheredTopHeight() if it has a feather or a mask), or
+  /// two to four planet grids without feather or mask that all answer, with nothing finer
+  /// below (blendHeight()): composeGeneral()'s height and contributors there, to the bit.
+  /// Else contributors 0.
   [[nodiscard]] CountedHeight topTierHeight(const Snapshot::Cell& cell, double latDeg,
                                             double lonDeg, double metres) const;
+  /// The cell's top, alone in its tier, with a feather or a mask: its height where its
+  /// coverage is 1, and in its band its composite over the one other candidate if that one
+  /// has neither and answers; else contributors 0.
+  [[nodiscard]] CountedHeight featheredTopHeight(const Snapshot::Cell& cell, double latDeg,
+                                                 double lonDeg, double metres) const;
   /// The weighted mean of a blend's members `tier` (entries, in tier order, the first the
   /// finest), as composeGeneral() forms it; contributors 0 where one does not answer.
   [[nodiscard]] CountedHeight blendHeight(std::span<const std::uint32_t> tier, double latDeg,

@@ -163,7 +163,9 @@ class Dataset {
   /// placement costs a projection to locate the point, more than the miss it would hide).
   void prefetch(double latDeg, double lonDeg, std::size_t level = 0) const noexcept;
   /// True if both are planet grids whose quality() is one function of the latitude: the
-  /// same body radii and level-0 spacings (quality() at a point inside both is then equal).
+  /// same body radii and level-0 pixel shape (spacing in longitude over spacing in
+  /// latitude), whatever the pixel's size; quality() at a point inside both is then equal,
+  /// bit for bit.
   [[nodiscard]] bool samePlanetQuality(const Dataset& other) const noexcept;
   /// The projection quality alone at a point of the pixel extent (kMinQuality outside it).
   [[nodiscard]] double quality(double latDeg, double lonDeg) const;
@@ -220,7 +222,8 @@ class Dataset {
   /// soleHeight()'s shortcut applies: a planet grid without feather or mask.
   bool plainPlanet_ = false;
   double groundSpacing_ = 0.0;
-  double planetNominal_ = 0.0;  // a planet grid's pixel on the equator, metres (geometric mean)
+  double planetAspect_ = 0.0;   // a planet grid's level-0 spacing in longitude / in latitude
+  double planetEquator_ = 0.0;  // the body's radii on the equator, a·m₀ (m²)
   std::array<double, 2> heightRange_{0.0, 0.0};
   std::array<double, 2> ellipsoidHeights_{0.0, 0.0};
   std::array<glm::dvec3, 2> bounds_{};
