@@ -210,13 +210,11 @@ ComposedSurface::CountedHeight ComposedSurface::featheredTopHeight(const Snapsho
                                                                    double latDeg, double lonDeg,
                                                                    double metres) const {
   const Dataset& top = *cell.top;
-  Contribution c;
-  top.evaluateInto(latDeg, lonDeg, metres > 0.0 ? top.levelFor(metres) : 0, false, false, c);
-  if (c.status != QueryStatus::Ok || !(c.coverage > 0.0)) return kNoFastHeight;
+  const Dataset::CoveredHeight c =
+      top.coveredHeight(latDeg, lonDeg, metres > 0.0 ? top.levelFor(metres) : 0);
+  if (!(c.coverage > 0.0)) return kNoFastHeight;
   if (c.coverage == 1.0) return CountedHeight{c.height, QueryStatus::Ok, 1};
   if (cell.candidates.size() != 2) return kNoFastHeight;
-  // (Prefetching its samples before the top's read cost more than it saved: 284 against
-  // 227 ns in ComposedFeathered.)
   const auto entries = snapshot_->entries();
   const Dataset& below =
       *entries[cell.candidates[entries[cell.candidates[0]].dataset.get() == &top ? 1 : 0]].dataset;

@@ -465,6 +465,27 @@ std::optional<double> Dataset::soleHeight(double latDeg, double lonDeg, std::siz
   return c.height;
 }
 
+Dataset::CoveredHeight Dataset::coveredHeight(double latDeg, double lonDeg,
+                                              std::size_t level) const {
+  constexpr CoveredHeight none{std::numeric_limits<double>::quiet_NaN(), 0.0};
+  if (isPlanet()) {
+    // evaluateInto()'s planet path, the coverage first: it depends on the point alone.
+    const GridPoint g = locatePlanet(latDeg, lonDeg);
+    if (!g.inside) return none;
+    const double c = coverageAt(g, latDeg);
+    if (!(c > 0.0)) return none;
+    const topo::TopoPlanet& planet =
+        level == 0 ? *planet0_ : *levels_[std::min(level, levels_.size() - 1)].planet;
+    const topo::HeightSample h = planet.heightUnchecked({g.y, g.x}, topo::Interpolation::Bilinear);
+    if (!h.valid()) return none;
+    return {h.height + options_.heightOffset, c};
+  }
+  Contribution c;
+  evaluateInto(latDeg, lonDeg, level, false, false, c);
+  if (c.status != topo::QueryStatus::Ok || !(c.coverage > 0.0)) return none;
+  return {c.height, c.coverage};
+}
+
 void Dataset::evaluateInto(double latDeg, double lonDeg, std::size_t level, bool wantSlope,
                            bool wantQuality, Contribution& out) const {
   out = Contribution{};

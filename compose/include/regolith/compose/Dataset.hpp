@@ -157,6 +157,16 @@ class Dataset {
   /// only where the coverage is exactly 1 (a dataset that hides every tier below it).
   [[nodiscard]] std::optional<double> soleHeight(double latDeg, double lonDeg, std::size_t level,
                                                  bool full = false) const;
+  /// A height and its coverage, as evaluate() gives them where it answers Ok with coverage
+  /// > 0; coverage 0 (and a NaN height) elsewhere.
+  struct CoveredHeight {
+    double height;
+    double coverage;
+  };
+  /// evaluate()'s height and coverage alone, in registers: a feathered or masked planet
+  /// grid's coverage comes from the point's position before its samples are read (a DEM
+  /// takes evaluateInto()). Requires finite coordinates with |lat| <= 90.
+  [[nodiscard]] CoveredHeight coveredHeight(double latDeg, double lonDeg, std::size_t level) const;
   /// Asks the processor to fetch the samples evaluate() would read at a point of level
   /// `level` into its cache (topo::TopoPlanet::prefetch()): a hint, never failing, so that a
   /// composition overlaps the memory misses of its datasets. Planet grids only (a DEM's
