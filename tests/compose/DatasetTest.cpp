@@ -92,7 +92,9 @@ TEST(Dataset, MaskScalesCoverageAndFeatherStartsAtTheEdge) {
 TEST(Dataset, SoleHeightIsEvaluatesHeightWhereItAnswersWithCoverage) {
   // soleHeight() (a composition's query where one dataset is the cell's only candidate; a
   // planet grid without feather or mask takes a shortcut) against evaluate(): true exactly
-  // where evaluate() answers Ok with coverage > 0, and then the same height bit for bit. A
+  // where evaluate() answers Ok with coverage > 0, and then the same height bit for bit.
+  // coveredHeight() (a feathered top's query; a planet grid takes the coverage first): the
+  // same, with the coverage bit for bit, and coverage 0 exactly where soleHeight() has none. A
   // global grid, a regional one with an offset (shortcut), the same feathered and masked
   // (general path), a planetocentric one on an ellipsoid and a DEM, at random points, on
   // their edges, across the seam and beyond a turn of longitude.
@@ -138,23 +140,34 @@ TEST(Dataset, SoleHeightIsEvaluatesHeightWhereItAnswersWithCoverage) {
     pts.push_back({g.latDeg, g.lonDeg});
   }
   for (const auto& d : datasets) {
-    int answered = 0, declined = 0;
+    int answered = 0, declined = 0, partial = 0;
     for (const auto& [la, lo] : pts) {
       const Contribution c = d->evaluate(la, lo, 0, false, false);
       const std::optional<double> h = d->soleHeight(la, lo, 0);
+      const Dataset::CoveredHeight ch = d->coveredHeight(la, lo, 0);
       const bool expected = c.status == topo::QueryStatus::Ok && c.coverage > 0.0;
       ASSERT_EQ(h.has_value(), expected) << d->options().name << " at " << la << ", " << lo;
+      ASSERT_EQ(ch.coverage > 0.0, expected) << d->options().name << " at " << la << ", " << lo;
       if (!h) {
+        ASSERT_EQ(ch.coverage, 0.0);
         ++declined;
         continue;
       }
       ++answered;
       ASSERT_EQ(std::bit_cast<std::uint64_t>(*h), std::bit_cast<std::uint64_t>(c.height))
           << d->options().name << " at " << la << ", " << lo;
+      ASSERT_EQ(std::bit_cast<std::uint64_t>(ch.height), std::bit_cast<std::uint64_t>(c.height))
+          << d->options().name << " at " << la << ", " << lo;
+      ASSERT_EQ(std::bit_cast<std::uint64_t>(ch.coverage), std::bit_cast<std::uint64_t>(c.coverage))
+          << d->options().name << " at " << la << ", " << lo;
+      partial += c.coverage < 1.0 ? 1 : 0;
     }
     // Both outcomes were exercised for every dataset.
     EXPECT_GT(answered, 50) << d->options().name;
     EXPECT_GT(declined, 50) << d->options().name;
+    if (!d->unfeathered()) {
+      EXPECT_GT(partial, 50) << d->options().name;  // in the feather or the mask's slopes
+    }
   }
   // A non-finite point is outside every planet grid (their grids' unchecked reads never see
   // one), global or not: no error, no height.
@@ -167,6 +180,7 @@ TEST(Dataset, SoleHeightIsEvaluatesHeightWhereItAnswersWithCoverage) {
       EXPECT_EQ(c.status, topo::QueryStatus::OutsideGrid) << k << ": " << la << ", " << lo;
       EXPECT_EQ(c.coverage, 0.0);
       EXPECT_FALSE(datasets[k]->soleHeight(la, lo, 0).has_value());
+      EXPECT_EQ(datasets[k]->coveredHeight(la, lo, 0).coverage, 0.0);
     }
   }
 }
