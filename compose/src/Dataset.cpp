@@ -185,6 +185,7 @@ Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement
     // (the nominal pixel is the pixel's size there).
     planetAspect_ = g0.spacingX() / g0.spacingY();
     planetEquator_ = body_.equatorialRadius() * body_.meridianRadius(0.0);
+    buildFeatherInterior();
   } else {
     groundSpacing_ = std::sqrt(g0.spacingX() * g0.spacingY());
   }
@@ -258,11 +259,45 @@ Dataset::GridPoint Dataset::locate(double latDeg, double lonDeg) const {
 
 bool Dataset::contains(double latDeg, double lonDeg) const { return locate(latDeg, lonDeg).inside; }
 
+// A planet grid's feather interior: the box of grid coordinates at least featherMetres from
+// every edge coverageAt() measures, found from the smallest radii of curvature the grid
+// reaches (the meridian's on the equator or at a pole, the parallel's at the latitude
+// farthest from the equator), widened by a millionth for the rounding. Inside it the
+// feather is exactly 1 (smoothstep of at least 1), which coverageAt() then takes without
+// its cosine. Left empty where a parallel in the grid has no length (a pole).
+void Dataset::buildFeatherInterior() {
+  const double f = options_.featherMetres;
+  if (!(f > 0.0 && std::isfinite(f))) return;
+  const topo::TopoGrid& grid = levels_.front().level.grid;
+  const double latNorth = body_.toPlanetodetic(std::clamp(grid.north(), -90.0, 90.0), latType_);
+  const double latSouth = body_.toPlanetodetic(std::clamp(grid.south(), -90.0, 90.0), latType_);
+  const double farthest = std::max(std::abs(latNorth), std::abs(latSouth));
+  const double meridian = std::min(body_.meridianRadius(0.0), body_.meridianRadius(90.0)) * kDeg;
+  const double parallel = body_.primeVerticalRadius(farthest) * std::cos(farthest * kDeg) * kDeg;
+  constexpr double kWider = 1.0 + 1e-6;
+  const double inf = std::numeric_limits<double>::infinity();
+  FeatherInterior b;
+  b.south = southPole_ ? -inf : grid.south() + kWider * f / meridian;
+  b.north = northPole_ ? inf : grid.north() - kWider * f / meridian;
+  if (globalLon_) {
+    b.west = -inf;
+    b.east = inf;
+  } else if (parallel > 0.0) {
+    b.west = grid.west() + kWider * f / parallel;
+    b.east = grid.east() - kWider * f / parallel;
+  } else {
+    return;  // the parallels shrink to a point: no box
+  }
+  featherInterior_ = b;
+}
+
 double Dataset::coverageAt(const GridPoint& g, double latDeg) const {
   if (!g.inside) return 0.0;
   const topo::TopoGrid& grid = levels_.front().level.grid;
   double c = 1.0;
-  if (options_.featherMetres > 0.0) {
+  const FeatherInterior& box = featherInterior_;
+  const bool interior = g.x >= box.west && g.x <= box.east && g.y >= box.south && g.y <= box.north;
+  if (options_.featherMetres > 0.0 && !interior) {
     double d = std::numeric_limits<double>::infinity();
     if (isPlanet()) {
       const double lat = latDeg * kDeg;

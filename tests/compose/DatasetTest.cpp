@@ -275,6 +275,72 @@ TEST(Dataset, RefusesBadOptionsWithClearMessages) {
                InvalidArgument);
 }
 
+TEST(Dataset, PlanetFeatherIsTheDistanceToTheEdgesItHas) {
+  // A planet grid's feather coverage against its rule in double: smoothstep of the smallest
+  // ground distance to an edge the grid has (along the meridian to its north and south
+  // edges, unless it reaches a pole; along the parallel to its west and east edges, unless
+  // it spans all longitudes), with the radii of curvature at the point. coverageAt() takes
+  // 1 without that arithmetic inside a box found from the grid's smallest radii: the points
+  // cluster where the box ends, on a sphere, an ellipsoid (planetodetic and planetocentric
+  // grids, one reaching 80°) and a band around all longitudes.
+  const topo::Body ellipsoid = topo::Body::marsEllipsoid();
+  const auto flat = [](double, double) { return 0.0; };
+  struct Case {
+    topo::Body body;
+    topo::GridPyramid pyramid;
+    double feather;
+  };
+  auto centric = testing::planetPyramid(ellipsoid, 79.75, -29.75, 0.5, 40, 120, flat);
+  centric.latitudeType = topo::LatitudeType::Planetocentric;
+  std::vector<Case> cases;
+  cases.push_back(
+      {kMars, testing::planetPyramid(kMars, 29.875, 170.125, 0.25, 40, 60, flat), 60e3});
+  cases.push_back(
+      {ellipsoid, testing::planetPyramid(ellipsoid, 79.75, -29.75, 0.5, 40, 120, flat), 90e3});
+  cases.push_back({ellipsoid, centric, 90e3});
+  cases.push_back(
+      {ellipsoid, testing::planetPyramid(ellipsoid, -40.5, -179.5, 1.0, 20, 360, flat), 150e3});
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (const Case& k : cases) {
+    const auto d = Dataset::planet(k.pyramid, named("feathered", k.feather));
+    const topo::TopoGrid& g = k.pyramid.levels[0].grid;
+    const bool allLon = g.east() - g.west() >= 360.0 - 1e-9;
+    int partial = 0, full = 0;
+    for (int i = 0; i < 20000; ++i) {
+      // Grid coordinates (lon, lat in the grid's latitude type), half of them within two
+      // feather widths of an edge.
+      double y = g.south() + (g.north() - g.south()) * unit(rng);
+      double x = g.west() + (g.east() - g.west()) * unit(rng);
+      if (i % 2 == 0) {
+        const double du = 2.0 * k.feather / (k.body.meridianRadius(0.0) * kDeg) * unit(rng);
+        switch (i % 8) {
+          case 0: y = g.north() - du; break;
+          case 2: y = g.south() + du; break;
+          case 4: x = g.west() + du / std::cos(std::abs(y) * kDeg); break;
+          default: x = g.east() - du / std::cos(std::abs(y) * kDeg); break;
+        }
+        x = std::clamp(x, g.west(), g.east());
+      }
+      const double lat = k.body.toPlanetodetic(y, k.pyramid.latitudeType);
+      const double m = k.body.meridianRadius(lat) * kDeg;
+      const double p = k.body.primeVerticalRadius(lat) * std::cos(lat * kDeg) * kDeg;
+      double dist = std::min((g.north() - y) * m, (y - g.south()) * m);
+      if (!allLon) dist = std::min({dist, (x - g.west()) * p, (g.east() - x) * p});
+      const double expected = testing::smoothstep(dist / k.feather);
+      const double got = d->coverageQuality(lat, x)[0];
+      ASSERT_NEAR(got, expected, 1e-12) << "grid " << &k - cases.data() << " at " << y << ", " << x;
+      if (expected == 1.0) {
+        ASSERT_EQ(got, 1.0);
+      }
+      partial += expected < 1.0 ? 1 : 0;
+      full += expected == 1.0 ? 1 : 0;
+    }
+    EXPECT_GT(partial, 2000) << &k - cases.data();
+    EXPECT_GT(full, 2000) << &k - cases.data();
+  }
+}
+
 TEST(Dataset, FeatherMaskMatchesBruteForceDistance) {
   const std::size_t rows = 37, cols = 53;
   std::mt19937 rng(2);

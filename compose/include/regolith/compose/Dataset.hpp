@@ -210,6 +210,7 @@ class Dataset {
   /// locate() for a planet grid (from frame_).
   [[nodiscard]] GridPoint locatePlanet(double latDeg, double lonDeg) const noexcept;
   [[nodiscard]] double coverageAt(const GridPoint& g, double latDeg) const;
+  void buildFeatherInterior();
   [[nodiscard]] double qualityAt(const GridPoint& g) const;
   [[nodiscard]] double planetQuality(double latDeg) const;
   void buildQualityLattice();
@@ -232,6 +233,11 @@ class Dataset {
   /// soleHeight()'s shortcut applies: a planet grid without feather or mask.
   bool plainPlanet_ = false;
   double groundSpacing_ = 0.0;
+  /// A feathered planet grid's interior, in level-0 grid coordinates (lon, lat): where its
+  /// feather is exactly 1 (buildFeatherInterior()). Empty otherwise.
+  struct FeatherInterior {
+    double west = 1.0, east = 0.0, south = 1.0, north = 0.0;
+  } featherInterior_;
   double planetAspect_ = 0.0;   // a planet grid's level-0 spacing in longitude / in latitude
   double planetEquator_ = 0.0;  // the body's radii on the equator, a·m₀ (m²)
   std::array<double, 2> heightRange_{0.0, 0.0};
