@@ -131,9 +131,9 @@ ComposedSurface::CountedHeight ComposedSurface::fastHeight(const Snapshot::Cell&
                                                            double metres) const {
   if (cell.candidates.size() != 1) return topTierHeight(cell, latDeg, lonDeg, metres);
   const Dataset* d = cell.top;
-  if (const std::optional<double> h =
-          d->soleHeight(latDeg, lonDeg, metres > 0.0 ? d->levelFor(metres) : 0)) {
-    return CountedHeight{*h, QueryStatus::Ok, 1};
+  if (const double h = d->soleHeightOrNan(latDeg, lonDeg, metres > 0.0 ? d->levelFor(metres) : 0);
+      !std::isnan(h)) {
+    return CountedHeight{h, QueryStatus::Ok, 1};
   }
   return kNoFastHeight;
 }
@@ -186,9 +186,10 @@ ComposedSurface::CountedHeight ComposedSurface::topTierHeight(const Snapshot::Ce
   }
   if (k == 1) {
     if (top.unfeathered()) {
-      if (const std::optional<double> h =
-              top.soleHeight(latDeg, lonDeg, metres > 0.0 ? top.levelFor(metres) : 0, true)) {
-        return CountedHeight{*h, QueryStatus::Ok, 1};
+      if (const double h =
+              top.soleHeightOrNan(latDeg, lonDeg, metres > 0.0 ? top.levelFor(metres) : 0, true);
+          !std::isnan(h)) {
+        return CountedHeight{h, QueryStatus::Ok, 1};
       }
       return kNoFastHeight;
     }
@@ -219,12 +220,12 @@ ComposedSurface::CountedHeight ComposedSurface::featheredTopHeight(const Snapsho
   const Dataset& below =
       *entries[cell.candidates[entries[cell.candidates[0]].dataset.get() == &top ? 1 : 0]].dataset;
   if (!below.unfeathered()) return kNoFastHeight;
-  const std::optional<double> hb =
-      below.soleHeight(latDeg, lonDeg, metres > 0.0 ? below.levelFor(metres) : 0, true);
-  if (!hb) return kNoFastHeight;
+  const double hb =
+      below.soleHeightOrNan(latDeg, lonDeg, metres > 0.0 ? below.levelFor(metres) : 0, true);
+  if (std::isnan(hb)) return kNoFastHeight;
   const double alpha = 1.0 - (1.0 - c.coverage);
   if (!(alpha > 0.0 && alpha < 1.0)) return kNoFastHeight;
-  return CountedHeight{alpha * c.height + (1.0 - alpha) * *hb, QueryStatus::Ok, 2};
+  return CountedHeight{alpha * c.height + (1.0 - alpha) * hb, QueryStatus::Ok, 2};
 }
 
 // A blend of planet grids without feather or mask that all answer (coverage 1):
@@ -243,10 +244,8 @@ ComposedSurface::CountedHeight ComposedSurface::blendHeight(std::span<const std:
   std::array<double, kCellCandidatesAtMost> h{};
   for (std::size_t i = 0; i < k; ++i) {
     const Dataset& d = *entries[tier[i]].dataset;
-    const std::optional<double> v =
-        d.soleHeight(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, true);
-    if (!v) return kNoFastHeight;
-    h[i] = *v;
+    h[i] = d.soleHeightOrNan(latDeg, lonDeg, metres > 0.0 ? d.levelFor(metres) : 0, true);
+    if (std::isnan(h[i])) return kNoFastHeight;
   }
   // Members of one planet quality (one body and pixel shape: overlapping products of one
   // kind) have it as a common factor that composeGeneral() leaves out of the height's

@@ -148,6 +148,8 @@ TEST(Dataset, SoleHeightIsEvaluatesHeightWhereItAnswersWithCoverage) {
       const bool expected = c.status == topo::QueryStatus::Ok && c.coverage > 0.0;
       ASSERT_EQ(h.has_value(), expected) << d->options().name << " at " << la << ", " << lo;
       ASSERT_EQ(ch.coverage > 0.0, expected) << d->options().name << " at " << la << ", " << lo;
+      const double plain = d->soleHeightOrNan(la, lo, 0);  // the fast paths' form
+      ASSERT_EQ(!std::isnan(plain), expected) << d->options().name << " at " << la << ", " << lo;
       if (!h) {
         ASSERT_EQ(ch.coverage, 0.0);
         ++declined;
@@ -158,6 +160,7 @@ TEST(Dataset, SoleHeightIsEvaluatesHeightWhereItAnswersWithCoverage) {
           << d->options().name << " at " << la << ", " << lo;
       ASSERT_EQ(std::bit_cast<std::uint64_t>(ch.height), std::bit_cast<std::uint64_t>(c.height))
           << d->options().name << " at " << la << ", " << lo;
+      ASSERT_EQ(std::bit_cast<std::uint64_t>(plain), std::bit_cast<std::uint64_t>(c.height));
       ASSERT_EQ(std::bit_cast<std::uint64_t>(ch.coverage), std::bit_cast<std::uint64_t>(c.coverage))
           << d->options().name << " at " << la << ", " << lo;
       partial += c.coverage < 1.0 ? 1 : 0;
@@ -181,6 +184,7 @@ TEST(Dataset, SoleHeightIsEvaluatesHeightWhereItAnswersWithCoverage) {
       EXPECT_EQ(c.coverage, 0.0);
       EXPECT_FALSE(datasets[k]->soleHeight(la, lo, 0).has_value());
       EXPECT_EQ(datasets[k]->coveredHeight(la, lo, 0).coverage, 0.0);
+      EXPECT_TRUE(std::isnan(datasets[k]->soleHeightOrNan(la, lo, 0)));
     }
   }
 }

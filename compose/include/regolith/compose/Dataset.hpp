@@ -157,6 +157,10 @@ class Dataset {
   /// only where the coverage is exactly 1 (a dataset that hides every tier below it).
   [[nodiscard]] std::optional<double> soleHeight(double latDeg, double lonDeg, std::size_t level,
                                                  bool full = false) const;
+  /// soleHeight() as a plain double, NaN where it has none: what the composition's fast
+  /// paths call (an optional returned through memory stalls each query).
+  [[nodiscard]] double soleHeightOrNan(double latDeg, double lonDeg, std::size_t level,
+                                       bool full = false) const;
   /// A height and its coverage, as evaluate() gives them where it answers Ok with coverage
   /// > 0; coverage 0 (and a NaN height) elsewhere.
   struct CoveredHeight {
