@@ -198,8 +198,9 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
       threeTiers += g.contributors == 3 ? 1U : 0U;
       blended += snapshot == blendSnapshot && policy == Policy::Weighted && g.contributors >= 2;
       twinned += snapshot == blendSnapshot && policy == Policy::FinestWins && g.contributors == 2;
-      // In the feathered regional grid's band over the global grid (two tiers of one).
-      band += snapshot == tSnapshot && g.contributors == 2;
+      // In the feathered regional grid's band over the global grid: two tiers of one under
+      // FinestWins (featheredTopHeight()); Weighted puts 0.5° and 1° in one tier.
+      band += snapshot == tSnapshot && policy == Policy::FinestWins && g.contributors == 2;
       // In the oblong grid (-12.4…-5.2° east, -14…-6° north), with "half" and "base".
       shapes += snapshot == blendSnapshot && policy == Policy::Weighted && g.contributors >= 2 &&
                 lo > -12.4 && lo < -5.2 && la > -14.0 && la < -6.0;
