@@ -240,8 +240,9 @@ void ComposedFeathered(benchmark::State& state) {
 }
 BENCHMARK(ComposedFeathered);
 
-// Dataset::soleHeight() alone (what Composed/1 runs after its cell look-up): the dataset's
-// own locate and its grid's query, against PlainPaged.
+// Dataset::soleHeight() alone (Composed/1 runs its plain-double form, soleHeightOrNan(),
+// after its cell look-up): the dataset's own locate and its grid's query, against
+// PlainPaged.
 void SoleHeight(benchmark::State& state) {
   const auto d = compose::datasetFromStore(*paged().pager, "global");
   const Points pts(1 << 16);
