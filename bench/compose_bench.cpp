@@ -240,15 +240,14 @@ void ComposedFeathered(benchmark::State& state) {
 }
 BENCHMARK(ComposedFeathered);
 
-// Dataset::soleHeight() alone (Composed/1 runs its plain-double form, soleHeightOrNan(),
-// after its cell look-up): the dataset's own locate and its grid's query, against
-// PlainPaged.
+// Dataset::soleHeightOrNan() alone (what Composed/1 runs after its cell look-up): the
+// dataset's own locate and its grid's query, against PlainPaged.
 void SoleHeight(benchmark::State& state) {
   const auto d = compose::datasetFromStore(*paged().pager, "global");
   const Points pts(1 << 16);
   std::size_t i = 0;
   for (auto _ : state) {
-    benchmark::DoNotOptimize(d->soleHeight(pts.lat[i], pts.lon[i], 0));
+    benchmark::DoNotOptimize(d->soleHeightOrNan(pts.lat[i], pts.lon[i], 0));
     i = (i + 1) & (pts.lat.size() - 1);
   }
 }

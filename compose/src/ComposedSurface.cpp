@@ -217,8 +217,9 @@ ComposedSurface::CountedHeight ComposedSurface::featheredTopHeight(const Snapsho
   if (c.coverage == 1.0) return CountedHeight{c.height, QueryStatus::Ok, 1};
   if (cell.candidates.size() != 2) return kNoFastHeight;
   const auto entries = snapshot_->entries();
-  const Dataset& below =
-      *entries[cell.candidates[entries[cell.candidates[0]].dataset.get() == &top ? 1 : 0]].dataset;
+  const std::uint32_t other =
+      cell.candidates[0] == cell.topEntry ? cell.candidates[1] : cell.candidates[0];
+  const Dataset& below = *entries[other].dataset;
   if (!below.unfeathered()) return kNoFastHeight;
   const double hb =
       below.soleHeightOrNan(latDeg, lonDeg, metres > 0.0 ? below.levelFor(metres) : 0, true);
@@ -539,13 +540,12 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
     const auto heightWeight = [oneQuality](const Member& m) {
       return m.c.coverage * (oneQuality ? 1.0 : m.c.quality) * m.resolution;
     };
-    double sumW = 0.0, sumWH = 0.0, sumH = 0.0, keep = 1.0, sumFullW = 0.0;
+    double sumW = 0.0, sumWH = 0.0, sumH = 0.0, keep = 1.0;
     const double w0 = heightWeight(first);
     bool equal = w0 > 0.0;
     for (std::size_t i = begin; i < end; ++i) {
       const Member& m = member(i);
       const double w = heightWeight(m);
-      sumFullW += m.c.coverage * m.c.quality * m.resolution;  // the normal's
       sumW += w;
       sumWH += w * m.c.height;
       sumH += m.c.height;
@@ -580,7 +580,7 @@ ComposedSample ComposedSurface::composeGeneral(std::span<const std::uint32_t> ce
           }
         }
       }
-      gradHt /= sumFullW;
+      gradHt /= oneQuality ? first.c.quality * sumW : sumW;  // Σ w with the quality
     }
     if (bottom) {
       acc = ht;

@@ -212,8 +212,8 @@ Dataset::Dataset(const topo::GridPyramid& pyramid, std::optional<topo::Placement
 }
 
 // Inlined into its callers: called, it returned its point through memory, written field by
-// field and read back by soleHeight() as one 16-byte pair, a store-forwarding stall that
-// serialised consecutive queries (soleHeight() took 2.2× TopoPlanet's own query; 1.0× inlined,
+// field and read back by soleHeightOrNan() as one 16-byte pair, a store-forwarding stall that
+// serialised consecutive queries (soleHeightOrNan() took 2.2× TopoPlanet's own query; 1.0× inlined,
 // compose_bench's SoleHeight against PlainPaged).
 [[gnu::always_inline]] inline Dataset::GridPoint Dataset::locatePlanet(
     double latDeg, double lonDeg) const noexcept {
@@ -296,8 +296,8 @@ double Dataset::coverageAt(const GridPoint& g, double latDeg) const {
   const topo::TopoGrid& grid = levels_.front().level.grid;
   double c = 1.0;
   const FeatherInterior& box = featherInterior_;
-  const bool interior = g.x >= box.west && g.x <= box.east && g.y >= box.south && g.y <= box.north;
-  if (options_.featherMetres > 0.0 && !interior) {
+  if (options_.featherMetres > 0.0 &&
+      !(g.x >= box.west && g.x <= box.east && g.y >= box.south && g.y <= box.north)) {
     double d = std::numeric_limits<double>::infinity();
     if (isPlanet()) {
       const double lat = latDeg * kDeg;
@@ -480,17 +480,9 @@ Contribution Dataset::evaluate(double latDeg, double lonDeg, std::size_t level, 
   return out;
 }
 
-std::optional<double> Dataset::soleHeight(double latDeg, double lonDeg, std::size_t level,
-                                          bool full) const {
-  const double h = soleHeightOrNan(latDeg, lonDeg, level, full);
-  if (std::isnan(h)) return std::nullopt;
-  return h;
-}
-
-// The optional's flag, written as a byte and read back with the height as one 16-byte pair,
-// stalled each query on its store forwarding (a tenth of Composed/1's time in perf): the
-// composition's own queries take the height alone, NaN for none (an answered height is a
-// number: a NaN sample answers Nodata).
+// A std::optional<double> returned here (stop 41 to 43) had its flag written as a byte and
+// read back with the height as one 16-byte pair, a store-forwarding stall on each query (a
+// tenth of Composed/1's time in perf): the height alone, NaN for none.
 double Dataset::soleHeightOrNan(double latDeg, double lonDeg, std::size_t level, bool full) const {
   constexpr double none = std::numeric_limits<double>::quiet_NaN();
   if (plainPlanet_) {

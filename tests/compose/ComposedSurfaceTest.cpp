@@ -131,9 +131,9 @@ TEST(ComposedSurface, HeightGivesTheGeneralPathsBitsWhereOneDatasetIsACandidate)
                       named("fine below")));
   // Blends without feathers (ComposedSurface::topTierHeight() and blendHeight()): two regional
   // grids of 0.5° and 0.7° that overlap each other, a 0.5° twin of the first over part of it (one
-  // quality serves both) and the 1° global grid, one tier (ratio 2: 1° <= 2 · 0.5°) of two to four
-  // members; and (FinestWins) tiers of equal spacings. A coarse grid of higher priority
-  // over part of it puts a tier of one above them.
+  // quality serves both) and the 1° global grid, one tier (tier ratio 4: 1° <= 4 · 0.5°) of two to
+  // four members; and (FinestWins) tiers of equal spacings. A coarse grid of higher priority over
+  // part of it puts a tier of one above them.
   Catalogue blend(kMoon);
   blend.add(Dataset::planet(
       globalPlanet(kMoon, 1.0, [](double la, double lo) { return 30.0 + 0.4 * la - 0.2 * lo; }),

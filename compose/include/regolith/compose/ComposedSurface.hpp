@@ -132,7 +132,7 @@ class ComposedSurface {
   [[nodiscard]] CountedHeight heightOf(double latDeg, double lonDeg, double metres) const;
   /// A height without composeGeneral()'s large frame, or contributors 0 where the general
   /// path must answer (a real answer has at least one; in registers, as an optional's 24
-  /// bytes would not be): the cell's sole candidate (Dataset::soleHeight()), else
+  /// bytes would not be): the cell's sole candidate (Dataset::soleHeightOrNan()), else
   /// topTierHeight().
   [[nodiscard]] CountedHeight fastHeight(const Snapshot::Cell& cell, double latDeg, double lonDeg,
                                          double metres) const;

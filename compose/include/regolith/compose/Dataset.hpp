@@ -149,16 +149,13 @@ class Dataset {
   void evaluateInto(double latDeg, double lonDeg, std::size_t level, bool wantSlope,
                     bool wantQuality, Contribution& out) const;
   /// The height evaluate() gives at a point where it answers Ok with coverage > 0, else
-  /// none: a composition's query where the dataset is the only candidate. A planet grid
-  /// without feather or mask (coverage 1 wherever it answers) skips the contribution's
-  /// other fields and, the point being checked, the grid's argument checks. Returned in
-  /// registers (a height written through a reference was read back from memory on the
-  /// query's critical path). Requires finite coordinates with |lat| <= 90. With `full`,
-  /// only where the coverage is exactly 1 (a dataset that hides every tier below it).
-  [[nodiscard]] std::optional<double> soleHeight(double latDeg, double lonDeg, std::size_t level,
-                                                 bool full = false) const;
-  /// soleHeight() as a plain double, NaN where it has none: what the composition's fast
-  /// paths call (an optional returned through memory stalls each query).
+  /// NaN (an answered height is a number: a NaN sample answers Nodata): a composition's
+  /// query where the dataset is the only candidate. A planet grid without feather or mask
+  /// (coverage 1 wherever it answers) skips the contribution's other fields and, the point
+  /// being checked, the grid's argument checks. A plain double in a register (a height
+  /// written through a reference, or an optional's flag byte read back with the height,
+  /// stalled the query's critical path). Requires finite coordinates with |lat| <= 90. With
+  /// `full`, only where the coverage is exactly 1 (a dataset that hides every tier below it).
   [[nodiscard]] double soleHeightOrNan(double latDeg, double lonDeg, std::size_t level,
                                        bool full = false) const;
   /// A height and its coverage, as evaluate() gives them where it answers Ok with coverage
@@ -234,7 +231,7 @@ class Dataset {
     double west = 0.0, east = 0.0, south = 0.0, north = 0.0;
     bool sameLatitude = true;
   } frame_;
-  /// soleHeight()'s shortcut applies: a planet grid without feather or mask.
+  /// soleHeightOrNan()'s shortcut applies: a planet grid without feather or mask.
   bool plainPlanet_ = false;
   double groundSpacing_ = 0.0;
   /// A feathered planet grid's interior, in level-0 grid coordinates (lon, lat): where its
@@ -252,7 +249,7 @@ class Dataset {
   /// evaluating the Jacobian at each query would cost six projections. Planet grids compute
   /// theirs exactly (two trigonometric calls).
   std::vector<double> quality_;
-  /// Level 0's grid again, inside the dataset (a planet grid): soleHeight()'s query reads
+  /// Level 0's grid again, inside the dataset (a planet grid): soleHeightOrNan()'s query reads
   /// its fields one dependent load sooner than through levels_. Last, so that the members
   /// the general path reads keep their cache lines.
   std::optional<topo::TopoPlanet> planet0_;
