@@ -16,7 +16,8 @@
 //       = C (0: the full grid): the grid is halved while its cells span fewer than C pixels.
 //       Counters: grid_drawn (the side of the grid drawn), cell_px (the full grid's largest
 //       cell on the screen).
-//   compare/<view>/pgm/grid:<G>, compare/<view>/clipmap/size:<N>   PGM (layers 4096 wide)
+//   compare/<view>/pgm/grid:<G>, compare/<view>/clipmap/size:<N>   PGM (layers 4096 wide,
+//       the even-error spread of its rays on; pgm-even: off, the paper's even grid)
 //       against the clipmap-only planet (a global 4096 × 2048 pyramid of the same relief,
 //       every level, focused below the eye) for the same view on a 1024² screen. Counters:
 //       the screen-space error against the relief function itself, in double, on every
@@ -34,7 +35,9 @@
 //       the behind-the-horizon band (ω > b, what the occluded-area sampling costs) and the
 //       fraction whose surface point lands outside the view (not pertinent); of a plain grid
 //       over the view frustum, the fraction of rays that miss the body (wasted) and of the
-//       sampling camera's, the same.
+//       sampling camera's, the same. These are the paper's even grid, before the even-error
+//       spread; spread_us: the spread's table for the view's spheres (computed when they
+//       change), in microseconds.
 //
 // Run: build/bench/farfield_bench --benchmark_min_time=5x
 #include <regolith/clod/Camera.hpp>
@@ -58,6 +61,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -279,7 +283,18 @@ void sampling(benchmark::State& state, const std::string& name) {
     sc = farfield::samplingCamera(frustum, nadir, s.tauTop);
     benchmark::DoNotOptimize(sc);
   }
-  // Counters on a 128² grid of each kind.
+  // The even-error spread's table for these spheres: what a frame pays when they change.
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    constexpr int kSpreads = 200;
+    for (int i = 0; i < kSpreads; ++i) {
+      benchmark::DoNotOptimize(farfield::evenErrorSpread(s, 256));
+    }
+    state.counters["spread_us"] =
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() /
+        kSpreads;
+  }
+  // Counters on a 128² grid of each kind (the paper's even grid: no spread).
   const int n = 128;
   int behind = 0, offScreen = 0, plainMiss = 0, samplingMiss = 0;
   for (int j = 0; j < n; ++j) {
@@ -376,10 +391,12 @@ void setCompareCounters(benchmark::State& state, const TruthError& e) {
 }
 
 /// One PGM frame (FarField's way: grid, mesh, Lagged reduction) against the truth.
-void comparePgm(benchmark::State& state, const std::string& name, int grid, int screen) {
+void comparePgm(benchmark::State& state, const std::string& name, int grid, int screen,
+                bool evenError) {
   View v = view(name, screen);
   farfield::PgmOptions o;
   o.gridWidth = o.gridHeight = grid;
+  o.evenError = evenError;
   o.minCellPixels = 0.0;  // the grid as given
   farfield::PgmRenderer pgm(layers(4096), o);
   gl::RenderTarget target(screen, screen);
@@ -390,7 +407,8 @@ void comparePgm(benchmark::State& state, const std::string& name, int grid, int 
   }
   glFinish();
   setCompareCounters(state, truthError(v.camera, target.readDepth()));
-  savePngIfAsked("compare_" + name + "_pgm_" + std::to_string(grid), target);
+  savePngIfAsked("compare_" + name + (evenError ? "_pgm_" : "_pgm-even_") + std::to_string(grid),
+                 target);
   for (auto _ : state) {
     target.clear({0.0F, 0.0F, 0.0F, 1.0F});
     pgm.draw(target, v.camera, sun);
@@ -571,14 +589,17 @@ int main(int argc, char** argv) {
         ->Unit(benchmark::kMicrosecond);
   }
   for (const char* name : {"global", "low"}) {
-    for (const int grid : {64, 128, 256, 512}) {
-      const std::string label =
-          std::string("compare/") + name + "/pgm/grid:" + std::to_string(grid) + "/screen:1024";
-      benchmark::RegisterBenchmark(label.c_str(),
-                                   [=](benchmark::State& s) { comparePgm(s, name, grid, 1024); })
-          ->Unit(benchmark::kMillisecond)
-          ->UseRealTime()
-          ->MinWarmUpTime(0.0);
+    for (const bool evenError : {true, false}) {
+      for (const int grid : {64, 96, 128, 256, 512}) {
+        const std::string label = std::string("compare/") + name +
+                                  (evenError ? "/pgm/grid:" : "/pgm-even/grid:") +
+                                  std::to_string(grid) + "/screen:1024";
+        benchmark::RegisterBenchmark(
+            label.c_str(), [=](benchmark::State& s) { comparePgm(s, name, grid, 1024, evenError); })
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->MinWarmUpTime(0.0);
+      }
     }
     for (const int size : {63, 127, 255}) {
       const std::string label =

@@ -25,6 +25,8 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr const char* kOp = "farfield::PgmRenderer()";
+/// The entries of the spread's table: the size of the grid shader's uSpread array.
+constexpr int kSpreadEntries = 256;
 
 void requireRange(const char* field, double v, double lo, double hi) {
   detail::requireRange(kOp, field, v, lo, hi);
@@ -214,8 +216,10 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
   const glm::dvec3 fwd = camera.forward();
   const double aspect = static_cast<double>(camera.width) / camera.height;
   const Frustum view = viewFrustum(fwd, right, up, camera.fovYDegrees * kDeg, aspect);
-  frame.sampling = samplingCamera(view, -camera.position / d, frame.spheres.tauTop);
+  const glm::dvec3 nadir = -camera.position / d;
+  frame.sampling = samplingCamera(view, nadir, frame.spheres.tauTop);
   setFrameUniforms(camera, frame.spheres, frame.sampling, sun);
+  setSpread(frame, nadir);
 
   // The grid drawn: the full grid, or every stride-th point (minCellPixels).
   const int stride = gridStride(camera, frame);
@@ -323,6 +327,30 @@ PgmFrame PgmRenderer::draw(const gl::RenderTarget& target, const clod::Camera& c
   return frame;
 }
 
+void PgmRenderer::setSpread(PgmFrame& frame, const glm::dvec3& nadir) {
+  // The spread keeps the grid's coverage only where the grid holds the nadir (RaySpread).
+  if (!options_.evenError || !frame.sampling.holds(nadir)) {
+    grid_.set("uSpreadOn", 0);
+    return;
+  }
+  const ReferenceSpheres& s = frame.spheres;
+  const ReferenceSpheres& was = spreadSpheres_;
+  if (!spread_.active() || s.d != was.d || s.primary != was.primary || s.maximum != was.maximum ||
+      s.zeta != was.zeta) {
+    spread_ = evenErrorSpread(s, kSpreadEntries);
+    spreadSpheres_ = s;
+    if (spread_.active()) {
+      std::array<float, kSpreadEntries> table{};
+      std::transform(spread_.table.begin(), spread_.table.end(), table.begin(),
+                     [](double w) { return static_cast<float>(w); });
+      glProgramUniform1fv(grid_.id(), glGetUniformLocation(grid_.id(), "uSpread"), kSpreadEntries,
+                          table.data());
+    }
+  }
+  grid_.set("uSpreadOn", spread_.active() ? 1 : 0);
+  if (spread_.active()) frame.spread = spread_;
+}
+
 int PgmRenderer::gridStride(const clod::Camera& camera, PgmFrame& frame) const {
   if (options_.minCellPixels <= 0.0) return 1;
   // A grid point lies on its eye ray before the height displaces it, so the angle between
@@ -334,19 +362,21 @@ int PgmRenderer::gridStride(const clod::Camera& camera, PgmFrame& frame) const {
   const double d = glm::length(camera.position);
   if (d - maxRadius_ <= 20.0 * (maxRadius_ - minRadius_)) return 1;
   const SamplingCamera& sc = frame.sampling;
+  const glm::dvec3 nadir = -camera.position / d;
+  const auto ray = [&](double u, double v) { return frame.spread.ray(sc.ray(u, v), nadir); };
   const double du = 1.0 / (options_.gridWidth - 1), dv = 1.0 / (options_.gridHeight - 1);
   const double f = camera.focalPixels();
   double largest = 0.0;
   for (int b = 0; b <= 8; ++b) {
     for (int a = 0; a <= 8; ++a) {
       const double u = std::min(a / 8.0, 1.0 - du), v = std::min(b / 8.0, 1.0 - dv);
-      const glm::dvec3 r = sc.ray(u, v);
+      const glm::dvec3 r = ray(u, v);
       const glm::dvec3 q = camera.project(camera.position + r);
       if (q.z <= 0.0 || q.x < 0.0 || q.y < 0.0 || q.x > camera.width || q.y > camera.height) {
         continue;
       }
-      largest = std::max({largest, glm::length(sc.ray(u + du, v) - r) * f,
-                          glm::length(sc.ray(u, v + dv) - r) * f});
+      largest = std::max(
+          {largest, glm::length(ray(u + du, v) - r) * f, glm::length(ray(u, v + dv) - r) * f});
     }
   }
   frame.cellPixels = largest;

@@ -13,6 +13,8 @@ uniform vec3 uFwd, uRight, uUp, uNadir, uAnyPerp;
 uniform vec4 uBounds;                  // left, right, bottom, top
 uniform float uD, uRp, uAlt, uD2R2;    // d, r_p, d - r_p, (d - r_p)(d + r_p)
 uniform float uBegin, uTau0, uTauTop, uTauS, uOmegaSb, uRs;
+uniform int uSpreadOn;
+uniform float uSpread[256];            // RaySpread::table (PgmMath)
 uniform float uA, uB, uAminusRp, uAB2; // ellipsoid a, b, a - r_p, (a/b)^2
 uniform sampler2D uEquirect, uNorth, uSouth;
 uniform float uEquirectRows, uCapSize, uCapRadius, uCapLat, uCapBlend, uLodBias;
@@ -33,6 +35,14 @@ float blended(float w) {
   float u = mix(uOmegaSb, uTauS, f);
   float gs = asin(min(1.0, uD * sin(u) / uRs)) - u;
   return mix(frontGamma(w), gs, f);
+}
+
+// RaySpread::angle: the ray angle turned by the even-error spread.
+float spreadAngle(float w) {
+  if (uSpreadOn == 0 || !(w < uTauTop) || !(w > 0.0)) return w;
+  float x = w / uTauTop * 255.0;
+  int i = min(int(x), 254);
+  return mix(uSpread[i], uSpread[i + 1], x - float(i));
 }
 
 // Height at the geodetic normal ng: the equirectangular layer, blended into the polar cap.
@@ -60,7 +70,7 @@ void main() {
   float c = dot(r, uNadir);
   vec3 across = r - c * uNadir;
   float sl = length(across);
-  float omega = atan(sl, c);
+  float omega = spreadAngle(atan(sl, c));
   vec3 k = sl > 1e-7 ? across / sl : uAnyPerp;
   float gamma = blended(omega);
   float sg = sin(gamma), hs = sin(0.5 * gamma);

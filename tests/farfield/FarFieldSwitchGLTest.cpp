@@ -89,8 +89,9 @@ std::size_t differing(const Images& a, const Images& b) {
 TEST(PgmRendererGL, AThinnedGridDrawsExactlyAsTheSmallerGrid) {
   test::glContext();
   const double a = topo::Body::marsEllipsoid().equatorialRadius();
-  // The whole planet, small on a 256² screen: a 255² grid's cells are under a pixel.
-  const clod::Camera global = camera({4.0 * a, 0.0, 0.3 * a}, {0.0, 0.0, 0.0}, 256, 45.0);
+  // The whole planet, small on a 256² screen: a 255² grid's cells are under a pixel (from
+  // 6 a; from 4 a the even-error spread's widest cells, in the middle, span 1.1 px).
+  const clod::Camera global = camera({6.0 * a, 0.0, 0.45 * a}, {0.0, 0.0, 0.0}, 256, 45.0);
   const Images thin = drawPgm(global, 255, 4.0);
   std::printf("global: cells %.2f px at 255², grid drawn %d × %d\n", thin.frame.cellPixels,
               thin.frame.gridWidth, thin.frame.gridHeight);

@@ -10,7 +10,9 @@
 #include <gtest/gtest.h>
 #include <proj.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <optional>
 #include <random>
@@ -185,6 +187,87 @@ TEST(PgmMath, SamplingCameraCoversEveryPertinentRayOfTheView) {
   }
   EXPECT_GT(lookedAway, 0);  // the random views include some that look away
   EXPECT_LT(lookedAway, views);
+}
+
+/// A step of the grid from ray angle w0 to w1 on the primary sphere: its ground length
+/// squared over its distance from the eye, which a cell's screen-space error grows as.
+double stepError(const ReferenceSpheres& s, double w0, double w1) {
+  const double g0 = blendedNormalAngle(s, w0), g1 = blendedNormalAngle(s, w1);
+  const glm::dvec3 n(0.0, 0.0, -1.0), k(1.0, 0.0, 0.0);
+  const glm::dvec3 p = eyeSpacePoint(0.5 * (g0 + g1), s.d, s.primary, n, k);
+  const double ground = s.primary * (g1 - g0);
+  return ground * ground / glm::length(p);
+}
+
+TEST(PgmMath, EvenErrorSpreadIsMonotoneKeepsCoverageAndEvensTheStepsError) {
+  const double rMin = kMars - 8000.0, rMax = kMars + 21000.0;
+  struct Case {
+    const char* what;
+    double d;
+  };
+  // 0: the distance where r_s is barely positive.
+  const Case cases[] = {
+      {"3 R (global)", 3.0 * kMars},
+      {"400 km (low)", kMars + 400e3},
+      {"30 km above the highest point", rMax + 30e3},
+      {"2 m above the lowest sphere", rMin + 2.0},
+      {"r_s barely positive", 0.0},
+  };
+  for (const Case& c : cases) {
+    // r_s → 0⁺: the largest distance with r_s > 1 m, by bisection.
+    double d = c.d;
+    if (d == 0.0) {
+      double lo = 1.01 * rMax, hi = 1e3 * rMax;
+      for (int i = 0; i < 200; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (referenceSpheres(mid, rMin, rMax, 0.9).secondary > 1.0 ? lo : hi) = mid;
+      }
+      d = lo;
+    }
+    const ReferenceSpheres s = referenceSpheres(d, rMin, rMax, 0.9);
+    ASSERT_TRUE(s.secondaryExists()) << c.what;
+    const RaySpread spread = evenErrorSpread(s, 256);
+    ASSERT_TRUE(spread.active()) << c.what;
+    ASSERT_EQ(spread.table.size(), 256U);
+    EXPECT_EQ(spread.table.front(), 0.0) << c.what;
+    EXPECT_EQ(spread.table.back(), s.tauTop) << c.what;
+    // Monotone, finite, never below the identity (coverage), the identity beyond τ_top.
+    double previous = -1.0;
+    for (int i = 0; i <= 5000; ++i) {
+      const double w = s.tauTop * i / 5000.0;
+      const double f = spread.angle(w);
+      ASSERT_TRUE(std::isfinite(f)) << c.what << " " << w;
+      EXPECT_GE(f, previous) << c.what << " " << w;
+      EXPECT_GE(f, w * (1.0 - 1e-12)) << c.what << " " << w;
+      EXPECT_LE(f, s.tauTop) << c.what << " " << w;
+      previous = f;
+    }
+    EXPECT_EQ(spread.angle(1.01 * s.tauTop), 1.01 * s.tauTop) << c.what;
+    // The ray turned about the nadir keeps its azimuth and takes the new angle.
+    const glm::dvec3 nadir(0.0, 0.0, -1.0);
+    const double w = 0.37 * s.tauTop;
+    const glm::dvec3 r(std::sin(w) * 0.6, std::sin(w) * 0.8, -std::cos(w));
+    const glm::dvec3 turned = spread.ray(r, nadir);
+    EXPECT_NEAR(std::acos(glm::dot(turned, nadir)), spread.angle(w), 1e-9) << c.what;
+    EXPECT_NEAR(turned.y / turned.x, 0.8 / 0.6, 1e-9) << c.what;
+    EXPECT_EQ(spread.ray(nadir, nadir), nadir);
+    // A grid of 64 steps from the nadir to τ_top: the largest step's error, evenly spaced in
+    // the ray angle against spread.
+    double evenWorst = 0.0, spreadWorst = 0.0;
+    for (int i = 0; i < 64; ++i) {
+      const double u0 = s.tauTop * i / 64.0, u1 = s.tauTop * (i + 1) / 64.0;
+      evenWorst = std::max(evenWorst, stepError(s, u0, u1));
+      spreadWorst = std::max(spreadWorst, stepError(s, spread.angle(u0), spread.angle(u1)));
+    }
+    std::printf("[ %s ] largest step error: even grid %.4g, spread %.4g (%.1fx lower)\n", c.what,
+                evenWorst, spreadWorst, evenWorst / spreadWorst);
+    // 18–70× here; the ideal spreads the error evenly over the 64 steps.
+    EXPECT_LE(spreadWorst * 8.0, evenWorst) << c.what;
+  }
+  // No ray angles to spread: inactive, and the identity.
+  ReferenceSpheres none;
+  EXPECT_FALSE(evenErrorSpread(none).active());
+  EXPECT_EQ(RaySpread{}.angle(0.3), 0.3);
 }
 
 TEST(PgmMath, SamplingCameraLookingAwayUsesThePlanetFrustumCorners) {

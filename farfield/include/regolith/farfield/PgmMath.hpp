@@ -74,6 +74,38 @@ struct ReferenceSpheres {
 /// be 1 (all secondary) at b, against its own text; this uses the reading the text states.
 [[nodiscard]] double blendedNormalAngle(const ReferenceSpheres& s, double omega) noexcept;
 
+/// The even-error spread of the grid's rays (PgmOptions::evenError; not in the paper,
+/// docs/far-field.md). The sampling camera's grid is even in its image plane, so its cells are
+/// longest on the ground where the rays graze the body: at the limb, and just inside it where
+/// the occluded-area blend turns γ faster still. A cell's screen-space error grows as its
+/// ground length squared over its distance, so an even grid is far finer than it needs to be
+/// in the middle of the view and coarsest at the limb, where the error's 99th percentile lies.
+///
+/// The spread turns each grid ray about the nadir, within its plane: a ray at angle
+/// ω < τ_top becomes the ray at F(ω). F is the inverse of the normalised cumulative of
+/// dγ/√(distance) over the ray angle, with γ the blended normal angle and the distance that of
+/// the point on the primary sphere; so each step of the grid spans about the same
+/// (ground length)² / distance. F is monotone, F(0) = 0, F(τ_top) = τ_top, and F(ω) ≥ ω
+/// (the cumulative's inverse is raised to the identity where it falls below it), so a grid
+/// that holds the nadir still covers every ray it covered: along each azimuth the grid's rays
+/// from the nadir to its edge, [0, ω_edge], become [0, F(ω_edge)] ⊇ [0, ω_edge].
+struct RaySpread {
+  double top = 0.0;           ///< τ_top: rays at or beyond it are left alone
+  std::vector<double> table;  ///< F at ω = top·i/(n − 1), i = 0 … n − 1; empty: no spread
+
+  [[nodiscard]] bool active() const noexcept { return table.size() >= 2; }
+  /// F(ω): the table interpolated linearly, as the grid pass does in float.
+  [[nodiscard]] double angle(double omega) const noexcept;
+  /// The unit ray r turned about the nadir to the angle F(ω) (r itself where ω ≥ top, or
+  /// where r is the nadir).
+  [[nodiscard]] glm::dvec3 ray(const glm::dvec3& r, const glm::dvec3& nadir) const noexcept;
+};
+
+/// The spread for one frame's reference spheres (which must have a secondary sphere), as a
+/// table of `entries` ≥ 2 values; an inactive spread if the spheres give no ray angles to
+/// spread (τ_top ≤ 0).
+[[nodiscard]] RaySpread evenErrorSpread(const ReferenceSpheres& s, int entries = 256);
+
 /// The sampling camera of §5: its orientation and its frustum bounds on the plane at unit
 /// distance, so that grid point (u, v) ∈ [0, 1]² has the eye ray
 /// normalize(forward + (left + u·(right − left))·rightAxis + (bottom + v·(top − bottom))·up).
@@ -90,6 +122,9 @@ struct SamplingCamera {
 
   /// The unit eye ray of grid point (u, v).
   [[nodiscard]] glm::dvec3 ray(double u, double v) const noexcept;
+  /// True if the direction lies in the sampling frustum: in front of the camera and within
+  /// the bounds (with a relative tolerance of 1e-9).
+  [[nodiscard]] bool holds(const glm::dvec3& direction) const noexcept;
 };
 
 /// A viewing frustum as four unit corner rays, counter-clockwise seen from the eye (for

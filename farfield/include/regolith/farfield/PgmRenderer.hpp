@@ -38,6 +38,12 @@ struct PgmOptions {
   /// radius) below the last minimum, so terrain that comes into view this frame is not
   /// shrunk away (§4, "shrinking").
   double primaryMargin = 0.02;
+  /// Spread the grid's rays for an even screen-space error (RaySpread, docs/far-field.md):
+  /// the paper's grid is even in the sampling camera's image plane and coarsest on the
+  /// ground at the limb; the spread moves its rows towards the limb and the horizon. Off:
+  /// the paper's even grid. Frames whose sampling frustum does not hold the nadir (only
+  /// views looking nearly along the horizontal plane or away) are drawn without it.
+  bool evenError = true;
   /// Mip bias of the height lookups (0: one layer texel per grid step).
   float lodBias = 0.0F;
   /// Colour: a height ramp from `low` to `high` over the layers' height range, or one
@@ -81,6 +87,8 @@ struct PgmFrame {
   /// GPU time of the grid pass (the PGM step proper: rays, spheres, heights), the mesh pass
   /// and the reduction, in milliseconds (PgmOptions::timePasses; else 0).
   double gridMs = 0.0, meshMs = 0.0, reduceMs = 0.0;
+  /// The spread of the grid's rays this frame (inactive: the even grid).
+  RaySpread spread;
   /// The grid drawn: the options' size, or smaller under PgmOptions::minCellPixels.
   int gridWidth = 0, gridHeight = 0;
   /// The grid's largest cell on the screen (pixels) at the options' size (0 unless
@@ -145,6 +153,9 @@ class PgmRenderer {
  private:
   void setFrameUniforms(const clod::Camera& camera, const ReferenceSpheres& s,
                         const SamplingCamera& sc, const glm::dvec3& sun) const;
+  /// The frame's spread (PgmOptions::evenError), uploaded to the grid pass; recomputed only
+  /// when the reference spheres change.
+  void setSpread(PgmFrame& frame, const glm::dvec3& nadir);
   void reduce(const gl::RenderTarget& target, PgmFrame& frame);
   /// The grid stride (1, 2, 4, …) for PgmOptions::minCellPixels; sets frame.cellPixels.
   int gridStride(const clod::Camera& camera, PgmFrame& frame) const;
@@ -175,6 +186,8 @@ class PgmRenderer {
   std::array<double, 2> primaryOf_{0.0, 0.0};
   std::array<gl::Id, 3> timers_{0, 0, 0};  ///< r_p each buffer's frame drew with
   int frameIndex_ = 0;
+  RaySpread spread_;                ///< the last spread computed,
+  ReferenceSpheres spreadSpheres_;  ///< for these spheres
 };
 
 }  // namespace regolith::farfield
