@@ -590,7 +590,7 @@ int main(int argc, char** argv) {
   }
   for (const char* name : {"global", "low"}) {
     for (const bool evenError : {true, false}) {
-      for (const int grid : {64, 96, 128, 256, 512}) {
+      for (const int grid : {40, 64, 96, 128, 256, 512}) {
         const std::string label = std::string("compare/") + name +
                                   (evenError ? "/pgm/grid:" : "/pgm-even/grid:") +
                                   std::to_string(grid) + "/screen:1024";
