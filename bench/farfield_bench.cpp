@@ -35,9 +35,9 @@
 //       the behind-the-horizon band (ω > b, what the occluded-area sampling costs) and the
 //       fraction whose surface point lands outside the view (not pertinent); of a plain grid
 //       over the view frustum, the fraction of rays that miss the body (wasted) and of the
-//       sampling camera's, the same. These are the paper's even grid, before the even-error
-//       spread; spread_us: the spread's table for the view's spheres (computed when they
-//       change), in microseconds.
+//       sampling camera's, the same. These are the paper's even grid; spread_*: the first two
+//       for the grid with the even-error spread of its rays; spread_us: the spread's table
+//       for the view's spheres (computed when they change), in microseconds.
 //
 // Run: build/bench/farfield_bench --benchmark_min_time=5x
 #include <regolith/clod/Camera.hpp>
@@ -294,24 +294,31 @@ void sampling(benchmark::State& state, const std::string& name) {
         std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() /
         kSpreads;
   }
-  // Counters on a 128² grid of each kind (the paper's even grid: no spread).
+  // Counters on a 128² grid of each kind: the paper's even grid, and the same spread.
+  const farfield::RaySpread spread = farfield::evenErrorSpread(s, 256);
   const int n = 128;
   int behind = 0, offScreen = 0, plainMiss = 0, samplingMiss = 0;
+  int spreadBehind = 0, spreadOffScreen = 0;
+  // Whether grid ray r's surface point (on the primary sphere at its blended γ) is off the
+  // screen, and whether r is in the behind-the-horizon band.
+  const auto offTheScreen = [&](const glm::dvec3& r, int& inBand) {
+    const double omega = std::acos(std::clamp(glm::dot(r, nadir), -1.0, 1.0));
+    inBand += omega > s.begin ? 1 : 0;
+    const double gamma = farfield::blendedNormalAngle(s, omega);
+    glm::dvec3 k = r - glm::dot(r, nadir) * nadir;
+    k = glm::length(k) > 1e-12 ? glm::normalize(k) : glm::dvec3(0.0);
+    const glm::dvec3 p = cam.position + farfield::eyeSpacePoint(gamma, d, s.primary, nadir, k);
+    const glm::dvec3 q = cam.project(p);
+    return (q.z <= 0.0 || q.x < 0 || q.y < 0 || q.x > cam.width || q.y > cam.height) ? 1 : 0;
+  };
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
       const double u = i / (n - 1.0), w = j / (n - 1.0);
       const glm::dvec3 r = sc.ray(u, w);
       const double omega = std::acos(std::clamp(glm::dot(r, nadir), -1.0, 1.0));
-      behind += omega > s.begin ? 1 : 0;
       samplingMiss += omega > s.tauTop ? 1 : 0;
-      // The grid point's surface position (on the primary sphere at its blended γ).
-      const double gamma = farfield::blendedNormalAngle(s, omega);
-      glm::dvec3 k = r - glm::dot(r, nadir) * nadir;
-      k = glm::length(k) > 1e-12 ? glm::normalize(k) : glm::dvec3(0.0);
-      const glm::dvec3 p = cam.position + farfield::eyeSpacePoint(gamma, d, s.primary, nadir, k);
-      const glm::dvec3 q = cam.project(p);
-      offScreen +=
-          (q.z <= 0.0 || q.x < 0 || q.y < 0 || q.x > cam.width || q.y > cam.height) ? 1 : 0;
+      offScreen += offTheScreen(r, behind);
+      spreadOffScreen += offTheScreen(spread.ray(r, nadir), spreadBehind);
       // A plain grid over the view frustum.
       const glm::dvec3 pr = cam.ray(u * cam.width, w * cam.height);
       const double om = std::acos(std::clamp(glm::dot(pr, nadir), -1.0, 1.0));
@@ -323,6 +330,8 @@ void sampling(benchmark::State& state, const std::string& name) {
   state.counters["sampling_offscreen_fraction"] = offScreen / total;
   state.counters["sampling_miss_fraction"] = samplingMiss / total;
   state.counters["plain_grid_miss_fraction"] = plainMiss / total;
+  state.counters["spread_behind_horizon_fraction"] = spreadBehind / total;
+  state.counters["spread_offscreen_fraction"] = spreadOffScreen / total;
 }
 
 // ---- PGM against the clipmap-only planet at equal screen-space error ----------------------

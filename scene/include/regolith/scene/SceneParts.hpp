@@ -50,7 +50,8 @@ namespace regolith::scene {
 
 /// The far field's settings for a planet drawn with a terrain's albedo and clod's ambient,
 /// so the clipmap and PGM look alike where they meet (render::SceneRenderer::addFarField):
-/// a 512² grid, thinned while its cells span under 2 pixels (PgmOptions::minCellPixels).
+/// a 256² grid with the even-error spread of its rays, thinned while its cells span under 2
+/// pixels (PgmOptions::minCellPixels).
 [[nodiscard]] farfield::PgmOptions planetFarFieldOptions(const glm::vec3& albedo);
 
 /// A traverse over `dem` that presses the six wheels into `tracks` every
