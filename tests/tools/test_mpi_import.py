@@ -153,6 +153,18 @@ def test_one_raster_is_bit_for_bit_the_single_process_import(sources, codec):
         assert [p.name for p in d.iterdir() if ".parts-" in p.name or ".tmp-" in p.name] == []
 
 
+def test_one_rank_is_the_single_process_import_and_says_it_had_one_rank(sources):
+    d, big, _, _ = sources
+    single, multi = d / "single_np1.h5", d / "multi_np1.h5"
+    opts = ["--patch", "32", "--deflate", "4"]
+    regolith(["import", str(big), "--out", str(single)] + opts)
+    r = mpirun(1, ["import", str(big), "--out", str(multi)] + opts)
+    assert r.returncode == 0, r.stdout + r.stderr
+    # The reason for one part is the one rank (it said "too few rows" before stop 44).
+    assert "one part (one rank), on rank 0 alone" in r.stdout, r.stdout
+    assert_same_store(single, multi)
+
+
 def test_tiles_are_bit_for_bit_the_single_process_import(sources):
     d, _, _, tiles = sources
     # The command line's order is not the tiles' row order: the store keeps the given order.

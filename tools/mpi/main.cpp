@@ -573,8 +573,9 @@ int run(const Args& a, int rank, int size) {
       }
     } else if (status == 0) {
       std::cout << "Wrote " << out.string() << ": grid '" << l.grid << "', one part ("
-                << (l.onePart.empty() ? std::string("too few rows for two bands of patches")
-                                      : l.onePart)
+                << (size == 1           ? std::string("one rank")
+                    : l.onePart.empty() ? std::string("too few rows for two bands of patches")
+                                        : l.onePart)
                 << "), on rank 0 alone, " << seconds(t0) << " seconds\n";
     }
   }
