@@ -12,6 +12,7 @@
 #include <regolith/store/Generate.hpp>
 #include <regolith/store/Pager.hpp>
 #include <regolith/store/Store.hpp>
+#include <regolith/topo/Body.hpp>
 
 #include "CancelOnSignal.hpp"
 #include "Commands.hpp"
@@ -358,6 +359,9 @@ void runMainDemo(const MainDemoOptions& o, std::ostream& out) {
   // The flight starts beyond the north pole and passes over it, and ends where the traverse
   // stopped, with the tracks it left.
   fly.overPole = true;
+  // It begins with an approach from 16 Mars radii, where the far field draws Mars as the
+  // ray-cast impostor, so the flight passes through impostor, PGM and clipmaps.
+  fly.approachFrom = 16.0 * topo::Body::marsEllipsoid().equatorialRadius();
   fly.progress = [&out, every = std::max<std::size_t>(1, o.frames / 6)](int done, int all,
                                                                         const fs::path& path) {
     if (static_cast<std::size_t>(done) % every == 0 || done == all)

@@ -148,6 +148,9 @@ void checkFlyover(const FlyoverOptions& options) {
   if (options.frames < 2)
     throw InvalidArgument("renderFlyover(): " + std::to_string(options.frames) +
                           " frames, expected at least 2");
+  if (!(options.approachFrom >= 0.0) || !std::isfinite(options.approachFrom))
+    throw InvalidArgument("renderFlyover(): approachFrom " + std::to_string(options.approachFrom) +
+                          " m, expected 0 (no approach) or a finite distance");
   if (options.width < 1 || options.height < 1)
     throw InvalidArgument("renderFlyover(): image " + std::to_string(options.width) + "×" +
                           std::to_string(options.height) + ", expected a non-empty image");
@@ -296,8 +299,18 @@ FlyoverSummary renderFlyover(scene::Scene& s, const FlyoverOptions& options) {
     constexpr double kPoleShare = 0.4, kPoleAltitude = 2.0e6;
     const glm::dvec3 meridian(std::cos(lonV * kDeg), std::sin(lonV * kDeg), 0.0);
     double bestLat = -90.0;
+    // The approach (approachFrom): the first tenth of the frames, at least one, and at least
+    // two frames left for the rest.
+    const int approachFrames =
+        options.approachFrom > 0.0
+            ? std::min(std::max(1, static_cast<int>(std::lround(0.1 * options.frames))),
+                       options.frames - 2)
+            : 0;
+    const int restFrames = options.frames - approachFrames;
+    const glm::dvec3 marsCentre = victoriaFromMars.translation;  // in Victoria's frame
     for (int i = 0; i < options.frames; ++i) {
-      const double t = static_cast<double>(i) / (options.frames - 1);
+      const double t =
+          i < approachFrames ? 0.0 : static_cast<double>(i - approachFrames) / (restFrames - 1);
       scenegraph::Pose pose;
       std::optional<glm::dvec3> poleLight;  // in the Mars frame
       if (options.overPole && t < kPoleShare) {
@@ -317,7 +330,7 @@ FlyoverSummary renderFlyover(scene::Scene& s, const FlyoverOptions& options) {
             std::cos(35.0 * kDeg) * glm::normalize(-0.92 * enu[0] + 0.38 * enu[1]) +
             std::sin(35.0 * kDeg) * enu[2];
         poleLight = glm::normalize(glm::mix(sky, lightIn(marsNode), t / kPoleShare));
-        if (lat > bestLat) {
+        if (lat > bestLat && i >= approachFrames) {
           bestLat = lat;
           summary.poleFrame = i;
           summary.poleLatitude = lat;
@@ -325,6 +338,18 @@ FlyoverSummary renderFlyover(scene::Scene& s, const FlyoverOptions& options) {
       } else {
         const double u = options.overPole ? (t - kPoleShare) / (1.0 - kPoleShare) : t;
         pose = flyoverCamera(u, rover, options.overPole ? kPoleAltitude : 8.0e6);
+      }
+      if (i < approachFrames) {
+        // Back along the first pose's view, to a distance from Mars's centre log-spaced from
+        // approachFrom down to the first pose's: |w − k·f| = D, w = eye − centre.
+        const glm::dvec3 f = pose.applyVector(glm::dvec3(0.0, 0.0, -1.0));
+        const glm::dvec3 w = pose.translation - marsCentre;
+        const double near = glm::length(w), far = std::max(options.approachFrom, near);
+        const double a = static_cast<double>(i) / approachFrames;
+        const double dist = std::exp(std::log(far) + a * (std::log(near) - std::log(far)));
+        const double wf = glm::dot(w, f);
+        pose.translation -=
+            (wf + std::sqrt(std::max(wf * wf - glm::dot(w, w) + dist * dist, 0.0))) * f;
       }
       g.setLocal(cam, pose);
       const double dist = glm::length(pose.translation - rover);

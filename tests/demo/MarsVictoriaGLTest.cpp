@@ -7,6 +7,7 @@
 #include <regolith/rover/TrackLayer.hpp>
 #include <regolith/scene/Scene.hpp>
 #include <regolith/store/Generate.hpp>
+#include <regolith/topo/Body.hpp>
 
 #include "gl/GlContext.hpp"
 
@@ -75,6 +76,62 @@ TEST(MarsVictoriaGLTest, FlyoverGoesFromMarsWholeToTheRover) {
   const auto* ground = last.pixel(48, 60);
   EXPECT_GT(ground[1], ground[0]);
   std::filesystem::remove_all(dir);
+}
+
+// The approach from 16 Mars radii (FlyoverOptions::approachFrom): the first frame is beyond
+// PGM's reach and draws Mars as the ray-cast impostor, a disc of the size the ellipsoid
+// subtends from there; the frames after it are PGM's and the clipmaps'.
+TEST(MarsVictoriaGLTest, AnApproachFromFarDrawsMarsAsTheImpostorFirst) {
+  test::glContext();
+  const auto dir = std::filesystem::path(::testing::TempDir()) / "regolith_flyover_approach";
+  std::filesystem::remove_all(dir);
+  FlyoverOptions o;
+  o.outputDir = dir;
+  o.frames = 5;
+  o.width = 384;
+  o.height = 256;
+  o.multiView = false;
+  o.overPole = true;
+  o.scene = small();
+  const topo::Body mars = topo::Body::marsEllipsoid();
+  o.approachFrom = 16.0 * mars.equatorialRadius();
+  const FlyoverSummary s = renderFlyover(o);
+  std::printf("approach: impostor %d, PGM %d, covered %d of 5 frames; pole frame %d\n",
+              s.impostorFrames, s.farFieldFrames, s.coveredFrames, s.poleFrame);
+  EXPECT_EQ(s.impostorFrames, 1);  // 5 frames: the approach is frame 0
+  EXPECT_GE(s.farFieldFrames, 1);
+  EXPECT_EQ(s.impostorFrames + s.farFieldFrames + s.coveredFrames, 5);
+  EXPECT_GE(s.poleFrame, 1);  // the pole pass comes after the approach
+  // Frame 0: Mars's disc against the ellipsoid's apparent size from 16 a (the mean of its
+  // radii; relief and flattening move the area by under 2 %), within the limb's pixels.
+  const gl::RgbaImage first = gl::readPng(s.files.front().string());
+  int disc = 0;
+  for (int y = 0; y < first.height; ++y) {
+    for (int x = 0; x < first.width; ++x) disc += first.is(x, y, 5, 5, 10) ? 0 : 1;
+  }
+  const double r = 0.5 * (mars.equatorialRadius() + mars.polarRadius());
+  const double focal = 0.5 * o.height / std::tan(22.5 * 3.14159265358979 / 180.0);
+  const double radiusPx = focal * std::tan(std::asin(r / o.approachFrom));
+  const double expected = 3.14159265358979 * radiusPx * radiusPx;
+  std::printf("approach frame 0: %d disc pixels, %.0f expected (radius %.1f px)\n", disc, expected,
+              radiusPx);
+  EXPECT_NEAR(disc, expected, 2.0 * 3.14159265358979 * radiusPx);  // one limb's width
+  std::filesystem::remove_all(dir);
+}
+
+TEST(MarsVictoriaGLTest, ApproachFromMustBeADistance) {
+  FlyoverOptions o;
+  o.scene = small();
+  for (const double bad : {-1.0, std::nan("")}) {
+    o.approachFrom = bad;
+    try {
+      (void)renderFlyover(o);
+      ADD_FAILURE() << "no error for " << bad;
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find("renderFlyover(): approachFrom"), std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 // The far field draws Mars beyond the planet clipmap, which keeps only its levels of at most

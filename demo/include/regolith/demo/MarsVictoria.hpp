@@ -99,6 +99,13 @@ struct FlyoverOptions {
   /// Begin over the north pole: the first 40% of the frames fly from 2000 km above the pole
   /// along Victoria's meridian to 2000 km above Victoria, then descend as without it.
   bool overPole = false;
+  /// Begin with an approach from this far from Mars's centre (metres; 0: none): the first
+  /// tenth of the frames (at least one, leaving at least two) fly in along the first pose's
+  /// view, log-spaced in distance, to that pose. From beyond about 10.5 Mars radii, where
+  /// PGM's secondary sphere vanishes, the first frame draws Mars as the ray-cast impostor,
+  /// so the fly-over passes through all three of the far field's renderers: impostor, PGM,
+  /// clipmaps (docs/far-field.md). InvalidArgument if negative or not finite.
+  double approachFrom = 0.0;
   /// Called after each frame with (frames written, frames in all, path).
   std::function<void(int, int, const std::filesystem::path&)> progress;
 };
