@@ -176,7 +176,16 @@ TEST(PgmMath, SamplingCameraCoversEveryPertinentRayOfTheView) {
                   y <= cam.top + eps)
           << "trial " << trial << " altitude " << altitude;
     }
-    // The nadir is always sampled.
+    // holds(): the grid's own rays, inside and on the edges, and not beyond them or behind.
+    EXPECT_TRUE(cam.holds(cam.ray(0.5, 0.5)) && cam.holds(cam.ray(0.0, 1.0)) &&
+                cam.holds(cam.ray(1.0, 0.0)))
+        << trial;
+    EXPECT_FALSE(cam.holds(cam.ray(-0.01, 0.5)) || cam.holds(cam.ray(0.5, 1.01)) ||
+                 cam.holds(-cam.forward))
+        << trial;
+    // The nadir is always sampled, so the even-error spread is never turned off
+    // (PgmRenderer draws a frame whose grid does not hold the nadir without it).
+    EXPECT_TRUE(cam.holds(nadir)) << trial;
     const double zn = glm::dot(nadir, cam.forward);
     if (zn > std::cos(1.45)) {
       const double xn = glm::dot(nadir, cam.rightAxis) / zn, yn = glm::dot(nadir, cam.up) / zn;

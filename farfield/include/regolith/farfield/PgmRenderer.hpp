@@ -41,8 +41,9 @@ struct PgmOptions {
   /// Spread the grid's rays for an even screen-space error (RaySpread, docs/far-field.md):
   /// the paper's grid is even in the sampling camera's image plane and coarsest on the
   /// ground at the limb; the spread moves its rows towards the limb and the horizon. Off:
-  /// the paper's even grid. Frames whose sampling frustum does not hold the nadir (only
-  /// views looking nearly along the horizontal plane or away) are drawn without it.
+  /// the paper's even grid. A frame whose sampling frustum did not hold the nadir would be
+  /// drawn without it (the spread keeps the grid's coverage only about a nadir it holds);
+  /// the sampling camera includes the nadir, and no view tested has left it out.
   bool evenError = true;
   /// Mip bias of the height lookups (0: one layer texel per grid step).
   float lodBias = 0.0F;
