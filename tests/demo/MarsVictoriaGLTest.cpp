@@ -36,16 +36,22 @@ MarsVictoriaOptions small() {
   return o;
 }
 
-TEST(MarsVictoriaGLTest, FlyoverGoesFromMarsWholeToTheRover) {
+/// A five-frame fly-over of small() into a fresh temporary folder.
+FlyoverOptions fiveFrames(const char* folder, int width, int height) {
   test::glContext();
-  const auto dir = std::filesystem::path(::testing::TempDir()) / "regolith_flyover_test";
-  std::filesystem::remove_all(dir);
   FlyoverOptions o;
-  o.outputDir = dir;
+  o.outputDir = std::filesystem::path(::testing::TempDir()) / folder;
+  std::filesystem::remove_all(o.outputDir);
   o.frames = 5;
-  o.width = 96;
-  o.height = 64;
+  o.width = width;
+  o.height = height;
   o.scene = small();
+  return o;
+}
+
+TEST(MarsVictoriaGLTest, FlyoverGoesFromMarsWholeToTheRover) {
+  FlyoverOptions o = fiveFrames("regolith_flyover_test", 96, 64);
+  const std::filesystem::path dir = o.outputDir;
   int calls = 0;
   o.progress = [&](int done, int all, const std::filesystem::path& p) {
     ++calls;
@@ -82,17 +88,10 @@ TEST(MarsVictoriaGLTest, FlyoverGoesFromMarsWholeToTheRover) {
 // PGM's reach and draws Mars as the ray-cast impostor, a disc of the size the ellipsoid
 // subtends from there; the frames after it are PGM's and the clipmaps'.
 TEST(MarsVictoriaGLTest, AnApproachFromFarDrawsMarsAsTheImpostorFirst) {
-  test::glContext();
-  const auto dir = std::filesystem::path(::testing::TempDir()) / "regolith_flyover_approach";
-  std::filesystem::remove_all(dir);
-  FlyoverOptions o;
-  o.outputDir = dir;
-  o.frames = 5;
-  o.width = 384;
-  o.height = 256;
+  FlyoverOptions o = fiveFrames("regolith_flyover_approach", 384, 256);
+  const std::filesystem::path dir = o.outputDir;
   o.multiView = false;
   o.overPole = true;
-  o.scene = small();
   const topo::Body mars = topo::Body::marsEllipsoid();
   o.approachFrom = 16.0 * mars.equatorialRadius();
   const FlyoverSummary s = renderFlyover(o);
