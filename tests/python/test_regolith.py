@@ -733,3 +733,20 @@ def test_render_flyover_writes_every_frame(tmp_path):
     assert 0.0 < s["render_seconds"] <= s["seconds"]
     with pytest.raises(regolith.InvalidArgument, match="frames"):
         regolith.render_flyover(tmp_path / "none", frames=1)
+
+
+def test_render_flyover_takes_the_demos_pole_pass_and_approach(tmp_path):
+    small = {k: SMALL_SCENE[k] for k in ("planet_rows", "dem_size", "dem_spacing",
+                                         "clipmap_size")}
+    # From 16 Mars radii, as `regolith demo`: 5 frames, the first the approach's.
+    s = regolith.render_flyover(tmp_path / "fly", frames=5, width=96, height=54,
+                                over_pole=True, approach_from=16 * 3396190.0, **small)
+    assert s["impostor_frames"] == 1, s
+    assert s["far_field_frames"] >= 1, s
+    assert s["impostor_frames"] + s["far_field_frames"] + s["covered_frames"] == 5, s
+    assert s["start_distance"] > 15 * 3396190.0 - 3396190.0 - 10000.0, s
+    # Without them the flight starts 8000 km from the rover and never needs the impostor.
+    plain = regolith.render_flyover(tmp_path / "plain", frames=5, width=96, height=54, **small)
+    assert plain["impostor_frames"] == 0 and abs(plain["start_distance"] - 8.0e6) < 1.0, plain
+    with pytest.raises(regolith.InvalidArgument, match="approachFrom"):
+        regolith.render_flyover(tmp_path / "bad", frames=3, approach_from=-1.0)

@@ -268,12 +268,15 @@ void bindScene(py::module_& m) {
       [](const std::filesystem::path& outDir, int frames, int width, int height,
          std::optional<std::filesystem::path> marsStore,
          std::optional<std::filesystem::path> victoriaStore, std::size_t planetRows,
-         std::size_t demSize, double demSpacing, int clipmapSize) {
+         std::size_t demSize, double demSpacing, int clipmapSize, bool overPole,
+         double approachFrom) {
         demo::FlyoverOptions o;
         o.outputDir = outDir;
         o.frames = frames;
         o.width = width;
         o.height = height;
+        o.overPole = overPole;
+        o.approachFrom = approachFrom;
         o.scene =
             sceneOptions(marsStore, victoriaStore, planetRows, demSize, demSpacing, clipmapSize);
         demo::FlyoverSummary s;
@@ -289,14 +292,22 @@ void bindScene(py::module_& m) {
         d["focus_switch_frame"] = s.focusSwitchFrame;
         d["start_distance"] = s.startDistance;
         d["end_distance"] = s.endDistance;
+        d["far_field_frames"] = s.farFieldFrames;
+        d["impostor_frames"] = s.impostorFrames;
+        d["covered_frames"] = s.coveredFrames;
         return d;
       },
       py::arg("out_dir"), py::arg("frames") = 24, py::arg("width") = 480, py::arg("height") = 270,
       py::arg("mars_store") = py::none(), py::arg("victoria_store") = py::none(),
       py::arg("planet_rows") = 360, py::arg("dem_size") = 601, py::arg("dem_spacing") = 2.0,
-      py::arg("clipmap_size") = 127,
+      py::arg("clipmap_size") = 127, py::arg("over_pole") = false, py::arg("approach_from") = 0.0,
       "Renders the fly-over from orbit down to the rover (demo::renderFlyover) as "
-      "frame_NNNN.png files and multiview.png in out_dir; returns a summary dict.");
+      "frame_NNNN.png files and multiview.png in out_dir; returns a summary dict. over_pole: "
+      "begin with the pass over the north pole at 2000 km; approach_from: begin with an "
+      "approach from this many metres from Mars's centre (0: none; `regolith demo` takes both, "
+      "from 16 Mars radii, where the far field draws Mars as the ray-cast impostor). The "
+      "summary counts the frames the far field drew by PGM (far_field_frames), by the "
+      "impostor (impostor_frames) and left to the clipmaps (covered_frames).");
 }
 
 }  // namespace regolith::python
