@@ -17,7 +17,7 @@
 //       Counters: grid_drawn (the side of the grid drawn), cell_px (the full grid's largest
 //       cell on the screen).
 //   compare/<view>/pgm/grid:<G>, compare/<view>/clipmap/size:<N>   PGM (layers 4096 wide,
-//       the even-error spread of its rays on; pgm-even: off, the paper's even grid)
+//       the even-error spread of its rays on; pgm-paper: off, the paper's even grid)
 //       against the clipmap-only planet (a global 4096 × 2048 pyramid of the same relief,
 //       every level, focused below the eye) for the same view on a 1024² screen. Counters:
 //       the screen-space error against the relief function itself, in double, on every
@@ -416,7 +416,7 @@ void comparePgm(benchmark::State& state, const std::string& name, int grid, int 
   }
   glFinish();
   setCompareCounters(state, truthError(v.camera, target.readDepth()));
-  savePngIfAsked("compare_" + name + (evenError ? "_pgm_" : "_pgm-even_") + std::to_string(grid),
+  savePngIfAsked("compare_" + name + (evenError ? "_pgm_" : "_pgm-paper_") + std::to_string(grid),
                  target);
   for (auto _ : state) {
     target.clear({0.0F, 0.0F, 0.0F, 1.0F});
@@ -601,7 +601,7 @@ int main(int argc, char** argv) {
     for (const bool evenError : {true, false}) {
       for (const int grid : {40, 64, 96, 128, 256, 512}) {
         const std::string label = std::string("compare/") + name +
-                                  (evenError ? "/pgm/grid:" : "/pgm-even/grid:") +
+                                  (evenError ? "/pgm/grid:" : "/pgm-paper/grid:") +
                                   std::to_string(grid) + "/screen:1024";
         benchmark::RegisterBenchmark(
             label.c_str(), [=](benchmark::State& s) { comparePgm(s, name, grid, 1024, evenError); })
