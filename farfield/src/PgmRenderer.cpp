@@ -343,8 +343,7 @@ void PgmRenderer::setSpread(PgmFrame& frame, const glm::dvec3& nadir) {
       std::array<float, kSpreadEntries> table{};
       std::transform(spread_.table.begin(), spread_.table.end(), table.begin(),
                      [](double w) { return static_cast<float>(w); });
-      glProgramUniform1fv(grid_.id(), glGetUniformLocation(grid_.id(), "uSpread"), kSpreadEntries,
-                          table.data());
+      glProgramUniform1fv(grid_.id(), grid_.uniform("uSpread"), kSpreadEntries, table.data());
     }
   }
   grid_.set("uSpreadOn", spread_.active() ? 1 : 0);
