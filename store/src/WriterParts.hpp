@@ -114,17 +114,23 @@ class LevelWriter {
  public:
   LevelWriter(hid_t group, const GridInfo& info, std::size_t level, const WriteOptions& o,
               const Context& ctx)
-      : LevelWriter(group, info, format::levelName(level),
-                    {info.levelRows(level), info.levelCols(level)}, format::chunkShape(info, level),
-                    o, ctx) {}
+      : LevelWriter(
+            group, info, format::levelName(level), {info.levelRows(level), info.levelCols(level)},
+            format::chunkShape(info, level), o, ctx,
+            // WriteOptions::reserveRows, halved as the grid's rows are.
+            std::max<std::size_t>(info.levelRows(level),
+                                  (o.reserveRows + (std::size_t{1} << level) - 1) >> level)) {}
 
+  /// maxRows: the dataset's maximum rows (0: its rows).
   LevelWriter(hid_t group, const GridInfo& info, std::string name,
               const std::array<hsize_t, 2>& shape, const std::array<hsize_t, 2>& chunk,
-              const WriteOptions& o, const Context& ctx)
+              const WriteOptions& o, const Context& ctx, std::size_t maxRows = 0)
       : info_(info), ctx_(ctx), name_(std::move(name)) {
     const hdf5::Lock lock;
     const std::string what = "cannot create grid '" + info.name + "' dataset '" + name_ + "'";
-    const hdf5::Dataspace space(hdf5::check(H5Screate_simple(2, shape.data(), nullptr), ctx, what));
+    const std::array<hsize_t, 2> maxShape{std::max<hsize_t>(shape[0], maxRows), shape[1]};
+    const hdf5::Dataspace space(
+        hdf5::check(H5Screate_simple(2, shape.data(), maxShape.data()), ctx, what));
     const hdf5::PropertyList dcpl(hdf5::check(H5Pcreate(H5P_DATASET_CREATE), ctx, what));
     hdf5::check(H5Pset_chunk(dcpl.get(), 2, chunk.data()), ctx, what);
     // No modification times in object headers: rewriting the same input changes no content.

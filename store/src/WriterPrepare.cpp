@@ -127,6 +127,14 @@ Prepared prepare(const GridSource& src, const WriteOptions& o,
   const bool tiled = !src.tiles.empty();
   if (tiled && src.samples) invalid(ctx, owner + " has both samples and tiles, expected one");
   if (!tiled && !src.samples) invalid(ctx, owner + " has no samples");
+  if (tiled && o.reserveRows > 0) {
+    invalid(ctx, owner + " is tiled, but options.reserveRows is " + std::to_string(o.reserveRows) +
+                     ", expected 0 (only a plain grid may grow)");
+  }
+  if (o.reserveRows > kMaxGridSide) {
+    invalid(ctx, "options.reserveRows is " + std::to_string(o.reserveRows) + ", expected at most " +
+                     std::to_string(kMaxGridSide) + " (the limit of docs/store-format.md)");
+  }
   if (info.rows == 0 || info.cols == 0) {
     invalid(ctx, owner + " has " + std::to_string(info.rows) + "x" + std::to_string(info.cols) +
                      " samples, expected both > 0");

@@ -413,6 +413,78 @@ TEST(StoreWriter, DeflateIsRecordedAsAFilterAndReadsBackTheSame) {
   expectSameHeights(readLevel(s, "crater", 0), tabulate(37, 53, crater), "level 0");
 }
 
+// regolith-mpi's rank 0 writes its band with room for the whole grid, and the join grows it in
+// place (docs/scale.md, "Stop 45"): each level's maximum rows are the reserve halved as its rows
+// are, nothing else changes, and HDF5 lets the level grow to exactly that and no further.
+TEST(StoreWriter, ReserveRowsLetsEachLevelGrowInPlaceToTheReservedGrid) {
+  const fs::path p = scratch("reserve.h5"), plain = scratch("reserve-plain.h5");
+  const std::vector<GridSource> grids{source(demInfo("crater", 37, 53), crater)};
+  WriteOptions o;
+  o.patchRows = o.patchCols = 16;
+  o.levels = 3;
+  o.deflate = 4;
+  writeStore(plain, grids, o);
+  o.reserveRows = 100;
+  writeStore(p, grids, o);
+  const auto shape = [](const fs::path& f, std::size_t level) {
+    const H5 file(H5Fopen(f.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+    const std::string name = "/grids/crater/level" + std::to_string(level);
+    const H5 ds(H5Dopen2(file, name.c_str(), H5P_DEFAULT), H5Dclose);
+    const H5 space(H5Dget_space(ds), H5Sclose);
+    std::array<hsize_t, 4> dims{};  // rows, cols, max rows, max cols
+    EXPECT_EQ(H5Sget_simple_extent_dims(space, dims.data(), dims.data() + 2), 2);
+    return dims;
+  };
+  const std::array<hsize_t, 3> rows{37, 19, 10}, cols{53, 27, 14}, maxRows{100, 50, 25};
+  for (std::size_t k = 0; k < 3; ++k) {
+    const auto d = shape(p, k), q = shape(plain, k);
+    EXPECT_EQ(d[0], rows[k]) << "level " << k;
+    EXPECT_EQ(d[1], cols[k]) << "level " << k;
+    EXPECT_EQ(d[2], maxRows[k]) << "level " << k;
+    EXPECT_EQ(d[3], cols[k]) << "level " << k;
+    EXPECT_EQ(q[2], rows[k]) << "level " << k << " without a reserve: fixed";
+    EXPECT_EQ(q[3], cols[k]) << "level " << k << " without a reserve: fixed";
+  }
+  {  // The same samples on every level as without the reserve.
+    const Store a = Store::open(p), b = Store::open(plain);
+    for (std::size_t k = 0; k < 3; ++k) {
+      expectSameHeights(readLevel(a, "crater", k), readLevel(b, "crater", k),
+                        "level " + std::to_string(k));
+    }
+  }
+  {  // HDF5 grows level 1 to 50 rows, and refuses 51.
+    const H5 file(H5Fopen(p.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose);
+    const H5 ds(H5Dopen2(file, "/grids/crater/level1", H5P_DEFAULT), H5Dclose);
+    std::array<hsize_t, 2> to{50, 27};
+    EXPECT_GE(H5Dset_extent(ds, to.data()), 0);
+    to[0] = 51;
+    H5E_BEGIN_TRY { EXPECT_LT(H5Dset_extent(ds, to.data()), 0); }
+    H5E_END_TRY;
+  }
+  // A reserve past the format's limit, or on a tiled grid, is refused before any file is made.
+  WriteOptions big = o;
+  big.reserveRows = kMaxGridSide + 1;
+  const fs::path refused = scratch("reserve-refused.h5");
+  try {
+    writeStore(refused, grids, big);
+    ADD_FAILURE() << "a reserve past kMaxGridSide was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("options.reserveRows"), std::string::npos) << e.what();
+  }
+  GridSource tiled;
+  tiled.info = demInfo("mosaic", 32, 32);
+  tiled.tiles.push_back({0, 0, topo::InMemorySamples::fromFunction(32, 32, crater), {}, {}});
+  try {
+    writeStore(refused, std::vector<GridSource>{tiled}, o);
+    ADD_FAILURE() << "a reserve on a tiled grid was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("is tiled, but options.reserveRows is 100"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(fs::exists(refused));
+}
+
 TEST(StoreWriter, ZfpCodecIsLosslessOnEveryLevelWithNanOddSizesAndThinGrids) {
   // Every level of every grid reads back bit for bit as from an uncompressed store: NaN
   // holes, odd sizes (partial chunks), and chunks with a dimension of 1, which H5Z-ZFP

@@ -112,7 +112,14 @@ def assert_same_store(single, multi):
 
 def compare_dataset(da, db, what):
     assert da.shape == db.shape, what
+    # The first part grows into the store (H5Dset_extent): its maximum shape must end as the
+    # grid's, as the single-process writer's.
+    assert da.maxshape == db.maxshape, f"{what}: maxshape {da.maxshape} vs {db.maxshape}"
     assert da.chunks == db.chunks, what
+    assert da.fillvalue.tobytes() == db.fillvalue.tobytes(), what
+    assert attrs(da).keys() == attrs(db).keys(), what
+    for k in attrs(da):
+        assert same_value(da.attrs[k], db.attrs[k]), f"{what} attribute {k}"
     pa, pb = da.id.get_create_plist(), db.id.get_create_plist()
     assert pa.get_nfilters() == pb.get_nfilters(), what
     for i in range(pa.get_nfilters()):
@@ -163,6 +170,37 @@ def test_one_rank_is_the_single_process_import_and_says_it_had_one_rank(sources)
     # The reason for one part is the one rank (it said "too few rows" before stop 44).
     assert "one part (one rank), on rank 0 alone" in r.stdout, r.stdout
     assert_same_store(single, multi)
+
+
+def test_a_one_node_job_asks_openmpi_for_shared_memory_unless_a_pml_was_chosen(sources):
+    """Every rank on one node: regolith-mpi asks OpenMPI for its ob1 point-to-point layer before
+    MPI_Init, so that OpenMPI does not load and probe its cm layer's fabrics (docs/scale.md,
+    "Stop 45"). OpenMPI's own verbose output is the oracle of what it loaded. A pml the user
+    chose (OMPI_MCA_pml, as `mpirun --mca pml` sets it) is kept, and the store is the same."""
+    d, big, _, _ = sources
+    opts = ["--patch", "32", "--deflate", "4"]
+    verbose = {"OMPI_MCA_pml_base_verbose": "100", "OMPI_MCA_mtl_base_verbose": "100"}
+    ours, theirs = d / "pml_ob1.h5", d / "pml_chosen.h5"
+    r = mpirun(2, ["import", str(big), "--out", str(ours)] + opts, env=verbose)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "pml ob1 (every rank on one node)" in r.stdout, r.stdout
+    assert "initializing pml component ob1" in r.stderr, r.stderr[-3000:]
+    assert "component cm" not in r.stderr and "mtl components" not in r.stderr, r.stderr[-3000:]
+    # The user's choice: anything but UCX, so OpenMPI tries cm (and its fabrics) first.
+    r = mpirun(2, ["import", str(big), "--out", str(theirs)] + opts,
+               env=dict(verbose, OMPI_MCA_pml="^ucx"))
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "pml ^ucx, as OMPI_MCA_pml set it" in r.stdout, r.stdout
+    assert "component cm" in r.stderr, r.stderr[-3000:]
+    assert_same_store(ours, theirs)
+    # Started without mpirun (a singleton), OpenMPI chooses as it always does.
+    single = d / "pml_singleton.h5"
+    e = {k: v for k, v in os.environ.items() if not k.startswith("OMPI_")}
+    r = subprocess.run([REGOLITH_MPI, "import", str(big), "--out", str(single)] + opts,
+                       capture_output=True, text=True, timeout=120, env=e)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "OpenMPI's choice (not started by its mpirun)" in r.stdout, r.stdout
+    assert_same_store(ours, single)
 
 
 def test_tiles_are_bit_for_bit_the_single_process_import(sources):

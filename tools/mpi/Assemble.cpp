@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -247,30 +248,55 @@ std::filesystem::path writeCoarseLevels(const Assembly& a) {
 
 }  // namespace
 
-void assemble(const Assembly& a) {
+JoinSeconds assemble(const Assembly& a) {
+  JoinSeconds js;
+  auto lapStart = std::chrono::steady_clock::now();
+  const auto lap = [&lapStart]() {
+    const auto now = std::chrono::steady_clock::now();
+    return std::chrono::duration<double>(now - std::exchange(lapStart, now)).count();
+  };
   const bool tiled = !a.partTiles.empty();
   const std::size_t top = a.plan.partTop;
   std::filesystem::path coarse;
   if (a.levels > top + 1) coarse = writeCoarseLevels(a);
-  std::vector<Id> parts;
-  for (const auto& p : a.parts) {
-    parts.push_back(
-        file(H5Fopen(p.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), "cannot open " + p.string()));
+  js.coarse = lap();
+  const bool grow = a.growFirst && !tiled;
+  std::vector<Id> parts;  // grow: the first stays closed, to become the store
+  for (std::size_t p = 0; p < a.parts.size(); ++p) {
+    if (grow && p == 0) {
+      parts.emplace_back();
+      continue;
+    }
+    parts.push_back(file(H5Fopen(a.parts[p].c_str(), H5F_ACC_RDONLY, H5P_DEFAULT),
+                         "cannot open " + a.parts[p].string()));
   }
   const std::string gridPath = "/grids/" + a.grid;
   const auto write = [&](const std::filesystem::path& tmp) {
     const std::string w = "cannot create " + tmp.string();
     const Id fapl = plist(H5Pcreate(H5P_FILE_ACCESS), w);
     check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18), w);
-    const Id out = file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), w);
-    {
-      const Id from = group(H5Gopen2(parts.front().get(), "/", H5P_DEFAULT), w);
-      const Id to = group(H5Gopen2(out.get(), "/", H5P_DEFAULT), w);
-      copyAttributes(from.get(), to.get(), "the root group");
-    }
-    const Id grids = newGroup(out.get(), "grids");
-    const Id g = newGroup(grids.get(), a.grid);
-    {
+    Id out, g;
+    if (grow) {
+      // The first part's root and grid attributes are the store's (its band starts at row 0);
+      // those that depend on the whole grid are set below.
+      std::error_code ec;
+      std::filesystem::rename(a.parts.front(), tmp, ec);
+      if (ec) {
+        throw store::StoreError("regolith-mpi: assemble: cannot move " + a.parts.front().string() +
+                                " to " + tmp.string() + ": " + ec.message());
+      }
+      out = file(H5Fopen(tmp.c_str(), H5F_ACC_RDWR, fapl.get()), "cannot open " + tmp.string());
+      g = group(H5Gopen2(out.get(), gridPath.c_str(), H5P_DEFAULT),
+                "cannot open " + gridPath + " of " + tmp.string());
+    } else {
+      out = file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), w);
+      {
+        const Id from = group(H5Gopen2(parts.front().get(), "/", H5P_DEFAULT), w);
+        const Id to = group(H5Gopen2(out.get(), "/", H5P_DEFAULT), w);
+        copyAttributes(from.get(), to.get(), "the root group");
+      }
+      const Id grids = newGroup(out.get(), "grids");
+      g = newGroup(grids.get(), a.grid);
       const Id from = group(H5Gopen2(parts.front().get(), gridPath.c_str(), H5P_DEFAULT),
                             "cannot open " + gridPath + " of " + a.parts.front().string());
       copyAttributes(from.get(), g.get(), gridPath);
@@ -333,14 +359,25 @@ void assemble(const Assembly& a) {
       from += '/';
       from += name;
       std::vector<Id> sources;
-      for (std::size_t p = 0; p < parts.size(); ++p) {
+      for (std::size_t p = grow ? 1 : 0; p < parts.size(); ++p) {
         sources.push_back(dataset(H5Dopen2(parts[p].get(), from.c_str(), H5P_DEFAULT),
                                   "cannot open " + from + " of " + a.parts[p].string()));
       }
-      const Id d = levelLike(g.get(), name, sources.front().get(), levelSide(a.rows, k),
-                             levelSide(a.cols, k));
-      for (std::size_t p = 0; p < parts.size(); ++p) {
-        copyChunks(sources[p].get(), d.get(), a.plan.parts[p].row0 >> k,
+      Id d;
+      if (grow) {
+        // The first part's dataset, its maximum rows the grid's: grown to the grid's rows.
+        d = dataset(H5Dopen2(g.get(), name.c_str(), H5P_DEFAULT),
+                    "cannot open " + from + " of " + tmp.string());
+        const std::array<hsize_t, 2> dims{levelSide(a.rows, k), levelSide(a.cols, k)};
+        check(H5Dset_extent(d.get(), dims.data()),
+              "cannot extend " + from + " of " + tmp.string() + " to " + std::to_string(dims[0]) +
+                  "x" + std::to_string(dims[1]) + " (was the first part written with room?)");
+      } else {
+        d = levelLike(g.get(), name, sources.front().get(), levelSide(a.rows, k),
+                      levelSide(a.cols, k));
+      }
+      for (std::size_t p = grow ? 1 : 0; p < parts.size(); ++p) {
+        copyChunks(sources[p - (grow ? 1 : 0)].get(), d.get(), a.plan.parts[p].row0 >> k,
                    from + " of " + a.parts[p].string());
       }
     }
@@ -357,17 +394,23 @@ void assemble(const Assembly& a) {
         copyChunks(s.get(), d.get(), 0, from + " of " + coarse.string());
       }
     }
+    js.copies = lap();
     if (a.lateProvenance) {
       // The chunks reach the disk while the provenance is awaited; the sync after the rename
       // then writes little more than the attribute.
       check(H5Fflush(out.get(), H5F_SCOPE_GLOBAL), "cannot flush " + tmp.string());
       core::syncFile(tmp, "regolith-mpi import");
-      setText(g.get(), "provenance", a.lateProvenance(), what);
+      js.sync = lap();
+      const std::string provenance = a.lateProvenance();
+      js.wait = lap();
+      setText(g.get(), "provenance", provenance, what);
     }
     check(H5Fflush(out.get(), H5F_SCOPE_GLOBAL), "cannot flush " + tmp.string());
   };
   core::writeFileAtomically(a.out, write, "regolith-mpi import");
   if (!coarse.empty()) std::filesystem::remove(coarse);
+  js.finish = lap();
+  return js;
 }
 
 }  // namespace regolith::tools::mpi

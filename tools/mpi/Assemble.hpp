@@ -34,11 +34,25 @@ struct Assembly {
   /// (a single raster: another rank takes the source's digests meanwhile). May throw; the
   /// store is then not written.
   std::function<std::string()> lateProvenance;
+  /// An untiled grid whose first part was written with room for the whole grid
+  /// (store::WriteOptions::reserveRows = rows): that part becomes the store, moved to the
+  /// target's temporary and extended in place, and only the other parts' chunks are copied
+  /// (docs/scale.md, "Stop 45"). The first part is gone after assemble(), joined or not.
+  bool growFirst = false;
   /// Threads for the coarse levels (0: all).
   unsigned threads = 0;
 };
 
+/// Where the join's time went, in seconds (the summary's `joining:` line).
+struct JoinSeconds {
+  double coarse = 0.0;  // the levels above the parts'
+  double copies = 0.0;  // the parts' chunks copied (and the first part grown)
+  double sync = 0.0;    // the chunks synced to the disk, with lateProvenance
+  double wait = 0.0;    // lateProvenance, after the sync
+  double finish = 0.0;  // the provenance written, the last sync, the rename
+};
+
 /// Writes the store (core::writeFileAtomically). Throws regolith::Error naming the file.
-void assemble(const Assembly& a);
+JoinSeconds assemble(const Assembly& a);
 
 }  // namespace regolith::tools::mpi

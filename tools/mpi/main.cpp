@@ -349,6 +349,8 @@ std::vector<store::BlockStatistics> importPart(const Args& a, const store::Impor
   const PartRows& part = l.plan.parts[p];
   if (l.tiles.empty()) {
     o.window = store::SampleWindow{part.row0, 0, part.row1 - part.row0, l.cols};
+    // The first band becomes the store, grown to the whole grid by the join (Assembly).
+    if (p == 0) o.reserveRows = l.rows;
     (void)store::importRaster(a.sources.front(), path, o);
   } else {
     std::vector<fs::path> tiles;
@@ -375,7 +377,33 @@ std::string digestSource(const Args& a, const store::ImportOptions& o) {
   }
 }
 
-int run(const Args& a, int rank, int size) {
+/// Before MPI_Init: where every rank of the job runs on this node (OpenMPI's launcher gives
+/// OMPI_COMM_WORLD_LOCAL_SIZE and OMPI_COMM_WORLD_SIZE) and nobody chose a point-to-point layer
+/// (OMPI_MCA_pml, which `mpirun --mca pml X` sets too), asks OpenMPI for ob1, whose
+/// shared-memory transport (vader) carries one node's messages. Left to choose, Debian's
+/// OpenMPI 4.1 first tries its cm layer, loading and probing the PSM, PSM2 and libfabric
+/// fabrics: 0.2 s of every rank's MPI_Init on a node that has none (docs/scale.md, "Stop
+/// 45"). Across nodes OpenMPI chooses, as before. Returns what the summary says of it.
+std::string choosePointToPoint() {
+  if (const char* chosen = std::getenv("OMPI_MCA_pml"); chosen != nullptr) {
+    return std::string("pml ") + chosen + ", as OMPI_MCA_pml set it";
+  }
+  const char* local = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE");
+  const char* world = std::getenv("OMPI_COMM_WORLD_SIZE");
+  if (local == nullptr || world == nullptr) return "OpenMPI's choice (not started by its mpirun)";
+  if (std::strcmp(local, world) != 0) return "OpenMPI's choice (ranks on several nodes)";
+  // Before MPI_Init, on the only thread; the variable is read by MPI_Init.
+  if (setenv("OMPI_MCA_pml", "ob1", 0) != 0) return "OpenMPI's choice (setenv failed)";
+  return "pml ob1 (every rank on one node)";
+}
+
+/// How MPI started: MPI_Init's seconds and the point-to-point layer (choosePointToPoint()).
+struct MpiStart {
+  double seconds = 0.0;
+  std::string pointToPoint;
+};
+
+int run(const Args& a, int rank, int size, const MpiStart& started) {
   const auto t0 = std::chrono::steady_clock::now();
   // Threads per rank, unless --threads says: the cores this rank may run on (one where mpirun
   // binds each rank to a core, its default for two ranks or fewer), and at most its share of
@@ -501,6 +529,7 @@ int run(const Args& a, int rank, int size) {
     if (status == 0 && parts > 1) {
       const auto tJoin = std::chrono::steady_clock::now();
       std::string reply, digestSeconds;
+      JoinSeconds joined;
       try {
         Assembly as;
         as.out = out;
@@ -519,6 +548,7 @@ int run(const Args& a, int rank, int size) {
         for (std::size_t i = 0; i < parts; ++i) appendBlocks(stats[i], as.blocks);
         if (!l.tiles.empty()) as.provenance = mergedProvenance(l, as.parts, a.sources);
         as.threads = a.threads;
+        as.growFirst = l.tiles.empty();
         if (digestApart) {
           as.lateProvenance = [&]() {
             reply = receiveString(digester, kProvenanceTag);
@@ -533,7 +563,7 @@ int run(const Args& a, int rank, int size) {
             return reply.substr(eol + 1);
           };
         }
-        assemble(as);
+        joined = assemble(as);
       } catch (const std::exception& e) {
         status = 1;
         std::cerr << "regolith-mpi import: rank 0 (assembling " << out.string()
@@ -563,6 +593,9 @@ int run(const Args& a, int rank, int size) {
         }
         std::cout << "\n  seconds:        " << seconds(t0) << " (parts " << slowest
                   << " on the slowest rank, joining " << seconds(tJoin) << ")\n";
+        std::cout << "  joining:        coarse levels " << joined.coarse << " s, chunks "
+                  << joined.copies << " s, sync " << joined.sync << " s, digest awaited "
+                  << joined.wait << " s, provenance and rename " << joined.finish << " s\n";
         std::cout << "  ranks:          " << ranks.str() << " (rank 0's CPU before the join)\n";
         if (digestApart) {
           std::cout << "  digests:        on rank " << digester
@@ -577,6 +610,10 @@ int run(const Args& a, int rank, int size) {
                     : l.onePart.empty() ? std::string("too few rows for two bands of patches")
                                         : l.onePart)
                 << "), on rank 0 alone, " << seconds(t0) << " seconds\n";
+    }
+    if (status == 0) {
+      std::cout << "  MPI:            MPI_Init " << started.seconds << " s, "
+                << started.pointToPoint << "\n";
     }
   }
   status = broadcastInt(status);
@@ -594,8 +631,12 @@ int run(const Args& a, int rank, int size) {
 }  // namespace
 
 int main(int argc, char** argv) try {
+  MpiStart started;
+  started.pointToPoint = choosePointToPoint();
+  const auto t0 = std::chrono::steady_clock::now();
   int provided = 0;
   MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  started.seconds = seconds(t0);
   int rank = 0, size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
@@ -643,7 +684,7 @@ int main(int argc, char** argv) try {
     return rc;
   }
   try {
-    rc = run(a, rank, size);
+    rc = run(a, rank, size, started);
   } catch (const std::exception& e) {
     std::cerr << "regolith-mpi import: rank " << rank << ": " << e.what() << "\n";
     MPI_Abort(MPI_COMM_WORLD, 1);

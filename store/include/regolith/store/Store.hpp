@@ -211,6 +211,12 @@ struct WriteOptions {
   /// Scratch: a file that its job deletes before it ends (regolith-mpi's part stores),
   /// renamed into place unsynced; a crash may leave it incomplete (core::Durability).
   core::Durability durability = core::Durability::Durable;
+  /// Level-0 rows an untiled grid's level datasets may later grow to (their HDF5 maximum
+  /// dimensions; each level's the same halving of it as its rows). 0, or no more than the
+  /// grid's rows: fixed at the grid's size. regolith-mpi's rank 0 writes its band, the grid's
+  /// first rows, so; the join extends it in place to the whole grid (H5Dset_extent) rather
+  /// than copying its chunks into a new file. Only the maximum dimensions differ until then.
+  std::size_t reserveRows = 0;
 };
 
 /// How writeStore() builds one grid's pyramid within WriteOptions::memoryBudgetBytes
