@@ -47,9 +47,10 @@ struct Assembly {
 struct JoinSeconds {
   double coarse = 0.0;  // the levels above the parts'
   double copies = 0.0;  // the parts' chunks copied (and the first part grown)
-  double sync = 0.0;    // the chunks synced to the disk, with lateProvenance
-  double wait = 0.0;    // lateProvenance, after the sync
-  double finish = 0.0;  // the provenance written, the last sync, the rename
+  double sync = 0.0;    // with lateProvenance: the chunks synced while it is awaited
+  double wait = 0.0;    // lateProvenance, after that sync
+  double finish = 0.0;  // the provenance written, the last sync (all of it without
+                        // lateProvenance: a mosaic), the rename
 };
 
 /// Writes the store (core::writeFileAtomically). Throws regolith::Error naming the file.

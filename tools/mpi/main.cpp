@@ -390,7 +390,8 @@ std::string choosePointToPoint() {
   }
   const char* local = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE");
   const char* world = std::getenv("OMPI_COMM_WORLD_SIZE");
-  if (local == nullptr || world == nullptr) return "OpenMPI's choice (not started by its mpirun)";
+  if (local == nullptr || world == nullptr)
+    return "the MPI library's choice (not started by OpenMPI's mpirun)";
   if (std::strcmp(local, world) != 0) return "OpenMPI's choice (ranks on several nodes)";
   // Before MPI_Init, on the only thread; the variable is read by MPI_Init.
   if (setenv("OMPI_MCA_pml", "ob1", 0) != 0) return "OpenMPI's choice (setenv failed)";
@@ -595,7 +596,7 @@ int run(const Args& a, int rank, int size, const MpiStart& started) {
                   << " on the slowest rank, joining " << seconds(tJoin) << ")\n";
         std::cout << "  joining:        coarse levels " << joined.coarse << " s, chunks "
                   << joined.copies << " s, sync " << joined.sync << " s, digest awaited "
-                  << joined.wait << " s, provenance and rename " << joined.finish << " s\n";
+                  << joined.wait << " s, last sync and rename " << joined.finish << " s\n";
         std::cout << "  ranks:          " << ranks.str() << " (rank 0's CPU before the join)\n";
         if (digestApart) {
           std::cout << "  digests:        on rank " << digester
