@@ -37,7 +37,8 @@ struct Assembly {
   /// An untiled grid whose first part was written with room for the whole grid
   /// (store::WriteOptions::reserveRows = rows): that part becomes the store, moved to the
   /// target's temporary and extended in place, and only the other parts' chunks are copied
-  /// (docs/scale.md, "Stop 45"). The first part is gone after assemble(), joined or not.
+  /// (docs/scale.md, "Stop 45"). Once moved, the first part is the target's temporary, which
+  /// a failing join removes (core::writeFileAtomically); the caller removes the other parts.
   bool growFirst = false;
   /// Threads for the coarse levels (0: all).
   unsigned threads = 0;
