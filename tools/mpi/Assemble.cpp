@@ -358,10 +358,12 @@ JoinSeconds assemble(const Assembly& a) {
       std::string from = gridPath;
       from += '/';
       from += name;
-      std::vector<Id> sources;
-      for (std::size_t p = grow ? 1 : 0; p < parts.size(); ++p) {
-        sources.push_back(dataset(H5Dopen2(parts[p].get(), from.c_str(), H5P_DEFAULT),
-                                  "cannot open " + from + " of " + a.parts[p].string()));
+      // grow: the first part's dataset is the store's own, so its source stays empty.
+      const std::size_t firstCopied = grow ? 1 : 0;
+      std::vector<Id> sources(parts.size());
+      for (std::size_t p = firstCopied; p < parts.size(); ++p) {
+        sources[p] = dataset(H5Dopen2(parts[p].get(), from.c_str(), H5P_DEFAULT),
+                             "cannot open " + from + " of " + a.parts[p].string());
       }
       Id d;
       if (grow) {
@@ -376,8 +378,8 @@ JoinSeconds assemble(const Assembly& a) {
         d = levelLike(g.get(), name, sources.front().get(), levelSide(a.rows, k),
                       levelSide(a.cols, k));
       }
-      for (std::size_t p = grow ? 1 : 0; p < parts.size(); ++p) {
-        copyChunks(sources[p - (grow ? 1 : 0)].get(), d.get(), a.plan.parts[p].row0 >> k,
+      for (std::size_t p = firstCopied; p < parts.size(); ++p) {
+        copyChunks(sources[p].get(), d.get(), a.plan.parts[p].row0 >> k,
                    from + " of " + a.parts[p].string());
       }
     }
